@@ -1,0 +1,14 @@
+//! mdsurf: Gaussian density surfaces for molecular dynamics trajectories.
+//!
+//! Data flow: [`io`] reads a [`model::Topology`] and a stream of [`model::Frame`]s; the surface
+//! engine ([`surface`] on the CPU, [`gpu`] on the GPU) turns atom positions, radii and colours into
+//! a density map and a triangle [`surface::Mesh`]; [`render`] draws it and [`export`] writes it.
+//! The desktop viewer in [`app`] sits on top of all of them; none of them imports the app.
+
+pub mod app;
+pub mod export;
+pub mod gpu;
+pub mod io;
+pub mod model;
+pub mod render;
+pub mod surface;

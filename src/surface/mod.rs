@@ -1,0 +1,58 @@
+//! The surface definition and the CPU reference engine: parameters, grid, density and colour
+//! volumes, Marching Cubes, area and volume (DESIGN section 2). The GPU engine in [`crate::gpu`]
+//! is tested against this module.
+
+pub mod engine;
+pub mod grid;
+pub mod mesh;
+pub mod params;
+pub mod tables;
+
+pub use engine::{AtomSet, StageTimings, SurfaceEngine, SurfaceOutput};
+pub use grid::GridSpec;
+pub use mesh::Mesh;
+pub use params::{Quality, SurfaceParams};
+pub use tables::McTables;
+
+/// Why a surface could not be computed.
+#[derive(Debug, thiserror::Error)]
+pub enum SurfaceError {
+    /// H, R or I was not a positive finite number.
+    #[error("{name} must be a positive number, got {value}")]
+    InvalidParameter {
+        /// Which parameter.
+        name: &'static str,
+        /// The value given.
+        value: String,
+    },
+    /// There were no atoms.
+    #[error("the system has no atoms")]
+    EmptySystem,
+    /// An atom had a NaN or infinite coordinate.
+    #[error("atom {atom} has a NaN or infinite coordinate")]
+    NonFiniteCoordinate {
+        /// Index of the atom (from 0).
+        atom: usize,
+    },
+    /// An atom had a radius that is not positive and finite.
+    #[error("atom {atom} has radius {radius} Å; radii must be positive")]
+    InvalidRadius {
+        /// Index of the atom (from 0).
+        atom: usize,
+        /// Its radius in Å.
+        radius: f32,
+    },
+    /// The grid would not fit in memory.
+    #[error(
+        "a {}x{}x{} grid needs {:.1} GB but only {:.1} GB is available; use a larger grid spacing H",
+        dims[0], dims[1], dims[2], *bytes_needed as f64 / 1e9, *bytes_available as f64 / 1e9
+    )]
+    GridTooLarge {
+        /// Grid samples along x, y, z.
+        dims: [u64; 3],
+        /// Bytes the computation would need.
+        bytes_needed: u64,
+        /// Bytes the engine may use.
+        bytes_available: u64,
+    },
+}

@@ -1,0 +1,110 @@
+//! The user's knobs for a surface: grid spacing H, radius scale R, isovalue I and quality (the
+//! Gaussian cutoff). Shared by the CPU and GPU engines and the UI.
+
+use std::fmt;
+use std::str::FromStr;
+
+use super::SurfaceError;
+
+/// How far each Gaussian reaches, in units of its width alpha.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Quality {
+    /// Cutoff 2.0 alpha.
+    Low,
+    /// Cutoff 2.5 alpha (the default).
+    #[default]
+    Medium,
+    /// Cutoff 3.0 alpha.
+    High,
+    /// Cutoff 4.0 alpha.
+    Max,
+}
+
+impl Quality {
+    /// All qualities, lowest first.
+    pub const ALL: [Quality; 4] = [Quality::Low, Quality::Medium, Quality::High, Quality::Max];
+
+    /// Cutoff distance in units of alpha (dimensionless).
+    pub fn cutoff(self) -> f32 {
+        match self {
+            Quality::Low => 2.0,
+            Quality::Medium => 2.5,
+            Quality::High => 3.0,
+            Quality::Max => 4.0,
+        }
+    }
+
+    /// Lower-case name as used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::Low => "low",
+            Quality::Medium => "medium",
+            Quality::High => "high",
+            Quality::Max => "max",
+        }
+    }
+}
+
+impl fmt::Display for Quality {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Quality {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Quality::ALL
+            .into_iter()
+            .find(|q| q.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| format!("unknown quality '{s}' (expected low, medium, high or max)"))
+    }
+}
+
+/// Parameters of one surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceParams {
+    /// Grid spacing H in Å.
+    pub spacing: f32,
+    /// Radius scale R (dimensionless): Gaussian width alpha = r * R.
+    pub radius_scale: f32,
+    /// Isovalue I of the density (dimensionless; 1.0 is the peak of one isolated atom).
+    pub isovalue: f32,
+    /// Cutoff of each Gaussian.
+    pub quality: Quality,
+}
+
+impl Default for SurfaceParams {
+    fn default() -> Self {
+        SurfaceParams {
+            spacing: 1.0,
+            radius_scale: 1.0,
+            isovalue: 0.5,
+            quality: Quality::Medium,
+        }
+    }
+}
+
+impl SurfaceParams {
+    /// Checks that H, R and I are finite and positive.
+    pub fn validate(&self) -> Result<(), SurfaceError> {
+        for (name, value) in [
+            ("grid spacing H", self.spacing),
+            ("radius scale R", self.radius_scale),
+            ("isovalue I", self.isovalue),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(SurfaceError::InvalidParameter {
+                    name,
+                    value: value.to_string(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Cutoff factor q (units of alpha).
+    pub fn cutoff(&self) -> f32 {
+        self.quality.cutoff()
+    }
+}
