@@ -130,7 +130,11 @@ mod tests {
     fn water_has_two_bonds_and_no_h_h_bond() {
         // O at origin, H at 0.96 Å, H-O-H 104.5 degrees; a second water 3 Å away.
         let a = 104.5f32.to_radians();
-        let mut p = vec![Vec3::ZERO, Vec3::new(0.96, 0.0, 0.0), Vec3::new(0.96 * a.cos(), 0.96 * a.sin(), 0.0)];
+        let mut p = vec![
+            Vec3::ZERO,
+            Vec3::new(0.96, 0.0, 0.0),
+            Vec3::new(0.96 * a.cos(), 0.96 * a.sin(), 0.0),
+        ];
         let shift = Vec3::new(0.0, 0.0, 3.0);
         p.extend(p.clone().iter().map(|q| *q + shift));
         let r = [1.3, 1.0, 1.0, 1.3, 1.0, 1.0];

@@ -2,6 +2,7 @@
 //! plane, zooms along the view direction, fits a bounding box, and offsets itself for stereo
 //! eyes. The app turns mouse drags into calls here; headless renders set it up directly.
 
+use glam::camera::rh::proj::directx;
 use glam::{Mat4, Vec3};
 
 /// How 3D positions are projected onto the image.
@@ -113,7 +114,7 @@ impl Camera {
 
     /// World-to-view matrix (right-handed, looking down -z).
     pub fn view_matrix(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye(), self.target, Vec3::Y)
+        glam::camera::rh::view::look_at_mat4(self.eye(), self.target, Vec3::Y)
     }
 
     /// Near and far clip distances in Å, enclosing the scene's bounding sphere.
@@ -126,14 +127,18 @@ impl Camera {
 
     /// View-to-clip matrix for an image of `aspect` = width / height (depth 0 near, 1 far).
     pub fn projection_matrix(&self, aspect: f32) -> Mat4 {
-        let aspect = if aspect.is_finite() && aspect > 0.0 { aspect } else { 1.0 };
+        let aspect = if aspect.is_finite() && aspect > 0.0 {
+            aspect
+        } else {
+            1.0
+        };
         let (near, far) = self.clip_range();
         match self.projection {
-            Projection::Perspective => Mat4::perspective_rh(self.fov_y, aspect, near, far),
+            Projection::Perspective => directx::perspective(self.fov_y, aspect, near, far),
             Projection::Orthographic => {
                 let h = self.visible_height() * 0.5;
                 let w = h * aspect;
-                Mat4::orthographic_rh(-w, w, -h, h, near, far)
+                directx::orthographic(-w, w, -h, h, near, far)
             }
         }
     }
@@ -165,7 +170,10 @@ mod tests {
         let vp = c.projection_matrix(1.0) * c.view_matrix();
         for corner in [Vec3::new(-10.0, 0.0, 0.0), Vec3::new(30.0, 20.0, 10.0)] {
             let p = vp.project_point3(corner);
-            assert!(p.x.abs() < 1.0 && p.y.abs() < 1.0 && (0.0..1.0).contains(&p.z), "{p}");
+            assert!(
+                p.x.abs() < 1.0 && p.y.abs() < 1.0 && (0.0..1.0).contains(&p.z),
+                "{p}"
+            );
         }
     }
 

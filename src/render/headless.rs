@@ -17,7 +17,8 @@ pub struct HeadlessGpu {
 impl HeadlessGpu {
     /// Opens the best available adapter with its own limits (so large screenshots fit).
     pub fn new() -> Result<HeadlessGpu, RenderError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             force_fallback_adapter: false,

@@ -40,7 +40,8 @@ fn vec3_layout(attributes: &[wgpu::VertexAttribute]) -> wgpu::VertexBufferLayout
     }
 }
 
-const SPHERE_ATTRS: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4];
+const SPHERE_ATTRS: [wgpu::VertexAttribute; 2] =
+    wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4];
 const CYLINDER_ATTRS: [wgpu::VertexAttribute; 3] =
     wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4];
 
@@ -152,7 +153,11 @@ impl Pipelines {
         let p = vec3_buffer(0);
         let n = vec3_buffer(1);
         let c = vec3_buffer(2);
-        let mesh_buffers = [Some(vec3_layout(&p)), Some(vec3_layout(&n)), Some(vec3_layout(&c))];
+        let mesh_buffers = [
+            Some(vec3_layout(&p)),
+            Some(vec3_layout(&n)),
+            Some(vec3_layout(&c)),
+        ];
         let sphere_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: size_of::<SphereInstance>() as u64,
             step_mode: wgpu::VertexStepMode::Instance,
@@ -178,12 +183,18 @@ impl Pipelines {
         let oit_targets = [
             Some(wgpu::ColorTargetState {
                 format: ACCUM_FORMAT,
-                blend: Some(wgpu::BlendState { color: additive, alpha: additive }),
+                blend: Some(wgpu::BlendState {
+                    color: additive,
+                    alpha: additive,
+                }),
                 write_mask: wgpu::ColorWrites::ALL,
             }),
             Some(wgpu::ColorTargetState {
                 format: REVEAL_FORMAT,
-                blend: Some(wgpu::BlendState { color: reveal, alpha: reveal }),
+                blend: Some(wgpu::BlendState {
+                    color: reveal,
+                    alpha: reveal,
+                }),
                 write_mask: wgpu::ColorWrites::RED,
             }),
         ];
@@ -197,10 +208,50 @@ impl Pipelines {
             depth,
             targets,
         };
-        let mesh_opaque = pipeline(device, scene_spec("mesh opaque", "vs_mesh", "fs_mesh", &mesh_buffers, depth(true), &opaque_target));
-        let mesh_oit = pipeline(device, scene_spec("mesh oit", "vs_mesh", "fs_mesh_oit", &mesh_buffers, depth(false), &oit_targets));
-        let sphere = pipeline(device, scene_spec("spheres", "vs_sphere", "fs_sphere", &sphere_buffers, depth(true), &opaque_target));
-        let cylinder = pipeline(device, scene_spec("cylinders", "vs_cylinder", "fs_cylinder", &cylinder_buffers, depth(true), &opaque_target));
+        let mesh_opaque = pipeline(
+            device,
+            scene_spec(
+                "mesh opaque",
+                "vs_mesh",
+                "fs_mesh",
+                &mesh_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+        );
+        let mesh_oit = pipeline(
+            device,
+            scene_spec(
+                "mesh oit",
+                "vs_mesh",
+                "fs_mesh_oit",
+                &mesh_buffers,
+                depth(false),
+                &oit_targets,
+            ),
+        );
+        let sphere = pipeline(
+            device,
+            scene_spec(
+                "spheres",
+                "vs_sphere",
+                "fs_sphere",
+                &sphere_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+        );
+        let cylinder = pipeline(
+            device,
+            scene_spec(
+                "cylinders",
+                "vs_cylinder",
+                "fs_cylinder",
+                &cylinder_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+        );
         let over = [colour_target(Some(wgpu::BlendState::ALPHA_BLENDING))];
         let post_spec = |label, fs, targets| PipelineSpec {
             label,

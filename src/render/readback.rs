@@ -27,7 +27,12 @@ impl RgbaImage {
     /// The RGBA value at (x, y).
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
         let i = ((y * self.width + x) * 4) as usize;
-        [self.pixels[i], self.pixels[i + 1], self.pixels[i + 2], self.pixels[i + 3]]
+        [
+            self.pixels[i],
+            self.pixels[i + 1],
+            self.pixels[i + 2],
+            self.pixels[i + 3],
+        ]
     }
 
     /// Number of distinct colours (a uniform image has 1).
@@ -49,18 +54,27 @@ impl RgbaImage {
         let mut reader = png::Decoder::new(std::io::BufReader::new(file))
             .read_info()
             .map_err(|e| err(e.to_string()))?;
-        let size = reader.output_buffer_size().ok_or_else(|| err("image too large".into()))?;
+        let size = reader
+            .output_buffer_size()
+            .ok_or_else(|| err("image too large".into()))?;
         let mut buf = vec![0; size];
-        let info = reader.next_frame(&mut buf).map_err(|e| err(e.to_string()))?;
+        let info = reader
+            .next_frame(&mut buf)
+            .map_err(|e| err(e.to_string()))?;
         buf.truncate(info.buffer_size());
         let pixels = match (info.color_type, info.bit_depth) {
             (png::ColorType::Rgba, png::BitDepth::Eight) => buf,
-            (png::ColorType::Rgb, png::BitDepth::Eight) => {
-                buf.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect()
-            }
+            (png::ColorType::Rgb, png::BitDepth::Eight) => buf
+                .chunks_exact(3)
+                .flat_map(|c| [c[0], c[1], c[2], 255])
+                .collect(),
             (c, d) => return Err(err(format!("unsupported PNG format {c:?} {d:?}"))),
         };
-        Ok(RgbaImage { width: info.width, height: info.height, pixels })
+        Ok(RgbaImage {
+            width: info.width,
+            height: info.height,
+            pixels,
+        })
     }
 }
 
@@ -81,7 +95,11 @@ pub fn render_to_rgba(
 }
 
 /// Copies an RGBA8 texture back to memory (blocking until the GPU is done).
-pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Result<RgbaImage, RenderError> {
+pub fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<RgbaImage, RenderError> {
     let (w, h) = (texture.width(), texture.height());
     let row = w * 4;
     let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
@@ -91,12 +109,18 @@ pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("readback"),
+    });
     encoder.copy_texture_to_buffer(
         texture.as_image_copy(),
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
         },
         texture.size(),
     );
@@ -111,7 +135,10 @@ pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::
     rx.recv()
         .map_err(|e| RenderError::Readback(e.to_string()))?
         .map_err(|e| RenderError::Readback(e.to_string()))?;
-    let data = buffer.slice(..).get_mapped_range();
+    let data = buffer
+        .slice(..)
+        .get_mapped_range()
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
     let mut pixels = Vec::with_capacity((row * h) as usize);
     for y in 0..h as usize {
         let start = y * padded as usize;
@@ -119,7 +146,11 @@ pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::
     }
     drop(data);
     buffer.unmap();
-    Ok(RgbaImage { width: w, height: h, pixels })
+    Ok(RgbaImage {
+        width: w,
+        height: h,
+        pixels,
+    })
 }
 
 /// Writes `image` as an 8-bit RGBA PNG. The file appears complete or not at all: the data goes
@@ -133,12 +164,17 @@ pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), RenderError> {
     std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
     let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| err(e.to_string()))?;
     {
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(tmp.as_file_mut()), image.width, image.height);
+        let mut enc = png::Encoder::new(
+            std::io::BufWriter::new(tmp.as_file_mut()),
+            image.width,
+            image.height,
+        );
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         let mut w = enc.write_header().map_err(|e| err(e.to_string()))?;
-        w.write_image_data(&image.pixels).map_err(|e| err(e.to_string()))?;
+        w.write_image_data(&image.pixels)
+            .map_err(|e| err(e.to_string()))?;
         w.finish().map_err(|e| err(e.to_string()))?;
     }
     tmp.as_file_mut().flush().map_err(|e| err(e.to_string()))?;

@@ -32,7 +32,11 @@ impl ViewUniform {
         // Depth cue from the front to the back of the scene's bounding sphere.
         let r = camera.scene_radius.max(1.0);
         let (cue_start, cue_end) = (camera.distance - r * 0.5, camera.distance + r);
-        let ortho = if camera.projection == Projection::Orthographic { 1.0 } else { 0.0 };
+        let ortho = if camera.projection == Projection::Orthographic {
+            1.0
+        } else {
+            0.0
+        };
         let light = Vec3::new(-0.4, 0.6, 0.7).normalize();
         let (single, sc) = match settings.surface_colour {
             Some(c) => (1.0, c),
@@ -43,7 +47,12 @@ impl ViewUniform {
             proj: camera.projection_matrix(aspect).to_cols_array_2d(),
             light_dir: [light.x, light.y, light.z, 0.0],
             background: [bg[0], bg[1], bg[2], 1.0],
-            fog: [cue_start, cue_end, settings.depth_cue.clamp(0.0, 1.0), ortho],
+            fog: [
+                cue_start,
+                cue_end,
+                settings.depth_cue.clamp(0.0, 1.0),
+                ortho,
+            ],
             surface: [settings.surface_opacity.clamp(0.0, 1.0), single, 0.0, 0.0],
             surface_colour: [sc[0], sc[1], sc[2], 1.0],
             misc: [0.35, 0.0, 0.0, 0.0],
@@ -119,22 +128,57 @@ impl Renderer {
             (Stereo::SideBySide, _) => {
                 let half = (w / 2).max(1);
                 vec![
-                    EyePass { camera: camera.eye_camera(-1.0, sep), viewport: [0, 0, half, h], target: &targets.colour_view, clear: true },
-                    EyePass { camera: camera.eye_camera(1.0, sep), viewport: [half, 0, w - half, h], target: &targets.colour_view, clear: false },
+                    EyePass {
+                        camera: camera.eye_camera(-1.0, sep),
+                        viewport: [0, 0, half, h],
+                        target: &targets.colour_view,
+                        clear: true,
+                    },
+                    EyePass {
+                        camera: camera.eye_camera(1.0, sep),
+                        viewport: [half, 0, w - half, h],
+                        target: &targets.colour_view,
+                        clear: false,
+                    },
                 ]
             }
             (Stereo::Anaglyph, Some([l, r])) => vec![
-                EyePass { camera: camera.eye_camera(-1.0, sep), viewport: [0, 0, w, h], target: l, clear: true },
-                EyePass { camera: camera.eye_camera(1.0, sep), viewport: [0, 0, w, h], target: r, clear: true },
+                EyePass {
+                    camera: camera.eye_camera(-1.0, sep),
+                    viewport: [0, 0, w, h],
+                    target: l,
+                    clear: true,
+                },
+                EyePass {
+                    camera: camera.eye_camera(1.0, sep),
+                    viewport: [0, 0, w, h],
+                    target: r,
+                    clear: true,
+                },
             ],
-            _ => vec![EyePass { camera: *camera, viewport: [0, 0, w, h], target: &targets.colour_view, clear: true }],
+            _ => vec![EyePass {
+                camera: *camera,
+                viewport: [0, 0, w, h],
+                target: &targets.colour_view,
+                clear: true,
+            }],
         };
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("render"),
+        });
         for (i, pass) in passes.iter().enumerate() {
             let aspect = pass.viewport[2] as f32 / pass.viewport[3].max(1) as f32;
             let u = ViewUniform::new(&pass.camera, aspect, settings);
             queue.write_buffer(&self.view_buffers[i], 0, bytemuck::bytes_of(&u));
-            self.encode_eye(device, &mut encoder, targets, scene, settings, pass, &self.view_groups[i]);
+            self.encode_eye(
+                device,
+                &mut encoder,
+                targets,
+                scene,
+                settings,
+                pass,
+                &self.view_groups[i],
+            );
         }
         if let (Stereo::Anaglyph, Some([l, r])) = (settings.stereo, &targets.eyes) {
             let group = self.post_group(device, l, r);
@@ -150,13 +194,24 @@ impl Renderer {
         queue.submit([encoder.finish()]);
     }
 
-    fn post_group(&self, device: &wgpu::Device, a: &wgpu::TextureView, b: &wgpu::TextureView) -> wgpu::BindGroup {
+    fn post_group(
+        &self,
+        device: &wgpu::Device,
+        a: &wgpu::TextureView,
+        b: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("post"),
             layout: &self.pipelines.post_layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(a) },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(b) },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(a),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(b),
+                },
             ],
         })
     }
@@ -174,16 +229,25 @@ impl Renderer {
     ) {
         let [x, y, w, h] = pass.viewport.map(|v| v as f32);
         let bg = settings.background.linear_rgb();
-        let clear = pass.clear.then_some(wgpu::Color { r: bg[0] as f64, g: bg[1] as f64, b: bg[2] as f64, a: 1.0 });
+        let clear = pass.clear.then_some(wgpu::Color {
+            r: bg[0] as f64,
+            g: bg[1] as f64,
+            b: bg[2] as f64,
+            a: 1.0,
+        });
         let mesh_ready = settings.show_surface && scene.index_count > 0;
-        let transparent = mesh_ready && settings.surface_is_transparent() && settings.surface_opacity > 0.0;
+        let transparent =
+            mesh_ready && settings.surface_is_transparent() && settings.surface_opacity > 0.0;
         {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("opaque"),
                 color_attachments: &[Some(colour_attachment(pass.target, clear))],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &targets.depth_view,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
                     stencil_ops: None,
                 }),
                 ..Default::default()
@@ -195,7 +259,11 @@ impl Renderer {
                 rp.set_vertex_buffer(0, s.buffer.slice(..));
                 rp.draw(0..6, 0..scene.sphere_count);
             }
-            if let Some(c) = scene.cylinders.as_ref().filter(|_| scene.cylinder_count > 0) {
+            if let Some(c) = scene
+                .cylinders
+                .as_ref()
+                .filter(|_| scene.cylinder_count > 0)
+            {
                 rp.set_pipeline(&self.pipelines.cylinder);
                 rp.set_vertex_buffer(0, c.buffer.slice(..));
                 rp.draw(0..CYLINDER_VERTICES, 0..scene.cylinder_count);
@@ -212,12 +280,21 @@ impl Renderer {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("transparent surface"),
                 color_attachments: &[
-                    Some(colour_attachment(&targets.accum_view, Some(wgpu::Color::TRANSPARENT))),
-                    Some(colour_attachment(&targets.reveal_view, Some(wgpu::Color::WHITE))),
+                    Some(colour_attachment(
+                        &targets.accum_view,
+                        Some(wgpu::Color::TRANSPARENT),
+                    )),
+                    Some(colour_attachment(
+                        &targets.reveal_view,
+                        Some(wgpu::Color::WHITE),
+                    )),
                 ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &targets.depth_view,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
                     stencil_ops: None,
                 }),
                 ..Default::default()
@@ -240,7 +317,12 @@ impl Renderer {
     }
 
     fn draw_mesh(&self, rp: &mut wgpu::RenderPass<'_>, scene: &GpuScene) {
-        let (Some(p), Some(n), Some(c), Some(i)) = (&scene.positions, &scene.normals, &scene.colours, &scene.indices) else {
+        let (Some(p), Some(n), Some(c), Some(i)) = (
+            &scene.positions,
+            &scene.normals,
+            &scene.colours,
+            &scene.indices,
+        ) else {
             return;
         };
         rp.set_vertex_buffer(0, p.buffer.slice(..));
@@ -251,7 +333,10 @@ impl Renderer {
     }
 }
 
-fn colour_attachment(view: &wgpu::TextureView, clear: Option<wgpu::Color>) -> wgpu::RenderPassColorAttachment<'_> {
+fn colour_attachment(
+    view: &wgpu::TextureView,
+    clear: Option<wgpu::Color>,
+) -> wgpu::RenderPassColorAttachment<'_> {
     wgpu::RenderPassColorAttachment {
         view,
         depth_slice: None,

@@ -45,13 +45,22 @@ pub(crate) struct GrowBuffer {
 }
 
 impl GrowBuffer {
-    fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages, data: &[u8]) -> Self {
+    fn new(
+        device: &wgpu::Device,
+        label: &'static str,
+        usage: wgpu::BufferUsages,
+        data: &[u8],
+    ) -> Self {
         let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
             contents: data,
             usage: usage | wgpu::BufferUsages::COPY_DST,
         });
-        GrowBuffer { buffer, usage, label }
+        GrowBuffer {
+            buffer,
+            usage,
+            label,
+        }
     }
 
     fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, data: &[u8]) {
@@ -123,8 +132,22 @@ impl GpuScene {
     /// Uploads a surface mesh, replacing the previous one. A mesh without colours is drawn white.
     pub fn set_mesh(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, mesh: &Mesh) {
         let vertex = wgpu::BufferUsages::VERTEX;
-        write_or_create(&mut self.positions, device, queue, "mesh positions", vertex, bytemuck::cast_slice(&mesh.positions));
-        write_or_create(&mut self.normals, device, queue, "mesh normals", vertex, bytemuck::cast_slice(&mesh.normals));
+        write_or_create(
+            &mut self.positions,
+            device,
+            queue,
+            "mesh positions",
+            vertex,
+            bytemuck::cast_slice(&mesh.positions),
+        );
+        write_or_create(
+            &mut self.normals,
+            device,
+            queue,
+            "mesh normals",
+            vertex,
+            bytemuck::cast_slice(&mesh.normals),
+        );
         let white;
         let colours: &[[f32; 3]] = if mesh.colours.len() == mesh.positions.len() {
             &mesh.colours
@@ -132,8 +155,22 @@ impl GpuScene {
             white = vec![[1.0f32; 3]; mesh.positions.len()];
             &white
         };
-        write_or_create(&mut self.colours, device, queue, "mesh colours", vertex, bytemuck::cast_slice(colours));
-        write_or_create(&mut self.indices, device, queue, "mesh indices", wgpu::BufferUsages::INDEX, bytemuck::cast_slice(&mesh.indices));
+        write_or_create(
+            &mut self.colours,
+            device,
+            queue,
+            "mesh colours",
+            vertex,
+            bytemuck::cast_slice(colours),
+        );
+        write_or_create(
+            &mut self.indices,
+            device,
+            queue,
+            "mesh indices",
+            wgpu::BufferUsages::INDEX,
+            bytemuck::cast_slice(&mesh.indices),
+        );
         self.index_count = mesh.indices.len() as u32;
         self.mesh_bounds = mesh.bounds();
     }
@@ -153,8 +190,22 @@ impl GpuScene {
         cylinders: &[CylinderInstance],
     ) {
         let inst = wgpu::BufferUsages::VERTEX;
-        write_or_create(&mut self.spheres, device, queue, "atom spheres", inst, bytemuck::cast_slice(spheres));
-        write_or_create(&mut self.cylinders, device, queue, "bond cylinders", inst, bytemuck::cast_slice(cylinders));
+        write_or_create(
+            &mut self.spheres,
+            device,
+            queue,
+            "atom spheres",
+            inst,
+            bytemuck::cast_slice(spheres),
+        );
+        write_or_create(
+            &mut self.cylinders,
+            device,
+            queue,
+            "bond cylinders",
+            inst,
+            bytemuck::cast_slice(cylinders),
+        );
         self.sphere_count = spheres.len() as u32;
         self.cylinder_count = cylinders.len() as u32;
         self.atom_bounds = spheres.iter().fold(None, |acc, s| {

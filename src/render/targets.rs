@@ -81,7 +81,8 @@ impl RenderTargets {
     /// Makes the per-eye images if they do not exist yet.
     pub(crate) fn ensure_eyes(&mut self, device: &wgpu::Device) {
         if self.eyes.is_none() {
-            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+            let usage =
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
             let (_, l) = texture(device, "left eye", self.size, COLOUR_FORMAT, usage);
             let (_, r) = texture(device, "right eye", self.size, COLOUR_FORMAT, usage);
             self.eyes = Some([l, r]);
