@@ -60,6 +60,11 @@ impl ChemReader {
         &self.path
     }
 
+    /// The format without compression (`DCD`, `GRO`).
+    pub(crate) fn base(&self) -> &'static str {
+        self.base
+    }
+
     /// Number of frames.
     pub(crate) fn len(&self) -> usize {
         self.len
@@ -123,7 +128,8 @@ fn cell_rows(frame: &chemfiles::Frame) -> Option<[Vec3; 3]> {
 
 /// The frame's time in ps when the format records it in a known unit.
 fn frame_time_ps(frame: &chemfiles::Frame, base: &str) -> Option<f64> {
-    let Some(Property::Double(t)) = frame.get("time") else {
+    // Looked up by iterating: `get` on a missing property makes chemfiles warn.
+    let Some((_, Property::Double(t))) = frame.properties().find(|(name, _)| name == "time") else {
         return None;
     };
     let t = match base {
@@ -197,11 +203,14 @@ fn renumber_by_first_atom(index: &mut [u32]) {
 
 /// The chain id of a residue (`chainid`), else its segment name, else empty.
 fn residue_chain(residue: &chemfiles::Residue) -> String {
+    let properties: Vec<(String, Property)> = residue.properties().collect();
     for key in ["chainid", "chainname", "segname"] {
-        if let Some(Property::String(s)) = residue.get(key) {
-            let s = s.trim();
-            if !s.is_empty() {
-                return s.to_string();
+        for (name, value) in &properties {
+            if let (true, Property::String(s)) = (name == key, value) {
+                let s = s.trim();
+                if !s.is_empty() {
+                    return s.to_string();
+                }
             }
         }
     }
