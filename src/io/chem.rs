@@ -60,6 +60,11 @@ impl ChemReader {
         &self.path
     }
 
+    /// The format without compression (`DCD`, `GRO`).
+    pub(crate) fn base(&self) -> &'static str {
+        self.base
+    }
+
     /// Number of frames.
     pub(crate) fn len(&self) -> usize {
         self.len
@@ -80,7 +85,7 @@ impl ChemReader {
     pub(crate) fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
         let base = self.base;
         let raw = self.read_raw(index)?;
-        let positions: Vec<Vec3> = raw.positions().iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect();
+        let positions = to_vec3(raw.positions());
         let cell = cell_rows(raw);
         let time_ps = frame_time_ps(raw, base);
         if let Some(atom) = positions.iter().position(|p| !p.is_finite()) {
@@ -89,12 +94,23 @@ impl ChemReader {
         Ok(Frame { index, time_ps, positions, cell })
     }
 
+    /// Reads frame `index` and returns its raw positions in Å (not checked to be finite).
+    pub(crate) fn read_positions(&mut self, index: usize) -> Result<Vec<Vec3>, IoError> {
+        let raw = self.read_raw(index)?;
+        Ok(to_vec3(raw.positions()))
+    }
+
     /// Reads frame `index` and returns the topology it carries (names, residues, chains, bonds;
     /// elements only where the file states them, radii left at 0 for the caller to complete).
     pub(crate) fn read_topology(&mut self, index: usize) -> Result<Topology, IoError> {
         let raw = self.read_raw(index)?;
         Ok(convert_topology(&raw.topology()))
     }
+}
+
+/// Converts chemfiles' positions (f64, Å) to ours (f32, Å).
+fn to_vec3(positions: &[[f64; 3]]) -> Vec<Vec3> {
+    positions.iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
 }
 
 /// The periodic box as rows a, b, c in Å, or `None` for an infinite (absent) box.
@@ -112,7 +128,8 @@ fn cell_rows(frame: &chemfiles::Frame) -> Option<[Vec3; 3]> {
 
 /// The frame's time in ps when the format records it in a known unit.
 fn frame_time_ps(frame: &chemfiles::Frame, base: &str) -> Option<f64> {
-    let Some(Property::Double(t)) = frame.get("time") else {
+    // Looked up by iterating: `get` on a missing property makes chemfiles warn.
+    let Some((_, Property::Double(t))) = frame.properties().find(|(name, _)| name == "time") else {
         return None;
     };
     let t = match base {
@@ -139,8 +156,12 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
     };
     for i in 0..n {
         let atom = top.atom(i);
-        let name = atom.name();
         let kind = atom.atomic_type();
+        // LAMMPS dumps give each particle a numeric type and no name: the type is the name.
+        let name = match atom.name() {
+            name if name.trim().is_empty() => kind.clone(),
+            name => name,
+        };
         // A type equal to the name is chemfiles' default, not an element column.
         let element = if kind != name { canonical_symbol(&kind).unwrap_or_default() } else { "" };
         out.elements.push(element.to_string());
@@ -148,7 +169,7 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
     }
     let residues = top.residues_count() as usize;
     for r in 0..residues {
-        let Some(residue) = top.residue(r as u64) else { continue };
+        let Some(residue) = top.residue(r) else { continue };
         let name = residue.name();
         let id = residue.id().unwrap_or(r as i64 + 1);
         let chain = residue_chain(&residue);
@@ -182,11 +203,14 @@ fn renumber_by_first_atom(index: &mut [u32]) {
 
 /// The chain id of a residue (`chainid`), else its segment name, else empty.
 fn residue_chain(residue: &chemfiles::Residue) -> String {
+    let properties: Vec<(String, Property)> = residue.properties().collect();
     for key in ["chainid", "chainname", "segname"] {
-        if let Some(Property::String(s)) = residue.get(key) {
-            let s = s.trim();
-            if !s.is_empty() {
-                return s.to_string();
+        for (name, value) in &properties {
+            if let (true, Property::String(s)) = (name == key, value) {
+                let s = s.trim();
+                if !s.is_empty() {
+                    return s.to_string();
+                }
             }
         }
     }
