@@ -81,12 +81,12 @@ fn main(
             tris = case_start[case_id + 1u] - case_start[case_id];
         }
         let verts = countOneBits(edges);
-        var active = 0u;
+        var is_active = 0u;
         if (k < u.own_z1 && (verts > 0u || tris > 0u)) {
-            active = 1u;
+            is_active = 1u;
         }
-        classes[n] = case_id | (edges << 8u) | (tris << 12u) | (active << 16u);
-        counts = vec3<u32>(verts, tris, active);
+        classes[n] = case_id | (edges << 8u) | (tris << 12u) | (is_active << 16u);
+        counts = vec3<u32>(verts, tris, is_active);
     } else if (n < u.class_points) {
         classes[n] = 0u;
     }

@@ -2,7 +2,8 @@
 // layer, looping over the atoms of the neighbouring bin cells once and sharing the y/z distance
 // work between its voxels (the paper's thread coarsening). Per-pair cutoff test before the
 // exponential; arithmetic mirrors the CPU reference (crate::surface density). Rust side:
-// src/gpu/density.rs. Output: density[v] and colour[3v..3v+3] for local voxel
+// src/gpu/density.rs. Output: density[v] and colour[3v..3v+3] (sum of w * colour, not yet
+// divided by I) for local voxel
 // v = i + nx * (j + ny * (k - dens_z0)).
 
 // Twin of crate::gpu::types::SlabUniform (112 bytes).
@@ -27,8 +28,10 @@ struct SlabUniform {
     atom_count: u32,
 }
 
-// 1 when the colour volume is computed too.
+// True when the colour volume is computed too.
 override WITH_COLOUR: bool = true;
+// False for a colour-only pass (colour scheme changed): the density volume is left as it is.
+override WRITE_DENSITY: bool = true;
 
 const RUN: u32 = 8u;
 
@@ -112,9 +115,13 @@ fn main(@builtin(global_invocation_id) g: vec3<u32>) {
     let base = i0 + u.dims.x * (j + u.dims.y * kl);
     for (var m = 0u; m < RUN; m++) {
         if (i0 + m < u.dims.x) {
-            density[base + m] = dens[m];
+            if (WRITE_DENSITY) {
+                density[base + m] = dens[m];
+            }
             if (WITH_COLOUR) {
-                let c = col[m] / u.isovalue;
+                // Unnormalised sum of w * colour; emit.wgsl divides by I (so an I change
+                // re-runs only Marching Cubes).
+                let c = col[m];
                 colour[3u * (base + m)] = c.x;
                 colour[3u * (base + m) + 1u] = c.y;
                 colour[3u * (base + m) + 2u] = c.z;

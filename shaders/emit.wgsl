@@ -107,8 +107,9 @@ fn write_vertex(id: u32, p0: vec3<u32>, axis: u32) {
     let nrm = safe_normalize(n0 + (n1 - n0) * t);
     var c = vec3<f32>(1.0);
     if (WITH_COLOUR) {
+        // The colour volume holds sum(w * colour); on the surface sum(w) = I.
         let c0 = col(p0);
-        c = c0 + (col(p1) - c0) * t;
+        c = (c0 + (col(p1) - c0) * t) / u.isovalue;
     }
     let o = 9u * id;
     vertices[o] = pos.x;

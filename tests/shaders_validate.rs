@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 
 fn wgsl_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let entries = std::fs::read_dir(dir).unwrap_or_else(|e| panic!("reading {}: {e}", dir.display()));
+    let entries =
+        std::fs::read_dir(dir).unwrap_or_else(|e| panic!("reading {}: {e}", dir.display()));
     for entry in entries {
         let path = entry.expect("directory entry").path();
         if path.is_dir() {
@@ -44,7 +45,11 @@ fn every_shader_parses_and_validates() {
             failures.push(format!("{}: {}", file.display(), e.emit_to_string(&source)));
         }
     }
-    assert!(failures.is_empty(), "invalid shaders:\n{}", failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "invalid shaders:\n{}",
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -55,16 +60,27 @@ fn edge_corner_table_in_emit_matches_the_rust_tables() {
         .lines()
         .find(|l| l.starts_with("const EDGE_CORNER0"))
         .expect("EDGE_CORNER0 in emit.wgsl");
-    let inner = line.rsplit_once("array<u32, 12>(").expect("array literal").1;
+    let inner = line
+        .rsplit_once("array<u32, 12>(")
+        .expect("array literal")
+        .1;
     let values: Vec<u8> = inner
         .trim_end_matches(");")
         .split(',')
         .map(|v| v.trim().trim_end_matches('u').parse().expect("number"))
         .collect();
-    let expected: Vec<u8> = mdsurf::surface::tables::EDGE_CORNERS.iter().map(|e| e[0]).collect();
+    let expected: Vec<u8> = mdsurf::surface::tables::EDGE_CORNERS
+        .iter()
+        .map(|e| e[0])
+        .collect();
     assert_eq!(values, expected);
     for (e, corners) in mdsurf::surface::tables::EDGE_CORNERS.iter().enumerate() {
         let (a, b) = (corners[0], corners[1]);
-        assert_eq!(b - a, 1 << (e / 4), "edge {e} must run along axis {}", e / 4);
+        assert_eq!(
+            b - a,
+            1 << (e / 4),
+            "edge {e} must run along axis {}",
+            e / 4
+        );
     }
 }

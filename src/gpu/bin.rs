@@ -69,11 +69,19 @@ impl Binner {
         let ub = || u.as_entire_binding();
         let count = self.count.bind(
             device,
-            &[(0, ub()), (1, b.positions.buffer.as_entire_binding()), (4, b.cell_start.buffer.as_entire_binding())],
+            &[
+                (0, ub()),
+                (1, b.positions.buffer.as_entire_binding()),
+                (4, b.cell_start.buffer.as_entire_binding()),
+            ],
         );
         let copy_starts = self.copy_starts.bind(
             device,
-            &[(0, ub()), (5, b.cell_start.buffer.as_entire_binding()), (6, b.cell_end.buffer.as_entire_binding())],
+            &[
+                (0, ub()),
+                (5, b.cell_start.buffer.as_entire_binding()),
+                (6, b.cell_end.buffer.as_entire_binding()),
+            ],
         );
         let scatter = self.scatter.bind(
             device,
@@ -88,7 +96,12 @@ impl Binner {
             ],
         );
         // The scan total (atom count) goes to a spare word of the partials buffer.
-        let scan = scanner.plan(device, &b.cell_start.buffer, plan.cell_count(), (&b.partials, 0));
+        let scan = scanner.plan(
+            device,
+            &b.cell_start.buffer,
+            plan.cell_count(),
+            (&b.partials, 0),
+        );
         BinFrame {
             count,
             copy_starts,
@@ -101,7 +114,14 @@ impl Binner {
     }
 
     /// Records the binning: clears the cell counts, then count, scan, copy, scatter.
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, scanner: &Scanner, b: &Buffers, f: &BinFrame, ts: Option<wgpu::ComputePassTimestampWrites<'_>>) {
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scanner: &Scanner,
+        b: &Buffers,
+        f: &BinFrame,
+        ts: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) {
         encoder.clear_buffer(&b.cell_start.buffer, 0, Some(f.cells * 4));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("bin"),
@@ -110,7 +130,11 @@ impl Binner {
         let atom_groups = groups_1d(f.atoms.div_ceil(256), self.max_groups);
         self.count.dispatch(&mut pass, &f.count, atom_groups);
         scanner.record(&mut pass, &f.scan);
-        self.copy_starts.dispatch(&mut pass, &f.copy_starts, groups_1d(f.cells.div_ceil(256), self.max_groups));
+        self.copy_starts.dispatch(
+            &mut pass,
+            &f.copy_starts,
+            groups_1d(f.cells.div_ceil(256), self.max_groups),
+        );
         self.scatter.dispatch(&mut pass, &f.scatter, atom_groups);
     }
 }

@@ -27,12 +27,14 @@ impl GpuContext {
     }
 
     async fn new_headless_async() -> Result<GpuContext, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = instance
             .request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference: wgpu::PowerPreference::HighPerformance,
                 force_fallback_adapter: false,
                 compatible_surface: None,
+                apply_limit_buckets: false,
             })
             .await
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
@@ -64,7 +66,9 @@ impl GpuContext {
             max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
             max_buffer_size: adapter.max_buffer_size,
             max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
-            max_storage_buffers_per_shader_stage: adapter.max_storage_buffers_per_shader_stage.min(16),
+            max_storage_buffers_per_shader_stage: adapter
+                .max_storage_buffers_per_shader_stage
+                .min(16),
             ..wgpu::Limits::default().using_resolution(adapter.clone())
         }
     }
@@ -89,7 +93,9 @@ impl GpuContext {
         match Self::new_headless() {
             Ok(ctx) => Ok(Some(ctx)),
             Err(e) if !gpu_required() => {
-                eprintln!("note: no GPU adapter ({e}); skipping GPU work (set REQUIRE_GPU=1 to fail instead)");
+                eprintln!(
+                    "note: no GPU adapter ({e}); skipping GPU work (set REQUIRE_GPU=1 to fail instead)"
+                );
                 Ok(None)
             }
             Err(e) => Err(e),

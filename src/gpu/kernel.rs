@@ -54,7 +54,12 @@ impl Kernel {
     }
 
     /// Records one dispatch of `groups` workgroups.
-    pub fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>, bind: &wgpu::BindGroup, groups: [u32; 3]) {
+    pub fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind: &wgpu::BindGroup,
+        groups: [u32; 3],
+    ) {
         if groups.contains(&0) {
             return;
         }
@@ -64,7 +69,12 @@ impl Kernel {
     }
 
     /// Records an indirect dispatch with arguments at the start of `args`.
-    pub fn dispatch_indirect(&self, pass: &mut wgpu::ComputePass<'_>, bind: &wgpu::BindGroup, args: &wgpu::Buffer) {
+    pub fn dispatch_indirect(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+    ) {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind, &[]);
         pass.dispatch_workgroups_indirect(args, 0);
@@ -92,7 +102,12 @@ pub fn groups_1d(groups: u64, max_per_dim: u32) -> [u32; 3] {
 }
 
 /// A storage buffer of `size` bytes (at least 16) with `usage` plus STORAGE.
-pub fn storage(device: &wgpu::Device, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+pub fn storage(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: size.max(16).next_multiple_of(4),
@@ -112,7 +127,11 @@ pub fn uniform<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, value: &T) 
 }
 
 /// A read-only storage buffer initialised with `data`.
-pub fn storage_init<T: bytemuck::Pod>(device: &wgpu::Device, label: &str, data: &[T]) -> wgpu::Buffer {
+pub fn storage_init<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    label: &str,
+    data: &[T],
+) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
     let mut bytes = bytemuck::cast_slice(data).to_vec();
     bytes.resize(bytes.len().max(16).next_multiple_of(4), 0);

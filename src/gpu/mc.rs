@@ -25,12 +25,21 @@ pub struct Emit {
 impl Classify {
     /// Compiles the kernel.
     pub fn new(device: &wgpu::Device) -> Classify {
-        let m = module(device, "classify.wgsl", include_str!("../../shaders/classify.wgsl"));
+        let m = module(
+            device,
+            "classify.wgsl",
+            include_str!("../../shaders/classify.wgsl"),
+        );
         Classify(Kernel::new(device, &m, "main", &[]))
     }
 
     /// Bind group for one slab uniform.
-    pub fn bind(&self, device: &wgpu::Device, b: &Buffers, slab_uniform: wgpu::BindingResource<'_>) -> wgpu::BindGroup {
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        b: &Buffers,
+        slab_uniform: wgpu::BindingResource<'_>,
+    ) -> wgpu::BindGroup {
         self.0.bind(
             device,
             &[
@@ -46,7 +55,13 @@ impl Classify {
     }
 
     /// Records classification of `blocks` blocks of 256 points.
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, bind: &wgpu::BindGroup, blocks: u64, max_groups: u32) {
+    pub fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind: &wgpu::BindGroup,
+        blocks: u64,
+        max_groups: u32,
+    ) {
         self.0.dispatch(pass, bind, groups_1d(blocks, max_groups));
     }
 }
@@ -54,12 +69,21 @@ impl Classify {
 impl Compact {
     /// Compiles the kernel.
     pub fn new(device: &wgpu::Device) -> Compact {
-        let m = module(device, "compact.wgsl", include_str!("../../shaders/compact.wgsl"));
+        let m = module(
+            device,
+            "compact.wgsl",
+            include_str!("../../shaders/compact.wgsl"),
+        );
         Compact(Kernel::new(device, &m, "main", &[]))
     }
 
     /// Bind group for one slab uniform.
-    pub fn bind(&self, device: &wgpu::Device, b: &Buffers, slab_uniform: wgpu::BindingResource<'_>) -> wgpu::BindGroup {
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        b: &Buffers,
+        slab_uniform: wgpu::BindingResource<'_>,
+    ) -> wgpu::BindGroup {
         self.0.bind(
             device,
             &[
@@ -76,7 +100,13 @@ impl Compact {
     }
 
     /// Records compaction of `blocks` blocks of 256 points.
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, bind: &wgpu::BindGroup, blocks: u64, max_groups: u32) {
+    pub fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind: &wgpu::BindGroup,
+        blocks: u64,
+        max_groups: u32,
+    ) {
         self.0.dispatch(pass, bind, groups_1d(blocks, max_groups));
     }
 }
@@ -92,11 +122,21 @@ impl Emit {
     }
 
     fn kernel(&self, colour: bool) -> &Kernel {
-        if colour { &self.with_colour } else { &self.plain }
+        if colour {
+            &self.with_colour
+        } else {
+            &self.plain
+        }
     }
 
     /// Bind group for one slab uniform.
-    pub fn bind(&self, device: &wgpu::Device, b: &Buffers, slab_uniform: wgpu::BindingResource<'_>, colour: bool) -> wgpu::BindGroup {
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        b: &Buffers,
+        slab_uniform: wgpu::BindingResource<'_>,
+        colour: bool,
+    ) -> wgpu::BindGroup {
         self.kernel(colour).bind(
             device,
             &[
@@ -116,7 +156,14 @@ impl Emit {
     }
 
     /// Records emission over the active cells (indirect: arguments written by `slab_begin`).
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, bind: &wgpu::BindGroup, b: &Buffers, colour: bool) {
-        self.kernel(colour).dispatch_indirect(pass, bind, &b.dispatch_args);
+    pub fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        bind: &wgpu::BindGroup,
+        b: &Buffers,
+        colour: bool,
+    ) {
+        self.kernel(colour)
+            .dispatch_indirect(pass, bind, &b.dispatch_args);
     }
 }

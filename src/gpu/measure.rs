@@ -28,7 +28,11 @@ pub struct MeasureFrame {
 impl Measure {
     /// Compiles the kernels.
     pub fn new(device: &wgpu::Device) -> Measure {
-        let m = module(device, "measure.wgsl", include_str!("../../shaders/measure.wgsl"));
+        let m = module(
+            device,
+            "measure.wgsl",
+            include_str!("../../shaders/measure.wgsl"),
+        );
         let k = |e| Kernel::new(device, &m, e, &[]);
         Measure {
             slab_begin: k("slab_begin"),
@@ -40,13 +44,23 @@ impl Measure {
     }
 
     /// Bind groups for a frame; `uniform` holds a [`super::types::MeasureUniform`].
-    pub fn frame(&self, device: &wgpu::Device, b: &Buffers, uniform: &wgpu::Buffer) -> MeasureFrame {
+    pub fn frame(
+        &self,
+        device: &wgpu::Device,
+        b: &Buffers,
+        uniform: &wgpu::Buffer,
+    ) -> MeasureFrame {
         let u = || (0, uniform.as_entire_binding());
         let c = || (1, b.counters.as_entire_binding());
         MeasureFrame {
-            slab_begin: self.slab_begin.bind(device, &[u(), c(), (5, b.dispatch_args.as_entire_binding())]),
+            slab_begin: self.slab_begin.bind(
+                device,
+                &[u(), c(), (5, b.dispatch_args.as_entire_binding())],
+            ),
             slab_end: self.slab_end.bind(device, &[c()]),
-            frame_end: self.frame_end.bind(device, &[c(), (6, b.draw_args.as_entire_binding())]),
+            frame_end: self
+                .frame_end
+                .bind(device, &[c(), (6, b.draw_args.as_entire_binding())]),
             partial_sums: self.partial_sums.bind(
                 device,
                 &[
@@ -57,7 +71,9 @@ impl Measure {
                     (4, b.partials.as_entire_binding()),
                 ],
             ),
-            final_sum: self.final_sum.bind(device, &[c(), (4, b.partials.as_entire_binding())]),
+            final_sum: self
+                .final_sum
+                .bind(device, &[c(), (4, b.partials.as_entire_binding())]),
         }
     }
 
@@ -74,7 +90,8 @@ impl Measure {
     /// After the last slab: totals, draw arguments, area and volume.
     pub fn frame_end(&self, pass: &mut wgpu::ComputePass<'_>, f: &MeasureFrame) {
         self.frame_end.dispatch(pass, &f.frame_end, [1, 1, 1]);
-        self.partial_sums.dispatch(pass, &f.partial_sums, [256, 1, 1]);
+        self.partial_sums
+            .dispatch(pass, &f.partial_sums, [256, 1, 1]);
         self.final_sum.dispatch(pass, &f.final_sum, [1, 1, 1]);
     }
 }

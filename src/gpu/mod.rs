@@ -6,16 +6,18 @@
 //! (CLI, tests) or non-blocking into a [`GpuSurface`] the renderer draws from (viewer).
 //! The shaders live in `shaders/`, one file per stage.
 
-pub mod bench;
 pub mod bin;
 pub mod context;
 pub mod density;
 pub mod engine;
+pub mod frame;
+pub mod inputs;
 pub mod kernel;
 pub mod mc;
 pub mod measure;
 pub mod output;
 pub mod plan;
+pub mod resources;
 pub mod scan;
 pub mod table1;
 pub mod timing;
@@ -23,7 +25,7 @@ pub mod tolerance;
 pub mod types;
 
 pub use context::{GpuContext, gpu_required};
-pub use engine::GpuEngine;
+pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
 pub use output::{FrameStats, GpuSurface};
 pub use types::{DrawIndexedArgs, GpuCounters, GpuVertex};
 

@@ -83,7 +83,11 @@ pub fn plan_frame(
     // Cells at least one cutoff wide (so 3 cells per axis reach) and one voxel wide, and few
     // enough that the per-cell arrays fit one binding.
     let mut cell_size = max_cut.max(h);
-    let extent = [(nx - 1) as f32 * h, (ny - 1) as f32 * h, (nz - 1) as f32 * h];
+    let extent = [
+        (nx - 1) as f32 * h,
+        (ny - 1) as f32 * h,
+        (nz - 1) as f32 * h,
+    ];
     let dims_for = |c: f32| extent.map(|e| (e / c).floor() as u32 + 1);
     let limit = (max_binding / 4).min(u32::MAX as u64 / 2);
     loop {
@@ -100,7 +104,9 @@ pub fn plan_frame(
     // The colour volume (12 bytes per voxel) is the largest per-voxel binding.
     let by_binding = max_binding / (12 * layer);
     let by_budget = volume_budget / (BYTES_PER_VOXEL * layer);
-    let fit = by_binding.min(by_budget).min(u32::MAX as u64 / layer.max(1));
+    let fit = by_binding
+        .min(by_budget)
+        .min(u32::MAX as u64 / layer.max(1));
     if fit < 4 {
         return Err(GpuError::TooLarge {
             what: "one 4-layer slab of the density grid",
@@ -172,7 +178,15 @@ mod tests {
     fn binding_limit_forces_slabs() {
         let p = SurfaceParams::default();
         let layer_bytes = 12 * 100 * 100;
-        let plan = plan_frame(grid([100, 100, 100]), &p, 1.5, 20 * layer_bytes, 1 << 40, None).unwrap();
+        let plan = plan_frame(
+            grid([100, 100, 100]),
+            &p,
+            1.5,
+            20 * layer_bytes,
+            1 << 40,
+            None,
+        )
+        .unwrap();
         assert!(plan.slabs.len() > 1);
         assert!(plan.slab_voxels() * 12 <= 20 * layer_bytes);
         let one = plan_frame(grid([100, 100, 100]), &p, 1.5, 1 << 40, 1 << 40, None).unwrap();

@@ -115,7 +115,12 @@ impl Buffers {
             indices: Grow::new(device, "indices", U::INDEX | U::COPY_SRC),
             counters: storage(device, "counters", size_of::<GpuCounters>() as u64, copy),
             dispatch_args: storage(device, "emit dispatch args", 16, U::INDIRECT),
-            draw_args: storage(device, "draw args", size_of::<DrawIndexedArgs>() as u64, U::INDIRECT | U::COPY_SRC),
+            draw_args: storage(
+                device,
+                "draw args",
+                size_of::<DrawIndexedArgs>() as u64,
+                U::INDIRECT | U::COPY_SRC,
+            ),
             partials: storage(device, "area/volume partials", 256 * 8, U::empty()),
             case_start: storage_init(device, "mc case start", &tables.case_start),
             tri_edges: storage_init(device, "mc triangle edges", &tables.triangles_flat_u32()),
@@ -154,7 +159,8 @@ impl Buffers {
 
     /// Grows the mesh buffers to hold `vertices` and `triangles`.
     pub fn ensure_mesh(&mut self, device: &wgpu::Device, vertices: u64, triangles: u64) {
-        self.vertices.ensure(device, vertices * size_of::<GpuVertex>() as u64);
+        self.vertices
+            .ensure(device, vertices * size_of::<GpuVertex>() as u64);
         self.indices.ensure(device, triangles * 12);
     }
 
@@ -168,11 +174,29 @@ impl Buffers {
     /// Bytes of GPU memory held (all buffers).
     pub fn bytes(&self) -> u64 {
         let grows = [
-            &self.positions, &self.radii, &self.colours, &self.sorted_atoms, &self.sorted_colours,
-            &self.cell_start, &self.cell_end, &self.density, &self.colour, &self.classes,
-            &self.vertex_base, &self.active, &self.vertices, &self.indices,
+            &self.positions,
+            &self.radii,
+            &self.colours,
+            &self.sorted_atoms,
+            &self.sorted_colours,
+            &self.cell_start,
+            &self.cell_end,
+            &self.density,
+            &self.colour,
+            &self.classes,
+            &self.vertex_base,
+            &self.active,
+            &self.vertices,
+            &self.indices,
         ];
-        let fixed = [&self.counters, &self.dispatch_args, &self.draw_args, &self.partials, &self.case_start, &self.tri_edges];
+        let fixed = [
+            &self.counters,
+            &self.dispatch_args,
+            &self.draw_args,
+            &self.partials,
+            &self.case_start,
+            &self.tri_edges,
+        ];
         grows.iter().map(|g| g.size()).sum::<u64>()
             + self.block_sums.iter().map(|g| g.size()).sum::<u64>()
             + fixed.iter().map(|b| b.size()).sum::<u64>()

@@ -39,7 +39,13 @@ impl Scanner {
 
     /// Plans an exclusive scan of the first `count` u32 of `data`, writing the total to
     /// `total.0[total.1]` (a u32 index).
-    pub fn plan(&self, device: &wgpu::Device, data: &wgpu::Buffer, count: u64, total: (&wgpu::Buffer, u32)) -> ScanPlan {
+    pub fn plan(
+        &self,
+        device: &wgpu::Device,
+        data: &wgpu::Buffer,
+        count: u64,
+        total: (&wgpu::Buffer, u32),
+    ) -> ScanPlan {
         let mut levels = Vec::new();
         let mut buffers = Vec::new();
         let mut level_data = data.clone();
