@@ -1,7 +1,8 @@
 //! `mdsurf bench`: times each stage (read, upload, bin, density, Marching Cubes) as medians over
-//! repeats, per backend, on the bundled demo, on files given, on synthetic tiled systems
-//! (`--synthetic N`) and on the paper's Table 1 sizes (`--table1`), and prints an aligned table
-//! (optionally a CSV too). Speed claims of the project are measured here, never in tests.
+//! repeats, per backend, on the bundled demo, on a file given, and on synthetic tiled systems
+//! (`--synthetic N`), and prints an aligned table (optionally a CSV too); `--table1` runs the
+//! GPU engine's reproduction of the paper's Table 1. Speed claims of the project are measured
+//! here, never in tests.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -9,12 +10,13 @@ use std::time::Instant;
 use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 use mdsurf::export::write_atomic;
-use mdsurf::surface::{StageTimings, SurfaceOutput, SurfaceParams};
+use mdsurf::surface::{StageTimings, SurfaceEngine, SurfaceOutput, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
 
-use super::bench_engines::{BenchBackend, BenchEngine, engines_for};
-use super::common::{InputArgs, ParamArgs, ParticleArgs, System, demo_files, ms_since};
-use super::table::{PaperRow, TABLE1, Table, peak_rss_bytes};
+use super::bench_table::{Table, peak_rss_bytes};
+use super::common::{
+    BenchBackend, InputArgs, ParamArgs, ParticleArgs, System, demo_files, engines_for, ms_since,
+};
 
 /// Arguments of `mdsurf bench`.
 #[derive(clap::Args, Debug)]
@@ -29,7 +31,8 @@ pub struct BenchArgs {
     /// the demo with per-frame jitter; accepts 1000000, 1e6, 950k, 2.37M (repeatable).
     #[arg(long, value_name = "N", value_parser = parse_count)]
     pub synthetic: Vec<usize>,
-    /// Run the rows of the paper's Table 1 (R = 1, I = 0.5, the paper's sizes and spacings).
+    /// Run the GPU engine's reproduction of the paper's Table 1 (its sizes and spacings,
+    /// R = 1, I = 0.5) and print it beside the paper's figures.
     #[arg(long)]
     pub table1: bool,
     /// Engines to time: cpu, gpu, or all that are available.
@@ -86,7 +89,6 @@ struct Case {
     label: String,
     source: Source,
     params: SurfaceParams,
-    paper: Option<PaperRow>,
 }
 
 /// Medians of one case on one engine.
@@ -112,10 +114,6 @@ pub struct BenchResult {
     pub compute_wall_ms: f64,
     /// Frames per second including reading.
     pub fps: f64,
-    /// The paper's t_sort + t_d + t_MC in ms, for Table 1 rows.
-    pub paper_ms: Option<f64>,
-    /// Engine memory in bytes where the engine reports it (GPU).
-    pub engine_bytes: Option<u64>,
     /// Peak resident memory of the process so far, bytes.
     pub peak_rss: Option<u64>,
 }
@@ -123,6 +121,12 @@ pub struct BenchResult {
 /// Runs `mdsurf bench`.
 pub fn run(args: BenchArgs) -> Result<()> {
     let params = args.params.params()?;
+    if args.table1 {
+        print_table1()?;
+        if args.top.is_none() && args.synthetic.is_empty() {
+            return Ok(());
+        }
+    }
     let mut engines = engines_for(args.backend)?;
     let cases = build_cases(&args, params)?;
     let mut results = Vec::new();
@@ -131,25 +135,18 @@ pub fn run(args: BenchArgs) -> Result<()> {
             label,
             mut source,
             params,
-            paper,
         } = case;
         for engine in engines.iter_mut() {
-            eprintln!("timing {label} on {} ...", engine.name());
-            let mut r = time_case(&mut source, engine, &params, &args)
-                .map_err(|e| anyhow!("{label} on {}: {e:#}", engine.name()))?;
+            let name = engine.name().to_string();
+            eprintln!("timing {label} on {name} ...");
+            let mut r = time_case(&mut source, engine.as_mut(), &params, &args)
+                .map_err(|e| anyhow!("{label} on {name}: {e:#}"))?;
             r.case = label.clone();
-            r.paper_ms = paper.map(|p| p.total_ms());
             results.push(r);
         }
     }
-    let table = Table::from_results(&results, args.table1);
+    let table = Table::from_results(&results);
     println!("{}", table.to_text());
-    if args.table1 {
-        println!(
-            "paper: Krone et al. 2012, Table 1, GeForce GTX 580, t_sort+t_d+t_MC (t_sort includes the upload); \
-             speed-up = paper / (upload+bin+density+mc)"
-        );
-    }
     if let Some(csv) = &args.csv {
         let text = table.to_csv();
         write_atomic(csv, |w| w.write_all(text.as_bytes()))?;
@@ -157,7 +154,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// The cases the arguments ask for, in order: the file (or demo), synthetic sizes, Table 1.
+/// Runs the GPU engine's Table 1 reproduction and prints its table.
+fn print_table1() -> Result<()> {
+    let text = super::shim::table1()?;
+    println!("{text}");
+    Ok(())
+}
+
+/// The cases the arguments ask for, in order: the file (or demo), then synthetic sizes.
 fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
     let input = match &args.top {
         Some(top) => InputArgs {
@@ -190,16 +194,19 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
     let base_colours = system.particles.colours().to_vec();
     let colours = (!args.no_color).then_some(base_colours.as_slice());
     let tile = |n: usize| -> Result<SyntheticSystem> {
-        Ok(SyntheticSystem::tile(&base_positions, &base_radii, colours, n)?)
+        Ok(SyntheticSystem::tile(
+            &base_positions,
+            &base_radii,
+            colours,
+            n,
+        )?)
     };
 
-    let only_synthetic = args.top.is_none() && (!args.synthetic.is_empty() || args.table1);
-    if !only_synthetic {
+    if args.top.is_some() || args.synthetic.is_empty() {
         cases.push(Case {
             label: name.clone(),
             source: Source::Real(Box::new(system)),
             params,
-            paper: None,
         });
     }
     for &n in &args.synthetic {
@@ -207,24 +214,7 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
             label: format!("synthetic {n} ({name})"),
             source: Source::Synthetic(tile(n)?),
             params,
-            paper: None,
         });
-    }
-    if args.table1 {
-        for row in TABLE1 {
-            let p = SurfaceParams {
-                spacing: row.spacing,
-                radius_scale: 1.0,
-                isovalue: 0.5,
-                quality: params.quality,
-            };
-            cases.push(Case {
-                label: format!("table1 {} H={}", row.label, row.spacing),
-                source: Source::Synthetic(tile(row.atoms)?),
-                params: p,
-                paper: Some(row),
-            });
-        }
     }
     Ok(cases)
 }
@@ -232,7 +222,7 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
 /// Times one case on one engine: `warmup` untimed frames, then `repeats` timed ones.
 fn time_case(
     source: &mut Source,
-    engine: &mut BenchEngine,
+    engine: &mut dyn SurfaceEngine,
     params: &SurfaceParams,
     args: &BenchArgs,
 ) -> Result<BenchResult> {
@@ -259,7 +249,7 @@ fn time_case(
                 colours: s.colours(),
             },
         };
-        last = engine.engine().compute(&atoms, params)?;
+        last = engine.compute(&atoms, params)?;
         let compute_ms = ms_since(t1);
         if i >= args.warmup as usize {
             reads.push(read_ms);
@@ -286,8 +276,6 @@ fn time_case(
         },
         compute_wall_ms: median(computes),
         fps: 1e3 / wall.max(1e-9),
-        paper_ms: None,
-        engine_bytes: engine.memory_bytes(),
         peak_rss: peak_rss_bytes(),
     })
 }

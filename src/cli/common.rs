@@ -10,9 +10,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
-use mdsurf::io::{self, Trajectory};
-use mdsurf::model::{ColorScheme, Frame, ParticleOptions, Particles, RadiusOverrides, Topology};
+use mdsurf::model::{ColorScheme, Frame, ParticleOptions, Particles, RadiusOverrides};
 use mdsurf::surface::{Quality, SurfaceEngine, SurfaceParams};
+
+use super::shim::io::{self, Trajectory};
+use super::shim::{CpuEngine, GpuEngine};
 
 /// Input files and how their atoms become particles.
 #[derive(clap::Args, Debug, Clone)]
@@ -100,21 +102,49 @@ pub enum Backend {
 /// Creates the engine for `backend`; `auto` says on stderr which one it picked and why.
 pub fn make_engine(backend: Backend) -> Result<Box<dyn SurfaceEngine>> {
     match backend {
-        Backend::Cpu => Ok(Box::new(mdsurf::surface::CpuEngine::new())),
+        Backend::Cpu => Ok(Box::new(CpuEngine::new())),
         Backend::Gpu => Ok(Box::new(
-            mdsurf::gpu::GpuEngine::new().context("cannot start the GPU engine")?,
+            GpuEngine::new().context("--backend gpu: cannot start the GPU engine")?,
         )),
-        Backend::Auto => match mdsurf::gpu::GpuEngine::new() {
+        Backend::Auto => match GpuEngine::new() {
             Ok(gpu) => {
-                eprintln!("backend: gpu ({})", gpu.adapter_name());
+                eprintln!("backend: gpu");
                 Ok(Box::new(gpu))
             }
             Err(err) => {
-                eprintln!("backend: cpu (no usable GPU: {err})");
-                Ok(Box::new(mdsurf::surface::CpuEngine::new()))
+                eprintln!("backend: cpu (no usable GPU: {err:#})");
+                Ok(Box::new(CpuEngine::new()))
             }
         },
     }
+}
+
+/// Which engines `mdsurf bench` times.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BenchBackend {
+    /// Only the CPU engine.
+    Cpu,
+    /// Only the GPU engine (an error when there is none).
+    Gpu,
+    /// Every engine that starts on this machine.
+    All,
+}
+
+/// The engines `backend` asks for; `all` skips a GPU that does not start, saying so on stderr.
+pub fn engines_for(backend: BenchBackend) -> Result<Vec<Box<dyn SurfaceEngine>>> {
+    let mut engines: Vec<Box<dyn SurfaceEngine>> = Vec::new();
+    if backend != BenchBackend::Gpu {
+        engines.push(Box::new(CpuEngine::new()));
+    }
+    match (backend, GpuEngine::new()) {
+        (BenchBackend::Cpu, _) => {}
+        (_, Ok(gpu)) => engines.push(Box::new(gpu)),
+        (BenchBackend::Gpu, Err(err)) => {
+            return Err(err.context("--backend gpu: cannot start the GPU engine"));
+        }
+        (BenchBackend::All, Err(err)) => eprintln!("note: no GPU engine ({err:#}); timing the CPU only"),
+    }
+    Ok(engines)
 }
 
 /// A `START:STOP:STEP` frame selection (STOP exclusive; each part optional; a single number
@@ -228,11 +258,6 @@ impl System {
             },
             first,
         ))
-    }
-
-    /// The topology.
-    pub fn topology(&self) -> &Topology {
-        self.trajectory.topology()
     }
 
     /// Number of frames.
