@@ -80,7 +80,7 @@ impl ChemReader {
     pub(crate) fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
         let base = self.base;
         let raw = self.read_raw(index)?;
-        let positions: Vec<Vec3> = raw.positions().iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect();
+        let positions = to_vec3(raw.positions());
         let cell = cell_rows(raw);
         let time_ps = frame_time_ps(raw, base);
         if let Some(atom) = positions.iter().position(|p| !p.is_finite()) {
@@ -89,12 +89,23 @@ impl ChemReader {
         Ok(Frame { index, time_ps, positions, cell })
     }
 
+    /// Reads frame `index` and returns its raw positions in Å (not checked to be finite).
+    pub(crate) fn read_positions(&mut self, index: usize) -> Result<Vec<Vec3>, IoError> {
+        let raw = self.read_raw(index)?;
+        Ok(to_vec3(raw.positions()))
+    }
+
     /// Reads frame `index` and returns the topology it carries (names, residues, chains, bonds;
     /// elements only where the file states them, radii left at 0 for the caller to complete).
     pub(crate) fn read_topology(&mut self, index: usize) -> Result<Topology, IoError> {
         let raw = self.read_raw(index)?;
         Ok(convert_topology(&raw.topology()))
     }
+}
+
+/// Converts chemfiles' positions (f64, Å) to ours (f32, Å).
+fn to_vec3(positions: &[[f64; 3]]) -> Vec<Vec3> {
+    positions.iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
 }
 
 /// The periodic box as rows a, b, c in Å, or `None` for an infinite (absent) box.
@@ -139,8 +150,12 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
     };
     for i in 0..n {
         let atom = top.atom(i);
-        let name = atom.name();
         let kind = atom.atomic_type();
+        // LAMMPS dumps give each particle a numeric type and no name: the type is the name.
+        let name = match atom.name() {
+            name if name.trim().is_empty() => kind.clone(),
+            name => name,
+        };
         // A type equal to the name is chemfiles' default, not an element column.
         let element = if kind != name { canonical_symbol(&kind).unwrap_or_default() } else { "" };
         out.elements.push(element.to_string());
@@ -148,7 +163,7 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
     }
     let residues = top.residues_count() as usize;
     for r in 0..residues {
-        let Some(residue) = top.residue(r as u64) else { continue };
+        let Some(residue) = top.residue(r) else { continue };
         let name = residue.name();
         let id = residue.id().unwrap_or(r as i64 + 1);
         let chain = residue_chain(&residue);

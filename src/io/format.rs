@@ -14,8 +14,27 @@ pub struct FileFormat {
     pub base: &'static str,
     /// True when the format carries atom names (so it can be its own topology).
     pub has_names: bool,
-    /// The pdbtbx reader for wwPDB files (uncompressed PDB and mmCIF only).
-    pub wwpdb: Option<pdbtbx::Format>,
+    /// Which wwPDB flavour this is, for the pdbtbx reader (uncompressed PDB and mmCIF only).
+    pub wwpdb: Option<WwFormat>,
+}
+
+/// The two wwPDB file flavours pdbtbx reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WwFormat {
+    /// Fixed-column PDB.
+    Pdb,
+    /// PDBx/mmCIF.
+    Mmcif,
+}
+
+impl WwFormat {
+    /// The pdbtbx name of this format.
+    pub(crate) fn pdbtbx(self) -> pdbtbx::Format {
+        match self {
+            WwFormat::Pdb => pdbtbx::Format::Pdb,
+            WwFormat::Mmcif => pdbtbx::Format::Mmcif,
+        }
+    }
 }
 
 /// The compression suffixes chemfiles reads itself, with its names for them.
@@ -66,8 +85,8 @@ pub fn detect(path: &Path) -> Result<FileFormat, IoError> {
         None => base.to_string(),
     };
     let wwpdb = match (base, compression) {
-        ("PDB", None) => Some(pdbtbx::Format::Pdb),
-        ("mmCIF", None) => Some(pdbtbx::Format::Mmcif),
+        ("PDB", None) => Some(WwFormat::Pdb),
+        ("mmCIF", None) => Some(WwFormat::Mmcif),
         _ => None,
     };
     Ok(FileFormat { chemfiles, base, has_names, wwpdb })
@@ -113,7 +132,7 @@ mod tests {
         let (_d, p) = temp_file("x.cif");
         let f = detect(&p).expect("known");
         assert_eq!(f.base, "mmCIF");
-        assert_eq!(f.wwpdb, Some(pdbtbx::Format::Mmcif));
+        assert_eq!(f.wwpdb, Some(WwFormat::Mmcif));
     }
 
     #[test]
