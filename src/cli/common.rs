@@ -10,11 +10,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
+use mdsurf::gpu::GpuEngine;
+use mdsurf::io::{self, Trajectory};
 use mdsurf::model::{ColorScheme, Frame, ParticleOptions, Particles, RadiusOverrides};
-use mdsurf::surface::{Quality, SurfaceEngine, SurfaceParams};
+use mdsurf::surface::{CpuEngine, Quality, SurfaceEngine, SurfaceParams};
 
-use super::shim::io::{self, Trajectory};
-use super::shim::{CpuEngine, GpuEngine};
 
 /// Input files and how their atoms become particles.
 #[derive(clap::Args, Debug, Clone)]
@@ -108,7 +108,7 @@ pub fn make_engine(backend: Backend) -> Result<Box<dyn SurfaceEngine>> {
         )),
         Backend::Auto => match GpuEngine::new() {
             Ok(gpu) => {
-                eprintln!("backend: gpu");
+                eprintln!("backend: gpu ({})", gpu.context().adapter_name);
                 Ok(Box::new(gpu))
             }
             Err(err) => {
@@ -140,7 +140,7 @@ pub fn engines_for(backend: BenchBackend) -> Result<Vec<Box<dyn SurfaceEngine>>>
         (BenchBackend::Cpu, _) => {}
         (_, Ok(gpu)) => engines.push(Box::new(gpu)),
         (BenchBackend::Gpu, Err(err)) => {
-            return Err(err.context("--backend gpu: cannot start the GPU engine"));
+            return Err(anyhow::Error::new(err).context("--backend gpu: cannot start the GPU engine"));
         }
         (BenchBackend::All, Err(err)) => eprintln!("note: no GPU engine ({err:#}); timing the CPU only"),
     }
@@ -243,7 +243,7 @@ impl System {
     pub fn open(input: &InputArgs, first_frame: usize) -> Result<(System, Frame)> {
         let options = input.particles.options()?;
         let trajectory = io::open(&input.top, input.traj.as_deref())?;
-        let frames_path = input.traj.clone().unwrap_or_else(|| input.top.clone());
+        let frames_path = trajectory.path().to_path_buf();
         if trajectory.len() == 0 {
             bail!("{}: the trajectory has no frames", frames_path.display());
         }
@@ -260,9 +260,19 @@ impl System {
         ))
     }
 
-    /// Number of frames.
+    /// Number of readable frames.
     pub fn len(&self) -> usize {
         self.trajectory.len()
+    }
+
+    /// Frames a selection may name: the readable ones plus, in a damaged (truncated) file, the
+    /// first unreadable one, so that a run over the whole file reaches it and reports its error
+    /// after processing the good frames.
+    pub fn selectable_len(&self) -> usize {
+        match self.trajectory.damage() {
+            Some(damage) => damage.frame + 1,
+            None => self.trajectory.len(),
+        }
     }
 
     /// Reads frame `index` and writes its particle positions (Å) into `out`. Returns the frame

@@ -59,7 +59,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let start_frame = args.frames.map(|r| r.start).unwrap_or(0);
     let (mut system, _first) = System::open(&args.input, start_frame)?;
     let range = args.frames.unwrap_or_default();
-    let frames = range.indices(system.len());
+    let frames = range.indices(system.selectable_len());
     if frames.is_empty() {
         bail!(
             "--frames {range} selects no frame of {} ({} frames)",
