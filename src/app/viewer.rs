@@ -169,7 +169,7 @@ impl Viewer {
             self.picked = None;
             self.apply(ctx, cmd);
         }
-        let dropped: Vec<PathBuf> = ctx.input(|i| i.raw.dropped_files.iter().filter_map(|f| f.path.clone()).collect());
+        let dropped: Vec<PathBuf> = ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect());
         if let Some(top) = dropped.first().cloned() {
             self.apply(ctx, Command::Open(top, dropped.get(1).cloned()));
         }
