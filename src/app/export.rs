@@ -110,11 +110,19 @@ pub fn export_ui(
     ui.horizontal(|ui| {
         ui.add(egui::Slider::new(shot_scale, 1..=4).text("× window"));
         if ui.button("Screenshot…").clicked() {
-            out.push(Command::Screenshot { scale: *shot_scale, size: None, path: None });
+            out.push(Command::Screenshot {
+                scale: *shot_scale,
+                size: None,
+                path: None,
+            });
         }
     });
     if ui.button("Screenshot 3840×2160…").clicked() {
-        out.push(Command::Screenshot { scale: 1, size: Some([3840, 2160]), path: None });
+        out.push(Command::Screenshot {
+            scale: 1,
+            size: Some([3840, 2160]),
+            path: None,
+        });
     }
     ui.separator();
     let mut range = plan.frames.is_some();
@@ -125,25 +133,53 @@ pub fn export_ui(
         ui.horizontal(|ui| {
             ui.add(egui::DragValue::new(&mut a).range(0..=last).prefix("from "));
             ui.add(egui::DragValue::new(&mut b).range(0..=last).prefix("to "));
-            ui.add(egui::DragValue::new(&mut plan.stride).range(1..=1000).prefix("stride "));
+            ui.add(
+                egui::DragValue::new(&mut plan.stride)
+                    .range(1..=1000)
+                    .prefix("stride "),
+            );
         });
         plan.frames = Some((a, b));
     } else {
         plan.frames = None;
-        ui.add(egui::DragValue::new(&mut plan.turntable_frames).range(1..=3600).prefix("images "));
+        ui.add(
+            egui::DragValue::new(&mut plan.turntable_frames)
+                .range(1..=3600)
+                .prefix("images "),
+        );
     }
-    ui.add(egui::DragValue::new(&mut plan.degrees_per_frame).range(-90.0..=90.0).prefix("turn ").suffix(" °/image"));
+    ui.add(
+        egui::DragValue::new(&mut plan.degrees_per_frame)
+            .range(-90.0..=90.0)
+            .prefix("turn ")
+            .suffix(" °/image"),
+    );
     ui.horizontal(|ui| {
-        ui.add(egui::DragValue::new(&mut plan.size[0]).range(16..=8192).prefix("w "));
-        ui.add(egui::DragValue::new(&mut plan.size[1]).range(16..=8192).prefix("h "));
+        ui.add(
+            egui::DragValue::new(&mut plan.size[0])
+                .range(16..=8192)
+                .prefix("w "),
+        );
+        ui.add(
+            egui::DragValue::new(&mut plan.size[1])
+                .range(16..=8192)
+                .prefix("h "),
+        );
     });
     let mut dir = plan.dir.display().to_string();
-    if ui.add(egui::TextEdit::singleline(&mut dir).hint_text("output folder")).changed() {
+    if ui
+        .add(egui::TextEdit::singleline(&mut dir).hint_text("output folder"))
+        .changed()
+    {
         plan.dir = PathBuf::from(dir);
     }
     match job {
         Some(j) => {
-            ui.add(egui::ProgressBar::new(j.progress()).text(format!("{}/{}", j.done, j.steps.len())));
+            ui.add(egui::ProgressBar::new(j.progress()).text(format!(
+                "{}/{}",
+                j.done,
+                j.steps.len()
+            )));
             if ui.button("Cancel").clicked() {
                 out.push(Command::CancelMovie);
             }
@@ -163,12 +199,22 @@ mod tests {
 
     #[test]
     fn steps_cover_range_and_turn() {
-        let plan = MoviePlan { frames: Some((2, 8)), stride: 3, degrees_per_frame: 10.0, dir: "m".into(), ..Default::default() };
+        let plan = MoviePlan {
+            frames: Some((2, 8)),
+            stride: 3,
+            degrees_per_frame: 10.0,
+            dir: "m".into(),
+            ..Default::default()
+        };
         let s = plan.steps(0);
         assert_eq!(s.iter().map(|s| s.frame).collect::<Vec<_>>(), [2, 5, 8]);
         assert_eq!(s[2].degrees, 20.0);
         assert_eq!(s[1].path, Path::new("m/frame_00001.png"));
-        let turn = MoviePlan { turntable_frames: 4, ..Default::default() }.steps(7);
+        let turn = MoviePlan {
+            turntable_frames: 4,
+            ..Default::default()
+        }
+        .steps(7);
         assert_eq!(turn.len(), 4);
         assert!(turn.iter().all(|s| s.frame == 7));
     }

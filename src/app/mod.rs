@@ -39,13 +39,17 @@ pub struct ViewOptions {
     pub cpu: bool,
     /// Initial surface parameters.
     pub params: crate::surface::SurfaceParams,
+    /// Initial particle options (beads, colours, radius overrides).
+    pub particles: crate::model::ParticleOptions,
 }
 
 /// Why the window could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum ViewError {
     /// No display to open a window on.
-    #[error("cannot open a window: {0}; use `mdsurf render TOP [TRAJ] -o out.png` to make pictures without a display")]
+    #[error(
+        "cannot open a window: {0}; use `mdsurf render TOP [TRAJ] -o out.png` to make pictures without a display"
+    )]
     NoDisplay(String),
     /// The scripted run failed.
     #[error("scripted run failed: {0}")]
@@ -54,14 +58,22 @@ pub enum ViewError {
 
 /// The surface engine for the window: the CPU reference engine (the GPU engine shares eframe's
 /// device once available).
-fn make_engine(_state: Option<&egui_wgpu::RenderState>, _cpu: bool) -> Box<dyn SurfaceEngine + Send> {
+fn make_engine(
+    _state: Option<&egui_wgpu::RenderState>,
+    _cpu: bool,
+) -> Box<dyn SurfaceEngine + Send> {
     Box::new(crate::surface::CpuEngine::new())
 }
 
 /// Opens the viewer window and runs it until it is closed.
 pub fn run(options: ViewOptions) -> Result<(), ViewError> {
-    if cfg!(target_os = "linux") && std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
-        return Err(ViewError::NoDisplay("neither DISPLAY nor WAYLAND_DISPLAY is set".into()));
+    if cfg!(target_os = "linux")
+        && std::env::var_os("DISPLAY").is_none()
+        && std::env::var_os("WAYLAND_DISPLAY").is_none()
+    {
+        return Err(ViewError::NoDisplay(
+            "neither DISPLAY nor WAYLAND_DISPLAY is set".into(),
+        ));
     }
     let result: viewer::ScriptResult = Arc::new(Mutex::new(None));
     let (top, traj) = options
@@ -69,7 +81,9 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
         .clone()
         .unwrap_or_else(|| (PathBuf::from(DEMO_TOP), Some(PathBuf::from(DEMO_TRAJ))));
     let native = eframe::NativeOptions {
-        viewport: egui::ViewportBuilder::default().with_inner_size([1400.0, 900.0]).with_drag_and_drop(true),
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([1400.0, 900.0])
+            .with_drag_and_drop(true),
         renderer: eframe::Renderer::Wgpu,
         ..Default::default()
     };
@@ -80,9 +94,13 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
         Box::new(move |cc| {
             let state = cc.wgpu_render_state.as_ref();
             let ctx = cc.egui_ctx.clone();
-            let worker = worker::Worker::spawn(make_engine(state, options.cpu), Box::new(move || ctx.request_repaint()));
+            let worker = worker::Worker::spawn(
+                make_engine(state, options.cpu),
+                Box::new(move || ctx.request_repaint()),
+            );
             let mut core = AppCore::new(worker);
             core.params = options.params;
+            core.options = options.particles.clone();
             let gpu = state.map(viewport::GpuView::new);
             let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
             viewer.open(&cc.egui_ctx, top, traj);

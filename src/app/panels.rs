@@ -29,24 +29,44 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
     let mut out = Vec::new();
     ui.heading("Surface");
     let p = &mut draft.params;
-    ui.add(egui::Slider::new(&mut p.spacing, 0.25..=4.0).logarithmic(true).text("H grid spacing (Å)"));
+    ui.add(
+        egui::Slider::new(&mut p.spacing, 0.25..=4.0)
+            .logarithmic(true)
+            .text("H grid spacing (Å)"),
+    );
     ui.add(egui::Slider::new(&mut p.radius_scale, 0.5..=3.0).text("R radius scale"));
-    ui.add(egui::Slider::new(&mut p.isovalue, 0.05..=2.0).logarithmic(true).text("I isovalue"));
+    ui.add(
+        egui::Slider::new(&mut p.isovalue, 0.05..=2.0)
+            .logarithmic(true)
+            .text("I isovalue"),
+    );
     egui::ComboBox::from_label("quality")
         .selected_text(p.quality.name())
         .show_ui(ui, |ui| {
             for q in Quality::ALL {
-                ui.selectable_value(&mut p.quality, q, format!("{} (cutoff {} α)", q.name(), q.cutoff()));
+                ui.selectable_value(
+                    &mut p.quality,
+                    q,
+                    format!("{} (cutoff {} α)", q.name(), q.cutoff()),
+                );
             }
         });
     match core.grid_estimate(p) {
         Some((grid, bytes)) => {
             let [x, y, z] = grid.dims;
-            ui.label(format!("grid {x}×{y}×{z} = {:.2} M voxels, {}", grid.voxel_count() as f64 / 1e6, megabytes(bytes)));
+            ui.label(format!(
+                "grid {x}×{y}×{z} = {:.2} M voxels, {}",
+                grid.voxel_count() as f64 / 1e6,
+                megabytes(bytes)
+            ));
             if bytes > core.grid_limit_bytes {
                 ui.colored_label(
                     ui.visuals().error_fg_color,
-                    format!("refused: needs {} > limit {}; raise H", megabytes(bytes), megabytes(core.grid_limit_bytes)),
+                    format!(
+                        "refused: needs {} > limit {}; raise H",
+                        megabytes(bytes),
+                        megabytes(core.grid_limit_bytes)
+                    ),
                 );
             } else if *p != core.params {
                 out.push(Command::SetParams(*p));
@@ -75,7 +95,11 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
                 ColorScheme::BFactor,
                 ColorScheme::Single([0.8, 0.8, 0.8]),
             ] {
-                let name = if let ColorScheme::Single(_) = s { "single colour".to_string() } else { s.to_string() };
+                let name = if let ColorScheme::Single(_) = s {
+                    "single colour".to_string()
+                } else {
+                    s.to_string()
+                };
                 let selected = std::mem::discriminant(&scheme) == std::mem::discriminant(&s);
                 if ui.selectable_label(selected, name).clicked() && !selected {
                     scheme = s;
@@ -133,7 +157,11 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     ui.horizontal(|ui| {
         let mut ortho = core.camera.projection == Projection::Orthographic;
         if ui.checkbox(&mut ortho, "orthographic").changed() {
-            out.push(Command::SetProjection(if ortho { Projection::Orthographic } else { Projection::Perspective }));
+            out.push(Command::SetProjection(if ortho {
+                Projection::Orthographic
+            } else {
+                Projection::Perspective
+            }));
         }
         if ui.button("Reset view").clicked() {
             out.push(Command::ResetCamera);
@@ -146,7 +174,11 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
         let mut on = core.turntable.is_some();
         let mut speed = core.turntable.unwrap_or(30.0);
         let a = ui.checkbox(&mut on, "turntable");
-        let b = ui.add(egui::DragValue::new(&mut speed).range(-360.0..=360.0).suffix(" °/s"));
+        let b = ui.add(
+            egui::DragValue::new(&mut speed)
+                .range(-360.0..=360.0)
+                .suffix(" °/s"),
+        );
         if a.changed() || b.changed() {
             out.push(Command::SetTurntable(on.then_some(speed)));
         }
@@ -158,7 +190,11 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
 pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) {
     ui.heading("Readouts");
     let Some(shown) = &core.shown else {
-        ui.label(if core.source.is_some() { "computing…" } else { "no data" });
+        ui.label(if core.source.is_some() {
+            "computing…"
+        } else {
+            "no data"
+        });
         return;
     };
     let c = &shown.computed;
@@ -169,7 +205,10 @@ pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) 
             ui.monospace(v);
             ui.end_row();
         };
-        row(if c.beads { "beads" } else { "atoms" }, c.particles.positions.len().to_string());
+        row(
+            if c.beads { "beads" } else { "atoms" },
+            c.particles.positions.len().to_string(),
+        );
         row("triangles", c.output.mesh.triangle_count().to_string());
         row("area", format!("{:.1} Å²", c.output.area));
         row("volume", format!("{:.1} Å³", c.output.volume));

@@ -51,7 +51,10 @@ impl History {
     /// Writes [`History::to_csv`] to `path` atomically (temporary file, then rename).
     pub fn write_csv(&self, path: &Path) -> Result<(), String> {
         let err = |e: std::io::Error| format!("{}: {e}", path.display());
-        let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let dir = path
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
         let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(err)?;
         tmp.write_all(self.to_csv().as_bytes()).map_err(err)?;
         tmp.persist(path).map_err(|e| err(e.error))?;
@@ -61,13 +64,21 @@ impl History {
 
 /// Draws area and volume (each scaled to its own range) against frame, with the current frame
 /// marked, and a CSV export button.
-pub fn plot_ui(ui: &mut egui::Ui, history: &History, current: usize, frames: usize) -> Vec<Command> {
+pub fn plot_ui(
+    ui: &mut egui::Ui,
+    history: &History,
+    current: usize,
+    frames: usize,
+) -> Vec<Command> {
     let mut out = Vec::new();
     ui.horizontal(|ui| {
         ui.colored_label(AREA, "— area (Å²)");
         ui.colored_label(VOLUME, "— volume (Å³)");
         ui.label(format!("{} frames", history.len()));
-        if ui.add_enabled(!history.is_empty(), egui::Button::new("Export CSV…")).clicked() {
+        if ui
+            .add_enabled(!history.is_empty(), egui::Button::new("Export CSV…"))
+            .clicked()
+        {
             out.push(Command::ExportCsv(None));
         }
     });
@@ -75,12 +86,21 @@ pub fn plot_ui(ui: &mut egui::Ui, history: &History, current: usize, frames: usi
     let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
-    let x_of = |f: usize| rect.left() + rect.width() * f as f32 / frames.saturating_sub(1).max(1) as f32;
+    let x_of =
+        |f: usize| rect.left() + rect.width() * f as f32 / frames.saturating_sub(1).max(1) as f32;
     let x = x_of(current);
-    painter.line_segment([egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())], (1.0, egui::Color32::GRAY));
+    painter.line_segment(
+        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
+        (1.0, egui::Color32::GRAY),
+    );
     for (series, colour) in [(0, AREA), (1, VOLUME)] {
-        let vals: Vec<(usize, f64)> = history.rows().map(|(f, a, v)| (f, if series == 0 { a } else { v })).collect();
-        let (lo, hi) = vals.iter().fold((f64::MAX, f64::MIN), |(lo, hi), (_, v)| (lo.min(*v), hi.max(*v)));
+        let vals: Vec<(usize, f64)> = history
+            .rows()
+            .map(|(f, a, v)| (f, if series == 0 { a } else { v }))
+            .collect();
+        let (lo, hi) = vals.iter().fold((f64::MAX, f64::MIN), |(lo, hi), (_, v)| {
+            (lo.min(*v), hi.max(*v))
+        });
         let span = (hi - lo).max(hi.abs() * 1e-6).max(1e-9);
         let pts: Vec<egui::Pos2> = vals
             .iter()
@@ -96,8 +116,18 @@ pub fn plot_ui(ui: &mut egui::Ui, history: &History, current: usize, frames: usi
         }
         if !vals.is_empty() {
             let text = format!("{lo:.0} … {hi:.0}");
-            let at = if series == 0 { rect.left_top() } else { rect.left_bottom() - egui::vec2(0.0, 14.0) };
-            painter.text(at + egui::vec2(4.0, 2.0), egui::Align2::LEFT_TOP, text, egui::FontId::monospace(10.0), colour);
+            let at = if series == 0 {
+                rect.left_top()
+            } else {
+                rect.left_bottom() - egui::vec2(0.0, 14.0)
+            };
+            painter.text(
+                at + egui::vec2(4.0, 2.0),
+                egui::Align2::LEFT_TOP,
+                text,
+                egui::FontId::monospace(10.0),
+                colour,
+            );
         }
     }
     out
@@ -115,7 +145,10 @@ mod tests {
         let mut h = History::default();
         h.record(3, 10.0, 20.5);
         h.record(1, 1.0, 2.0);
-        assert_eq!(h.to_csv(), "frame,area_A2,volume_A3\n1,1.0000,2.0000\n3,10.0000,20.5000\n");
+        assert_eq!(
+            h.to_csv(),
+            "frame,area_A2,volume_A3\n1,1.0000,2.0000\n3,10.0000,20.5000\n"
+        );
         let dir = tempfile::tempdir().expect("tempdir");
         let p = dir.path().join("h.csv");
         h.write_csv(&p).expect("write");

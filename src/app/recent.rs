@@ -73,7 +73,11 @@ fn format(entries: &[RecentEntry]) -> String {
     entries
         .iter()
         .map(|e| {
-            let traj = e.traj.as_ref().map(|t| t.display().to_string()).unwrap_or_default();
+            let traj = e
+                .traj
+                .as_ref()
+                .map(|t| t.display().to_string())
+                .unwrap_or_default();
             format!("{}\t{traj}\n", e.top.display())
         })
         .collect()
@@ -86,8 +90,14 @@ mod tests {
     #[test]
     fn round_trip_newest_first_without_duplicates() {
         let mut r = Recent::default();
-        let a = RecentEntry { top: "a.gro".into(), traj: Some("a.xtc".into()) };
-        let b = RecentEntry { top: "b.pdb".into(), traj: None };
+        let a = RecentEntry {
+            top: "a.gro".into(),
+            traj: Some("a.xtc".into()),
+        };
+        let b = RecentEntry {
+            top: "b.pdb".into(),
+            traj: None,
+        };
         r.push(a.clone());
         r.push(b.clone());
         r.push(a.clone());

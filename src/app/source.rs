@@ -41,10 +41,13 @@ impl FrameSource for MemorySource {
         self.frames.len()
     }
     fn read_frame(&self, index: usize) -> Result<Frame, String> {
-        self.frames
-            .get(index)
-            .cloned()
-            .ok_or_else(|| format!("{}: no frame {index} (it has {})", self.name, self.frames.len()))
+        self.frames.get(index).cloned().ok_or_else(|| {
+            format!(
+                "{}: no frame {index} (it has {})",
+                self.name,
+                self.frames.len()
+            )
+        })
     }
     fn name(&self) -> String {
         self.name.clone()
@@ -63,8 +66,10 @@ impl FrameSource for crate::io::Trajectory {
     }
     fn name(&self) -> String {
         let p = self.path();
-        p.file_name()
-            .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
     }
 }
 

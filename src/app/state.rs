@@ -142,7 +142,12 @@ impl AppCore {
 
     /// Replaces the data; the old data stays until this is called (so failed loads keep it).
     pub fn set_source(&mut self, source: Arc<dyn FrameSource>) {
-        self.status = format!("{}: {} atoms, {} frames", source.name(), source.topology().len(), source.len());
+        self.status = format!(
+            "{}: {} atoms, {} frames",
+            source.name(),
+            source.topology().len(),
+            source.len()
+        );
         self.timeline = Timeline::new(source.len());
         self.source = Some(source);
         self.fit_pending = true;
@@ -182,7 +187,10 @@ impl AppCore {
             }
             Command::ResetCamera => {
                 let projection = self.camera.projection;
-                self.camera = Camera { projection, ..Camera::default() };
+                self.camera = Camera {
+                    projection,
+                    ..Camera::default()
+                };
                 self.fit_camera();
             }
             Command::FitCamera => self.fit_camera(),
@@ -213,12 +221,17 @@ impl AppCore {
 
     /// Asks the worker for the current frame unless it is already on screen or on its way.
     pub fn request_current(&mut self) {
-        let Some(source) = self.source.clone() else { return };
+        let Some(source) = self.source.clone() else {
+            return;
+        };
         if source.is_empty() {
             return;
         }
         let want = (self.generation, self.timeline.current);
-        let on_screen = self.shown.as_ref().map(|s| (s.computed.generation, s.computed.frame));
+        let on_screen = self
+            .shown
+            .as_ref()
+            .map(|s| (s.computed.generation, s.computed.frame));
         if on_screen == Some(want) || self.requested == Some(want) {
             return;
         }
@@ -250,7 +263,10 @@ impl AppCore {
             if left.is_zero() {
                 return false;
             }
-            if let Some(r) = self.worker.recv_timeout(left.min(Duration::from_millis(50))) {
+            if let Some(r) = self
+                .worker
+                .recv_timeout(left.min(Duration::from_millis(50)))
+            {
                 self.accept(r);
             }
         }
@@ -259,7 +275,9 @@ impl AppCore {
     }
 
     fn shown_key(&self) -> Option<(u64, usize)> {
-        self.shown.as_ref().map(|s| (s.computed.generation, s.computed.frame))
+        self.shown
+            .as_ref()
+            .map(|s| (s.computed.generation, s.computed.frame))
     }
 
     fn accept(&mut self, reply: Reply) -> bool {
@@ -277,10 +295,17 @@ impl AppCore {
                         self.fit_pending = false;
                     }
                 }
-                self.shown = Some(Shown { computed: *c, dirty: true });
+                self.shown = Some(Shown {
+                    computed: *c,
+                    dirty: true,
+                });
                 true
             }
-            Reply::Failed { frame, message, generation } => {
+            Reply::Failed {
+                frame,
+                message,
+                generation,
+            } => {
                 if self.in_flight == Some((generation, frame)) {
                     self.in_flight = None;
                 }
@@ -311,7 +336,10 @@ fn scene_bounds(c: &Computed) -> Option<(glam::Vec3, glam::Vec3)> {
     c.output.mesh.bounds().or_else(|| {
         let p = &c.particles.positions;
         let first = *p.first()?;
-        Some(p.iter().fold((first, first), |(lo, hi), q| (lo.min(*q), hi.max(*q))))
+        Some(
+            p.iter()
+                .fold((first, first), |(lo, hi), q| (lo.min(*q), hi.max(*q))),
+        )
     })
 }
 

@@ -107,7 +107,8 @@ impl Timeline {
                 EndMode::Loop => next = if next > last { 0 } else { last },
                 EndMode::Bounce => {
                     self.direction = -self.direction;
-                    next = (self.current as i64 + self.direction * self.stride as i64).clamp(0, last);
+                    next =
+                        (self.current as i64 + self.direction * self.stride as i64).clamp(0, last);
                 }
             }
         }
@@ -164,17 +165,35 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
         let mut f = t.current;
         let max = t.len.saturating_sub(1).max(1);
         ui.spacing_mut().slider_width = (ui.available_width() - 420.0).max(120.0);
-        if ui.add(egui::Slider::new(&mut f, 0..=max).text("frame")).changed() {
+        if ui
+            .add(egui::Slider::new(&mut f, 0..=max).text("frame"))
+            .changed()
+        {
             cmd(TimelineCmd::Seek(f));
         }
         ui.label(format!("/ {}", t.len.saturating_sub(1)));
         ui.label(time_ps.map_or_else(|| "t = ?".into(), |p| format!("t = {p:.1} ps")));
         let mut fps = t.fps;
-        if ui.add(egui::DragValue::new(&mut fps).range(0.5..=240.0).speed(0.5).suffix(" fps")).changed() {
+        if ui
+            .add(
+                egui::DragValue::new(&mut fps)
+                    .range(0.5..=240.0)
+                    .speed(0.5)
+                    .suffix(" fps"),
+            )
+            .changed()
+        {
             cmd(TimelineCmd::SetFps(fps));
         }
         let mut stride = t.stride;
-        if ui.add(egui::DragValue::new(&mut stride).range(1..=1000).prefix("stride ")).changed() {
+        if ui
+            .add(
+                egui::DragValue::new(&mut stride)
+                    .range(1..=1000)
+                    .prefix("stride "),
+            )
+            .changed()
+        {
             cmd(TimelineCmd::SetStride(stride));
         }
         let mut mode = t.end_mode;
@@ -201,10 +220,20 @@ mod tests {
         let mut t = Timeline::new(4);
         t.apply(TimelineCmd::SetPlaying(true));
         t.apply(TimelineCmd::SetFps(10.0));
-        let frames: Vec<usize> = (0..5).map(|_| { t.advance(0.1); t.current }).collect();
+        let frames: Vec<usize> = (0..5)
+            .map(|_| {
+                t.advance(0.1);
+                t.current
+            })
+            .collect();
         assert_eq!(frames, [1, 2, 3, 0, 1]);
         t.apply(TimelineCmd::SetEndMode(EndMode::Bounce));
-        let frames: Vec<usize> = (0..4).map(|_| { t.advance(0.1); t.current }).collect();
+        let frames: Vec<usize> = (0..4)
+            .map(|_| {
+                t.advance(0.1);
+                t.current
+            })
+            .collect();
         assert_eq!(frames, [2, 3, 2, 1]);
         t.apply(TimelineCmd::SetEndMode(EndMode::Once));
         t.apply(TimelineCmd::Last);

@@ -54,8 +54,15 @@ pub struct Viewer {
 
 impl Viewer {
     /// A viewer on `core`; `gpu` is `None` when eframe has no wgpu device (then nothing is drawn).
-    pub fn new(core: AppCore, gpu: Option<GpuView>, script: Script, script_result: ScriptResult) -> Viewer {
-        let draft = SurfaceDraft { params: core.params };
+    pub fn new(
+        core: AppCore,
+        gpu: Option<GpuView>,
+        script: Script,
+        script_result: ScriptResult,
+    ) -> Viewer {
+        let draft = SurfaceDraft {
+            params: core.params,
+        };
         Viewer {
             core,
             gpu,
@@ -94,27 +101,56 @@ impl Viewer {
         for cmd in std::mem::take(&mut self.core.outbox) {
             match cmd {
                 Command::Open(top, traj) => self.open(ctx, top, traj),
-                Command::OpenDialog => self.dialog(ctx, |paths| {
-                    let mut it = paths.into_iter();
-                    it.next().map(|top| Command::Open(top, it.next()))
-                }, true),
-                Command::Screenshot { scale, size, path: Some(path) } => {
+                Command::OpenDialog => self.dialog(
+                    ctx,
+                    |paths| {
+                        let mut it = paths.into_iter();
+                        it.next().map(|top| Command::Open(top, it.next()))
+                    },
+                    true,
+                ),
+                Command::Screenshot {
+                    scale,
+                    size,
+                    path: Some(path),
+                } => {
                     if let Err(e) = self.screenshot(scale, size, &path) {
                         self.core.error = Some(e);
                     }
                 }
-                Command::Screenshot { scale, size, path: None } => {
-                    self.dialog(ctx, move |p| p.into_iter().next().map(|path| Command::Screenshot { scale, size, path: Some(path) }), false)
-                }
+                Command::Screenshot {
+                    scale,
+                    size,
+                    path: None,
+                } => self.dialog(
+                    ctx,
+                    move |p| {
+                        p.into_iter().next().map(|path| Command::Screenshot {
+                            scale,
+                            size,
+                            path: Some(path),
+                        })
+                    },
+                    false,
+                ),
                 Command::ExportCsv(Some(path)) => match self.core.history.write_csv(&path) {
                     Ok(()) => self.core.status = format!("wrote {}", path.display()),
                     Err(e) => self.core.error = Some(e),
                 },
-                Command::ExportCsv(None) => self.dialog(ctx, |p| p.into_iter().next().map(|p| Command::ExportCsv(Some(p))), false),
+                Command::ExportCsv(None) => self.dialog(
+                    ctx,
+                    |p| p.into_iter().next().map(|p| Command::ExportCsv(Some(p))),
+                    false,
+                ),
                 Command::StartMovie(plan) => {
                     let steps = plan.steps(self.core.timeline.current);
                     self.core.timeline.playing = false;
-                    self.movie = Some(MovieJob { steps, done: 0, start_yaw: self.core.camera.yaw, size: plan.size });
+                    self.movie = Some(MovieJob {
+                        steps,
+                        done: 0,
+                        start_yaw: self.core.camera.yaw,
+                        size: plan.size,
+                    });
                 }
                 Command::CancelMovie => {
                     if let Some(job) = self.movie.take() {
@@ -128,12 +164,21 @@ impl Viewer {
 
     /// Runs a file dialog on a background thread (open: several files; else save) and turns the
     /// chosen paths into a command.
-    fn dialog(&mut self, ctx: &egui::Context, then: impl FnOnce(Vec<PathBuf>) -> Option<Command> + Send + 'static, open: bool) {
+    fn dialog(
+        &mut self,
+        ctx: &egui::Context,
+        then: impl FnOnce(Vec<PathBuf>) -> Option<Command> + Send + 'static,
+        open: bool,
+    ) {
         let (tx, rx) = channel();
         let ctx = ctx.clone();
         std::thread::spawn(move || {
             let d = rfd::FileDialog::new();
-            let paths = if open { d.pick_files().unwrap_or_default() } else { d.save_file().into_iter().collect() };
+            let paths = if open {
+                d.pick_files().unwrap_or_default()
+            } else {
+                d.save_file().into_iter().collect()
+            };
             if let Some(cmd) = then(paths) {
                 let _ = tx.send(cmd);
             }
@@ -143,12 +188,19 @@ impl Viewer {
     }
 
     /// Renders the current view at `scale` × the viewport (or `size`) and writes a PNG.
-    fn screenshot(&mut self, scale: u32, size: Option<[u32; 2]>, path: &std::path::Path) -> Result<(), String> {
+    fn screenshot(
+        &mut self,
+        scale: u32,
+        size: Option<[u32; 2]>,
+        path: &std::path::Path,
+    ) -> Result<(), String> {
         let gpu = self.gpu.as_mut().ok_or("no GPU device for screenshots")?;
         let base = gpu.size().unwrap_or([1280, 720]);
         let size = size.unwrap_or([base[0] * scale.clamp(1, 4), base[1] * scale.clamp(1, 4)]);
         gpu.sync(&mut self.core);
-        let image = gpu.snapshot(&self.core.camera, &self.core.render, size).map_err(|e| e.to_string())?;
+        let image = gpu
+            .snapshot(&self.core.camera, &self.core.render, size)
+            .map_err(|e| e.to_string())?;
         write_png(path, &image).map_err(|e| e.to_string())?;
         self.core.status = format!("wrote {} ({}×{})", path.display(), size[0], size[1]);
         Ok(())
@@ -162,14 +214,23 @@ impl Viewer {
                     self.core.set_source(source);
                     self.recent.push(entry);
                 }
-                Err(e) => self.core.error = Some(format!("could not open {}: {e}", entry.top.display())),
+                Err(e) => {
+                    self.core.error = Some(format!("could not open {}: {e}", entry.top.display()))
+                }
             }
         }
         if let Some(cmd) = self.picked.as_ref().and_then(|rx| rx.try_recv().ok()) {
             self.picked = None;
             self.apply(ctx, cmd);
         }
-        let dropped: Vec<PathBuf> = ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect());
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .filter(|p| !p.as_os_str().is_empty())
+                .collect()
+        });
         if let Some(top) = dropped.first().cloned() {
             self.apply(ctx, Command::Open(top, dropped.get(1).cloned()));
         }
@@ -177,20 +238,31 @@ impl Viewer {
 
     /// Advances a running movie by at most one image per UI update.
     fn step_movie(&mut self) {
-        let Some(job) = self.movie.as_mut() else { return };
+        let Some(job) = self.movie.as_mut() else {
+            return;
+        };
         let Some(step) = job.next().cloned() else {
             self.core.status = format!("movie: wrote {} images", job.done);
             self.movie = None;
             return;
         };
         if self.core.timeline.current != step.frame {
-            self.core.apply(Command::Timeline(TimelineCmd::Seek(step.frame)));
+            self.core
+                .apply(Command::Timeline(TimelineCmd::Seek(step.frame)));
             return;
         }
-        if self.core.computing() || self.core.shown.as_ref().is_none_or(|s| s.computed.frame != step.frame) {
+        if self.core.computing()
+            || self
+                .core
+                .shown
+                .as_ref()
+                .is_none_or(|s| s.computed.frame != step.frame)
+        {
             return;
         }
-        let (Some(gpu), Some(job)) = (self.gpu.as_mut(), self.movie.as_mut()) else { return };
+        let (Some(gpu), Some(job)) = (self.gpu.as_mut(), self.movie.as_mut()) else {
+            return;
+        };
         gpu.sync(&mut self.core);
         let mut camera = self.core.camera;
         camera.yaw = job.start_yaw;
@@ -219,7 +291,11 @@ impl Viewer {
         if let Some(e) = self.core.error.clone().filter(|_| self.script.quit) {
             return self.finish_script(ctx, Some(e));
         }
-        let want = self.script.play_frames.unwrap_or(1).min(self.core.timeline.len.max(1));
+        let want = self
+            .script
+            .play_frames
+            .unwrap_or(1)
+            .min(self.core.timeline.len.max(1));
         let shown = self.core.shown.as_ref().map(|s| s.computed.frame);
         if self.core.computing() || shown != Some(self.core.timeline.current) {
             return;
@@ -248,7 +324,9 @@ impl Viewer {
     }
 
     fn scripted(&self) -> bool {
-        self.script.play_frames.is_some_and(|n| n > 0) || self.script.screenshot.is_some() || self.script.quit
+        self.script.play_frames.is_some_and(|n| n > 0)
+            || self.script.screenshot.is_some()
+            || self.script.quit
     }
 
     fn menu_ui(&mut self, ui: &mut egui::Ui) -> Vec<Command> {
@@ -270,7 +348,11 @@ impl Viewer {
                     }
                 });
                 if ui.button("Screenshot…").clicked() {
-                    out.push(Command::Screenshot { scale: 1, size: None, path: None });
+                    out.push(Command::Screenshot {
+                        scale: 1,
+                        size: None,
+                        path: None,
+                    });
                 }
                 if ui.button("Quit").clicked() {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
@@ -290,7 +372,11 @@ impl eframe::App for Viewer {
         self.last_update = now;
         self.poll_background(&ctx);
         if self.core.poll() {
-            self.fps = if dt > 0.0 { 0.8 * self.fps + 0.2 / dt } else { self.fps };
+            self.fps = if dt > 0.0 {
+                0.8 * self.fps + 0.2 / dt
+            } else {
+                self.fps
+            };
         }
         if self.movie.is_none() && !self.scripted() && self.core.timeline.advance(dt) {
             self.core.request_current();
@@ -315,22 +401,35 @@ impl eframe::App for Viewer {
                 });
             });
         }
-        egui::Panel::left("controls").resizable(true).show(ui, |ui| {
-            egui::ScrollArea::vertical().show(ui, |ui| {
-                cmds.extend(surface_ui(ui, &self.core, &mut self.draft));
-                ui.separator();
-                cmds.extend(look_ui(ui, &self.core));
-                ui.separator();
-                let frames = self.core.timeline.len;
-                cmds.extend(export_ui(ui, &mut self.plan, &mut self.shot_scale, frames, self.movie.as_ref()));
+        egui::Panel::left("controls")
+            .resizable(true)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    cmds.extend(surface_ui(ui, &self.core, &mut self.draft));
+                    ui.separator();
+                    cmds.extend(look_ui(ui, &self.core));
+                    ui.separator();
+                    let frames = self.core.timeline.len;
+                    cmds.extend(export_ui(
+                        ui,
+                        &mut self.plan,
+                        &mut self.shot_scale,
+                        frames,
+                        self.movie.as_ref(),
+                    ));
+                });
             });
-        });
         let render_ms = self.gpu.as_ref().map_or(0.0, |g| g.render_ms);
-        egui::Panel::right("readouts").show(ui, |ui| readouts_ui(ui, &self.core, render_ms, self.fps));
+        egui::Panel::right("readouts")
+            .show(ui, |ui| readouts_ui(ui, &self.core, render_ms, self.fps));
         egui::Panel::bottom("timeline").show(ui, |ui| {
             let time = self.core.shown.as_ref().and_then(|s| s.computed.time_ps);
             cmds.extend(timeline_ui(ui, &self.core.timeline, time));
-            let (h, cur, len) = (&self.core.history, self.core.timeline.current, self.core.timeline.len);
+            let (h, cur, len) = (
+                &self.core.history,
+                self.core.timeline.current,
+                self.core.timeline.len,
+            );
             cmds.extend(plot_ui(ui, h, cur, len));
         });
         egui::CentralPanel::default().show(ui, |ui| {
@@ -344,7 +443,13 @@ impl eframe::App for Viewer {
         for cmd in cmds {
             self.apply(&ctx, cmd);
         }
-        if self.core.timeline.playing || self.core.computing() || self.core.turntable.is_some() || self.movie.is_some() || self.scripted() || self.loading.is_some() {
+        if self.core.timeline.playing
+            || self.core.computing()
+            || self.core.turntable.is_some()
+            || self.movie.is_some()
+            || self.scripted()
+            || self.loading.is_some()
+        {
             ctx.request_repaint();
         }
     }

@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use super::state::{AppCore, Command};
 use crate::render::{
-    Camera, GpuScene, RenderError, RenderSettings, Renderer, RenderTargets, RgbaImage, atom_instances,
-    render_to_rgba,
+    Camera, GpuScene, RenderError, RenderSettings, RenderTargets, Renderer, RgbaImage,
+    atom_instances, render_to_rgba,
 };
 
 /// The window's GPU side: eframe's device, our renderer, the scene and the output texture.
@@ -47,20 +47,34 @@ impl GpuView {
 
     /// Uploads the shown surface and particles when they changed.
     pub fn sync(&mut self, core: &mut AppCore) {
-        let Some(shown) = core.shown.as_mut() else { return };
+        let Some(shown) = core.shown.as_mut() else {
+            return;
+        };
         if !shown.dirty {
             return;
         }
         shown.dirty = false;
         let c = &shown.computed;
-        self.scene.set_mesh(&self.device, &self.queue, &c.output.mesh);
+        self.scene
+            .set_mesh(&self.device, &self.queue, &c.output.mesh);
         let p = &c.particles;
-        let (s, cyl) = atom_instances(&p.positions, &p.radii, Some(&p.colours), &p.bonds, &core.render);
+        let (s, cyl) = atom_instances(
+            &p.positions,
+            &p.radii,
+            Some(&p.colours),
+            &p.bonds,
+            &core.render,
+        );
         self.scene.set_atoms(&self.device, &self.queue, &s, &cyl);
     }
 
     /// Renders the scene at `size` pixels into the window texture and returns its egui id.
-    pub fn render(&mut self, camera: &Camera, settings: &RenderSettings, size: [u32; 2]) -> Option<egui::TextureId> {
+    pub fn render(
+        &mut self,
+        camera: &Camera,
+        settings: &RenderSettings,
+        size: [u32; 2],
+    ) -> Option<egui::TextureId> {
         let t0 = Instant::now();
         let size = [size[0].max(1), size[1].max(1)];
         let resized = self.targets.as_ref().is_none_or(|t| t.size() != size);
@@ -68,12 +82,30 @@ impl GpuView {
             self.targets = Some(RenderTargets::new(&self.device, size));
         }
         let targets = self.targets.as_mut()?;
-        self.renderer.render(&self.device, &self.queue, targets, &self.scene, camera, settings);
+        self.renderer.render(
+            &self.device,
+            &self.queue,
+            targets,
+            &self.scene,
+            camera,
+            settings,
+        );
         if resized {
             let mut r = self.egui_renderer.write();
             match self.texture {
-                Some(id) => r.update_egui_texture_from_wgpu_texture(&self.device, targets.colour_view(), wgpu::FilterMode::Linear, id),
-                None => self.texture = Some(r.register_native_texture(&self.device, targets.colour_view(), wgpu::FilterMode::Linear)),
+                Some(id) => r.update_egui_texture_from_wgpu_texture(
+                    &self.device,
+                    targets.colour_view(),
+                    wgpu::FilterMode::Linear,
+                    id,
+                ),
+                None => {
+                    self.texture = Some(r.register_native_texture(
+                        &self.device,
+                        targets.colour_view(),
+                        wgpu::FilterMode::Linear,
+                    ))
+                }
             }
         }
         self.render_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -81,8 +113,21 @@ impl GpuView {
     }
 
     /// Renders the current scene offscreen at `size` and reads it back (screenshots, movies).
-    pub fn snapshot(&self, camera: &Camera, settings: &RenderSettings, size: [u32; 2]) -> Result<RgbaImage, RenderError> {
-        render_to_rgba(&self.device, &self.queue, &self.renderer, &self.scene, camera, settings, size)
+    pub fn snapshot(
+        &self,
+        camera: &Camera,
+        settings: &RenderSettings,
+        size: [u32; 2],
+    ) -> Result<RgbaImage, RenderError> {
+        render_to_rgba(
+            &self.device,
+            &self.queue,
+            &self.renderer,
+            &self.scene,
+            camera,
+            settings,
+            size,
+        )
     }
 
     /// The egui id of the window texture, once rendered.
@@ -99,7 +144,10 @@ impl GpuView {
 /// The viewport: shows `texture` filling the available space and maps mouse input to camera
 /// commands (left drag orbits, right/middle or shift drag pans, scroll zooms, double-click fits).
 /// Returns the commands and the size in pixels to render at.
-pub fn viewport_ui(ui: &mut egui::Ui, texture: Option<egui::TextureId>) -> (Vec<Command>, [u32; 2]) {
+pub fn viewport_ui(
+    ui: &mut egui::Ui,
+    texture: Option<egui::TextureId>,
+) -> (Vec<Command>, [u32; 2]) {
     let mut out = Vec::new();
     let rect = ui.available_rect_before_wrap();
     let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
@@ -128,6 +176,9 @@ pub fn viewport_ui(ui: &mut egui::Ui, texture: Option<egui::TextureId>) -> (Vec<
         out.push(Command::FitCamera);
     }
     let ppp = ui.ctx().pixels_per_point();
-    let size = [(rect.width() * ppp).round() as u32, (rect.height() * ppp).round() as u32];
+    let size = [
+        (rect.width() * ppp).round() as u32,
+        (rect.height() * ppp).round() as u32,
+    ];
     (out, size)
 }

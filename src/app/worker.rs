@@ -106,7 +106,13 @@ impl Worker {
             .name("mdsurf compute".into())
             .spawn(move || run(engine, s, tx, b, st, notify))
             .ok();
-        Worker { slot, replies, busy, stop, engine_name }
+        Worker {
+            slot,
+            replies,
+            busy,
+            stop,
+            engine_name,
+        }
     }
 
     /// Queues `request`, replacing any request not yet started.
@@ -191,7 +197,11 @@ fn run(
         let (generation, frame) = (request.generation, request.frame);
         let reply = match compute(&mut *engine, &mut cache, &request) {
             Ok(c) => Reply::Done(Box::new(c)),
-            Err(message) => Reply::Failed { generation, frame, message },
+            Err(message) => Reply::Failed {
+                generation,
+                frame,
+                message,
+            },
         };
         if let Ok(pending) = slot.0.lock() {
             busy.store(pending.is_some(), Ordering::SeqCst);
@@ -204,7 +214,10 @@ fn run(
 }
 
 fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f64), String> {
-    let same = cache.source.as_ref().is_some_and(|s| Arc::ptr_eq(s, &req.source));
+    let same = cache
+        .source
+        .as_ref()
+        .is_some_and(|s| Arc::ptr_eq(s, &req.source));
     if !same {
         cache.source = Some(req.source.clone());
         cache.frames.clear();
@@ -227,12 +240,20 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
     Ok((frame, ms))
 }
 
-fn compute(engine: &mut dyn SurfaceEngine, cache: &mut Cache, req: &Request) -> Result<Computed, String> {
+fn compute(
+    engine: &mut dyn SurfaceEngine,
+    cache: &mut Cache,
+    req: &Request,
+) -> Result<Computed, String> {
     let (frame, read_ms) = frame_of(cache, req)?;
     let topology = req.source.topology();
-    let rebuild = cache.particles.as_ref().is_none_or(|(o, _, _)| *o != req.options);
+    let rebuild = cache
+        .particles
+        .as_ref()
+        .is_none_or(|(o, _, _)| *o != req.options);
     if rebuild {
-        let particles = Particles::new(topology, &frame, &req.options).map_err(|e| format!("frame {}: {e}", req.frame))?;
+        let particles = Particles::new(topology, &frame, &req.options)
+            .map_err(|e| format!("frame {}: {e}", req.frame))?;
         let bonds = if particles.is_beads() {
             Arc::new(Vec::new())
         } else {
@@ -270,7 +291,10 @@ fn compute(engine: &mut dyn SurfaceEngine, cache: &mut Cache, req: &Request) -> 
         frame: req.frame,
         time_ps: frame.time_ps,
         output,
-        particles: ParticleData { positions, ..data.clone() },
+        particles: ParticleData {
+            positions,
+            ..data.clone()
+        },
         beads: particles.is_beads(),
         read_ms,
     })

@@ -155,3 +155,28 @@ impl RenderSettings {
         self.show_surface && self.surface_opacity < 0.999
     }
 }
+
+impl FromStr for AtomStyle {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        AtomStyle::ALL
+            .into_iter()
+            .find(|m| m.name().eq_ignore_ascii_case(s))
+            .ok_or_else(|| {
+                format!(
+                    "unknown atom style '{s}' (expected none, spheres, sticks or ball-and-stick)"
+                )
+            })
+    }
+}
+
+impl FromStr for Background {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "dark" | "black" => Ok(Background::Dark),
+            "light" | "white" => Ok(Background::Light),
+            _ => Err(format!("unknown background '{s}' (expected dark or light)")),
+        }
+    }
+}
