@@ -1,0 +1,1 @@
+//! The paper's Table 1 on synthetic systems (placeholder until the benchmark lands).
