@@ -37,6 +37,7 @@ impl ChemReader {
     /// Opens `path` in `format`; fails when chemfiles cannot open it or it holds no frame.
     pub(crate) fn open(path: &Path, format: &FileFormat) -> Result<Self, IoError> {
         warnings::install();
+        sniff(path, format.base)?;
         let inner = chemfiles::Trajectory::open_with_format(path, 'r', format.chemfiles.as_str())
             .map_err(|e| IoError::unreadable(path, &e.message))?;
         let mut reader = ChemReader {
@@ -105,6 +106,23 @@ impl ChemReader {
     pub(crate) fn read_topology(&mut self, index: usize) -> Result<Topology, IoError> {
         let raw = self.read_raw(index)?;
         Ok(convert_topology(&raw.topology()))
+    }
+}
+
+/// Rejects files that plainly are not in `base` format before a C library sees them. The TNG
+/// library prints straight to stderr (past chemfiles' warning callback) and tries huge
+/// allocations on garbage, so a TNG file must start with its GENERAL INFO block.
+fn sniff(path: &Path, base: &str) -> Result<(), IoError> {
+    if base != "TNG" {
+        return Ok(());
+    }
+    let mut head = [0u8; 64];
+    let read = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut head));
+    let n = read.map_err(|e| IoError::unreadable(path, e.to_string()))?;
+    if head[..n].windows(12).any(|w| w == b"GENERAL INFO") {
+        Ok(())
+    } else {
+        Err(IoError::unreadable(path, "not a TNG file (it does not start with a GENERAL INFO block)"))
     }
 }
 
