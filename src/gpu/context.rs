@@ -109,6 +109,21 @@ impl GpuContext {
             .min(self.limits.max_buffer_size)
     }
 
+    /// Runs `f` inside validation and out-of-memory error scopes, so a GPU error becomes a
+    /// [`GpuError::Device`] instead of wgpu's default panic.
+    pub fn scoped<T>(&self, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let result = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        match (result, v.or(o)) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Some(e)) => Err(GpuError::Device(one_line(&e.to_string()))),
+            (Ok(t), None) => Ok(t),
+        }
+    }
+
     /// Blocks until all submitted work is done.
     pub fn wait(&self) -> Result<(), GpuError> {
         self.device
@@ -116,6 +131,11 @@ impl GpuContext {
             .map(|_| ())
             .map_err(|e| GpuError::Device(e.to_string()))
     }
+}
+
+/// Joins a multi-line wgpu error into one line.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 /// True when the environment variable `REQUIRE_GPU` is set to `1` (CI).

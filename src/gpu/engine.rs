@@ -18,7 +18,7 @@ use super::timing::Timer;
 use super::types::{GpuCounters, pack_colour};
 use super::{GpuError, inputs};
 use crate::surface::{
-    AtomSet, GridSpec, SurfaceEngine, SurfaceError, SurfaceOutput, SurfaceParams,
+    AtomSet, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput, SurfaceParams,
 };
 
 /// Tuning knobs (tests force slabs and overflows with them).
@@ -118,11 +118,12 @@ impl GpuEngine {
     /// Opens the best adapter headless (its own limits, timestamps when supported). Under
     /// `REQUIRE_GPU=1` and without it alike, a missing adapter is [`GpuError::NoAdapter`].
     pub fn new() -> Result<GpuEngine, GpuError> {
-        Ok(Self::with_context(GpuContext::new_headless()?))
+        Self::with_context(GpuContext::new_headless()?)
     }
 
-    /// Wraps a device created elsewhere (the viewer shares eframe's device).
-    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> GpuEngine {
+    /// Wraps a device created elsewhere (the viewer shares eframe's device); its limits bound
+    /// the problem sizes and slabs.
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Result<GpuEngine, GpuError> {
         Self::with_context(GpuContext::from_device(
             device,
             queue,
@@ -130,12 +131,18 @@ impl GpuEngine {
         ))
     }
 
-    /// An engine on `ctx`.
-    pub fn with_context(ctx: GpuContext) -> GpuEngine {
+    /// An engine on `ctx` (compiles every stage).
+    pub fn with_context(ctx: GpuContext) -> Result<GpuEngine, GpuError> {
         let max_groups = ctx.limits.max_compute_workgroups_per_dimension;
-        GpuEngine {
-            stages: Stages::new(&ctx.device, max_groups),
-            buffers: Buffers::new(&ctx.device),
+        let (stages, buffers) = ctx.scoped(|| {
+            Ok((
+                Stages::new(&ctx.device, max_groups),
+                Buffers::new(&ctx.device),
+            ))
+        })?;
+        Ok(GpuEngine {
+            stages,
+            buffers,
             timer: Timer::new(&ctx.queue, ctx.timestamps),
             readbacks: Readbacks::default(),
             options: EngineOptions::defaults(&ctx),
@@ -143,7 +150,7 @@ impl GpuEngine {
             frame: 0,
             latest: None,
             ctx,
-        }
+        })
     }
 
     /// The device context.
@@ -203,7 +210,34 @@ impl GpuEngine {
         params: &SurfaceParams,
         changes: Changes,
         wall_clock: bool,
-    ) -> Result<(FrameInfo, Option<crate::surface::StageTimings>), SurfaceError> {
+    ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
+        let ctx = self.ctx.clone();
+        let mut inner = Ok(None);
+        let scoped = ctx.scoped(|| {
+            inner = self
+                .submit_unscoped(atoms, params, changes, wall_clock)
+                .map(Some);
+            Ok(())
+        });
+        match (inner, scoped) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Err(e)) => {
+                // The frame is broken: forget the state so the next one starts afresh.
+                self.state.params = None;
+                Err(e.into())
+            }
+            (Ok(Some(r)), Ok(())) => Ok(r),
+            (Ok(None), Ok(())) => Err(SurfaceError::Gpu("frame was not submitted".into())),
+        }
+    }
+
+    fn submit_unscoped(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        changes: Changes,
+        wall_clock: bool,
+    ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
         let start = Instant::now();
         params.validate()?;
         inputs::check_lengths(atoms)?;

@@ -37,6 +37,7 @@ impl ChemReader {
     /// Opens `path` in `format`; fails when chemfiles cannot open it or it holds no frame.
     pub(crate) fn open(path: &Path, format: &FileFormat) -> Result<Self, IoError> {
         warnings::install();
+        sniff(path, format.base)?;
         let inner = chemfiles::Trajectory::open_with_format(path, 'r', format.chemfiles.as_str())
             .map_err(|e| IoError::unreadable(path, &e.message))?;
         let mut reader = ChemReader {
@@ -58,6 +59,11 @@ impl ChemReader {
     /// The file this reader reads.
     pub(crate) fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// The format without compression (`DCD`, `GRO`).
+    pub(crate) fn base(&self) -> &'static str {
+        self.base
     }
 
     /// Number of frames.
@@ -103,6 +109,23 @@ impl ChemReader {
     }
 }
 
+/// Rejects files that plainly are not in `base` format before a C library sees them. The TNG
+/// library prints straight to stderr (past chemfiles' warning callback) and tries huge
+/// allocations on garbage, so a TNG file must start with its GENERAL INFO block.
+fn sniff(path: &Path, base: &str) -> Result<(), IoError> {
+    if base != "TNG" {
+        return Ok(());
+    }
+    let mut head = [0u8; 64];
+    let read = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut head));
+    let n = read.map_err(|e| IoError::unreadable(path, e.to_string()))?;
+    if head[..n].windows(12).any(|w| w == b"GENERAL INFO") {
+        Ok(())
+    } else {
+        Err(IoError::unreadable(path, "not a TNG file (it does not start with a GENERAL INFO block)"))
+    }
+}
+
 /// Converts chemfiles' positions (f64, Å) to ours (f32, Å).
 fn to_vec3(positions: &[[f64; 3]]) -> Vec<Vec3> {
     positions.iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
@@ -123,7 +146,8 @@ fn cell_rows(frame: &chemfiles::Frame) -> Option<[Vec3; 3]> {
 
 /// The frame's time in ps when the format records it in a known unit.
 fn frame_time_ps(frame: &chemfiles::Frame, base: &str) -> Option<f64> {
-    let Some(Property::Double(t)) = frame.get("time") else {
+    // Looked up by iterating: `get` on a missing property makes chemfiles warn.
+    let Some((_, Property::Double(t))) = frame.properties().find(|(name, _)| name == "time") else {
         return None;
     };
     let t = match base {
@@ -197,11 +221,14 @@ fn renumber_by_first_atom(index: &mut [u32]) {
 
 /// The chain id of a residue (`chainid`), else its segment name, else empty.
 fn residue_chain(residue: &chemfiles::Residue) -> String {
+    let properties: Vec<(String, Property)> = residue.properties().collect();
     for key in ["chainid", "chainname", "segname"] {
-        if let Some(Property::String(s)) = residue.get(key) {
-            let s = s.trim();
-            if !s.is_empty() {
-                return s.to_string();
+        for (name, value) in &properties {
+            if let (true, Property::String(s)) = (name == key, value) {
+                let s = s.trim();
+                if !s.is_empty() {
+                    return s.to_string();
+                }
             }
         }
     }

@@ -11,6 +11,7 @@
 //! [`take_warnings`]) rather than printed.
 
 mod chem;
+mod dcd;
 pub mod error;
 pub mod format;
 pub mod stream;

@@ -8,7 +8,7 @@ use std::sync::{Mutex, MutexGuard};
 
 use super::chem::ChemReader;
 use super::format::detect;
-use super::{IoError, wwpdb};
+use super::{IoError, dcd, wwpdb};
 use crate::model::{Frame, Topology};
 
 /// How many frames at the end of a file are probed for damage when it opens (a truncated
@@ -90,6 +90,7 @@ pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     // A count mismatch is reported at once, not at the first frame the user asks for.
     trajectory.read_frame(0)?;
     trajectory.probe_tail();
+    trajectory.check_dcd_size();
     Ok(trajectory)
 }
 
@@ -167,6 +168,25 @@ impl Trajectory {
         // A panic while holding the lock cannot leave our state inconsistent (the reader is
         // re-positioned on every read), so a poisoned lock is still usable.
         self.reader.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// A DCD file whose size leaves a partial frame after the last complete one was truncated:
+    /// chemfiles drops that frame silently, this records it as [`Damage`].
+    fn check_dcd_size(&mut self) {
+        if self.damage.is_some() || self.lock().base() != "DCD" {
+            return;
+        }
+        let Some(tail) = dcd::measure(&self.frames_path) else {
+            return;
+        };
+        if tail.trailing > 0 && tail.complete == self.len {
+            let message = format!(
+                "the file ends inside this frame (truncated: {} of {} bytes)",
+                tail.trailing, tail.frame_bytes
+            );
+            let error = IoError::bad_frame(&self.frames_path, self.len, message);
+            self.damage = Some(Damage { frame: self.len, error });
+        }
     }
 
     /// Checks the last few frames; if some fail to read, the readable length ends at the first

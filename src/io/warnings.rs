@@ -6,7 +6,7 @@ use std::sync::{Mutex, Once};
 /// At most this many warnings are kept; later ones only bump the dropped counter.
 const MAX_KEPT: usize = 64;
 
-/// Warnings seen since the last [`take_warnings`], and how many did not fit.
+/// Distinct warnings seen since the last [`take_warnings`], and how many did not fit.
 static BUFFER: Mutex<(Vec<String>, usize)> = Mutex::new((Vec::new(), 0));
 static INSTALL: Once = Once::new();
 
@@ -16,7 +16,9 @@ pub(crate) fn install() {
     INSTALL.call_once(|| {
         chemfiles::set_warning_callback(|message: &str| {
             if let Ok(mut buffer) = BUFFER.lock() {
-                if buffer.0.len() < MAX_KEPT {
+                if buffer.0.iter().any(|kept| kept == message) {
+                    // Parsers repeat a warning once per odd line: keep it once.
+                } else if buffer.0.len() < MAX_KEPT {
                     buffer.0.push(message.to_string());
                 } else {
                     buffer.1 += 1;

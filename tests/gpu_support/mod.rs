@@ -13,7 +13,9 @@ use mdsurf::surface::{AtomSet, GridSpec, Mesh, SurfaceParams};
 /// The engine, or None (with a note) when there is no adapter and REQUIRE_GPU is not 1.
 pub fn engine() -> Option<GpuEngine> {
     match GpuContext::headless_or_skip() {
-        Ok(Some(ctx)) => Some(GpuEngine::with_context(ctx)),
+        Ok(Some(ctx)) => {
+            Some(GpuEngine::with_context(ctx).expect("GPU engine on a working adapter"))
+        }
         Ok(None) => None,
         Err(e) => panic!("REQUIRE_GPU=1 but no GPU adapter: {e}"),
     }
@@ -162,8 +164,16 @@ pub fn reference(atoms: &Atoms, p: &SurfaceParams) -> (GridSpec, Vec<f32>, Mesh)
     (grid, d, mesh)
 }
 
-/// Asserts that a GPU mesh matches the reference within the tolerances.
-pub fn assert_mesh_close(what: &str, gpu: &Mesh, cpu: &Mesh, gpu_area: f64, gpu_volume: f64) {
+/// Asserts that a GPU mesh matches the reference within the tolerances; where the triangles are
+/// identical (no corner classified differently) also compares every vertex and colour and
+/// returns true.
+pub fn assert_mesh_close(
+    what: &str,
+    gpu: &Mesh,
+    cpu: &Mesh,
+    gpu_area: f64,
+    gpu_volume: f64,
+) -> bool {
     assert!(
         cpu.triangle_count() > 0,
         "{what}: the reference mesh is empty"
@@ -199,5 +209,75 @@ pub fn assert_mesh_close(what: &str, gpu: &Mesh, cpu: &Mesh, gpu_area: f64, gpu_
                 "{what}: vertex {v} at {g} vs {c}"
             );
         }
+        for (v, (g, c)) in gpu.normals.iter().zip(&cpu.normals).enumerate() {
+            assert!(g.dot(*c) > 0.999, "{what}: vertex {v} normal {g} vs {c}");
+        }
+        return true;
     }
+    false
+}
+
+/// Radius in Å of an element symbol (DESIGN section 2).
+pub fn element_radius(element: &str) -> f32 {
+    match element.trim().to_ascii_uppercase().as_str() {
+        "H" => 1.0,
+        "C" => 1.5,
+        "N" => 1.4,
+        "O" => 1.3,
+        "F" => 1.2,
+        "S" => 1.9,
+        "P" => 1.8,
+        _ => 1.5,
+    }
+}
+
+/// Atoms of a wwPDB file under `../shared/data` (ATOM/HETATM records, element column), coloured
+/// by element so the colour pass has something to do.
+pub fn load_pdb(name: &str) -> Atoms {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/").to_string() + name;
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!("test data {path} is missing ({e}); it ships in ../shared/data")
+    });
+    let mut atoms = Atoms {
+        colours: Some(Vec::new()),
+        ..Default::default()
+    };
+    for line in text
+        .lines()
+        .filter(|l| l.starts_with("ATOM") || l.starts_with("HETATM"))
+    {
+        let f = |a: usize, b: usize| line.get(a..b).unwrap_or("").trim();
+        let xyz = [f(30, 38), f(38, 46), f(46, 54)].map(|s| s.parse::<f32>().expect("coordinate"));
+        let element = f(76, 78);
+        atoms.positions.push(Vec3::from(xyz));
+        atoms.radii.push(element_radius(element));
+        let colour = match element {
+            "C" => [0.5, 0.5, 0.5],
+            "N" => [0.2, 0.2, 1.0],
+            "O" => [1.0, 0.1, 0.1],
+            "S" => [1.0, 0.9, 0.2],
+            _ => [0.9, 0.9, 0.9],
+        };
+        atoms.colours.as_mut().map(|c| c.push(colour));
+    }
+    assert!(!atoms.positions.is_empty(), "no atoms in {path}");
+    atoms
+}
+
+/// A copy of `atoms` with every coordinate moved by up to `amp` Å (deterministic per `seed`).
+pub fn jitter(atoms: &Atoms, seed: u64, amp: f32) -> Atoms {
+    let mut s = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    let mut next = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 33) as f32 / (1u64 << 31) as f32) * 2.0 - 1.0
+    };
+    let mut out = atoms.clone();
+    for p in &mut out.positions {
+        *p += Vec3::new(next(), next(), next()) * amp;
+    }
+    out
 }
