@@ -153,24 +153,33 @@ fn fill_slab(
         ty.fill(ry.0, ry.1, o.y, h, py, atom.k);
         tz.fill(k0, k1, o.z, h, pz, atom.k);
         let cut2 = atom.cut2;
-        let n = tx.d2.len();
         for (kz, (&dz2, &ez)) in tz.d2.iter().zip(&tz.e).enumerate() {
             let zoff = (tz.first + kz - z0 as usize) * plane;
             for (jy, (&dy2, &ey)) in ty.d2.iter().zip(&ty.e).enumerate() {
-                if dy2 + dz2 >= cut2 {
+                let rest = cut2 - (dy2 + dz2);
+                if rest <= 0.0 {
                     continue;
                 }
+                // Samples whose x lies within the chord (one extra on each side); the exact
+                // cutoff test below decides.
+                let half = rest.sqrt();
+                let lo = ((px - half - o.x) / h).floor().max(0.0) as usize;
+                let hi = ((px + half - o.x) / h).ceil().max(0.0) as usize + 1;
+                let lo = lo.clamp(tx.first, tx.first + tx.d2.len());
+                let hi = hi.clamp(lo, tx.first + tx.d2.len());
+                let (a, b) = (lo - tx.first, hi - tx.first);
+                let (dx2s, exs) = (&tx.d2[a..b], &tx.e[a..b]);
                 let eyz = ey * ez;
-                let row = zoff + (ty.first + jy) * nx as usize + tx.first;
-                let out = &mut vals[row..row + n];
-                for ((v, &dx2), &ex) in out.iter_mut().zip(&tx.d2).zip(&tx.e) {
+                let row = zoff + (ty.first + jy) * nx as usize + lo;
+                let out = &mut vals[row..row + (b - a)];
+                for ((v, &dx2), &ex) in out.iter_mut().zip(dx2s).zip(exs) {
                     let inside = (dx2 + dy2) + dz2 < cut2;
                     *v += if inside { ex * eyz } else { 0.0 };
                 }
                 if let Some(cols) = cols.as_deref_mut() {
                     let c = atom.colour;
-                    let out = &mut cols[row..row + n];
-                    for ((v, &dx2), &ex) in out.iter_mut().zip(&tx.d2).zip(&tx.e) {
+                    let out = &mut cols[row..row + (b - a)];
+                    for ((v, &dx2), &ex) in out.iter_mut().zip(dx2s).zip(exs) {
                         if (dx2 + dy2) + dz2 < cut2 {
                             let w = ex * eyz;
                             v[0] += w * c[0];
