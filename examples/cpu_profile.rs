@@ -9,7 +9,10 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use mdsurf::surface::{AtomSet, CpuEngine, Quality, SurfaceEngine, SurfaceParams};
+use mdsurf::surface::bin::bin_atoms;
+use mdsurf::surface::{
+    AtomSet, CpuEngine, Quality, SurfaceEngine, SurfaceParams, density, marching_cubes,
+};
 
 /// Gap between copies' bounding boxes in Å.
 const GAP: f32 = 2.0;
@@ -52,49 +55,93 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         positions.len(),
         rayon::current_num_threads()
     );
+    // One engine run (validation, summary), then the stages alone with wall and CPU time: the
+    // machine is shared, so CPU seconds / threads estimate the wall time on idle cores.
+    let out = engine.compute(&atoms, &params)?;
+    println!(
+        "engine: grid {:?}, {} vertices, {} triangles, area {:.0} A2, volume {:.0} A3, {:?}",
+        out.grid.dims,
+        out.mesh.vertex_count(),
+        out.mesh.triangle_count(),
+        out.area,
+        out.volume,
+        out.timings
+    );
+    drop(out);
+    let grid = engine.plan(&atoms, &params)?;
     let mut rows = Vec::new();
     for r in 0..repeats {
-        let t = Instant::now();
-        let out = engine.compute(&atoms, &params)?;
-        let wall = t.elapsed().as_secs_f64() * 1e3;
-        let s = out.timings;
+        let mut row = [0.0f64; 6];
+        let (bins, w, c) = timed(|| bin_atoms(&atoms, &params, &grid, density::slab_planes(&grid)));
+        (row[0], row[1]) = (w, c);
+        let (vol, w, c) = timed(|| density::compute_binned(&bins, &params, &grid, colour));
+        (row[2], row[3]) = (w, c);
+        drop(bins);
+        let ((mesh, area, volume), w, c) = timed(|| {
+            let mesh = marching_cubes::extract(&grid, &vol, params.isovalue);
+            let (a, v) = (mesh.area(), mesh.volume());
+            (mesh, a, v)
+        });
+        (row[4], row[5]) = (w, c);
         println!(
-            "run {r}: grid {:?}, {} vertices, {} triangles, area {:.0} A2, volume {:.0} A3; \
-             bin {:.0} ms, density {:.0} ms, mc {:.0} ms, density+mc {:.0} ms, wall {:.0} ms",
-            out.grid.dims,
-            out.mesh.vertex_count(),
-            out.mesh.triangle_count(),
-            out.area,
-            out.volume,
-            s.bin_ms,
-            s.density_ms,
-            s.mc_ms,
-            s.density_ms + s.mc_ms,
-            wall
+            "run {r}: {} triangles, area {area:.0}, volume {volume:.0}; wall/cpu ms: bin {:.0}/{:.0}, \
+             density {:.0}/{:.0}, mc {:.0}/{:.0}",
+            mesh.triangle_count(),
+            row[0],
+            row[1],
+            row[2],
+            row[3],
+            row[4],
+            row[5]
         );
-        rows.push([
-            s.bin_ms,
-            s.density_ms,
-            s.mc_ms,
-            s.density_ms + s.mc_ms,
-            wall,
-        ]);
+        rows.push(row);
     }
     let median = |k: usize| {
         let mut v: Vec<f64> = rows.iter().map(|r| r[k]).collect();
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
+    let threads = rayon::current_num_threads() as f64;
     println!(
-        "median of {repeats}: bin {:.0} ms, density {:.0} ms, mc {:.0} ms, density+mc {:.0} ms, \
-         wall {:.0} ms",
+        "median of {repeats} (wall ms / cpu ms / cpu ms per thread): bin {:.0}/{:.0}/{:.0}, \
+         density {:.0}/{:.0}/{:.0}, mc {:.0}/{:.0}/{:.0}; density+mc wall {:.0}, cpu/thread {:.0}",
         median(0),
         median(1),
+        median(1) / threads,
         median(2),
         median(3),
-        median(4)
+        median(3) / threads,
+        median(4),
+        median(5),
+        median(5) / threads,
+        median(2) + median(4),
+        (median(3) + median(5)) / threads
     );
     Ok(())
+}
+
+/// Runs `f`, returning its result, wall time and process CPU time (user + system) in ms.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, f64, f64) {
+    let (c0, t0) = (cpu_ms(), Instant::now());
+    let out = f();
+    (out, t0.elapsed().as_secs_f64() * 1e3, cpu_ms() - c0)
+}
+
+/// CPU time of this process in ms from `/proc/self/stat` (10 ms ticks; 0 where unavailable).
+fn cpu_ms() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    let after = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let tick = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|f| f.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    // Fields 14 and 15 of the line (utime, stime) are 12 and 13 after the command name.
+    (tick(11) + tick(12)) * 10.0
 }
 
 /// Positions (Å) and radii (Å, DESIGN section 2 by element) of the ATOM/HETATM records.

@@ -104,16 +104,28 @@ struct AxisTerms {
 impl AxisTerms {
     /// Fills the terms for samples `lo..=hi` of an axis with origin `o` (Å), spacing `h` (Å),
     /// atom coordinate `p` (Å) and exponent factor `k` (Å⁻²).
-    fn fill(&mut self, lo: u32, hi: u32, o: f32, h: f32, p: f32, k: f32) {
-        self.first = lo as usize;
+    /// Samples with `d^2 >= cut2` along this axis alone are dropped from both ends: f32
+    /// addition of non-negative terms never decreases, so they fail the full cutoff test too,
+    /// and `d^2` is monotonic in `|i - p|`, so the samples kept are contiguous.
+    /// Returns false when no sample is kept.
+    #[allow(clippy::too_many_arguments)]
+    fn fill(&mut self, lo: u32, hi: u32, o: f32, h: f32, p: f32, k: f32, cut2: f32) -> bool {
         self.d2.clear();
         self.e.clear();
+        let mut first = None;
         for i in lo..=hi {
             let d = (o + h * i as f32) - p;
             let d2 = d * d;
-            self.d2.push(d2);
-            self.e.push((-k * d2).exp());
+            if d2 < cut2 {
+                first.get_or_insert(i);
+                self.d2.push(d2);
+            } else if first.is_some() {
+                break;
+            }
         }
+        self.first = first.unwrap_or(lo) as usize;
+        self.e.extend(self.d2.iter().map(|&d2| (-k * d2).exp()));
+        !self.d2.is_empty()
     }
 }
 
@@ -149,36 +161,30 @@ fn fill_slab(
         if k0 > k1 {
             continue;
         }
-        tx.fill(rx.0, rx.1, o.x, h, px, atom.k);
-        ty.fill(ry.0, ry.1, o.y, h, py, atom.k);
-        tz.fill(k0, k1, o.z, h, pz, atom.k);
         let cut2 = atom.cut2;
+        if !(tx.fill(rx.0, rx.1, o.x, h, px, atom.k, cut2)
+            && ty.fill(ry.0, ry.1, o.y, h, py, atom.k, cut2)
+            && tz.fill(k0, k1, o.z, h, pz, atom.k, cut2))
+        {
+            continue;
+        }
         for (kz, (&dz2, &ez)) in tz.d2.iter().zip(&tz.e).enumerate() {
             let zoff = (tz.first + kz - z0 as usize) * plane;
             for (jy, (&dy2, &ey)) in ty.d2.iter().zip(&ty.e).enumerate() {
-                let rest = cut2 - (dy2 + dz2);
-                if rest <= 0.0 {
+                if dy2 + dz2 >= cut2 {
                     continue;
                 }
-                // Samples whose x lies within the chord (one extra on each side); the exact
-                // cutoff test below decides.
-                let half = rest.sqrt();
-                let lo = ((px - half - o.x) / h).floor().max(0.0) as usize;
-                let hi = ((px + half - o.x) / h).ceil().max(0.0) as usize + 1;
-                let lo = lo.clamp(tx.first, tx.first + tx.d2.len());
-                let hi = hi.clamp(lo, tx.first + tx.d2.len());
-                let (a, b) = (lo - tx.first, hi - tx.first);
-                let (dx2s, exs) = (&tx.d2[a..b], &tx.e[a..b]);
+                let (dx2s, exs) = (&tx.d2[..], &tx.e[..]);
                 let eyz = ey * ez;
-                let row = zoff + (ty.first + jy) * nx as usize + lo;
-                let out = &mut vals[row..row + (b - a)];
+                let row = zoff + (ty.first + jy) * nx as usize + tx.first;
+                let out = &mut vals[row..row + dx2s.len()];
                 for ((v, &dx2), &ex) in out.iter_mut().zip(dx2s).zip(exs) {
                     let inside = (dx2 + dy2) + dz2 < cut2;
                     *v += if inside { ex * eyz } else { 0.0 };
                 }
                 if let Some(cols) = cols.as_deref_mut() {
                     let c = atom.colour;
-                    let out = &mut cols[row..row + (b - a)];
+                    let out = &mut cols[row..row + dx2s.len()];
                     for ((v, &dx2), &ex) in out.iter_mut().zip(dx2s).zip(exs) {
                         if (dx2 + dy2) + dz2 < cut2 {
                             let w = ex * eyz;
