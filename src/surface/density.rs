@@ -129,6 +129,27 @@ impl AxisTerms {
     }
 }
 
+/// Width of the fixed-size row kernel (samples along x).
+const LANES: usize = 16;
+
+/// The x terms of one atom padded to [`LANES`]: `d2 = +inf` and `e = 0` past its reach.
+struct Lanes {
+    d2: [f32; LANES],
+    e: [f32; LANES],
+}
+
+impl Lanes {
+    fn new(t: &AxisTerms) -> Lanes {
+        let mut l = Lanes {
+            d2: [f32::INFINITY; LANES],
+            e: [0.0; LANES],
+        };
+        l.d2[..t.d2.len()].copy_from_slice(&t.d2);
+        l.e[..t.e.len()].copy_from_slice(&t.e);
+        l
+    }
+}
+
 /// Adds every atom of slab `s` to that slab's samples (`vals`, and `cols` when colouring).
 fn fill_slab(
     bins: &AtomBins,
@@ -168,30 +189,57 @@ fn fill_slab(
         {
             continue;
         }
+        let wide = (tx.d2.len() <= LANES).then(|| Lanes::new(&tx));
         for (kz, (&dz2, &ez)) in tz.d2.iter().zip(&tz.e).enumerate() {
             let zoff = (tz.first + kz - z0 as usize) * plane;
             for (jy, (&dy2, &ey)) in ty.d2.iter().zip(&ty.e).enumerate() {
                 if dy2 + dz2 >= cut2 {
                     continue;
                 }
-                let (dx2s, exs) = (&tx.d2[..], &tx.e[..]);
                 let eyz = ey * ez;
-                let row = zoff + (ty.first + jy) * nx as usize + tx.first;
-                let out = &mut vals[row..row + dx2s.len()];
-                for ((v, &dx2), &ex) in out.iter_mut().zip(dx2s).zip(exs) {
-                    let inside = (dx2 + dy2) + dz2 < cut2;
-                    *v += if inside { ex * eyz } else { 0.0 };
+                let row0 = zoff + (ty.first + jy) * nx as usize + tx.first;
+                if let Some(lanes) = wide.as_ref()
+                    && cols.is_none()
+                    && row0 + LANES <= vals.len()
+                {
+                    // Fixed-width path: lanes past the atom's reach (or failing the cutoff)
+                    // add exactly 0.0, which changes no sample.
+                    let out: &mut [f32; LANES] = match (&mut vals[row0..row0 + LANES]).try_into() {
+                        Ok(out) => out,
+                        Err(_) => continue,
+                    };
+                    for l in 0..LANES {
+                        let pass = (lanes.d2[l] + dy2) + dz2 < cut2;
+                        out[l] += if pass { lanes.e[l] * eyz } else { 0.0 };
+                    }
+                    continue;
+                }
+                // The samples of this row that pass the exact cutoff test are contiguous
+                // (the test is monotonic in dx^2): trim the failing ones from both ends, then
+                // add without a mask.
+                let pass = |d: f32| (d + dy2) + dz2 < cut2;
+                let mut a = 0;
+                let mut b = tx.d2.len();
+                while a < b && !pass(tx.d2[a]) {
+                    a += 1;
+                }
+                while b > a && !pass(tx.d2[b - 1]) {
+                    b -= 1;
+                }
+                let exs = &tx.e[a..b];
+                let row = row0 + a;
+                let out = &mut vals[row..row + exs.len()];
+                for (v, &ex) in out.iter_mut().zip(exs) {
+                    *v += ex * eyz;
                 }
                 if let Some(cols) = cols.as_deref_mut() {
                     let c = atom.colour;
-                    let out = &mut cols[row..row + dx2s.len()];
-                    for ((v, &dx2), &ex) in out.iter_mut().zip(dx2s).zip(exs) {
-                        if (dx2 + dy2) + dz2 < cut2 {
-                            let w = ex * eyz;
-                            v[0] += w * c[0];
-                            v[1] += w * c[1];
-                            v[2] += w * c[2];
-                        }
+                    let out = &mut cols[row..row + exs.len()];
+                    for (v, &ex) in out.iter_mut().zip(exs) {
+                        let w = ex * eyz;
+                        v[0] += w * c[0];
+                        v[1] += w * c[1];
+                        v[2] += w * c[2];
                     }
                 }
             }
