@@ -56,6 +56,14 @@ fn check(quality: Quality, spacing: f32, radius_scale: f32, seed: u64) {
     let grid = GridSpec::for_atoms(&pos, &radii, &params).expect("grid");
     let vol = density::compute(&atoms, &params, &grid).expect("density");
     let cols = vol.colours.as_ref().expect("colour volume");
+    // Without colours the density takes another code path; it must give the same numbers.
+    let plain = AtomSet {
+        colours: None,
+        ..atoms
+    };
+    let alone = density::compute(&plain, &params, &grid).expect("density");
+    assert!(alone.colours.is_none());
+    assert_eq!(alone.values, vol.values);
     assert_eq!(vol.values.len() as u64, grid.voxel_count());
     let [nx, ny, nz] = grid.dims;
     let (mut nonzero, mut worst) = (0, 0.0f64);
@@ -86,6 +94,8 @@ fn check(quality: Quality, spacing: f32, radius_scale: f32, seed: u64) {
 
 #[test]
 fn density_matches_the_direct_formula_at_every_quality() {
+    // Wide (more than 16 samples per row) and narrow atoms.
+    check(Quality::Max, 0.2, 1.0, 5);
     check(Quality::Low, 0.9, 1.0, 1);
     check(Quality::Medium, 0.7, 1.3, 2);
     check(Quality::High, 1.0, 0.8, 3);

@@ -5,7 +5,7 @@
 mod surface_common;
 
 use glam::Vec3;
-use mdsurf::surface::{AtomSet, GridSpec, SurfaceParams, density, marching_cubes};
+use mdsurf::surface::{AtomSet, GridSpec, McTables, SurfaceParams, density, marching_cubes};
 use surface_common::{Rng, cluster, surface};
 
 #[test]
@@ -169,4 +169,22 @@ fn stages_run_alone_give_the_engine_mesh() {
         active += usize::from(case != 0 && case != 255);
     }
     assert!(active > 0);
+    // Triangle and vertex counts agree with a naive count over all cells and edges.
+    let tables = McTables::get();
+    let tris: usize = cases.iter().map(|&c| tables.case_triangles(c).len()).sum();
+    assert_eq!(mesh.triangle_count(), tris);
+    let inside = |i: u32, j: u32, k: u32| vol.values[grid.index(i, j, k)] >= params.isovalue;
+    let [nx, ny, nz] = grid.dims;
+    let mut crossed = 0;
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let f = inside(i, j, k);
+                crossed += usize::from(i + 1 < nx && inside(i + 1, j, k) != f);
+                crossed += usize::from(j + 1 < ny && inside(i, j + 1, k) != f);
+                crossed += usize::from(k + 1 < nz && inside(i, j, k + 1) != f);
+            }
+        }
+    }
+    assert_eq!(mesh.vertex_count(), crossed);
 }

@@ -104,16 +104,49 @@ struct AxisTerms {
 impl AxisTerms {
     /// Fills the terms for samples `lo..=hi` of an axis with origin `o` (Å), spacing `h` (Å),
     /// atom coordinate `p` (Å) and exponent factor `k` (Å⁻²).
-    fn fill(&mut self, lo: u32, hi: u32, o: f32, h: f32, p: f32, k: f32) {
-        self.first = lo as usize;
+    /// Samples with `d^2 >= cut2` along this axis alone are dropped from both ends: f32
+    /// addition of non-negative terms never decreases, so they fail the full cutoff test too,
+    /// and `d^2` is monotonic in `|i - p|`, so the samples kept are contiguous.
+    /// Returns false when no sample is kept.
+    #[allow(clippy::too_many_arguments)]
+    fn fill(&mut self, lo: u32, hi: u32, o: f32, h: f32, p: f32, k: f32, cut2: f32) -> bool {
         self.d2.clear();
         self.e.clear();
+        let mut first = None;
         for i in lo..=hi {
             let d = (o + h * i as f32) - p;
             let d2 = d * d;
-            self.d2.push(d2);
-            self.e.push((-k * d2).exp());
+            if d2 < cut2 {
+                first.get_or_insert(i);
+                self.d2.push(d2);
+            } else if first.is_some() {
+                break;
+            }
         }
+        self.first = first.unwrap_or(lo) as usize;
+        self.e.extend(self.d2.iter().map(|&d2| (-k * d2).exp()));
+        !self.d2.is_empty()
+    }
+}
+
+/// Width of the fixed-size row kernel (samples along x).
+const LANES: usize = 16;
+
+/// The x terms of one atom padded to [`LANES`]: `d2 = +inf` and `e = 0` past its reach.
+struct Lanes {
+    d2: [f32; LANES],
+    e: [f32; LANES],
+}
+
+impl Lanes {
+    fn new(t: &AxisTerms) -> Lanes {
+        let mut l = Lanes {
+            d2: [f32::INFINITY; LANES],
+            e: [0.0; LANES],
+        };
+        l.d2[..t.d2.len()].copy_from_slice(&t.d2);
+        l.e[..t.e.len()].copy_from_slice(&t.e);
+        l
     }
 }
 
@@ -149,11 +182,14 @@ fn fill_slab(
         if k0 > k1 {
             continue;
         }
-        tx.fill(rx.0, rx.1, o.x, h, px, atom.k);
-        ty.fill(ry.0, ry.1, o.y, h, py, atom.k);
-        tz.fill(k0, k1, o.z, h, pz, atom.k);
         let cut2 = atom.cut2;
-        let n = tx.d2.len();
+        if !(tx.fill(rx.0, rx.1, o.x, h, px, atom.k, cut2)
+            && ty.fill(ry.0, ry.1, o.y, h, py, atom.k, cut2)
+            && tz.fill(k0, k1, o.z, h, pz, atom.k, cut2))
+        {
+            continue;
+        }
+        let wide = (tx.d2.len() <= LANES).then(|| Lanes::new(&tx));
         for (kz, (&dz2, &ez)) in tz.d2.iter().zip(&tz.e).enumerate() {
             let zoff = (tz.first + kz - z0 as usize) * plane;
             for (jy, (&dy2, &ey)) in ty.d2.iter().zip(&ty.e).enumerate() {
@@ -161,22 +197,49 @@ fn fill_slab(
                     continue;
                 }
                 let eyz = ey * ez;
-                let row = zoff + (ty.first + jy) * nx as usize + tx.first;
-                let out = &mut vals[row..row + n];
-                for ((v, &dx2), &ex) in out.iter_mut().zip(&tx.d2).zip(&tx.e) {
-                    let inside = (dx2 + dy2) + dz2 < cut2;
-                    *v += if inside { ex * eyz } else { 0.0 };
+                let row0 = zoff + (ty.first + jy) * nx as usize + tx.first;
+                if let Some(lanes) = wide.as_ref()
+                    && cols.is_none()
+                    && row0 + LANES <= vals.len()
+                {
+                    // Fixed-width path: lanes past the atom's reach (or failing the cutoff)
+                    // add exactly 0.0, which changes no sample.
+                    let out: &mut [f32; LANES] = match (&mut vals[row0..row0 + LANES]).try_into() {
+                        Ok(out) => out,
+                        Err(_) => continue,
+                    };
+                    for l in 0..LANES {
+                        let pass = (lanes.d2[l] + dy2) + dz2 < cut2;
+                        out[l] += if pass { lanes.e[l] * eyz } else { 0.0 };
+                    }
+                    continue;
+                }
+                // The samples of this row that pass the exact cutoff test are contiguous
+                // (the test is monotonic in dx^2): trim the failing ones from both ends, then
+                // add without a mask.
+                let pass = |d: f32| (d + dy2) + dz2 < cut2;
+                let mut a = 0;
+                let mut b = tx.d2.len();
+                while a < b && !pass(tx.d2[a]) {
+                    a += 1;
+                }
+                while b > a && !pass(tx.d2[b - 1]) {
+                    b -= 1;
+                }
+                let exs = &tx.e[a..b];
+                let row = row0 + a;
+                let out = &mut vals[row..row + exs.len()];
+                for (v, &ex) in out.iter_mut().zip(exs) {
+                    *v += ex * eyz;
                 }
                 if let Some(cols) = cols.as_deref_mut() {
                     let c = atom.colour;
-                    let out = &mut cols[row..row + n];
-                    for ((v, &dx2), &ex) in out.iter_mut().zip(&tx.d2).zip(&tx.e) {
-                        if (dx2 + dy2) + dz2 < cut2 {
-                            let w = ex * eyz;
-                            v[0] += w * c[0];
-                            v[1] += w * c[1];
-                            v[2] += w * c[2];
-                        }
+                    let out = &mut cols[row..row + exs.len()];
+                    for (v, &ex) in out.iter_mut().zip(exs) {
+                        let w = ex * eyz;
+                        v[0] += w * c[0];
+                        v[1] += w * c[1];
+                        v[2] += w * c[2];
                     }
                 }
             }

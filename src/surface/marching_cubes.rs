@@ -102,25 +102,38 @@ struct SlabMesh {
     indices: Vec<u32>,
 }
 
-/// Per-plane working buffers: inside flag per sample, vertex index per (sample, axis).
-struct PlaneBuf {
-    inside: Vec<u8>,
-    map: Vec<u32>,
+/// Eight inside flags (bytes 0 or 1) starting at `q`, as one word.
+fn word(flags: &[u8], q: usize) -> u64 {
+    let mut b = [0u8; 8];
+    b.copy_from_slice(&flags[q..q + 8]);
+    u64::from_le_bytes(b)
 }
 
+/// Eight flags that are all 1.
+const ALL_ONE: u64 = 0x0101_0101_0101_0101;
+
 impl Ctx<'_> {
+    /// Inside flags (1 when `rho >= iso`) of plane `k`.
+    fn flags(&self, k: usize, out: &mut [u8]) {
+        let plane = out.len();
+        let v = &self.density.values[k * plane..(k + 1) * plane];
+        for (flag, &x) in out.iter_mut().zip(v) {
+            *flag = u8::from(x >= self.iso);
+        }
+    }
+
     /// Cells of layers `c0..c1` (layer k lies between planes k and k + 1).
     fn slab(&self, c0: usize, c1: usize) -> SlabMesh {
         let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
         let plane = nx * ny;
         let last = c1 == nz - 1;
         let mut out = SlabMesh::default();
-        let new_buf = || PlaneBuf {
-            inside: vec![0; plane],
-            map: vec![0; plane * 3],
-        };
-        let (mut cur, mut next) = (new_buf(), new_buf());
-        self.plane(c0, &mut cur, Some(&mut out));
+        // Inside flags of planes k, k + 1, k + 2 and edge maps of planes k, k + 1.
+        let (mut fa, mut fb, mut fc) = (vec![0u8; plane], vec![0u8; plane], vec![0u8; plane]);
+        let (mut cur, mut next) = (vec![0u32; plane * 3], vec![0u32; plane * 3]);
+        self.flags(c0, &mut fa);
+        self.flags(c0 + 1, &mut fb);
+        self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut out));
         // Cell edge -> (plane 0 or 1, point offset within the plane, axis).
         let edge_ref: [(usize, usize, usize); 12] = std::array::from_fn(|e| {
             let [dx, dy, dz] = corner_offset(EDGE_CORNERS[e][0]).map(|d| d as usize);
@@ -128,20 +141,44 @@ impl Ctx<'_> {
         });
         for k in c0..c1 {
             let owned = k + 1 < c1 || last;
-            self.plane(k + 1, &mut next, owned.then_some(&mut out));
+            let up = k + 2 < nz;
+            if up {
+                self.flags(k + 2, &mut fc);
+            }
+            let emit = owned.then_some(&mut out);
+            self.plane(k + 1, &fb, up.then_some(&fc[..]), &mut next, emit);
             let flag = if owned { 0 } else { FOREIGN };
-            let (a, b) = (&cur.inside, &next.inside);
+            let (a, b) = (&fa, &fb);
             for j in 0..ny - 1 {
-                for i in 0..nx - 1 {
-                    let p = i + j * nx;
-                    let case = a[p]
-                        | a[p + 1] << 1
-                        | a[p + nx] << 2
-                        | a[p + nx + 1] << 3
-                        | b[p] << 4
-                        | b[p + 1] << 5
-                        | b[p + nx] << 6
-                        | b[p + nx + 1] << 7;
+                let r = j * nx;
+                let column = |i: usize| {
+                    let p = r + i;
+                    a[p] | a[p + nx] << 2 | b[p] << 4 | b[p + nx] << 6
+                };
+                let mut i = 0;
+                let mut left = column(0);
+                while i < nx - 1 {
+                    if i + 9 <= nx {
+                        let ws = [r + i, r + i + 1, r + nx + i, r + nx + i + 1];
+                        let (mut or, mut and) = (0u64, u64::MAX);
+                        for q in ws {
+                            for f in [a, b] {
+                                let w = word(f, q);
+                                or |= w;
+                                and &= w;
+                            }
+                        }
+                        if or == 0 || and == ALL_ONE {
+                            i += 8;
+                            left = column(i);
+                            continue;
+                        }
+                    }
+                    let right = column(i + 1);
+                    let case = left | right << 1;
+                    left = right;
+                    let p = r + i;
+                    i += 1;
                     if case == 0 || case == 255 {
                         continue;
                     }
@@ -149,9 +186,9 @@ impl Ctx<'_> {
                         for &e in tri {
                             let (dz, off, axis) = edge_ref[e as usize];
                             let idx = if dz == 0 {
-                                cur.map[(p + off) * 3 + axis]
+                                cur[(p + off) * 3 + axis]
                             } else {
-                                next.map[(p + off) * 3 + axis] | flag
+                                next[(p + off) * 3 + axis] | flag
                             };
                             out.indices.push(idx);
                         }
@@ -159,46 +196,65 @@ impl Ctx<'_> {
                 }
             }
             std::mem::swap(&mut cur, &mut next);
+            std::mem::swap(&mut fa, &mut fb);
+            std::mem::swap(&mut fb, &mut fc);
         }
         out
     }
 
-    /// Fills `buf` for plane `k`: inside flags and the index of each crossed edge starting on the
-    /// plane, numbered from the slab's current vertex count when `emit` is given (and the vertex
-    /// is appended), else from 0 (the next slab's numbering of its first plane).
-    fn plane(&self, k: usize, buf: &mut PlaneBuf, mut emit: Option<&mut SlabMesh>) {
-        let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
-        let plane = nx * ny;
-        let v = &self.density.values;
-        let iso = self.iso;
-        let base = k * plane;
-        for (flag, &x) in buf.inside.iter_mut().zip(&v[base..base + plane]) {
-            *flag = u8::from(x >= iso);
-        }
-        let up = (k + 1 < nz).then(|| &v[base + plane..base + 2 * plane]);
+    /// Fills `map` with the index of each crossed edge starting on plane `k` (inside flags `a`,
+    /// flags of plane `k + 1` in `up` unless `k` is the top plane), numbered from the slab's
+    /// current vertex count when `emit` is given (and the vertex is appended), else from 0 (the
+    /// next slab's numbering of its first plane). Entries of uncrossed edges are left as they were.
+    fn plane(
+        &self,
+        k: usize,
+        a: &[u8],
+        up: Option<&[u8]>,
+        map: &mut [u32],
+        mut emit: Option<&mut SlabMesh>,
+    ) {
+        let [nx, ny, _] = self.grid.dims.map(|d| d as usize);
         let mut count = emit.as_ref().map_or(0, |m| m.positions.len()) as u32;
         for j in 0..ny {
-            for i in 0..nx {
-                let p = i + j * nx;
-                let a = buf.inside[p];
+            let r = j * nx;
+            let mut i = 0;
+            while i < nx {
+                // Skip eight points at once when none of their x, y or z edges is crossed.
+                if i + 9 <= nx
+                    && j + 1 < ny
+                    && let Some(u) = up
+                {
+                    let w = word(a, r + i);
+                    let x = w ^ word(a, r + i + 1);
+                    let y = w ^ word(a, r + nx + i);
+                    let z = w ^ word(u, r + i);
+                    if x | y | z == 0 {
+                        i += 8;
+                        continue;
+                    }
+                }
+                let p = r + i;
+                let f = a[p];
                 let crossed = [
-                    i + 1 < nx && buf.inside[p + 1] != a,
-                    j + 1 < ny && buf.inside[p + nx] != a,
-                    up.is_some_and(|u| u8::from(u[p] >= iso) != a),
+                    i + 1 < nx && a[p + 1] != f,
+                    j + 1 < ny && a[p + nx] != f,
+                    up.is_some_and(|u| u[p] != f),
                 ];
                 for (axis, &c) in crossed.iter().enumerate() {
                     if !c {
                         continue;
                     }
-                    buf.map[p * 3 + axis] = count;
+                    map[p * 3 + axis] = count;
                     count += 1;
                     if let Some(m) = emit.as_deref_mut() {
-                        let vert = edge_vertex(self.grid, self.density, iso, [i, j, k], axis);
+                        let vert = edge_vertex(self.grid, self.density, self.iso, [i, j, k], axis);
                         m.positions.push(vert.position);
                         m.normals.push(vert.normal);
                         m.colours.push(vert.colour);
                     }
                 }
+                i += 1;
             }
         }
     }
