@@ -188,7 +188,9 @@ fn very_uneven_bins() {
     {
         atoms.positions.push(far);
         atoms.radii.push(1.2 + 0.3 * i as f32);
-        atoms.colours.as_mut().map(|c| c.push([1.0, 0.0, 0.0]));
+        if let Some(c) = atoms.colours.as_mut() {
+            c.push([1.0, 0.0, 0.0]);
+        }
     }
     let p = SurfaceParams {
         spacing: 1.0,
