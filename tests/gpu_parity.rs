@@ -64,8 +64,8 @@ fn two_overlapping_atoms_with_colours() {
         };
         let out = engine.compute(&atoms.set(), &p).expect("GPU surface");
         let (_, _, cpu) = reference(&atoms, &p);
-        assert_eq!(
-            out.mesh.indices, cpu.indices,
+        assert!(
+            out.mesh.indices == cpu.indices,
             "H={spacing}: different triangles"
         );
         assert!(assert_mesh_close(
