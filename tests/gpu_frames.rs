@@ -237,3 +237,35 @@ fn same_surface_whatever_the_path_or_atom_order() {
     let rev = other.compute(&reversed.set(), &p).expect("reversed");
     assert!(rev.mesh == first.mesh, "atom order changed the mesh");
 }
+
+#[test]
+fn runs_on_a_device_with_webgpu_default_limits() {
+    // The viewer shares eframe's device, which may have only the WebGPU default limits
+    // (8 storage buffers per stage, 128 MiB bindings): every pipeline must still build.
+    let Some(ctx) =
+        mdsurf::gpu::GpuContext::headless_or_skip().expect("REQUIRE_GPU=1 but no adapter")
+    else {
+        return;
+    };
+    let adapter_limits = ctx.limits.clone();
+    let limits = wgpu::Limits::default().using_resolution(adapter_limits);
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter =
+        pollster::block_on(instance.request_adapter(&Default::default())).expect("adapter");
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .expect("device with default limits");
+    let mut engine = GpuEngine::from_device(device, queue).expect("engine on default limits");
+    compare(
+        &mut engine,
+        "default limits",
+        &cluster(40, 9, 4.0),
+        &SurfaceParams {
+            spacing: 0.7,
+            ..Default::default()
+        },
+    );
+}

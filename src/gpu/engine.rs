@@ -138,7 +138,7 @@ impl GpuEngine {
         let (stages, buffers) = ctx.scoped(|| {
             Ok((
                 Stages::new(&ctx.device, max_groups),
-                Buffers::new(&ctx.device),
+                Buffers::new(&ctx.device)?,
             ))
         })?;
         Ok(GpuEngine {
@@ -285,6 +285,15 @@ impl GpuEngine {
 
         // Buffers: replaced per-atom buffers lose their contents, so re-upload everything then.
         let d = &self.ctx.device;
+        // The sorted atoms (16 bytes each) are the largest per-atom binding.
+        if n * 16 > self.ctx.max_binding() {
+            return Err(GpuError::TooLarge {
+                what: "the sorted atom array",
+                needed: n * 16,
+                limit: self.ctx.max_binding(),
+            }
+            .into());
+        }
         let replaced = self.buffers.ensure_atoms(d, n);
         self.buffers.ensure_plan(d, &plan, colour);
         let (want_v, want_t) = if st.mesh_want == (0, 0) {
