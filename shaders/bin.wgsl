@@ -1,5 +1,7 @@
 // Binning stage: counting sort of atoms into a uniform cell grid (count, [scan.wgsl], copy,
-// scatter). Rust side: src/gpu/bin.rs. Cell of an atom: floor((p - cell_origin) / cell_size),
+// scatter, sort_cells). Rust side: src/gpu/bin.rs. The scatter's atomics hand out slots in any
+// order; sort_cells then orders each cell's atoms by (x, y, z, alpha), so the density sums run
+// in an order that depends neither on the run nor on the input order of the atoms. Cell of an atom: floor((p - cell_origin) / cell_size),
 // clamped to the cell grid, linear index x fastest.
 
 // Twin of crate::gpu::types::BinUniform (48 bytes).
@@ -72,4 +74,45 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     let slot = atomicAdd(&cell_end[cell_of(p)], 1u);
     sorted_atoms[slot] = vec4<f32>(p, radii[i] * u.radius_scale);
     sorted_colours[slot] = colours[i];
+}
+
+// Cells holding more atoms than this keep the scatter order (insertion sort is quadratic).
+const MAX_SORTED: u32 = 1024u;
+
+fn atom_less(a: vec4<f32>, b: vec4<f32>) -> bool {
+    if (a.x != b.x) {
+        return a.x < b.x;
+    }
+    if (a.y != b.y) {
+        return a.y < b.y;
+    }
+    if (a.z != b.z) {
+        return a.z < b.z;
+    }
+    return a.w < b.w;
+}
+
+@compute @workgroup_size(256)
+fn sort_cells(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+    let c = linear_id(gid, nwg);
+    if (c >= u.cell_count) {
+        return;
+    }
+    let first = cell_start[c];
+    let last = atomicLoad(&cell_end[c]);
+    if (last - first > MAX_SORTED) {
+        return;
+    }
+    for (var i = first + 1u; i < last; i++) {
+        let a = sorted_atoms[i];
+        let ac = sorted_colours[i];
+        var j = i;
+        while (j > first && atom_less(a, sorted_atoms[j - 1u])) {
+            sorted_atoms[j] = sorted_atoms[j - 1u];
+            sorted_colours[j] = sorted_colours[j - 1u];
+            j--;
+        }
+        sorted_atoms[j] = a;
+        sorted_colours[j] = ac;
+    }
 }

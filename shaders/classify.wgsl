@@ -28,8 +28,21 @@ struct SlabUniform {
 
 @group(0) @binding(0) var<uniform> u: SlabUniform;
 @group(0) @binding(1) var<storage, read> density: array<f32>;
-// Triangles per case: case_start[c + 1] - case_start[c] (257 entries, crate::surface::McTables).
-@group(0) @binding(2) var<storage, read> case_start: array<u32>;
+// Marching Cubes tables as a uniform (uniforms do not count against the device's 8 storage
+// buffers per stage). Twin of crate::gpu::types::McTablesUniform: case starts in words 0..257
+// (crate::surface::McTables::case_start), triangle edges, three per triangle, from word
+// MC_TRI_BASE (crate::surface::McTables::triangles_flat_u32).
+const MC_TRI_BASE: u32 = 260u;
+struct McTablesUniform {
+    words: array<vec4<u32>, 1025>,
+}
+
+fn table_word(i: u32) -> u32 {
+    return mc.words[i / 4u][i % 4u];
+}
+
+// Triangles per case: case start c + 1 minus case start c.
+@group(0) @binding(2) var<uniform> mc: McTablesUniform;
 @group(0) @binding(3) var<storage, read_write> classes: array<u32>;
 @group(0) @binding(4) var<storage, read_write> block_vertices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> block_triangles: array<u32>;
@@ -78,7 +91,7 @@ fn main(
                     case_id |= 1u << c;
                 }
             }
-            tris = case_start[case_id + 1u] - case_start[case_id];
+            tris = table_word(case_id + 1u) - table_word(case_id);
         }
         let verts = countOneBits(edges);
         var is_active = 0u;

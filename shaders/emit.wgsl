@@ -47,9 +47,20 @@ override WITH_COLOUR: bool = true;
 @group(0) @binding(3) var<storage, read> classes: array<u32>;
 @group(0) @binding(4) var<storage, read> vertex_base: array<u32>;
 @group(0) @binding(5) var<storage, read> active_cells: array<vec2<u32>>;
-@group(0) @binding(6) var<storage, read> case_start: array<u32>;
-// Triangle edges, three per triangle (crate::surface::McTables::triangles_flat_u32).
-@group(0) @binding(7) var<storage, read> tri_edges: array<u32>;
+// Marching Cubes tables as a uniform (uniforms do not count against the device's 8 storage
+// buffers per stage). Twin of crate::gpu::types::McTablesUniform: case starts in words 0..257
+// (crate::surface::McTables::case_start), triangle edges, three per triangle, from word
+// MC_TRI_BASE (crate::surface::McTables::triangles_flat_u32).
+const MC_TRI_BASE: u32 = 260u;
+struct McTablesUniform {
+    words: array<vec4<u32>, 1025>,
+}
+
+fn table_word(i: u32) -> u32 {
+    return mc.words[i / 4u][i % 4u];
+}
+
+@group(0) @binding(6) var<uniform> mc: McTablesUniform;
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read_write> vertices: array<f32>;
 @group(0) @binding(10) var<storage, read_write> indices: array<u32>;
@@ -152,8 +163,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         }
     }
     let case_id = word & 255u;
-    let t0 = case_start[case_id];
-    let t1 = case_start[case_id + 1u];
+    let t0 = table_word(case_id);
+    let t1 = table_word(case_id + 1u);
     for (var t = t0; t < t1; t++) {
         let tri = cell.y + (t - t0);
         if (tri >= tcap) {
@@ -161,7 +172,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             break;
         }
         for (var v = 0u; v < 3u; v++) {
-            let e = tri_edges[3u * t + v];
+            let e = table_word(MC_TRI_BASE + 3u * t + v);
             let c = EDGE_CORNER0[e];
             let axis = e / 4u;
             let q = n + (c & 1u) + u.dims.x * (((c >> 1u) & 1u) + u.dims.y * ((c >> 2u) & 1u));

@@ -1,8 +1,9 @@
 //! Binning stage (the paper's t_sort): counting sort of the atoms into the uniform cell grid of
 //! [`super::plan::FramePlan`] with `shaders/bin.wgsl` (count per cell, exclusive scan, copy the
-//! starts into the fill cursors, scatter), so the density gather can walk neighbouring cells.
-//! Atoms in one cell land in the order the atomic cursor hands out slots, which may vary between
-//! runs: sums then differ in the last bits only.
+//! starts into the fill cursors, scatter, sort each cell), so the density gather can walk
+//! neighbouring cells. The per-cell sort by (x, y, z, alpha) makes the order within a cell, and
+//! so every density sum, independent of the run and of the input order (cells of more than 1024
+//! atoms keep the scatter order).
 
 use super::kernel::{Kernel, groups_1d, module, uniform};
 use super::plan::FramePlan;
@@ -16,6 +17,7 @@ pub struct Binner {
     count: Kernel,
     copy_starts: Kernel,
     scatter: Kernel,
+    sort_cells: Kernel,
     max_groups: u32,
 }
 
@@ -25,6 +27,7 @@ pub struct BinFrame {
     count: wgpu::BindGroup,
     copy_starts: wgpu::BindGroup,
     scatter: wgpu::BindGroup,
+    sort_cells: wgpu::BindGroup,
     scan: ScanPlan,
     atoms: u64,
     cells: u64,
@@ -39,6 +42,7 @@ impl Binner {
             count: Kernel::new(device, &m, "count", &[]),
             copy_starts: Kernel::new(device, &m, "copy_starts", &[]),
             scatter: Kernel::new(device, &m, "scatter", &[]),
+            sort_cells: Kernel::new(device, &m, "sort_cells", &[]),
             max_groups,
         }
     }
@@ -95,6 +99,16 @@ impl Binner {
                 (8, b.sorted_colours.buffer.as_entire_binding()),
             ],
         );
+        let sort_cells = self.sort_cells.bind(
+            device,
+            &[
+                (0, ub()),
+                (5, b.cell_start.buffer.as_entire_binding()),
+                (6, b.cell_end.buffer.as_entire_binding()),
+                (7, b.sorted_atoms.buffer.as_entire_binding()),
+                (8, b.sorted_colours.buffer.as_entire_binding()),
+            ],
+        );
         // The scan total (atom count) goes to a spare word of the partials buffer.
         let scan = scanner.plan(
             device,
@@ -106,6 +120,7 @@ impl Binner {
             count,
             copy_starts,
             scatter,
+            sort_cells,
             scan,
             atoms,
             cells: plan.cell_count(),
@@ -136,5 +151,8 @@ impl Binner {
             groups_1d(f.cells.div_ceil(256), self.max_groups),
         );
         self.scatter.dispatch(&mut pass, &f.scatter, atom_groups);
+        let cell_groups = groups_1d(f.cells.div_ceil(256), self.max_groups);
+        self.sort_cells
+            .dispatch(&mut pass, &f.sort_cells, cell_groups);
     }
 }

@@ -86,6 +86,7 @@ struct State {
     atoms: u64,
     params: Option<SurfaceParams>,
     plan: Option<FramePlan>,
+    last: Option<FrameInfo>,
     with_colour: bool,
     bounds: Option<(Vec3, Vec3, f32)>,
     fingerprints: inputs::Fingerprints,
@@ -137,7 +138,7 @@ impl GpuEngine {
         let (stages, buffers) = ctx.scoped(|| {
             Ok((
                 Stages::new(&ctx.device, max_groups),
-                Buffers::new(&ctx.device),
+                Buffers::new(&ctx.device)?,
             ))
         })?;
         Ok(GpuEngine {
@@ -172,6 +173,11 @@ impl GpuEngine {
     /// The plan of the last submitted frame.
     pub fn plan(&self) -> Option<&FramePlan> {
         self.state.plan.as_ref()
+    }
+
+    /// What the last submit did (which stages ran, grid, slabs).
+    pub fn last_frame(&self) -> Option<&FrameInfo> {
+        self.state.last.as_ref()
     }
 
     /// Bytes of GPU memory the engine's buffers hold.
@@ -279,6 +285,15 @@ impl GpuEngine {
 
         // Buffers: replaced per-atom buffers lose their contents, so re-upload everything then.
         let d = &self.ctx.device;
+        // The sorted atoms (16 bytes each) are the largest per-atom binding.
+        if n * 16 > self.ctx.max_binding() {
+            return Err(GpuError::TooLarge {
+                what: "the sorted atom array",
+                needed: n * 16,
+                limit: self.ctx.max_binding(),
+            }
+            .into());
+        }
         let replaced = self.buffers.ensure_atoms(d, n);
         self.buffers.ensure_plan(d, &plan, colour);
         let (want_v, want_t) = if st.mesh_want == (0, 0) {
@@ -363,6 +378,7 @@ impl GpuEngine {
             work,
         };
         st.plan = Some(plan);
+        st.last = Some(info.clone());
         Ok((info, wall))
     }
 

@@ -45,7 +45,7 @@ impl Classify {
             &[
                 (0, slab_uniform),
                 (1, b.density.buffer.as_entire_binding()),
-                (2, b.case_start.as_entire_binding()),
+                (2, b.mc_tables.as_entire_binding()),
                 (3, b.classes.buffer.as_entire_binding()),
                 (4, b.block_sums[0].buffer.as_entire_binding()),
                 (5, b.block_sums[1].buffer.as_entire_binding()),
@@ -146,8 +146,7 @@ impl Emit {
                 (3, b.classes.buffer.as_entire_binding()),
                 (4, b.vertex_base.buffer.as_entire_binding()),
                 (5, b.active.buffer.as_entire_binding()),
-                (6, b.case_start.as_entire_binding()),
-                (7, b.tri_edges.as_entire_binding()),
+                (6, b.mc_tables.as_entire_binding()),
                 (8, b.counters.as_entire_binding()),
                 (9, b.vertices.buffer.as_entire_binding()),
                 (10, b.indices.buffer.as_entire_binding()),

@@ -2,9 +2,10 @@
 //! Marching Cubes scratch, counters and the output mesh. Each grows (never shrinks) to what a
 //! frame needs; see [`super::plan`] for the byte counts per voxel and per atom.
 
-use super::kernel::{storage, storage_init};
+use super::GpuError;
+use super::kernel::{storage, uniform};
 use super::plan::FramePlan;
-use super::types::{DrawIndexedArgs, GpuCounters, GpuVertex};
+use super::types::{DrawIndexedArgs, GpuCounters, GpuVertex, McTablesUniform};
 use crate::surface::McTables;
 
 /// A buffer that is replaced by a bigger one when a frame needs more.
@@ -81,25 +82,27 @@ pub struct Buffers {
     pub draw_args: wgpu::Buffer,
     /// Area/volume partial sums.
     pub partials: wgpu::Buffer,
-    /// MC case starts (257 u32).
-    pub case_start: wgpu::Buffer,
-    /// MC triangle edges.
-    pub tri_edges: wgpu::Buffer,
+    /// MC tables ([`super::types::McTablesUniform`], a uniform buffer).
+    pub mc_tables: wgpu::Buffer,
 }
 
 impl Buffers {
     /// Empty buffers plus the Marching Cubes tables.
-    pub fn new(device: &wgpu::Device) -> Buffers {
+    pub fn new(device: &wgpu::Device) -> Result<Buffers, GpuError> {
         use wgpu::BufferUsages as U;
-        let tables = McTables::get();
+        let mc_tables = McTablesUniform::new(McTables::get()).ok_or(GpuError::TooLarge {
+            what: "the Marching Cubes tables",
+            needed: 0,
+            limit: 16 * super::types::MC_TABLE_ROWS as u64,
+        })?;
         let copy = U::COPY_DST | U::COPY_SRC;
-        Buffers {
+        Ok(Buffers {
             positions: Grow::new(device, "positions", U::COPY_DST),
             radii: Grow::new(device, "radii", U::COPY_DST),
             colours: Grow::new(device, "colours", U::COPY_DST),
             sorted_atoms: Grow::new(device, "sorted atoms", U::empty()),
             sorted_colours: Grow::new(device, "sorted colours", U::empty()),
-            cell_start: Grow::new(device, "cell start", U::COPY_DST),
+            cell_start: Grow::new(device, "cell start", U::COPY_DST | U::COPY_SRC),
             cell_end: Grow::new(device, "cell end", U::empty()),
             density: Grow::new(device, "density", U::COPY_SRC),
             colour: Grow::new(device, "colour volume", U::COPY_SRC),
@@ -122,9 +125,8 @@ impl Buffers {
                 U::INDIRECT | U::COPY_SRC,
             ),
             partials: storage(device, "area/volume partials", 256 * 8, U::empty()),
-            case_start: storage_init(device, "mc case start", &tables.case_start),
-            tri_edges: storage_init(device, "mc triangle edges", &tables.triangles_flat_u32()),
-        }
+            mc_tables: uniform(device, "mc tables", &*mc_tables),
+        })
     }
 
     /// Grows the per-atom buffers for `atoms`; true when any was replaced.
@@ -194,8 +196,7 @@ impl Buffers {
             &self.dispatch_args,
             &self.draw_args,
             &self.partials,
-            &self.case_start,
-            &self.tri_edges,
+            &self.mc_tables,
         ];
         grows.iter().map(|g| g.size()).sum::<u64>()
             + self.block_sums.iter().map(|g| g.size()).sum::<u64>()

@@ -175,3 +175,50 @@ pub fn pack_colour(c: [f32; 3]) -> [u32; 2] {
     let q = |v: f32| (v.clamp(0.0, 1.0) * 65535.0).round() as u32;
     [q(c[0]) | (q(c[1]) << 16), q(c[2])]
 }
+
+/// Word where the triangle edges start in [`McTablesUniform`] (`MC_TRI_BASE` in the WGSL).
+pub const MC_TRI_BASE: usize = 260;
+/// 16-byte rows of [`McTablesUniform`].
+pub const MC_TABLE_ROWS: usize = 1025;
+
+/// The Marching Cubes tables as one uniform buffer. Twin: `McTablesUniform` in
+/// `shaders/classify.wgsl` and `shaders/emit.wgsl`. Words `0..257`: case starts; from word
+/// [`MC_TRI_BASE`]: triangle edges, three per triangle.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct McTablesUniform {
+    /// The words, four per 16-byte row.
+    pub words: [[u32; 4]; MC_TABLE_ROWS],
+}
+const _: () = assert!(std::mem::size_of::<McTablesUniform>() == 16 * MC_TABLE_ROWS);
+
+impl McTablesUniform {
+    /// Packs `tables`; None when they do not fit (they always do for Marching Cubes: at most
+    /// 5 triangles per case).
+    pub fn new(tables: &crate::surface::McTables) -> Option<Box<McTablesUniform>> {
+        let edges = tables.triangles_flat_u32();
+        if tables.case_start.len() > MC_TRI_BASE || MC_TRI_BASE + edges.len() > 4 * MC_TABLE_ROWS {
+            return None;
+        }
+        let mut u: Box<McTablesUniform> = bytemuck::zeroed_box();
+        let flat: &mut [u32] = bytemuck::cast_slice_mut(&mut u.words);
+        flat[..tables.case_start.len()].copy_from_slice(&tables.case_start);
+        flat[MC_TRI_BASE..MC_TRI_BASE + edges.len()].copy_from_slice(&edges);
+        Some(u)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mc_tables_fit_the_uniform() {
+        let t = crate::surface::McTables::get();
+        let u = McTablesUniform::new(t).expect("tables fit");
+        let flat: &[u32] = bytemuck::cast_slice(&u.words);
+        assert_eq!(&flat[..257], &t.case_start[..]);
+        let edges = t.triangles_flat_u32();
+        assert_eq!(&flat[MC_TRI_BASE..MC_TRI_BASE + edges.len()], &edges[..]);
+    }
+}

@@ -258,7 +258,9 @@ pub fn load_pdb(name: &str) -> Atoms {
             "S" => [1.0, 0.9, 0.2],
             _ => [0.9, 0.9, 0.9],
         };
-        atoms.colours.as_mut().map(|c| c.push(colour));
+        if let Some(c) = atoms.colours.as_mut() {
+            c.push(colour);
+        }
     }
     assert!(!atoms.positions.is_empty(), "no atoms in {path}");
     atoms
