@@ -9,7 +9,12 @@ use clap::{Parser, Subcommand};
 
 /// Gaussian density surfaces for molecular dynamics trajectories.
 #[derive(Parser, Debug)]
-#[command(name = "mdsurf", version, about, args_conflicts_with_subcommands = true)]
+#[command(
+    name = "mdsurf",
+    version,
+    about,
+    args_conflicts_with_subcommands = true
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,

@@ -73,7 +73,10 @@ impl GridSpec {
 
     /// Number of cells (cubes between 8 samples).
     pub fn cell_count(&self) -> u64 {
-        self.dims.iter().map(|&d| d.saturating_sub(1) as u64).product()
+        self.dims
+            .iter()
+            .map(|&d| d.saturating_sub(1) as u64)
+            .product()
     }
 
     /// Linear index of sample (i, j, k), x fastest.

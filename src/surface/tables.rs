@@ -70,12 +70,18 @@ impl McTables {
 
     /// Largest number of triangles any case emits.
     pub fn max_triangles_per_cell(&self) -> usize {
-        (0..256).map(|c| self.case_triangles(c as u8).len()).max().unwrap_or(0)
+        (0..256)
+            .map(|c| self.case_triangles(c as u8).len())
+            .max()
+            .unwrap_or(0)
     }
 
     /// Triangle edges flattened to `u32` (three per triangle) for upload to the GPU.
     pub fn triangles_flat_u32(&self) -> Vec<u32> {
-        self.triangles.iter().flat_map(|t| t.map(u32::from)).collect()
+        self.triangles
+            .iter()
+            .flat_map(|t| t.map(u32::from))
+            .collect()
     }
 }
 
