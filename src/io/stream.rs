@@ -337,7 +337,6 @@ impl Reader {
                     }
                 }
             }
-            self.shared.landed.notify_all();
             if let Some(callback) = self
                 .shared
                 .notify
@@ -347,6 +346,7 @@ impl Reader {
             {
                 callback(index);
             }
+            self.shared.landed.notify_all();
         }
     }
 
