@@ -113,14 +113,14 @@ fn grid_too_large_says_how_much_and_suggests_a_larger_spacing() {
     fails_cleanly(dir.path(), &["far.xyz"], "o.ply", &["far.xyz", "GB", "larger", "spacing"]);
 }
 
-/// Writes `top.pdb` and `traj.dcd` with chemfiles: 3 atoms, frame 0 fine, frame 1 with `bad` as
+/// Writes `top.gro` and `traj.dcd` with chemfiles: 3 atoms, frame 0 fine, frame 1 with `bad` as
 /// one coordinate, frame 2 fine.
 fn write_bad_coordinate_trajectory(dir: &Path, bad: f64) {
     let mut frame = chemfiles::Frame::new();
     for (i, name) in ["C", "N", "O"].into_iter().enumerate() {
         frame.add_atom(&chemfiles::Atom::new(name), [i as f64 * 1.4, 0.0, 0.0], None);
     }
-    let mut top = chemfiles::Trajectory::open(dir.join("top.pdb"), 'w').unwrap();
+    let mut top = chemfiles::Trajectory::open(dir.join("top.gro"), 'w').unwrap();
     top.write(&frame).unwrap();
     drop(top);
     let mut traj = chemfiles::Trajectory::open(dir.join("traj.dcd"), 'w').unwrap();
@@ -140,7 +140,7 @@ fn nan_and_infinite_coordinates_name_the_frame_after_the_good_ones() {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
         write_bad_coordinate_trajectory(d, bad);
-        let run = fails(d, &["top.pdb", "traj.dcd"], "o_{frame}.ply", &["traj.dcd", "frame 1"]);
+        let run = fails(d, &["top.gro", "traj.dcd"], "o_{frame}.ply", &["traj.dcd", "frame 1"]);
         // Frame 0 was computed, written and reported before the error.
         assert!(run.stderr.lines().any(|l| l.starts_with("frame     0")), "{}", run.stderr);
         assert!(d.join("o_0.ply").is_file());
