@@ -136,13 +136,20 @@ pub fn engines_for(backend: BenchBackend) -> Result<Vec<Box<dyn SurfaceEngine>>>
     if backend != BenchBackend::Gpu {
         engines.push(Box::new(CpuEngine::new()));
     }
-    match (backend, GpuEngine::new()) {
-        (BenchBackend::Cpu, _) => {}
-        (_, Ok(gpu)) => engines.push(Box::new(gpu)),
-        (BenchBackend::Gpu, Err(err)) => {
-            return Err(anyhow::Error::new(err).context("--backend gpu: cannot start the GPU engine"));
+    if backend == BenchBackend::Cpu {
+        return Ok(engines);
+    }
+    match GpuEngine::new() {
+        Ok(gpu) => {
+            eprintln!("gpu: {}", gpu.context().adapter_name);
+            engines.push(Box::new(gpu));
         }
-        (BenchBackend::All, Err(err)) => eprintln!("note: no GPU engine ({err:#}); timing the CPU only"),
+        Err(err) if backend == BenchBackend::Gpu => {
+            return Err(
+                anyhow::Error::new(err).context("--backend gpu: cannot start the GPU engine")
+            );
+        }
+        Err(err) => eprintln!("note: no GPU engine ({err}); timing the CPU only"),
     }
     Ok(engines)
 }
