@@ -20,10 +20,24 @@ fn table_rows<'a>(stdout: &'a str, case_prefix: &str) -> Vec<Vec<&'a str>> {
 #[test]
 fn bench_on_the_demo_reports_stage_medians() {
     let dir = tempfile::tempdir().unwrap();
-    let args = ["bench", "--backend", "cpu", "--repeats", "3", "--warmup", "0", "--csv", "b.csv"];
+    let args = [
+        "bench",
+        "--backend",
+        "cpu",
+        "--repeats",
+        "3",
+        "--warmup",
+        "0",
+        "--csv",
+        "b.csv",
+    ];
     let run = mdsurf(dir.path(), &args);
     assert_eq!(run.code, 0, "{}", run.stderr);
-    let header = run.stdout.lines().find(|l| l.starts_with("case")).expect("no table header");
+    let header = run
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("case"))
+        .expect("no table header");
     for col in ["read_ms", "bin_ms", "density_ms", "mc_ms", "frames_per_s"] {
         assert!(header.contains(col), "{header}");
     }
@@ -34,7 +48,11 @@ fn bench_on_the_demo_reports_stage_medians() {
 
     let csv = Csv::read(&dir.path().join("b.csv"));
     assert_eq!(csv.rows.len(), 1);
-    let (bin, dens, mc) = (csv.col("bin_ms")[0], csv.col("density_ms")[0], csv.col("mc_ms")[0]);
+    let (bin, dens, mc) = (
+        csv.col("bin_ms")[0],
+        csv.col("density_ms")[0],
+        csv.col("mc_ms")[0],
+    );
     let compute = csv.col("compute_ms")[0];
     assert!(bin >= 0.0 && dens > 0.0 && mc > 0.0, "{:?}", csv.rows[0]);
     // Medians of the parts cannot exceed much more than the median of the whole.
@@ -48,8 +66,19 @@ fn bench_on_a_given_file_and_a_synthetic_system() {
     let dir = tempfile::tempdir().unwrap();
     let (pdb, dcd) = (data("adk_open.pdb"), data("adk_dims.dcd"));
     let args = [
-        "bench", &pdb, &dcd, "--synthetic", "12k", "--backend", "cpu", "--repeats", "2",
-        "--spacing", "2", "--csv", "b.csv",
+        "bench",
+        &pdb,
+        &dcd,
+        "--synthetic",
+        "12k",
+        "--backend",
+        "cpu",
+        "--repeats",
+        "2",
+        "--spacing",
+        "2",
+        "--csv",
+        "b.csv",
     ];
     let run = mdsurf(dir.path(), &args);
     assert_eq!(run.code, 0, "{}", run.stderr);
@@ -68,7 +97,10 @@ fn bench_on_a_given_file_and_a_synthetic_system() {
 fn bench_rejects_bad_counts_with_one_line() {
     let dir = tempfile::tempdir().unwrap();
     for bad in ["0", "lots", "-5"] {
-        let run = mdsurf(dir.path(), &["bench", "--backend", "cpu", "--synthetic", bad]);
+        let run = mdsurf(
+            dir.path(),
+            &["bench", "--backend", "cpu", "--synthetic", bad],
+        );
         assert_eq!(run.code, 2, "{bad}: {}", run.stderr);
         assert_eq!(run.stderr.lines().count(), 1, "{}", run.stderr);
         assert!(run.stderr.contains(bad), "{}", run.stderr);

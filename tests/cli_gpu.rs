@@ -15,7 +15,15 @@ fn gpu_backend_matches_the_cpu_backend_on_1hpv() {
         let out = format!("{backend}.ply");
         let stats = format!("{backend}.csv");
         let args = [
-            "surface", &pdb, "--spacing", "1.5", "--backend", backend, "-o", &out, "--stats",
+            "surface",
+            &pdb,
+            "--spacing",
+            "1.5",
+            "--backend",
+            backend,
+            "-o",
+            &out,
+            "--stats",
             &stats,
         ];
         (mdsurf(dir.path(), &args), stats, out)
@@ -36,14 +44,32 @@ fn gpu_backend_matches_the_cpu_backend_on_1hpv() {
         Csv::read(&dir.path().join(gpu_csv)),
         Csv::read(&dir.path().join(cpu_csv)),
     );
-    assert_eq!(g.columns, c.columns, "the backends write different CSV columns");
+    assert_eq!(
+        g.columns, c.columns,
+        "the backends write different CSV columns"
+    );
     for col in ["atoms", "nx", "ny", "nz"] {
         assert_eq!(g.col(col), c.col(col), "{col}");
     }
     let rel = |col: &str| (g.col(col)[0] / c.col(col)[0] - 1.0).abs();
-    assert!(rel("triangles") <= 0.005, "triangles differ by {}", rel("triangles"));
-    assert!(rel("area_A2") <= 0.001, "area differs by {}", rel("area_A2"));
-    assert!(rel("volume_A3") <= 0.001, "volume differs by {}", rel("volume_A3"));
+    assert!(
+        rel("triangles") <= 0.005,
+        "triangles differ by {}",
+        rel("triangles")
+    );
+    assert!(
+        rel("area_A2") <= 0.001,
+        "area differs by {}",
+        rel("area_A2")
+    );
+    assert!(
+        rel("volume_A3") <= 0.001,
+        "volume differs by {}",
+        rel("volume_A3")
+    );
     let (v, t, _) = read_ply_counts(&dir.path().join(gpu_ply));
-    assert_eq!((v as f64, t as f64), (g.col("vertices")[0], g.col("triangles")[0]));
+    assert_eq!(
+        (v as f64, t as f64),
+        (g.col("vertices")[0], g.col("triangles")[0])
+    );
 }

@@ -65,12 +65,11 @@ pub fn parse_count(s: &str) -> Result<usize, String> {
         _ => (t, 1.0),
     };
     let v: f64 = num
-        .replace('_', "")
-        .replace(',', "")
+        .replace(['_', ','], "")
         .parse()
         .map_err(|_| format!("bad atom count '{s}' (e.g. 1000000, 1e6, 950k, 2.37M)"))?;
     let n = (v * mult).round();
-    if !(n >= 1.0 && n <= 1e10) {
+    if !(1.0..=1e10).contains(&n) {
         return Err(format!("atom count '{s}' must be between 1 and 1e10"));
     }
     Ok(n as usize)

@@ -47,11 +47,7 @@ pub struct SurfaceArgs {
 pub fn run(args: SurfaceArgs) -> Result<()> {
     // Everything that can be checked before reading data is checked first.
     let params = args.params.params()?;
-    let output = args
-        .output
-        .as_deref()
-        .map(OutputPattern::new)
-        .transpose()?;
+    let output = args.output.as_deref().map(OutputPattern::new).transpose()?;
     if let Some(stats) = &args.stats {
         check_parent_dir(stats)?;
     }
@@ -81,8 +77,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let mut engine = make_engine(args.backend)?;
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
 
-    let bar = (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
-        .then(|| progress_bar(frames.len()));
+    let bar =
+        (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
+            .then(|| progress_bar(frames.len()));
     let t_all = Instant::now();
     let mut positions = Vec::new();
     let mut failure = None;
@@ -91,12 +88,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             let t0 = Instant::now();
             let (frame, read_ms) = system.read_positions(index, &mut positions)?;
             let atoms = system.particles.atom_set(&positions);
-            let surf = engine.compute(&atoms, &params).map_err(|e| {
-                anyhow!(
-                    "{}: frame {index}: {e}",
-                    system.frames_path.display()
-                )
-            })?;
+            let surf = engine
+                .compute(&atoms, &params)
+                .map_err(|e| anyhow!("{}: frame {index}: {e}", system.frames_path.display()))?;
             let total_ms = ms_since(t0);
             if let Some(out) = &output {
                 export::write_mesh(&out.path_for(index), &surf.mesh)?;
@@ -196,7 +190,11 @@ fn check_parent_dir(path: &Path) -> Result<()> {
     if let Some(dir) = dir
         && !dir.is_dir()
     {
-        bail!("cannot write {}: directory {} does not exist", path.display(), dir.display());
+        bail!(
+            "cannot write {}: directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
     }
     Ok(())
 }
@@ -236,7 +234,12 @@ impl OutputPattern {
                             anyhow!("-o {raw}: use {{frame}} or {{frame:0N}}, e.g. {{frame:04}}")
                         })?,
                 };
-                (raw[..at].to_string(), raw[close + 1..].to_string(), width, true)
+                (
+                    raw[..at].to_string(),
+                    raw[close + 1..].to_string(),
+                    width,
+                    true,
+                )
             }
         };
         if suffix.contains("{frame") {
