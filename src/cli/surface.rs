@@ -83,6 +83,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let t_all = Instant::now();
     let mut positions = Vec::new();
     let mut failure = None;
+    let mut ok_frames = 0usize;
     for &index in &frames {
         let row = (|| -> Result<StatsRow> {
             let t0 = Instant::now();
@@ -111,6 +112,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         })();
         match row {
             Ok(row) => {
+                ok_frames += 1;
                 if let Some(stats) = stats.as_mut() {
                     stats.write_row(&row)?;
                 }
@@ -131,15 +133,20 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
 
     // Keep what the good frames produced; a run where no frame succeeded changes no file.
-    let done = stats.as_ref().map(|s| s.rows());
     if let Some(stats) = stats
         && stats.rows() > 0
     {
         stats.finish()?;
     }
-    let ok_frames = done.unwrap_or(frames.len());
     if let Some(err) = failure {
-        return Err(err);
+        if ok_frames == 0 {
+            return Err(err);
+        }
+        let kept = match (&output, &args.stats) {
+            (None, None) => "",
+            _ => " and written",
+        };
+        bail!("{err:#} (the {ok_frames} frame(s) before it were processed{kept})");
     }
     if !args.quiet || bar.is_some() {
         let secs = t_all.elapsed().as_secs_f64();
