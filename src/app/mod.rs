@@ -1,1 +1,115 @@
-//! placeholder: filled by the app work
+//! The desktop viewer (eframe): the top of the data flow. It reads frames through a
+//! [`source::FrameSource`], computes surfaces on a [`worker::Worker`] thread with a surface
+//! engine, and draws them with [`crate::render`]. UI functions end in `_ui` and return
+//! [`state::Command`]s, applied in one place ([`state::AppCore::apply`] and the window layer in
+//! [`viewer::Viewer`]). Nothing below this module imports it.
+
+pub mod export;
+pub mod panels;
+pub mod plot;
+pub mod recent;
+pub mod source;
+pub mod state;
+pub mod timeline;
+pub mod viewer;
+pub mod viewport;
+pub mod worker;
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+pub use state::{AppCore, Command};
+pub use viewer::{Script, Viewer};
+
+use crate::surface::SurfaceEngine;
+
+/// Bundled demo: topology of the adenylate kinase (1U19) trajectory in assets/.
+pub const DEMO_TOP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/md_1u19.gro");
+/// Bundled demo trajectory.
+pub const DEMO_TRAJ: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/md_1u19.xtc");
+
+/// How the window starts.
+#[derive(Debug, Clone, Default)]
+pub struct ViewOptions {
+    /// Files to open (`None`: the bundled demo).
+    pub files: Option<(PathBuf, Option<PathBuf>)>,
+    /// Scripted run.
+    pub script: Script,
+    /// Use the CPU engine even when a GPU one is available.
+    pub cpu: bool,
+    /// Initial surface parameters.
+    pub params: crate::surface::SurfaceParams,
+    /// Initial particle options (beads, colours, radius overrides).
+    pub particles: crate::model::ParticleOptions,
+}
+
+/// Why the window could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    /// No display to open a window on.
+    #[error(
+        "cannot open a window: {0}; use `mdsurf render TOP [TRAJ] -o out.png` to make pictures without a display"
+    )]
+    NoDisplay(String),
+    /// The scripted run failed.
+    #[error("scripted run failed: {0}")]
+    Script(String),
+}
+
+/// The surface engine for the window: the CPU reference engine (the GPU engine shares eframe's
+/// device once available).
+fn make_engine(
+    _state: Option<&egui_wgpu::RenderState>,
+    _cpu: bool,
+) -> Box<dyn SurfaceEngine + Send> {
+    Box::new(crate::surface::CpuEngine::new())
+}
+
+/// Opens the viewer window and runs it until it is closed.
+pub fn run(options: ViewOptions) -> Result<(), ViewError> {
+    if cfg!(target_os = "linux")
+        && std::env::var_os("DISPLAY").is_none()
+        && std::env::var_os("WAYLAND_DISPLAY").is_none()
+    {
+        return Err(ViewError::NoDisplay(
+            "neither DISPLAY nor WAYLAND_DISPLAY is set".into(),
+        ));
+    }
+    let result: viewer::ScriptResult = Arc::new(Mutex::new(None));
+    let (top, traj) = options
+        .files
+        .clone()
+        .unwrap_or_else(|| (PathBuf::from(DEMO_TOP), Some(PathBuf::from(DEMO_TRAJ))));
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([1400.0, 900.0])
+            .with_drag_and_drop(true),
+        renderer: eframe::Renderer::Wgpu,
+        ..Default::default()
+    };
+    let script_result = result.clone();
+    let run = eframe::run_native(
+        "mdsurf",
+        native,
+        Box::new(move |cc| {
+            let state = cc.wgpu_render_state.as_ref();
+            let ctx = cc.egui_ctx.clone();
+            let worker = worker::Worker::spawn(
+                make_engine(state, options.cpu),
+                Box::new(move || ctx.request_repaint()),
+            );
+            let mut core = AppCore::new(worker);
+            core.params = options.params;
+            core.options = options.particles.clone();
+            let gpu = state.map(viewport::GpuView::new);
+            let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
+            viewer.open(&cc.egui_ctx, top, traj);
+            Ok(Box::new(viewer))
+        }),
+    );
+    run.map_err(|e| ViewError::NoDisplay(e.to_string()))?;
+    match result.lock().ok().and_then(|r| r.clone()) {
+        Some(e) => Err(ViewError::Script(e)),
+        None => Ok(()),
+    }
+}
