@@ -10,7 +10,11 @@ const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/");
 
 fn data(name: &str) -> PathBuf {
     let path = Path::new(DATA).join(name);
-    assert!(path.is_file(), "test data {} is missing (see ../shared/data/README.md)", path.display());
+    assert!(
+        path.is_file(),
+        "test data {} is missing (see ../shared/data/README.md)",
+        path.display()
+    );
     path
 }
 
@@ -36,14 +40,26 @@ fn one_line_naming(e: &IoError, names: &[&str]) {
 fn missing_directory_empty_and_unknown() {
     let dir = tempfile::tempdir().expect("tempdir");
     let missing = dir.path().join("nope.pdb");
-    assert!(matches!(open_err(&missing, None, &["nope.pdb"]), IoError::NotFound { .. }));
-    assert!(matches!(open_err(dir.path(), None, &[]), IoError::NotFound { .. }));
+    assert!(matches!(
+        open_err(&missing, None, &["nope.pdb"]),
+        IoError::NotFound { .. }
+    ));
+    assert!(matches!(
+        open_err(dir.path(), None, &[]),
+        IoError::NotFound { .. }
+    ));
     let empty = dir.path().join("empty.gro");
     std::fs::write(&empty, "").expect("write");
-    assert!(matches!(open_err(&empty, None, &["empty.gro"]), IoError::Empty { .. }));
+    assert!(matches!(
+        open_err(&empty, None, &["empty.gro"]),
+        IoError::Empty { .. }
+    ));
     let docx = dir.path().join("paper.docx");
     std::fs::write(&docx, "hello").expect("write");
-    assert!(matches!(open_err(&docx, None, &["paper.docx", "docx"]), IoError::UnknownFormat { .. }));
+    assert!(matches!(
+        open_err(&docx, None, &["paper.docx", "docx"]),
+        IoError::UnknownFormat { .. }
+    ));
     let missing_traj = dir.path().join("nope.xtc");
     open_err(&data("md_1u19.gro"), Some(&missing_traj), &["nope.xtc"]);
 }
@@ -51,8 +67,18 @@ fn missing_directory_empty_and_unknown() {
 #[test]
 fn garbage_content() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let junk: Vec<u8> = (0..5000u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
-    for name in ["junk.pdb", "junk.gro", "junk.xyz", "junk.cif", "junk.lammpstrj", "junk.tng", "junk.gro.gz"] {
+    let junk: Vec<u8> = (0..5000u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+        .collect();
+    for name in [
+        "junk.pdb",
+        "junk.gro",
+        "junk.xyz",
+        "junk.cif",
+        "junk.lammpstrj",
+        "junk.tng",
+        "junk.gro.gz",
+    ] {
         let path = dir.path().join(name);
         std::fs::write(&path, &junk).expect("write");
         open_err(&path, None, &[name]);
@@ -75,7 +101,11 @@ fn coordinates_only_trajectory_needs_a_topology() {
 
 #[test]
 fn atom_count_mismatch_names_both_files_and_counts() {
-    let e = open_err(&data("md_1u19.gro"), Some(&data("adk_oplsaa.xtc")), &["md_1u19.gro", "adk_oplsaa.xtc", "5547", "47681"]);
+    let e = open_err(
+        &data("md_1u19.gro"),
+        Some(&data("adk_oplsaa.xtc")),
+        &["md_1u19.gro", "adk_oplsaa.xtc", "5547", "47681"],
+    );
     assert!(matches!(e, IoError::AtomCountMismatch { .. }), "{e}");
 }
 
@@ -87,17 +117,26 @@ fn truncated(top: &str, traj: &str, keep: f64) {
     let cut = dir.path().join(format!("cut-{traj}"));
     std::fs::write(&cut, &bytes[..(bytes.len() as f64 * keep) as usize]).expect("write");
     let original = io::open(&data(top), Some(&data(traj))).expect("original");
-    let damaged = io::open(&data(top), Some(&cut)).unwrap_or_else(|e| panic!("truncated {traj} must still open: {e}"));
+    let damaged = io::open(&data(top), Some(&cut))
+        .unwrap_or_else(|e| panic!("truncated {traj} must still open: {e}"));
     let good = damaged.len();
-    assert!(good > 0 && good < original.len(), "{traj} cut to {keep}: {good} good of {}", original.len());
+    assert!(
+        good > 0 && good < original.len(),
+        "{traj} cut to {keep}: {good} good of {}",
+        original.len()
+    );
     let damage = damaged.damage().expect("damage is reported");
     assert_eq!(damage.frame, good);
     for k in [0, good / 2, good - 1] {
         let a = original.read_frame(k).expect("original frame");
-        let b = damaged.read_frame(k).unwrap_or_else(|e| panic!("good frame {k} must read: {e}"));
+        let b = damaged
+            .read_frame(k)
+            .unwrap_or_else(|e| panic!("good frame {k} must read: {e}"));
         assert_eq!(a.positions, b.positions, "frame {k}");
     }
-    let e = damaged.read_frame(good).expect_err("the cut frame must fail");
+    let e = damaged
+        .read_frame(good)
+        .expect_err("the cut frame must fail");
     one_line_naming(&e, &[&format!("frame {good}"), &format!("cut-{traj}")]);
     assert!(damaged.read_frame(good + 1).is_err());
 }
@@ -153,17 +192,47 @@ fn nan_and_infinite_coordinates_name_frame_and_atom() {
     assert_eq!(t.len(), 3);
     t.read_frame(1).expect("frame 1 is fine");
     let e = t.read_frame(2).expect_err("frame 2 has a NaN");
-    assert!(matches!(e, IoError::NonFiniteCoordinate { frame: 2, atom: 7, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            IoError::NonFiniteCoordinate {
+                frame: 2,
+                atom: 7,
+                ..
+            }
+        ),
+        "{e}"
+    );
     one_line_naming(&e, &["nan.dcd", "frame 2", "atom 7"]);
     let (top, traj) = nan_files(dir.path(), 0, 3, f64::INFINITY);
     let e = open_err(&top, Some(&traj), &["frame 0", "atom 3"]);
-    assert!(matches!(e, IoError::NonFiniteCoordinate { frame: 0, atom: 3, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            IoError::NonFiniteCoordinate {
+                frame: 0,
+                atom: 3,
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
 
 #[test]
 fn frame_past_the_end() {
     let t = io::open(&data("1hpv.pdb"), None).expect("open");
     let e = t.read_frame(5).expect_err("one frame only");
-    assert!(matches!(e, IoError::FrameOutOfRange { frame: 5, len: 1, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            IoError::FrameOutOfRange {
+                frame: 5,
+                len: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
     one_line_naming(&e, &["1hpv.pdb", "frame 5"]);
 }

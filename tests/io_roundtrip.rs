@@ -10,10 +10,20 @@ use mdsurf::io;
 fn positions(n: usize, frame: usize) -> Vec<[f64; 3]> {
     let mut state = 12345u64 + frame as u64;
     let mut next = move || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    (0..n).map(|_| [40.0 * next() + 5.0, 40.0 * next() + 5.0, 40.0 * next() + 5.0]).collect()
+    (0..n)
+        .map(|_| {
+            [
+                40.0 * next() + 5.0,
+                40.0 * next() + 5.0,
+                40.0 * next() + 5.0,
+            ]
+        })
+        .collect()
 }
 
 const NAMES: [&str; 5] = ["N", "CA", "C", "O", "CB"];
@@ -38,7 +48,8 @@ fn chem_frame(n: usize, frame: usize) -> chemfiles::Frame {
 }
 
 fn write(path: &Path, format: &str, atoms: usize, frames: usize) {
-    let mut t = chemfiles::Trajectory::open_with_format(path, 'w', format).expect("open for writing");
+    let mut t =
+        chemfiles::Trajectory::open_with_format(path, 'w', format).expect("open for writing");
     for k in 0..frames {
         t.write(&chem_frame(atoms, k)).expect("write frame");
     }
@@ -59,11 +70,21 @@ fn check(top: &Path, traj: Option<&Path>, atoms: usize, frames: usize, tolerance
             .positions
             .iter()
             .zip(&want)
-            .map(|(p, w)| (0..3).map(|d| (p[d] - w[d] as f32).abs()).fold(0.0f32, f32::max))
+            .map(|(p, w)| {
+                (0..3)
+                    .map(|d| (p[d] - w[d] as f32).abs())
+                    .fold(0.0f32, f32::max)
+            })
             .fold(0.0f32, f32::max);
-        assert!(worst <= tolerance, "{traj:?} frame {k}: off by {worst} Å (allowed {tolerance})");
+        assert!(
+            worst <= tolerance,
+            "{traj:?} frame {k}: off by {worst} Å (allowed {tolerance})"
+        );
         if let Some(cell) = f.cell {
-            assert!((cell[0].x - BOX as f32).abs() < 0.01 && (cell[2].z - BOX as f32).abs() < 0.01, "{cell:?}");
+            assert!(
+                (cell[0].x - BOX as f32).abs() < 0.01 && (cell[2].z - BOX as f32).abs() < 0.01,
+                "{cell:?}"
+            );
         }
     }
 }
@@ -76,14 +97,22 @@ fn trajectories_read_back_equal_to_file_precision() {
     write(&top, "PDB", atoms, 1);
     check(&top, None, atoms, 1, 0.0005 + 1e-4); // PDB: 3 decimals
     // XTC keeps 3 decimals in nm: 0.005 Å at most.
-    let cases = [("xtc", "XTC", 0.0051), ("trr", "TRR", 1e-4), ("dcd", "DCD", 1e-4), ("nc", "Amber NetCDF", 1e-4)];
+    let cases = [
+        ("xtc", "XTC", 0.0051),
+        ("trr", "TRR", 1e-4),
+        ("dcd", "DCD", 1e-4),
+        ("nc", "Amber NetCDF", 1e-4),
+    ];
     for (ext, format, tolerance) in cases {
         let path = dir.path().join(format!("traj.{ext}"));
         write(&path, format, atoms, frames);
         check(&top, Some(&path), atoms, frames, tolerance);
     }
     let xtc = io::open(&top, Some(&dir.path().join("traj.xtc"))).expect("xtc");
-    assert!(xtc.read_frame(0).expect("frame").cell.is_some(), "XTC keeps the box");
+    assert!(
+        xtc.read_frame(0).expect("frame").cell.is_some(),
+        "XTC keeps the box"
+    );
 }
 
 #[test]
@@ -91,7 +120,11 @@ fn topologies_in_other_formats() {
     let dir = tempfile::tempdir().expect("tempdir");
     let atoms = 57;
     // GRO keeps 3 decimals in nm (0.005 Å); mmCIF and XYZ as chemfiles prints them.
-    for (name, format, tolerance) in [("t.gro", "GRO", 0.0051), ("t.cif", "mmCIF", 0.0051), ("t.xyz", "XYZ", 1e-3)] {
+    for (name, format, tolerance) in [
+        ("t.gro", "GRO", 0.0051),
+        ("t.cif", "mmCIF", 0.0051),
+        ("t.xyz", "XYZ", 1e-3),
+    ] {
         let path = dir.path().join(name);
         write(&path, format, atoms, 2);
         check(&path, None, atoms, 2, tolerance);

@@ -51,7 +51,10 @@ impl ChemReader {
         let steps = catch_unwind(AssertUnwindSafe(|| reader.inner.nsteps()));
         reader.len = steps.map_err(|_| IoError::unreadable(path, "cannot count the frames"))?;
         if reader.len == 0 {
-            return Err(IoError::Empty { path: path.to_path_buf(), what: "no frames" });
+            return Err(IoError::Empty {
+                path: path.to_path_buf(),
+                what: "no frames",
+            });
         }
         Ok(reader)
     }
@@ -74,7 +77,11 @@ impl ChemReader {
     /// Reads frame `index` into the scratch frame and returns it.
     fn read_raw(&mut self, index: usize) -> Result<&chemfiles::Frame, IoError> {
         if index >= self.len {
-            return Err(IoError::FrameOutOfRange { path: self.path.clone(), frame: index, len: self.len });
+            return Err(IoError::FrameOutOfRange {
+                path: self.path.clone(),
+                frame: index,
+                len: self.len,
+            });
         }
         self.inner
             .read_step(index, &mut self.scratch)
@@ -90,9 +97,18 @@ impl ChemReader {
         let cell = cell_rows(raw);
         let time_ps = frame_time_ps(raw, base);
         if let Some(atom) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(IoError::NonFiniteCoordinate { path: self.path.clone(), frame: index, atom });
+            return Err(IoError::NonFiniteCoordinate {
+                path: self.path.clone(),
+                frame: index,
+                atom,
+            });
         }
-        Ok(Frame { index, time_ps, positions, cell })
+        Ok(Frame {
+            index,
+            time_ps,
+            positions,
+            cell,
+        })
     }
 
     /// Reads frame `index` and returns its raw positions in Å (not checked to be finite).
@@ -122,13 +138,19 @@ fn sniff(path: &Path, base: &str) -> Result<(), IoError> {
     if head[..n].windows(12).any(|w| w == b"GENERAL INFO") {
         Ok(())
     } else {
-        Err(IoError::unreadable(path, "not a TNG file (it does not start with a GENERAL INFO block)"))
+        Err(IoError::unreadable(
+            path,
+            "not a TNG file (it does not start with a GENERAL INFO block)",
+        ))
     }
 }
 
 /// Converts chemfiles' positions (f64, Å) to ours (f32, Å).
 fn to_vec3(positions: &[[f64; 3]]) -> Vec<Vec3> {
-    positions.iter().map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)).collect()
+    positions
+        .iter()
+        .map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32))
+        .collect()
 }
 
 /// The periodic box as rows a, b, c in Å, or `None` for an infinite (absent) box.
@@ -181,13 +203,19 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
             name => name,
         };
         // A type equal to the name is chemfiles' default, not an element column.
-        let element = if kind != name { canonical_symbol(&kind).unwrap_or_default() } else { "" };
+        let element = if kind != name {
+            canonical_symbol(&kind).unwrap_or_default()
+        } else {
+            ""
+        };
         out.elements.push(element.to_string());
         out.names.push(name);
     }
     let residues = top.residues_count() as usize;
     for r in 0..residues {
-        let Some(residue) = top.residue(r) else { continue };
+        let Some(residue) = top.residue(r) else {
+            continue;
+        };
         let name = residue.name();
         let id = residue.id().unwrap_or(r as i64 + 1);
         let chain = residue_chain(&residue);
@@ -205,7 +233,11 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         next += 1;
     }
     renumber_by_first_atom(&mut out.residue_index);
-    out.bonds = top.bonds().into_iter().map(|[a, b]| [a as u32, b as u32]).collect();
+    out.bonds = top
+        .bonds()
+        .into_iter()
+        .map(|[a, b]| [a as u32, b as u32])
+        .collect();
     out
 }
 

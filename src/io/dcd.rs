@@ -29,14 +29,21 @@ pub(crate) fn measure(path: &Path) -> Option<DcdTail> {
     let total = file.metadata().ok()?.len();
     let mut head = [0u8; 92];
     file.read_exact(&mut head).ok()?;
-    let little = match (head[0..4].try_into().ok().map(u32::from_le_bytes), &head[4..8]) {
+    let little = match (
+        head[0..4].try_into().ok().map(u32::from_le_bytes),
+        &head[4..8],
+    ) {
         (Some(84), b"CORD") => true,
         (_, b"CORD") if u32::from_be_bytes(head[0..4].try_into().ok()?) == 84 => false,
         _ => return None,
     };
     let int = |b: &[u8]| -> Option<i64> {
         let bytes: [u8; 4] = b.try_into().ok()?;
-        Some(i64::from(if little { i32::from_le_bytes(bytes) } else { i32::from_be_bytes(bytes) }))
+        Some(i64::from(if little {
+            i32::from_le_bytes(bytes)
+        } else {
+            i32::from_be_bytes(bytes)
+        }))
     };
     let control = |k: usize| int(&head[8 + 4 * k..12 + 4 * k]);
     let charmm = control(19)? != 0;
@@ -74,10 +81,18 @@ pub(crate) fn measure(path: &Path) -> Option<DcdTail> {
     let frame_bytes = extras + record(atoms - fixed) * if four_d { 4 } else { 3 };
     let body = total.checked_sub(header)?;
     if body < first_bytes {
-        return Some(DcdTail { complete: 0, trailing: body, frame_bytes });
+        return Some(DcdTail {
+            complete: 0,
+            trailing: body,
+            frame_bytes,
+        });
     }
     let rest = body - first_bytes;
-    Some(DcdTail { complete: 1 + (rest / frame_bytes) as usize, trailing: rest % frame_bytes, frame_bytes })
+    Some(DcdTail {
+        complete: 1 + (rest / frame_bytes) as usize,
+        trailing: rest % frame_bytes,
+        frame_bytes,
+    })
 }
 
 #[cfg(test)]
@@ -98,7 +113,9 @@ mod tests {
         control[0] = frames;
         control[10] = 1;
         control[19] = 24;
-        control.iter().for_each(|c| header.extend_from_slice(&c.to_le_bytes()));
+        control
+            .iter()
+            .for_each(|c| header.extend_from_slice(&c.to_le_bytes()));
         rec(&mut out, &header);
         let mut title = 1i32.to_le_bytes().to_vec();
         title.extend_from_slice(&[b' '; 80]);
@@ -120,11 +137,28 @@ mod tests {
         let path = dir.path().join("t.dcd");
         write_dcd(&path, 10, 3, 0);
         let frame_bytes = 56 + 3 * (8 + 40);
-        assert_eq!(measure(&path), Some(DcdTail { complete: 3, trailing: 0, frame_bytes }));
+        assert_eq!(
+            measure(&path),
+            Some(DcdTail {
+                complete: 3,
+                trailing: 0,
+                frame_bytes
+            })
+        );
         write_dcd(&path, 10, 3, 30);
-        assert_eq!(measure(&path), Some(DcdTail { complete: 3, trailing: 30, frame_bytes }));
-        std::fs::write(&path, b"not a dcd file at all, just some text that is long enough to fill the header....")
-            .expect("write");
+        assert_eq!(
+            measure(&path),
+            Some(DcdTail {
+                complete: 3,
+                trailing: 30,
+                frame_bytes
+            })
+        );
+        std::fs::write(
+            &path,
+            b"not a dcd file at all, just some text that is long enough to fill the header....",
+        )
+        .expect("write");
         assert_eq!(measure(&path), None);
     }
 }

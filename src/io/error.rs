@@ -109,7 +109,11 @@ impl IoError {
     }
 
     /// Builds an [`IoError::BadFrame`], squeezing a multi-line message onto one line.
-    pub(crate) fn bad_frame(path: &std::path::Path, frame: usize, message: impl AsRef<str>) -> Self {
+    pub(crate) fn bad_frame(
+        path: &std::path::Path,
+        frame: usize,
+        message: impl AsRef<str>,
+    ) -> Self {
         IoError::BadFrame {
             path: path.to_path_buf(),
             frame,
@@ -120,7 +124,11 @@ impl IoError {
 
 /// Joins the lines of a parser message with "; " so errors stay on one line.
 pub(crate) fn one_line(message: &str) -> String {
-    let parts: Vec<&str> = message.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
+    let parts: Vec<&str> = message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
     if parts.is_empty() {
         "unknown error".to_string()
     } else {

@@ -69,7 +69,10 @@ pub fn detect(path: &Path) -> Result<FileFormat, IoError> {
         .unwrap_or_default();
     let mut parts: Vec<&str> = name.split('.').skip(1).collect();
     let compression = match parts.last() {
-        Some(last) => COMPRESSIONS.iter().find(|(ext, _)| ext == last).map(|(_, c)| *c),
+        Some(last) => COMPRESSIONS
+            .iter()
+            .find(|(ext, _)| ext == last)
+            .map(|(_, c)| *c),
         None => None,
     };
     if compression.is_some() {
@@ -77,8 +80,14 @@ pub fn detect(path: &Path) -> Result<FileFormat, IoError> {
     }
     let ext = parts.last().copied().unwrap_or("");
     let Some(&(_, base, has_names)) = FORMATS.iter().find(|(e, _, _)| *e == ext) else {
-        let written = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
-        return Err(IoError::UnknownFormat { path: path.to_path_buf(), ext: written });
+        let written = path
+            .extension()
+            .map(|e| e.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        return Err(IoError::UnknownFormat {
+            path: path.to_path_buf(),
+            ext: written,
+        });
     };
     let chemfiles = match compression {
         Some(c) => format!("{base} / {c}"),
@@ -89,19 +98,30 @@ pub fn detect(path: &Path) -> Result<FileFormat, IoError> {
         ("mmCIF", None) => Some(WwFormat::Mmcif),
         _ => None,
     };
-    Ok(FileFormat { chemfiles, base, has_names, wwpdb })
+    Ok(FileFormat {
+        chemfiles,
+        base,
+        has_names,
+        wwpdb,
+    })
 }
 
 /// Fails with [`IoError::NotFound`] unless `path` is a regular file we may open.
 fn check_readable(path: &Path) -> Result<(), IoError> {
-    let not_found = |reason: String| IoError::NotFound { path: path.to_path_buf(), reason };
+    let not_found = |reason: String| IoError::NotFound {
+        path: path.to_path_buf(),
+        reason,
+    };
     let meta = std::fs::metadata(path).map_err(|e| not_found(e.to_string()))?;
     if !meta.is_file() {
         return Err(not_found("not a regular file".to_string()));
     }
     std::fs::File::open(path).map_err(|e| not_found(e.to_string()))?;
     if meta.len() == 0 {
-        return Err(IoError::Empty { path: path.to_path_buf(), what: "the file is empty" });
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+            what: "the file is empty",
+        });
     }
     Ok(())
 }

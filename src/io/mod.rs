@@ -21,5 +21,6 @@ mod wwpdb;
 
 pub use error::IoError;
 pub use format::{FileFormat, WwFormat, detect};
+pub use stream::{FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions};
 pub use trajectory::{Damage, Trajectory, open};
 pub use warnings::take_warnings;

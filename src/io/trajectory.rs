@@ -59,12 +59,17 @@ impl std::fmt::Debug for Trajectory {
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     let top_format = detect(top)?;
     if traj.is_none() && !top_format.has_names {
-        return Err(IoError::NeedsTopology { path: top.to_path_buf() });
+        return Err(IoError::NeedsTopology {
+            path: top.to_path_buf(),
+        });
     }
     let mut top_reader = ChemReader::open(top, &top_format)?;
     let mut topology = top_reader.read_topology(0)?;
     if topology.is_empty() {
-        return Err(IoError::Empty { path: top.to_path_buf(), what: "no atoms" });
+        return Err(IoError::Empty {
+            path: top.to_path_buf(),
+            what: "no atoms",
+        });
     }
     if let Some(format) = top_format.wwpdb {
         let first = top_reader.read_positions(0)?;
@@ -139,7 +144,11 @@ impl Trajectory {
             return Err(damage.error.clone());
         }
         if index >= self.len {
-            return Err(IoError::FrameOutOfRange { path: self.frames_path.clone(), frame: index, len: self.len });
+            return Err(IoError::FrameOutOfRange {
+                path: self.frames_path.clone(),
+                frame: index,
+                len: self.len,
+            });
         }
         let frame = self.lock().read_frame(index)?;
         if frame.positions.len() != self.topology.len() {
@@ -156,7 +165,12 @@ impl Trajectory {
 
     /// Reads frames `start..end` (clamped to the readable frames) one after the other, calling
     /// `visit` with each result; stops early when `visit` returns false.
-    pub fn for_each_frame(&self, start: usize, end: usize, mut visit: impl FnMut(Result<Frame, IoError>) -> bool) {
+    pub fn for_each_frame(
+        &self,
+        start: usize,
+        end: usize,
+        mut visit: impl FnMut(Result<Frame, IoError>) -> bool,
+    ) {
         for index in start..end.min(self.len) {
             if !visit(self.read_frame(index)) {
                 break;
@@ -167,7 +181,9 @@ impl Trajectory {
     fn lock(&self) -> MutexGuard<'_, ChemReader> {
         // A panic while holding the lock cannot leave our state inconsistent (the reader is
         // re-positioned on every read), so a poisoned lock is still usable.
-        self.reader.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+        self.reader
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
     /// A DCD file whose size leaves a partial frame after the last complete one was truncated:
@@ -185,7 +201,10 @@ impl Trajectory {
                 tail.trailing, tail.frame_bytes
             );
             let error = IoError::bad_frame(&self.frames_path, self.len, message);
-            self.damage = Some(Damage { frame: self.len, error });
+            self.damage = Some(Damage {
+                frame: self.len,
+                error,
+            });
         }
     }
 

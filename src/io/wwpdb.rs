@@ -1,9 +1,8 @@
-//! pdbtbx on wwPDB files (PDB, mmCIF): fills in what chemfiles does not read, the B-factors
-//! (and elements and chains when chemfiles found none). Atoms are matched by position, so the order and
-//! count of atoms stay chemfiles' (the order of the trajectory frames).
+//! wwPDB enrichment: pdbtbx (mmCIF) or a fixed-column reader (PDB) fills in what chemfiles does
+//! not read, the B-factors (and elements and chains when chemfiles found none). Atoms are matched
+//! by position, so the order and count of atoms stay chemfiles' (the order of the frames).
 
 use std::collections::HashMap;
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use glam::Vec3;
@@ -25,14 +24,20 @@ struct WwAtom {
 /// Copies B-factors (and chains where empty) from pdbtbx's reading of `path` into `topology`,
 /// whose frame-0 positions are `positions`. Returns false and changes nothing when pdbtbx
 /// cannot read the file or some atom has no match.
-pub(crate) fn enrich(path: &Path, format: WwFormat, topology: &mut Topology, positions: &[Vec3]) -> bool {
-    let atoms = match (read_atoms(path, format), format) {
-        (Some(atoms), _) => atoms,
-        (None, WwFormat::Pdb) => match read_columns(path) {
-            Some(atoms) => atoms,
-            None => return false,
-        },
-        (None, WwFormat::Mmcif) => return false,
+pub(crate) fn enrich(
+    path: &Path,
+    format: WwFormat,
+    topology: &mut Topology,
+    positions: &[Vec3],
+) -> bool {
+    // PDB: our column reader. pdbtbx rejects old files with an ID code and line number in
+    // columns 73-80 (as in 1hpv.pdb) and panics on some MD-written files.
+    let atoms = match format {
+        WwFormat::Pdb => read_columns(path),
+        WwFormat::Mmcif => read_atoms(path, format),
+    };
+    let Some(atoms) = atoms else {
+        return false;
     };
     let mut matched = Vec::with_capacity(positions.len());
     for p in positions {
@@ -58,12 +63,13 @@ pub(crate) fn enrich(path: &Path, format: WwFormat, topology: &mut Topology, pos
 /// The first model's atoms keyed by rounded position, or `None` when pdbtbx fails (or panics).
 fn read_atoms(path: &Path, format: WwFormat) -> Option<HashMap<(i64, i64, i64), WwAtom>> {
     let path = path.to_str()?;
-    let read = catch_unwind(AssertUnwindSafe(|| {
+    quiet_panics::install();
+    let read = quiet_panics::silenced(|| {
         pdbtbx::ReadOptions::new()
             .set_format(format.pdbtbx())
             .set_level(pdbtbx::StrictnessLevel::Loose)
             .read(path)
-    }));
+    });
     let (pdb, _warnings) = read.ok()?.ok()?;
     let model = pdb.models().next()?;
     let mut atoms = HashMap::new();
@@ -81,8 +87,40 @@ fn read_atoms(path: &Path, format: WwFormat) -> Option<HashMap<(i64, i64, i64), 
     Some(atoms)
 }
 
+/// Runs pdbtbx with its panics caught and not printed: a panic hook (installed once, chaining
+/// the previous hook) stays silent on threads that are inside [`quiet_panics::silenced`].
+mod quiet_panics {
+    use std::cell::Cell;
+    use std::panic::{AssertUnwindSafe, catch_unwind};
+    use std::sync::Once;
+
+    thread_local! {
+        static SILENT: Cell<bool> = const { Cell::new(false) };
+    }
+    static INSTALL: Once = Once::new();
+
+    pub(super) fn install() {
+        INSTALL.call_once(|| {
+            let previous = std::panic::take_hook();
+            std::panic::set_hook(Box::new(move |info| {
+                if !SILENT.with(Cell::get) {
+                    previous(info);
+                }
+            }));
+        });
+    }
+
+    /// Calls `f`, turning a panic into `Err(())` without printing it.
+    pub(super) fn silenced<T>(f: impl FnOnce() -> T) -> Result<T, ()> {
+        SILENT.with(|s| s.set(true));
+        let result = catch_unwind(AssertUnwindSafe(f));
+        SILENT.with(|s| s.set(false));
+        result.map_err(|_| ())
+    }
+}
+
 /// A plain fixed-column reading of the first model's ATOM/HETATM records, for PDB files pdbtbx
-/// rejects (old files with an ID code and line number in columns 73-80 break its charge field).
+/// rejects or panics on.
 /// Columns (1-based): chain 22, x/y/z 31-54, B-factor 61-66, element 77-78.
 fn read_columns(path: &Path) -> Option<HashMap<(i64, i64, i64), WwAtom>> {
     let text = std::fs::read_to_string(path).ok()?;
@@ -94,7 +132,8 @@ fn read_columns(path: &Path) -> Option<HashMap<(i64, i64, i64), WwAtom>> {
         if !(line.starts_with("ATOM") || line.starts_with("HETATM")) {
             continue;
         }
-        let field = |a: usize, b: usize| line.get(a..b.min(line.len())).map(str::trim).unwrap_or("");
+        let field =
+            |a: usize, b: usize| line.get(a..b.min(line.len())).map(str::trim).unwrap_or("");
         let number = |a: usize, b: usize| field(a, b).parse::<f64>().ok();
         let (Some(x), Some(y), Some(z)) = (number(30, 38), number(38, 46), number(46, 54)) else {
             continue;

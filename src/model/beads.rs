@@ -52,7 +52,11 @@ impl BeadModel {
         }
         // Drop residue indices that hold no atom.
         offsets.dedup();
-        let mut model = BeadModel { offsets, atoms, radii: Vec::new() };
+        let mut model = BeadModel {
+            offsets,
+            atoms,
+            radii: Vec::new(),
+        };
         model.radii = model.measure_radii(frame);
         Ok(model)
     }

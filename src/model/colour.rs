@@ -87,7 +87,12 @@ impl ColorScheme {
                 .collect(),
             ColorScheme::ResidueIndex => {
                 let last = topology.residue_count().saturating_sub(1).max(1) as f32;
-                let t = |i: usize| topology.residue_index.get(i).map_or(0.0, |&r| r as f32 / last);
+                let t = |i: usize| {
+                    topology
+                        .residue_index
+                        .get(i)
+                        .map_or(0.0, |&r| r as f32 / last)
+                };
                 (0..n).map(|i| rainbow(t(i))).collect()
             }
             ColorScheme::BFactor => colours_from_values(&topology.b_factors),
@@ -100,7 +105,9 @@ impl ColorScheme {
 /// equal; non-finite values are grey.
 pub fn colours_from_values(values: &[f32]) -> Vec<[f32; 3]> {
     let finite = values.iter().copied().filter(|v| v.is_finite());
-    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
     let span = hi - lo;
     values
         .iter()
@@ -122,13 +129,21 @@ pub fn colours_from_values(values: &[f32]) -> Vec<[f32; 3]> {
 
 /// Converts one sRGB channel (0..1) to linear.
 pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// Converts one linear channel (0..1) to sRGB.
 pub fn linear_to_srgb(c: f32) -> f32 {
     let c = c.clamp(0.0, 1.0);
-    if c <= 0.0031308 { c * 12.92 } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
+    if c <= 0.0031308 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// Parses `#rrggbb` (or `rrggbb`) as sRGB into linear RGB.
@@ -148,8 +163,16 @@ fn rgb(r: u8, g: u8, b: u8) -> [f32; 3] {
 
 /// Distinct colours for chains and unnamed particle types.
 const PALETTE: [(u8, u8, u8); 10] = [
-    (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
-    (140, 86, 75), (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207),
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
 ];
 
 fn palette(k: usize) -> [f32; 3] {
@@ -167,7 +190,9 @@ fn element_colour(element: &str, name: &str) -> [f32; 3] {
         "S" => rgb(255, 200, 50),
         "P" => rgb(255, 128, 0),
         "" => {
-            let hash = name.bytes().fold(7usize, |h, b| h.wrapping_mul(31).wrapping_add(usize::from(b)));
+            let hash = name.bytes().fold(7usize, |h, b| {
+                h.wrapping_mul(31).wrapping_add(usize::from(b))
+            });
             palette(hash)
         }
         _ => rgb(220, 120, 220),
@@ -218,14 +243,27 @@ mod tests {
 
     #[test]
     fn parse_round_trip() {
-        for s in ["element", "chain", "residue-type", "residue-index", "b-factor", "single:#ff8800"] {
+        for s in [
+            "element",
+            "chain",
+            "residue-type",
+            "residue-index",
+            "b-factor",
+            "single:#ff8800",
+        ] {
             let scheme: ColorScheme = s.parse().expect(s);
             assert_eq!(scheme.to_string(), s);
         }
         let c: ColorScheme = "#ff8800".parse().expect("hex");
         assert_eq!(c, "single:#FF8800".parse().expect("hex"));
         assert!("single:#ff88".parse::<ColorScheme>().is_err());
-        assert!("plaid".parse::<ColorScheme>().unwrap_err().to_string().contains("plaid"));
+        assert!(
+            "plaid"
+                .parse::<ColorScheme>()
+                .unwrap_err()
+                .to_string()
+                .contains("plaid")
+        );
     }
 
     #[test]

@@ -22,8 +22,8 @@ const LIGAND_TWO_LETTER: [&str; 8] = ["Cl", "Br", "Fe", "Zn", "Mg", "Mn", "Cu", 
 
 /// Martini (and similar) coarse-grained bead names that are not plausible atom names.
 const CG_BEADS: [&str; 24] = [
-    "BB", "SC1", "SC2", "SC3", "SC4", "SC5", "PO4", "NC3", "NH3", "CNO", "GL1", "GL2", "ROH",
-    "R1", "R2", "R3", "R4", "R5", "R6", "C1", "W", "WF", "PW", "ION",
+    "BB", "SC1", "SC2", "SC3", "SC4", "SC5", "PO4", "NC3", "NH3", "CNO", "GL1", "GL2", "ROH", "R1",
+    "R2", "R3", "R4", "R5", "R6", "C1", "W", "WF", "PW", "ION",
 ];
 
 /// Radius of a coarse-grained bead in Å (a Martini bead's van der Waals size).
@@ -153,7 +153,9 @@ mod tests {
     fn beads_and_radii() {
         assert!(is_bead_name("PO4") && is_bead_name("C1A") && is_bead_name("ROH"));
         assert!(!is_bead_name("CA"));
-        assert!(looks_coarse_grained(["NC3", "PO4", "GL1", "C1A"].into_iter()));
+        assert!(looks_coarse_grained(
+            ["NC3", "PO4", "GL1", "C1A"].into_iter()
+        ));
         assert!(!looks_coarse_grained(["N", "H1", "CA"].into_iter()));
         assert_eq!(element_radius("O"), 1.3);
         assert_eq!(element_radius("Fe"), DEFAULT_RADIUS);

@@ -100,7 +100,10 @@ impl Topology {
 
     /// Number of residues (one more than the largest [`Topology::residue_index`]).
     pub fn residue_count(&self) -> usize {
-        self.residue_index.iter().max().map_or(0, |&m| m as usize + 1)
+        self.residue_index
+            .iter()
+            .max()
+            .map_or(0, |&m| m as usize + 1)
     }
 }
 

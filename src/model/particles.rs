@@ -31,7 +31,11 @@ pub struct Particles {
 impl Particles {
     /// Builds particles from `topology`; `first` sizes the beads (see [`BeadModel`]) and must
     /// have the topology's atom count.
-    pub fn new(topology: &Topology, first: &Frame, options: &ParticleOptions) -> Result<Self, ModelError> {
+    pub fn new(
+        topology: &Topology,
+        first: &Frame,
+        options: &ParticleOptions,
+    ) -> Result<Self, ModelError> {
         check_count(first, topology.len())?;
         let atom_colours = options.colours.atom_colours(topology);
         let (beads, radii, colours) = if options.beads {
@@ -41,7 +45,12 @@ impl Particles {
         } else {
             (None, options.radius_overrides.apply(topology), atom_colours)
         };
-        Ok(Particles { atom_count: topology.len(), beads, radii, colours })
+        Ok(Particles {
+            atom_count: topology.len(),
+            beads,
+            radii,
+            colours,
+        })
     }
 
     /// Number of particles (atoms, or beads).
@@ -105,6 +114,10 @@ impl Particles {
 
     /// The engine input for `positions` (from [`Particles::positions`]), with colours.
     pub fn atom_set<'a>(&'a self, positions: &'a [Vec3]) -> AtomSet<'a> {
-        AtomSet { positions, radii: &self.radii, colours: Some(&self.colours) }
+        AtomSet {
+            positions,
+            radii: &self.radii,
+            colours: Some(&self.colours),
+        }
     }
 }

@@ -24,16 +24,26 @@ impl FromStr for RadiusOverride {
     /// Parses `KEY=RADIUS`, with RADIUS a positive number of Å up to 50.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let bad = |why: &str| ModelError::Parse(format!("bad radius override '{s}': {why}"));
-        let (key, value) = s.split_once('=').ok_or_else(|| bad("expected KEY=RADIUS, e.g. C=1.7"))?;
+        let (key, value) = s
+            .split_once('=')
+            .ok_or_else(|| bad("expected KEY=RADIUS, e.g. C=1.7"))?;
         let key = key.trim();
         if key.is_empty() {
             return Err(bad("the element, name or type before '=' is empty"));
         }
-        let radius: f32 = value.trim().parse().map_err(|_| bad("the radius is not a number"))?;
+        let radius: f32 = value
+            .trim()
+            .parse()
+            .map_err(|_| bad("the radius is not a number"))?;
         if !(radius > 0.0 && radius <= MAX_RADIUS) {
-            return Err(bad("the radius must be a number of Å above 0 and at most 50"));
+            return Err(bad(
+                "the radius must be a number of Å above 0 and at most 50",
+            ));
         }
-        Ok(RadiusOverride { key: key.to_string(), radius })
+        Ok(RadiusOverride {
+            key: key.to_string(),
+            radius,
+        })
     }
 }
 
@@ -45,7 +55,11 @@ pub struct RadiusOverrides(pub Vec<RadiusOverride>);
 impl RadiusOverrides {
     /// Parses each string as a [`RadiusOverride`].
     pub fn parse_all<S: AsRef<str>>(items: &[S]) -> Result<Self, ModelError> {
-        items.iter().map(|s| s.as_ref().parse()).collect::<Result<Vec<_>, _>>().map(Self)
+        items
+            .iter()
+            .map(|s| s.as_ref().parse())
+            .collect::<Result<Vec<_>, _>>()
+            .map(Self)
     }
 
     /// True when there are no overrides.
@@ -56,7 +70,12 @@ impl RadiusOverrides {
     /// The overridden radius in Å of a particle with this name and element, if any.
     pub fn radius_for(&self, name: &str, element: &str) -> Option<f32> {
         let by_name = self.0.iter().rev().find(|o| o.key == name);
-        let by_element = || self.0.iter().rev().find(|o| !element.is_empty() && o.key == element);
+        let by_element = || {
+            self.0
+                .iter()
+                .rev()
+                .find(|o| !element.is_empty() && o.key == element)
+        };
         by_name.or_else(by_element).map(|o| o.radius)
     }
 
@@ -65,8 +84,13 @@ impl RadiusOverrides {
         (0..topology.len())
             .map(|i| {
                 let element = topology.elements.get(i).map_or("", String::as_str);
-                self.radius_for(&topology.names[i], element)
-                    .unwrap_or(topology.radii.get(i).copied().unwrap_or(super::elements::DEFAULT_RADIUS))
+                self.radius_for(&topology.names[i], element).unwrap_or(
+                    topology
+                        .radii
+                        .get(i)
+                        .copied()
+                        .unwrap_or(super::elements::DEFAULT_RADIUS),
+                )
             })
             .collect()
     }
@@ -79,8 +103,16 @@ mod tests {
     #[test]
     fn parses_and_rejects() {
         let o: RadiusOverride = "C=1.7".parse().expect("valid");
-        assert_eq!(o, RadiusOverride { key: "C".into(), radius: 1.7 });
-        for bad in ["C", "=1.0", "C=abc", "C=-1", "C=0", "C=NaN", "C=inf", "C=1000"] {
+        assert_eq!(
+            o,
+            RadiusOverride {
+                key: "C".into(),
+                radius: 1.7
+            }
+        );
+        for bad in [
+            "C", "=1.0", "C=abc", "C=-1", "C=0", "C=NaN", "C=inf", "C=1000",
+        ] {
             let e = bad.parse::<RadiusOverride>().expect_err(bad);
             assert!(e.to_string().contains(bad), "{e}");
         }

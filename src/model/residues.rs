@@ -20,15 +20,44 @@ pub enum ResidueClass {
 const AMINO_ACIDS: [(&str, ResidueClass); 38] = {
     use ResidueClass::*;
     [
-        ("ALA", Hydrophobic), ("VAL", Hydrophobic), ("LEU", Hydrophobic), ("ILE", Hydrophobic),
-        ("MET", Hydrophobic), ("PHE", Hydrophobic), ("TRP", Hydrophobic), ("PRO", Hydrophobic),
-        ("GLY", Hydrophobic), ("MSE", Hydrophobic), ("NLE", Hydrophobic),
-        ("SER", Polar), ("THR", Polar), ("CYS", Polar), ("CYX", Polar), ("CYM", Polar),
-        ("TYR", Polar), ("ASN", Polar), ("GLN", Polar),
-        ("ASP", Acid), ("GLU", Acid), ("ASH", Acid), ("GLH", Acid), ("ASPP", Acid), ("GLUP", Acid),
-        ("LYS", Base), ("LYN", Base), ("LSN", Base), ("ARG", Base), ("ARN", Base),
-        ("HIS", Base), ("HID", Base), ("HIE", Base), ("HIP", Base), ("HSD", Base), ("HSE", Base),
-        ("HSP", Base), ("HISH", Base),
+        ("ALA", Hydrophobic),
+        ("VAL", Hydrophobic),
+        ("LEU", Hydrophobic),
+        ("ILE", Hydrophobic),
+        ("MET", Hydrophobic),
+        ("PHE", Hydrophobic),
+        ("TRP", Hydrophobic),
+        ("PRO", Hydrophobic),
+        ("GLY", Hydrophobic),
+        ("MSE", Hydrophobic),
+        ("NLE", Hydrophobic),
+        ("SER", Polar),
+        ("THR", Polar),
+        ("CYS", Polar),
+        ("CYX", Polar),
+        ("CYM", Polar),
+        ("TYR", Polar),
+        ("ASN", Polar),
+        ("GLN", Polar),
+        ("ASP", Acid),
+        ("GLU", Acid),
+        ("ASH", Acid),
+        ("GLH", Acid),
+        ("ASPP", Acid),
+        ("GLUP", Acid),
+        ("LYS", Base),
+        ("LYN", Base),
+        ("LSN", Base),
+        ("ARG", Base),
+        ("ARN", Base),
+        ("HIS", Base),
+        ("HID", Base),
+        ("HIE", Base),
+        ("HIP", Base),
+        ("HSD", Base),
+        ("HSE", Base),
+        ("HSP", Base),
+        ("HISH", Base),
     ]
 };
 
@@ -38,7 +67,9 @@ const NUCLEOTIDES: [&str; 16] = [
 ];
 
 /// Water residue names of the common force fields.
-const WATERS: [&str; 9] = ["SOL", "WAT", "HOH", "H2O", "TIP3", "TIP4", "TIP5", "SPC", "T3P"];
+const WATERS: [&str; 9] = [
+    "SOL", "WAT", "HOH", "H2O", "TIP3", "TIP4", "TIP5", "SPC", "T3P",
+];
 
 /// Lipid residue names whose atoms use the usual C/H/N/O/P naming.
 const LIPIDS: [&str; 14] = [
@@ -85,10 +116,30 @@ pub fn is_standard_organic(name: &str) -> bool {
 /// The element of a monatomic ion residue (`NA`, `SOD`, `CL`, `CLA`, `CA`, `CAL`, `ZN`, ...).
 pub fn ion_element(residue: &str) -> Option<&'static str> {
     const IONS: [(&str, &str); 24] = [
-        ("NA", "Na"), ("NA+", "Na"), ("SOD", "Na"), ("CL", "Cl"), ("CL-", "Cl"), ("CLA", "Cl"),
-        ("K", "K"), ("K+", "K"), ("POT", "K"), ("CA", "Ca"), ("CAL", "Ca"), ("CA2+", "Ca"),
-        ("MG", "Mg"), ("MG2+", "Mg"), ("ZN", "Zn"), ("ZN2", "Zn"), ("FE", "Fe"), ("FE2", "Fe"),
-        ("CU", "Cu"), ("MN", "Mn"), ("LI", "Li"), ("CS", "Cs"), ("RB", "Rb"), ("BR", "Br"),
+        ("NA", "Na"),
+        ("NA+", "Na"),
+        ("SOD", "Na"),
+        ("CL", "Cl"),
+        ("CL-", "Cl"),
+        ("CLA", "Cl"),
+        ("K", "K"),
+        ("K+", "K"),
+        ("POT", "K"),
+        ("CA", "Ca"),
+        ("CAL", "Ca"),
+        ("CA2+", "Ca"),
+        ("MG", "Mg"),
+        ("MG2+", "Mg"),
+        ("ZN", "Zn"),
+        ("ZN2", "Zn"),
+        ("FE", "Fe"),
+        ("FE2", "Fe"),
+        ("CU", "Cu"),
+        ("MN", "Mn"),
+        ("LI", "Li"),
+        ("CS", "Cs"),
+        ("RB", "Rb"),
+        ("BR", "Br"),
     ];
     let upper = residue.trim().to_ascii_uppercase();
     IONS.iter().find(|(n, _)| *n == upper).map(|(_, e)| *e)
