@@ -110,3 +110,64 @@ fn protein_1hpv_at_coarse_spacing() {
     assert!(out.mesh.is_closed(), "1hpv GPU mesh is not closed");
     assert!(out.volume > 0.0);
 }
+
+#[test]
+fn matches_the_cpu_engine() {
+    use mdsurf::gpu::tolerance as tol;
+    use mdsurf::surface::{CpuEngine, density};
+    let Some(mut gpu) = engine() else { return };
+    let mut cpu = CpuEngine::new();
+    let two = Atoms {
+        positions: vec![Vec3::ZERO, Vec3::new(2.1, 0.3, -0.2)],
+        radii: vec![1.5, 1.2],
+        colours: Some(vec![[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),
+    };
+    let cases = [
+        (
+            "two atoms H=0.4",
+            two,
+            SurfaceParams {
+                spacing: 0.4,
+                ..Default::default()
+            },
+        ),
+        (
+            "1hpv H=2",
+            load_pdb("1hpv.pdb"),
+            SurfaceParams {
+                spacing: 2.0,
+                ..Default::default()
+            },
+        ),
+    ];
+    for (what, atoms, p) in cases {
+        let g = gpu.compute(&atoms.set(), &p).expect("GPU surface");
+        let c = cpu.compute(&atoms.set(), &p).expect("CPU surface");
+        assert_eq!(g.grid, c.grid, "{what}: grids differ");
+        assert!(
+            tol::triangles_close(g.mesh.triangle_count(), c.mesh.triangle_count()),
+            "{what}: {} GPU vs {} CPU triangles",
+            g.mesh.triangle_count(),
+            c.mesh.triangle_count()
+        );
+        for (name, a, b) in [("area", g.area, c.area), ("volume", g.volume, c.volume)] {
+            assert!(
+                tol::rel_close(a, b, tol::AREA_VOLUME_REL),
+                "{what}: {name} GPU {a} CPU {b}"
+            );
+        }
+        // Density against the CPU engine's own density stage.
+        let d = density::compute(&atoms.set(), &p, &c.grid).expect("CPU density");
+        let gd = gpu.read_density().expect("GPU density");
+        assert_eq!(gd.len(), d.values.len());
+        let bad = gd
+            .iter()
+            .zip(&d.values)
+            .filter(|(a, b)| !tol::density_close(**a, **b))
+            .count();
+        assert_eq!(
+            bad, 0,
+            "{what}: {bad} density samples differ from the CPU engine"
+        );
+    }
+}

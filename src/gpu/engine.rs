@@ -86,6 +86,7 @@ struct State {
     atoms: u64,
     params: Option<SurfaceParams>,
     plan: Option<FramePlan>,
+    last: Option<FrameInfo>,
     with_colour: bool,
     bounds: Option<(Vec3, Vec3, f32)>,
     fingerprints: inputs::Fingerprints,
@@ -172,6 +173,11 @@ impl GpuEngine {
     /// The plan of the last submitted frame.
     pub fn plan(&self) -> Option<&FramePlan> {
         self.state.plan.as_ref()
+    }
+
+    /// What the last submit did (which stages ran, grid, slabs).
+    pub fn last_frame(&self) -> Option<&FrameInfo> {
+        self.state.last.as_ref()
     }
 
     /// Bytes of GPU memory the engine's buffers hold.
@@ -363,6 +369,7 @@ impl GpuEngine {
             work,
         };
         st.plan = Some(plan);
+        st.last = Some(info.clone());
         Ok((info, wall))
     }
 

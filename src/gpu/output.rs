@@ -201,9 +201,18 @@ pub fn read_bytes(
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let mut encoder = device.create_command_encoder(&Default::default());
     encoder.copy_buffer_to_buffer(src, offset, &staging, 0, Some(size));
     queue.submit([encoder.finish()]);
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        let msg = e
+            .to_string()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        return Err(GpuError::Readback(msg));
+    }
     let result: MapResult = Arc::default();
     let r2 = Arc::clone(&result);
     staging.map_async(wgpu::MapMode::Read, .., move |r| {

@@ -99,7 +99,7 @@ impl Buffers {
             colours: Grow::new(device, "colours", U::COPY_DST),
             sorted_atoms: Grow::new(device, "sorted atoms", U::empty()),
             sorted_colours: Grow::new(device, "sorted colours", U::empty()),
-            cell_start: Grow::new(device, "cell start", U::COPY_DST),
+            cell_start: Grow::new(device, "cell start", U::COPY_DST | U::COPY_SRC),
             cell_end: Grow::new(device, "cell end", U::empty()),
             density: Grow::new(device, "density", U::COPY_SRC),
             colour: Grow::new(device, "colour volume", U::COPY_SRC),
