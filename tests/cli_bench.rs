@@ -106,3 +106,12 @@ fn bench_rejects_bad_counts_with_one_line() {
         assert!(run.stderr.contains(bad), "{}", run.stderr);
     }
 }
+
+#[test]
+fn table1_needs_the_gpu_engine() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = mdsurf(dir.path(), &["bench", "--table1", "--backend", "cpu"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_eq!(run.stderr.lines().count(), 1, "{}", run.stderr);
+    assert!(run.stderr.contains("--table1"), "{}", run.stderr);
+}
