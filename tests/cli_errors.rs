@@ -154,9 +154,9 @@ fn grid_too_large_says_how_much_and_suggests_a_larger_spacing() {
     );
 }
 
-/// Writes `top.gro` and `traj.dcd` with chemfiles: 3 atoms, frame 0 fine, frame 1 with `bad` as
-/// one coordinate, frame 2 fine.
-fn write_bad_coordinate_trajectory(dir: &Path, bad: f64) {
+/// Writes the topology `top` (a `.gro` or `.pdb` name) and `traj.dcd` with chemfiles: 3 atoms,
+/// frame 0 fine, frame 1 with `bad` as one coordinate, frame 2 fine.
+fn write_bad_coordinate_trajectory(dir: &Path, top: &str, bad: f64) {
     let mut frame = chemfiles::Frame::new();
     for (i, name) in ["C", "N", "O"].into_iter().enumerate() {
         frame.add_atom(
@@ -165,9 +165,9 @@ fn write_bad_coordinate_trajectory(dir: &Path, bad: f64) {
             None,
         );
     }
-    let mut top = chemfiles::Trajectory::open(dir.join("top.gro"), 'w').unwrap();
-    top.write(&frame).unwrap();
-    drop(top);
+    let mut writer = chemfiles::Trajectory::open(dir.join(top), 'w').unwrap();
+    writer.write(&frame).unwrap();
+    drop(writer);
     let mut traj = chemfiles::Trajectory::open(dir.join("traj.dcd"), 'w').unwrap();
     for f in 0..3 {
         if f == 1 {
@@ -181,13 +181,13 @@ fn write_bad_coordinate_trajectory(dir: &Path, bad: f64) {
 
 #[test]
 fn nan_and_infinite_coordinates_name_the_frame_after_the_good_ones() {
-    for bad in [f64::NAN, f64::INFINITY] {
+    for (top, bad) in [("top.gro", f64::NAN), ("top.pdb", f64::INFINITY)] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        write_bad_coordinate_trajectory(d, bad);
+        write_bad_coordinate_trajectory(d, top, bad);
         let run = fails(
             d,
-            &["top.gro", "traj.dcd"],
+            &[top, "traj.dcd"],
             "o_{frame}.ply",
             &["traj.dcd", "frame 1"],
         );
