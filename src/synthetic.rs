@@ -60,7 +60,10 @@ impl SyntheticSystem {
         if count == 0 {
             return Err(SyntheticError::ZeroParticles);
         }
-        for other in [Some(radii.len()), colours.map(|c| c.len())].into_iter().flatten() {
+        for other in [Some(radii.len()), colours.map(|c| c.len())]
+            .into_iter()
+            .flatten()
+        {
             if other != n {
                 return Err(SyntheticError::LengthMismatch {
                     positions: n,
@@ -165,7 +168,9 @@ impl SyntheticSystem {
             .enumerate()
             .for_each(|(c, (dst, src))| {
                 let mut rng = SplitMix64::new(
-                    self.seed ^ (frame as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (c as u64) << 1,
+                    self.seed
+                        ^ (frame as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                        ^ (c as u64) << 1,
                 );
                 for (d, s) in dst.iter_mut().zip(src) {
                     let j = Vec3::new(rng.next_signed(), rng.next_signed(), rng.next_signed());

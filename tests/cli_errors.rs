@@ -22,8 +22,17 @@ fn fails(dir: &Path, args: &[&str], out: &str, must_name: &[&str]) -> Run {
     let run = mdsurf(dir, &all);
     assert_eq!(run.code, 2, "{args:?}: status {}\n{}", run.code, run.stderr);
     assert!(!run.stderr.contains("panicked"), "{}", run.stderr);
-    let errors: Vec<&str> = run.stderr.lines().filter(|l| !l.starts_with("frame")).collect();
-    assert_eq!(errors.len(), 1, "{args:?}: expected one error line:\n{}", run.stderr);
+    let errors: Vec<&str> = run
+        .stderr
+        .lines()
+        .filter(|l| !l.starts_with("frame"))
+        .collect();
+    assert_eq!(
+        errors.len(),
+        1,
+        "{args:?}: expected one error line:\n{}",
+        run.stderr
+    );
     let line = errors[0];
     assert!(line.starts_with("error: "), "{line}");
     for word in must_name {
@@ -43,7 +52,11 @@ fn fails(dir: &Path, args: &[&str], out: &str, must_name: &[&str]) -> Run {
 /// Like [`fails`], and the stats file is untouched too (nothing was computed).
 fn fails_cleanly(dir: &Path, args: &[&str], out: &str, must_name: &[&str]) {
     fails(dir, args, out, must_name);
-    assert_eq!(fs::read(dir.join("stats.csv")).unwrap(), OLD, "stats.csv was changed");
+    assert_eq!(
+        fs::read(dir.join("stats.csv")).unwrap(),
+        OLD,
+        "stats.csv was changed"
+    );
 }
 
 #[test]
@@ -54,7 +67,12 @@ fn missing_and_unknown_and_unreadable_files() {
     fs::write(d.join("mol.foo"), "hello").unwrap();
     fails_cleanly(d, &["mol.foo"], "o.ply", &["mol.foo", "format"]);
     fs::write(d.join("junk.xtc"), vec![0xA5u8; 3000]).unwrap();
-    fails_cleanly(d, &[&asset("md_1u19.gro"), "junk.xtc"], "o_{frame}.ply", &["junk.xtc"]);
+    fails_cleanly(
+        d,
+        &[&asset("md_1u19.gro"), "junk.xtc"],
+        "o_{frame}.ply",
+        &["junk.xtc"],
+    );
     fs::write(d.join("junk.gro"), "not\na gro file at all\n").unwrap();
     fails_cleanly(d, &["junk.gro"], "o.ply", &["junk.gro"]);
 }
@@ -75,7 +93,12 @@ fn bad_parameters_name_the_value() {
         fails_cleanly(d, &[&gro, flag, value], "o.ply", &[name, value]);
     }
     fails_cleanly(d, &[&gro, "--radius", "C=abc"], "o.ply", &["C=abc"]);
-    fails_cleanly(d, &[&gro, "--color", "purple-ish"], "o.ply", &["purple-ish"]);
+    fails_cleanly(
+        d,
+        &[&gro, "--color", "purple-ish"],
+        "o.ply",
+        &["purple-ish"],
+    );
     fails_cleanly(d, &[&gro, "--frames", "7:x"], "o.ply", &["7:x"]);
 }
 
@@ -84,9 +107,17 @@ fn several_frames_need_a_frame_pattern_and_outputs_a_known_format() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (gro, xtc) = (asset("md_1u19.gro"), asset("md_1u19.xtc"));
-    fails_cleanly(d, &[&gro, &xtc, "--frames", "0:2"], "one.ply", &["one.ply", "{frame}"]);
+    fails_cleanly(
+        d,
+        &[&gro, &xtc, "--frames", "0:2"],
+        "one.ply",
+        &["one.ply", "{frame}"],
+    );
     fails_cleanly(d, &[&gro], "mesh.xyz", &["mesh.xyz"]);
-    let run = mdsurf(d, &["surface", &gro, "--backend", "cpu", "-o", "no/dir/m.ply"]);
+    let run = mdsurf(
+        d,
+        &["surface", &gro, "--backend", "cpu", "-o", "no/dir/m.ply"],
+    );
     assert_eq!(run.code, 2);
     assert!(run.last_line().contains("no/dir"), "{}", run.stderr);
 }
@@ -95,7 +126,12 @@ fn several_frames_need_a_frame_pattern_and_outputs_a_known_format() {
 fn atom_count_mismatch_names_both_files_and_counts() {
     let dir = tempfile::tempdir().unwrap();
     let (pdb, xtc) = (data("adk_open.pdb"), asset("md_1u19.xtc"));
-    fails_cleanly(dir.path(), &[&pdb, &xtc], "o_{frame}.ply", &["adk_open.pdb", "md_1u19.xtc", "3341", "5547"]);
+    fails_cleanly(
+        dir.path(),
+        &[&pdb, &xtc],
+        "o_{frame}.ply",
+        &["adk_open.pdb", "md_1u19.xtc", "3341", "5547"],
+    );
 }
 
 #[test]
@@ -110,19 +146,28 @@ fn grid_too_large_says_how_much_and_suggests_a_larger_spacing() {
     let dir = tempfile::tempdir().unwrap();
     let xyz = "2\ntwo atoms 35 um apart\nC 0 0 0\nC 20000 20000 20000\n";
     fs::write(dir.path().join("far.xyz"), xyz).unwrap();
-    fails_cleanly(dir.path(), &["far.xyz"], "o.ply", &["far.xyz", "GB", "larger", "spacing"]);
+    fails_cleanly(
+        dir.path(),
+        &["far.xyz"],
+        "o.ply",
+        &["far.xyz", "GB", "larger", "spacing"],
+    );
 }
 
-/// Writes `top.pdb` and `traj.dcd` with chemfiles: 3 atoms, frame 0 fine, frame 1 with `bad` as
-/// one coordinate, frame 2 fine.
-fn write_bad_coordinate_trajectory(dir: &Path, bad: f64) {
+/// Writes the topology `top` (a `.gro` or `.pdb` name) and `traj.dcd` with chemfiles: 3 atoms,
+/// frame 0 fine, frame 1 with `bad` as one coordinate, frame 2 fine.
+fn write_bad_coordinate_trajectory(dir: &Path, top: &str, bad: f64) {
     let mut frame = chemfiles::Frame::new();
     for (i, name) in ["C", "N", "O"].into_iter().enumerate() {
-        frame.add_atom(&chemfiles::Atom::new(name), [i as f64 * 1.4, 0.0, 0.0], None);
+        frame.add_atom(
+            &chemfiles::Atom::new(name),
+            [i as f64 * 1.4, 0.0, 0.0],
+            None,
+        );
     }
-    let mut top = chemfiles::Trajectory::open(dir.join("top.pdb"), 'w').unwrap();
-    top.write(&frame).unwrap();
-    drop(top);
+    let mut writer = chemfiles::Trajectory::open(dir.join(top), 'w').unwrap();
+    writer.write(&frame).unwrap();
+    drop(writer);
     let mut traj = chemfiles::Trajectory::open(dir.join("traj.dcd"), 'w').unwrap();
     for f in 0..3 {
         if f == 1 {
@@ -136,13 +181,22 @@ fn write_bad_coordinate_trajectory(dir: &Path, bad: f64) {
 
 #[test]
 fn nan_and_infinite_coordinates_name_the_frame_after_the_good_ones() {
-    for bad in [f64::NAN, f64::INFINITY] {
+    for (top, bad) in [("top.gro", f64::NAN), ("top.pdb", f64::INFINITY)] {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        write_bad_coordinate_trajectory(d, bad);
-        let run = fails(d, &["top.pdb", "traj.dcd"], "o_{frame}.ply", &["traj.dcd", "frame 1"]);
+        write_bad_coordinate_trajectory(d, top, bad);
+        let run = fails(
+            d,
+            &[top, "traj.dcd"],
+            "o_{frame}.ply",
+            &["traj.dcd", "frame 1"],
+        );
         // Frame 0 was computed, written and reported before the error.
-        assert!(run.stderr.lines().any(|l| l.starts_with("frame     0")), "{}", run.stderr);
+        assert!(
+            run.stderr.lines().any(|l| l.starts_with("frame     0")),
+            "{}",
+            run.stderr
+        );
         assert!(d.join("o_0.ply").is_file());
         assert!(!d.join("o_2.ply").exists());
         assert_eq!(Csv::read(&d.join("stats.csv")).col("frame"), [0.0]);
@@ -152,13 +206,22 @@ fn nan_and_infinite_coordinates_name_the_frame_after_the_good_ones() {
 /// Copies `src` cut to `keep` of its length into `dir/name`.
 fn truncated_copy(src: &str, dir: &Path, name: &str, keep: f64) {
     let bytes = fs::read(src).unwrap();
-    fs::write(dir.join(name), &bytes[..(bytes.len() as f64 * keep) as usize]).unwrap();
+    fs::write(
+        dir.join(name),
+        &bytes[..(bytes.len() as f64 * keep) as usize],
+    )
+    .unwrap();
 }
 
 /// The frame index an error line names (`frame N`).
 fn frame_named(line: &str) -> usize {
     let at = line.find("frame ").expect("the error names no frame") + "frame ".len();
-    line[at..].split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
+    line[at..]
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap()
 }
 
 #[test]
@@ -166,7 +229,12 @@ fn truncated_xtc_processes_the_good_frames_then_fails() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     truncated_copy(&asset("md_1u19.xtc"), d, "cut.xtc", 0.45);
-    let run = fails(d, &[&asset("md_1u19.gro"), "cut.xtc", "--frames", "15:"], "o_{frame}.ply", &["cut.xtc"]);
+    let run = fails(
+        d,
+        &[&asset("md_1u19.gro"), "cut.xtc", "--frames", "15:"],
+        "o_{frame}.ply",
+        &["cut.xtc"],
+    );
     let bad = frame_named(run.last_line());
     assert!((16..51).contains(&bad), "{}", run.last_line());
     let csv = Csv::read(&d.join("stats.csv"));
@@ -181,7 +249,14 @@ fn truncated_dcd_processes_the_good_frames_then_fails() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     truncated_copy(&data("adk_dims.dcd"), d, "cut.dcd", 0.9);
-    let args = [&data("adk_open.pdb") as &str, "cut.dcd", "--frames", "80:", "--spacing", "3"];
+    let args = [
+        &data("adk_open.pdb") as &str,
+        "cut.dcd",
+        "--frames",
+        "80:",
+        "--spacing",
+        "3",
+    ];
     let run = fails(d, &args, "o_{frame}.stl", &["cut.dcd"]);
     let bad = frame_named(run.last_line());
     assert!((81..98).contains(&bad), "{}", run.last_line());

@@ -10,8 +10,17 @@ use cli_common::{Csv, asset, data, mdsurf, read_ply_counts, read_stl, volume_of}
 
 /// The columns issue 2 requires, in order, at the start of the CSV.
 const REQUIRED: [&str; 11] = [
-    "frame", "time_ps", "atoms", "nx", "ny", "nz", "vertices", "triangles", "area_A2",
-    "volume_A3", "ms_total",
+    "frame",
+    "time_ps",
+    "atoms",
+    "nx",
+    "ny",
+    "nz",
+    "vertices",
+    "triangles",
+    "area_A2",
+    "volume_A3",
+    "ms_total",
 ];
 
 #[test]
@@ -21,8 +30,17 @@ fn demo_frames_give_ply_files_and_stats_rows() {
     let run = mdsurf(
         dir.path(),
         &[
-            "surface", &gro, &xtc, "--frames", "0:3", "--backend", "cpu", "-o",
-            "surf_{frame}.ply", "--stats", "stats.csv",
+            "surface",
+            &gro,
+            &xtc,
+            "--frames",
+            "0:3",
+            "--backend",
+            "cpu",
+            "-o",
+            "surf_{frame}.ply",
+            "--stats",
+            "stats.csv",
         ],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
@@ -38,7 +56,10 @@ fn demo_frames_give_ply_files_and_stats_rows() {
         assert!((5.0 * 5547.0..30.0 * 5547.0).contains(&v), "volume {v}");
         // ...and no closed surface has less area than the sphere of the same volume.
         let sphere = (36.0 * std::f64::consts::PI * v * v).cbrt();
-        assert!(a > sphere && a < 20.0 * sphere, "area {a} vs sphere {sphere}");
+        assert!(
+            a > sphere && a < 20.0 * sphere,
+            "area {a} vs sphere {sphere}"
+        );
     }
     // Consecutive frames of a short MD are similar but not identical.
     assert!(((volumes[1] - volumes[0]) / volumes[0]).abs() < 0.1);
@@ -53,7 +74,11 @@ fn demo_frames_give_ply_files_and_stats_rows() {
     }
     assert!(!dir.path().join("surf_3.ply").exists());
     // One summary line per frame and a final line on stderr.
-    let lines: Vec<&str> = run.stderr.lines().filter(|l| l.starts_with("frame")).collect();
+    let lines: Vec<&str> = run
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("frame"))
+        .collect();
     assert_eq!(lines.len(), 3, "{}", run.stderr);
     assert!(run.last_line().contains("3 frame(s)"), "{}", run.stderr);
 }
@@ -69,14 +94,27 @@ fn every_format_agrees_with_the_stats() {
         let run = mdsurf(
             dir.path(),
             &[
-                "surface", &pdb, "--backend", "cpu", "--spacing", "1.5", "--color", "chain",
-                "-o", &out, "--stats", &stats,
+                "surface",
+                &pdb,
+                "--backend",
+                "cpu",
+                "--spacing",
+                "1.5",
+                "--color",
+                "chain",
+                "-o",
+                &out,
+                "--stats",
+                &stats,
             ],
         );
         assert_eq!(run.code, 0, "{ext}: {}", run.stderr);
         let csv = Csv::read(&dir.path().join(&stats));
         assert_eq!(csv.rows.len(), 1);
-        let (v, t) = (csv.col("vertices")[0] as usize, csv.col("triangles")[0] as usize);
+        let (v, t) = (
+            csv.col("vertices")[0] as usize,
+            csv.col("triangles")[0] as usize,
+        );
         let path = dir.path().join(&out);
         match ext {
             "ply" => assert_eq!(read_ply_counts(&path), (v, t, read_ply_counts(&path).2)),
@@ -90,7 +128,10 @@ fn every_format_agrees_with_the_stats() {
                 assert_eq!(tris.len(), t);
                 let vol = volume_of(&tris);
                 let want = csv.col("volume_A3")[0];
-                assert!(((vol - want) / want).abs() < 1e-4, "STL {vol} vs CSV {want}");
+                assert!(
+                    ((vol - want) / want).abs() < 1e-4,
+                    "STL {vol} vs CSV {want}"
+                );
             }
             _ => {
                 let b = fs::read(&path).unwrap();
@@ -115,8 +156,19 @@ fn padded_frame_pattern_and_step_name_one_file_per_frame() {
     let run = mdsurf(
         dir.path(),
         &[
-            "surface", &pdb, &dcd, "--frames", "0:6:2", "--backend", "cpu", "--spacing", "2",
-            "-o", "adk_{frame:04}.stl", "--stats", "adk.csv",
+            "surface",
+            &pdb,
+            &dcd,
+            "--frames",
+            "0:6:2",
+            "--backend",
+            "cpu",
+            "--spacing",
+            "2",
+            "-o",
+            "adk_{frame:04}.stl",
+            "--stats",
+            "adk.csv",
         ],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
@@ -125,7 +177,10 @@ fn padded_frame_pattern_and_step_name_one_file_per_frame() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, ["adk.csv", "adk_0000.stl", "adk_0002.stl", "adk_0004.stl"]);
+    assert_eq!(
+        names,
+        ["adk.csv", "adk_0000.stl", "adk_0002.stl", "adk_0004.stl"]
+    );
     let csv = Csv::read(&dir.path().join("adk.csv"));
     assert_eq!(csv.col("frame"), [0.0, 2.0, 4.0]);
     assert!(csv.col("atoms").iter().all(|&a| a == 3341.0));
@@ -138,7 +193,15 @@ fn beads_cut_the_particle_count_and_keep_the_shape() {
     let mut volume = Vec::new();
     for beads in [false, true] {
         let mut args = vec![
-            "surface", &pdb, &dcd, "--frames", "0", "--backend", "cpu", "--stats", "b.csv",
+            "surface",
+            &pdb,
+            &dcd,
+            "--frames",
+            "0",
+            "--backend",
+            "cpu",
+            "--stats",
+            "b.csv",
         ];
         if beads {
             args.push("--beads");
@@ -176,5 +239,9 @@ fn radius_scale_and_isovalue_move_the_surface_the_right_way() {
     let base = vol(&[]);
     assert!(vol(&["--isovalue", "0.8"]) < base);
     assert!(vol(&["--radius-scale", "1.3"]) > base);
-    assert!(vol(&["--radius", "C=2.0", "--radius", "N=2.0", "--radius", "O=2.0"]) > base);
+    assert!(
+        vol(&[
+            "--radius", "C=2.0", "--radius", "N=2.0", "--radius", "O=2.0"
+        ]) > base
+    );
 }

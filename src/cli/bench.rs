@@ -35,6 +35,9 @@ pub struct BenchArgs {
     /// R = 1, I = 0.5) and print it beside the paper's figures.
     #[arg(long)]
     pub table1: bool,
+    /// With --table1: skip the rows with more atoms than N (quick checks, small GPUs).
+    #[arg(long, value_name = "N", value_parser = parse_count)]
+    pub max_atoms: Option<usize>,
     /// Engines to time: cpu, gpu, or all that are available.
     #[arg(long, value_enum, default_value_t = BenchBackend::All)]
     pub backend: BenchBackend,
@@ -65,12 +68,11 @@ pub fn parse_count(s: &str) -> Result<usize, String> {
         _ => (t, 1.0),
     };
     let v: f64 = num
-        .replace('_', "")
-        .replace(',', "")
+        .replace(['_', ','], "")
         .parse()
         .map_err(|_| format!("bad atom count '{s}' (e.g. 1000000, 1e6, 950k, 2.37M)"))?;
     let n = (v * mult).round();
-    if !(n >= 1.0 && n <= 1e10) {
+    if !(1.0..=1e10).contains(&n) {
         return Err(format!("atom count '{s}' must be between 1 and 1e10"));
     }
     Ok(n as usize)
@@ -122,7 +124,7 @@ pub struct BenchResult {
 pub fn run(args: BenchArgs) -> Result<()> {
     let params = args.params.params()?;
     if args.table1 {
-        print_table1()?;
+        print_table1(&args)?;
         if args.top.is_none() && args.synthetic.is_empty() {
             return Ok(());
         }
@@ -154,9 +156,25 @@ pub fn run(args: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// Runs the GPU engine's Table 1 reproduction and prints its table.
-fn print_table1() -> Result<()> {
-    let text = super::shim::table1()?;
+/// Runs the GPU engine's Table 1 reproduction (tiling TOP or the demo) and prints its table.
+fn print_table1(args: &BenchArgs) -> Result<()> {
+    if args.backend == BenchBackend::Cpu {
+        bail!("--table1 times the GPU engine; use --backend gpu or all");
+    }
+    let (top, traj) = match &args.top {
+        Some(top) => (top.clone(), args.traj.clone()),
+        None => {
+            let (gro, xtc) = demo_files()?;
+            (gro, Some(xtc))
+        }
+    };
+    let opts = mdsurf::gpu::table1::Table1Options {
+        repeats: args.repeats as usize,
+        max_atoms: args.max_atoms,
+        colours: !args.no_color,
+    };
+    let text = mdsurf::gpu::table1::table1(&top, traj.as_deref(), &opts)
+        .map_err(|e| anyhow!("--table1: {e}"))?;
     println!("{text}");
     Ok(())
 }

@@ -15,7 +15,6 @@ use mdsurf::io::{self, Trajectory};
 use mdsurf::model::{ColorScheme, Frame, ParticleOptions, Particles, RadiusOverrides};
 use mdsurf::surface::{CpuEngine, Quality, SurfaceEngine, SurfaceParams};
 
-
 /// Input files and how their atoms become particles.
 #[derive(clap::Args, Debug, Clone)]
 pub struct InputArgs {
@@ -61,13 +60,28 @@ impl ParticleArgs {
 #[derive(clap::Args, Debug, Clone)]
 pub struct ParamArgs {
     /// Grid spacing H in Å.
-    #[arg(long, value_name = "H", default_value_t = 1.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "H",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
     pub spacing: f32,
     /// Radius scale R: Gaussian width = radius * R.
-    #[arg(long, value_name = "R", default_value_t = 1.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "R",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
     pub radius_scale: f32,
     /// Isovalue I of the density (1.0 = peak of one isolated atom).
-    #[arg(long, value_name = "I", default_value_t = 0.5, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "I",
+        default_value_t = 0.5,
+        allow_negative_numbers = true
+    )]
     pub isovalue: f32,
     /// Gaussian cutoff: low (2 alpha), medium (2.5), high (3), max (4).
     #[arg(long, value_name = "Q", default_value = "medium")]
@@ -136,13 +150,20 @@ pub fn engines_for(backend: BenchBackend) -> Result<Vec<Box<dyn SurfaceEngine>>>
     if backend != BenchBackend::Gpu {
         engines.push(Box::new(CpuEngine::new()));
     }
-    match (backend, GpuEngine::new()) {
-        (BenchBackend::Cpu, _) => {}
-        (_, Ok(gpu)) => engines.push(Box::new(gpu)),
-        (BenchBackend::Gpu, Err(err)) => {
-            return Err(anyhow::Error::new(err).context("--backend gpu: cannot start the GPU engine"));
+    if backend == BenchBackend::Cpu {
+        return Ok(engines);
+    }
+    match GpuEngine::new() {
+        Ok(gpu) => {
+            eprintln!("gpu: {}", gpu.context().adapter_name);
+            engines.push(Box::new(gpu));
         }
-        (BenchBackend::All, Err(err)) => eprintln!("note: no GPU engine ({err:#}); timing the CPU only"),
+        Err(err) if backend == BenchBackend::Gpu => {
+            return Err(
+                anyhow::Error::new(err).context("--backend gpu: cannot start the GPU engine")
+            );
+        }
+        Err(err) => eprintln!("note: no GPU engine ({err}); timing the CPU only"),
     }
     Ok(engines)
 }
@@ -204,7 +225,9 @@ impl FromStr for FrameRange {
             _ => return Err(bad()),
         };
         if range.step == 0 {
-            return Err(format!("bad frame range '{s}': the step must be at least 1"));
+            return Err(format!(
+                "bad frame range '{s}': the step must be at least 1"
+            ));
         }
         Ok(range)
     }
@@ -244,7 +267,7 @@ impl System {
         let options = input.particles.options()?;
         let trajectory = io::open(&input.top, input.traj.as_deref())?;
         let frames_path = trajectory.path().to_path_buf();
-        if trajectory.len() == 0 {
+        if trajectory.is_empty() {
             bail!("{}: the trajectory has no frames", frames_path.display());
         }
         let first = trajectory.read_frame(first_frame.min(trajectory.len() - 1))?;

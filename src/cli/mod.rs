@@ -5,6 +5,5 @@ pub mod bench;
 pub mod bench_table;
 pub mod common;
 pub mod render;
-pub mod shim;
 pub mod surface;
 pub mod view;

@@ -47,11 +47,7 @@ pub struct SurfaceArgs {
 pub fn run(args: SurfaceArgs) -> Result<()> {
     // Everything that can be checked before reading data is checked first.
     let params = args.params.params()?;
-    let output = args
-        .output
-        .as_deref()
-        .map(OutputPattern::new)
-        .transpose()?;
+    let output = args.output.as_deref().map(OutputPattern::new).transpose()?;
     if let Some(stats) = &args.stats {
         check_parent_dir(stats)?;
     }
@@ -81,22 +77,21 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let mut engine = make_engine(args.backend)?;
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
 
-    let bar = (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
-        .then(|| progress_bar(frames.len()));
+    let bar =
+        (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
+            .then(|| progress_bar(frames.len()));
     let t_all = Instant::now();
     let mut positions = Vec::new();
     let mut failure = None;
+    let mut ok_frames = 0usize;
     for &index in &frames {
         let row = (|| -> Result<StatsRow> {
             let t0 = Instant::now();
             let (frame, read_ms) = system.read_positions(index, &mut positions)?;
             let atoms = system.particles.atom_set(&positions);
-            let surf = engine.compute(&atoms, &params).map_err(|e| {
-                anyhow!(
-                    "{}: frame {index}: {e}",
-                    system.frames_path.display()
-                )
-            })?;
+            let surf = engine
+                .compute(&atoms, &params)
+                .map_err(|e| anyhow!("{}: frame {index}: {e}", system.frames_path.display()))?;
             let total_ms = ms_since(t0);
             if let Some(out) = &output {
                 export::write_mesh(&out.path_for(index), &surf.mesh)?;
@@ -117,6 +112,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         })();
         match row {
             Ok(row) => {
+                ok_frames += 1;
                 if let Some(stats) = stats.as_mut() {
                     stats.write_row(&row)?;
                 }
@@ -137,15 +133,20 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
 
     // Keep what the good frames produced; a run where no frame succeeded changes no file.
-    let done = stats.as_ref().map(|s| s.rows());
     if let Some(stats) = stats
         && stats.rows() > 0
     {
         stats.finish()?;
     }
-    let ok_frames = done.unwrap_or(frames.len());
     if let Some(err) = failure {
-        return Err(err);
+        if ok_frames == 0 {
+            return Err(err);
+        }
+        let kept = match (&output, &args.stats) {
+            (None, None) => "",
+            _ => " and written",
+        };
+        bail!("{err:#} (the {ok_frames} frame(s) before it were processed{kept})");
     }
     if !args.quiet || bar.is_some() {
         let secs = t_all.elapsed().as_secs_f64();
@@ -196,7 +197,11 @@ fn check_parent_dir(path: &Path) -> Result<()> {
     if let Some(dir) = dir
         && !dir.is_dir()
     {
-        bail!("cannot write {}: directory {} does not exist", path.display(), dir.display());
+        bail!(
+            "cannot write {}: directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
     }
     Ok(())
 }
@@ -236,7 +241,12 @@ impl OutputPattern {
                             anyhow!("-o {raw}: use {{frame}} or {{frame:0N}}, e.g. {{frame:04}}")
                         })?,
                 };
-                (raw[..at].to_string(), raw[close + 1..].to_string(), width, true)
+                (
+                    raw[..at].to_string(),
+                    raw[close + 1..].to_string(),
+                    width,
+                    true,
+                )
             }
         };
         if suffix.contains("{frame") {

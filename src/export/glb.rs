@@ -103,7 +103,16 @@ fn build(mesh: &Mesh) -> io::Result<(json::Root, Vec<u8>)> {
     section(&mut bin, &mut |b| {
         for i in 0..n {
             let c = mesh.colours.get(i).copied().unwrap_or([1.0; 3]);
-            push_f32s(b, c.map(|x| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 }));
+            push_f32s(
+                b,
+                c.map(|x| {
+                    if x.is_finite() {
+                        x.clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    }
+                }),
+            );
         }
     });
     section(&mut bin, &mut |b| {

@@ -120,7 +120,11 @@ pub fn write_mesh(path: &Path, mesh: &Mesh) -> Result<(), ExportError> {
 
 /// Encodes a linear RGB component in 0..1 as an 8-bit sRGB value.
 pub fn linear_to_srgb8(c: f32) -> u8 {
-    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
+    let c = if c.is_finite() {
+        c.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let s = if c <= 0.003_130_8 {
         12.92 * c
     } else {

@@ -11,7 +11,10 @@ use crate::surface::Mesh;
 
 /// Writes `mesh` as OBJ. Missing normals or colours are written as zero normals and white.
 pub fn write_obj(w: &mut dyn Write, mesh: &Mesh) -> io::Result<()> {
-    writeln!(w, "# mdsurf Gaussian density surface, positions in angstrom")?;
+    writeln!(
+        w,
+        "# mdsurf Gaussian density surface, positions in angstrom"
+    )?;
     writeln!(
         w,
         "# {} vertices, {} triangles",

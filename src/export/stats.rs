@@ -98,7 +98,8 @@ impl StatsWriter {
     /// Appends one row.
     pub fn write_row(&mut self, row: &StatsRow) -> Result<(), ExportError> {
         let line = row.fields().join(",");
-        writeln!(self.file.writer(), "{line}").map_err(|e| ExportError::io(self.file.target(), e))?;
+        writeln!(self.file.writer(), "{line}")
+            .map_err(|e| ExportError::io(self.file.target(), e))?;
         self.rows += 1;
         Ok(())
     }

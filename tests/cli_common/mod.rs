@@ -20,7 +20,11 @@ pub struct Run {
 impl Run {
     /// The last non-empty line of stderr.
     pub fn last_line(&self) -> &str {
-        self.stderr.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("")
+        self.stderr
+            .lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("")
     }
 }
 
@@ -89,7 +93,13 @@ impl Csv {
             .unwrap_or_else(|| panic!("no column {name} in {:?}", self.columns));
         self.rows
             .iter()
-            .map(|r| if r[i].is_empty() { f64::NAN } else { r[i].parse().unwrap() })
+            .map(|r| {
+                if r[i].is_empty() {
+                    f64::NAN
+                } else {
+                    r[i].parse().unwrap()
+                }
+            })
             .collect()
     }
 }
@@ -105,7 +115,10 @@ pub fn read_ply_counts(path: &Path) -> (usize, usize, usize) {
         .expect("PLY without end_header")
         + end.len();
     let header = std::str::from_utf8(&bytes[..header_len]).unwrap();
-    assert!(header.starts_with("ply\nformat binary_little_endian 1.0\n"), "{header}");
+    assert!(
+        header.starts_with("ply\nformat binary_little_endian 1.0\n"),
+        "{header}"
+    );
     let count = |element: &str| -> usize {
         header
             .lines()
@@ -115,7 +128,12 @@ pub fn read_ply_counts(path: &Path) -> (usize, usize, usize) {
             .unwrap()
     };
     let (v, f) = (count("vertex"), count("face"));
-    assert_eq!(bytes.len(), header_len + 27 * v + 13 * f, "{}", path.display());
+    assert_eq!(
+        bytes.len(),
+        header_len + 27 * v + 13 * f,
+        "{}",
+        path.display()
+    );
     (v, f, header_len)
 }
 
