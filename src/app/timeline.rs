@@ -146,20 +146,20 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
     let mut out = Vec::new();
     let mut cmd = |c: TimelineCmd| out.push(Command::Timeline(c));
     ui.horizontal(|ui| {
-        if ui.button("⏮").on_hover_text("first frame").clicked() {
+        if ui.button("|<").on_hover_text("first frame").clicked() {
             cmd(TimelineCmd::First);
         }
-        if ui.button("⏴").on_hover_text("step back").clicked() {
+        if ui.button("<").on_hover_text("step back").clicked() {
             cmd(TimelineCmd::Step(-1));
         }
-        let label = if t.playing { "⏸ Pause" } else { "▶ Play" };
+        let label = if t.playing { "Pause" } else { "Play" };
         if ui.button(label).clicked() {
             cmd(TimelineCmd::SetPlaying(!t.playing));
         }
-        if ui.button("⏵").on_hover_text("step forward").clicked() {
+        if ui.button(">").on_hover_text("step forward").clicked() {
             cmd(TimelineCmd::Step(1));
         }
-        if ui.button("⏭").on_hover_text("last frame").clicked() {
+        if ui.button(">|").on_hover_text("last frame").clicked() {
             cmd(TimelineCmd::Last);
         }
         let mut f = t.current;
@@ -197,7 +197,7 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
             cmd(TimelineCmd::SetStride(stride));
         }
         let mut mode = t.end_mode;
-        egui::ComboBox::from_id_salt("end mode")
+        egui::ComboBox::from_label("at end")
             .selected_text(format!("{mode:?}"))
             .show_ui(ui, |ui| {
                 for m in [EndMode::Once, EndMode::Loop, EndMode::Bounce] {

@@ -395,7 +395,7 @@ impl eframe::App for Viewer {
             egui::Panel::top("error").show(ui, |ui| {
                 ui.horizontal(|ui| {
                     ui.colored_label(ui.visuals().error_fg_color, err);
-                    if ui.button("✖").clicked() {
+                    if ui.button("Dismiss").clicked() {
                         cmds.push(Command::DismissError);
                     }
                 });
