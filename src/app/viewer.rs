@@ -313,6 +313,13 @@ impl Viewer {
     }
 
     fn finish_script(&mut self, ctx: &egui::Context, error: Option<String>) {
+        eprintln!(
+            "scripted run: showed {} frame(s), last frame {}, engine {}{}",
+            self.script_played + 1,
+            self.core.timeline.current,
+            self.core.engine_name(),
+            error.as_deref().map_or(String::new(), |e| format!("; error: {e}"))
+        );
         if let Ok(mut r) = self.script_result.lock() {
             *r = error;
         }
