@@ -42,10 +42,22 @@ fn scripted_run_plays_frames_and_saves_a_non_uniform_screenshot() {
         .output()
         .expect("run xvfb-run");
     let log = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "mdsurf exited with {}: {log}", out.status);
-    assert!(log.contains("showed 3 frame(s), last frame 2"), "did not play 3 frames: {log}");
+    assert!(
+        out.status.success(),
+        "mdsurf exited with {}: {log}",
+        out.status
+    );
+    assert!(
+        log.contains("showed 3 frame(s), last frame 2"),
+        "did not play 3 frames: {log}"
+    );
     let image = RgbaImage::read_png(&shot).unwrap_or_else(|e| panic!("{e}; log: {log}"));
-    assert!(image.width >= 200 && image.height >= 200, "{}x{}", image.width, image.height);
+    assert!(
+        image.width >= 200 && image.height >= 200,
+        "{}x{}",
+        image.width,
+        image.height
+    );
     let colours = image.distinct_colours();
     assert!(colours > 500, "screenshot looks blank: {colours} colours");
     let centre = image.pixel(image.width / 2, image.height / 2);

@@ -27,7 +27,9 @@ fn octahedron() -> Mesh {
             }
         }
     }
-    let colours = (0..6).map(|i| [i as f32 / 5.0, 1.0 - i as f32 / 5.0, 0.25]).collect();
+    let colours = (0..6)
+        .map(|i| [i as f32 / 5.0, 1.0 - i as f32 / 5.0, 0.25])
+        .collect();
     Mesh {
         normals: positions.clone(),
         positions,
@@ -73,7 +75,10 @@ fn ply_is_binary_little_endian_with_normals_and_colours() {
     let end = b"end_header\n";
     let header_len = bytes.windows(end.len()).position(|w| w == end).unwrap() + end.len();
     let header = std::str::from_utf8(&bytes[..header_len]).unwrap();
-    let lines: Vec<&str> = header.lines().filter(|l| !l.starts_with("comment")).collect();
+    let lines: Vec<&str> = header
+        .lines()
+        .filter(|l| !l.starts_with("comment"))
+        .collect();
     assert_eq!(
         lines,
         [
@@ -166,7 +171,13 @@ fn stl_is_binary_with_outward_unit_face_normals() {
     assert_eq!(bytes.len(), 84 + 8 * 50);
     let mut tris = Vec::new();
     for r in bytes[84..].chunks_exact(50) {
-        let v = |k: usize| Vec3::new(f32_at(r, k * 12), f32_at(r, k * 12 + 4), f32_at(r, k * 12 + 8));
+        let v = |k: usize| {
+            Vec3::new(
+                f32_at(r, k * 12),
+                f32_at(r, k * 12 + 4),
+                f32_at(r, k * 12 + 8),
+            )
+        };
         let (n, a, b, c) = (v(0), v(1), v(2), v(3));
         assert!((n.length() - 1.0).abs() < 1e-5);
         assert!(n.dot((a + b + c) / 3.0) > 0.0, "normal points inward");
@@ -216,15 +227,23 @@ fn glb_parses_validates_and_holds_the_mesh() {
     };
     let pos = accessor(gltf_json::mesh::Semantic::Positions);
     assert_eq!(pos.count.0, 6);
-    assert_eq!(pos.min.as_ref().unwrap(), &gltf_json::Value::from(vec![-1.0, -1.0, -1.0]));
+    assert_eq!(
+        pos.min.as_ref().unwrap(),
+        &gltf_json::Value::from(vec![-1.0, -1.0, -1.0])
+    );
     assert_eq!(read_vec3s(pos), mesh.positions);
-    assert_eq!(read_vec3s(accessor(gltf_json::mesh::Semantic::Normals)), mesh.normals);
+    assert_eq!(
+        read_vec3s(accessor(gltf_json::mesh::Semantic::Normals)),
+        mesh.normals
+    );
     let colours = read_vec3s(accessor(gltf_json::mesh::Semantic::Colors(0)));
     assert_eq!(colours[5].to_array(), mesh.colours[5]);
     let idx = &root.accessors[prim.indices.unwrap().value()];
     let view = &root.buffer_views[idx.buffer_view.unwrap().value()];
     let off = view.byte_offset.map_or(0, |o| o.0 as usize);
-    let indices: Vec<u32> = (0..idx.count.0 as usize).map(|i| u32_at(bin, off + 4 * i)).collect();
+    let indices: Vec<u32> = (0..idx.count.0 as usize)
+        .map(|i| u32_at(bin, off + 4 * i))
+        .collect();
     assert_eq!(indices, mesh.indices);
 }
 

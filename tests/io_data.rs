@@ -9,7 +9,11 @@ const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/");
 
 fn data(name: &str) -> PathBuf {
     let path = Path::new(DATA).join(name);
-    assert!(path.is_file(), "test data {} is missing (see ../shared/data/README.md)", path.display());
+    assert!(
+        path.is_file(),
+        "test data {} is missing (see ../shared/data/README.md)",
+        path.display()
+    );
     path
 }
 
@@ -36,8 +40,14 @@ fn check(top: &str, traj: Option<&str>, atoms: usize, frames: usize) -> Trajecto
     }
     let top = t.topology();
     assert_eq!(top.radii.len(), atoms);
-    assert!(top.radii.iter().all(|&r| r > 0.0 && r < 5.0), "radii out of range");
-    assert!(t.read_frame(frames).is_err(), "frame past the end must fail");
+    assert!(
+        top.radii.iter().all(|&r| r > 0.0 && r < 5.0),
+        "radii out of range"
+    );
+    assert!(
+        t.read_frame(frames).is_err(),
+        "frame past the end must fail"
+    );
     t
 }
 
@@ -48,7 +58,10 @@ fn rhodopsin_gro_xtc() {
     assert!(f.time_ps.is_some(), "XTC frames carry a time");
     assert!(f.cell.is_some(), "XTC frames carry a box");
     let top = t.topology();
-    assert!(top.elements.iter().all(|e| !e.is_empty()), "every protein atom gets an element");
+    assert!(
+        top.elements.iter().all(|e| !e.is_empty()),
+        "every protein atom gets an element"
+    );
     assert!(top.elements.iter().any(|e| e == "H"));
 }
 
@@ -61,7 +74,11 @@ fn adk_pdb_dcd() {
     let cd: Vec<usize> = (0..top.len()).filter(|&i| top.names[i] == "CD").collect();
     assert!(!cd.is_empty());
     for i in cd {
-        assert_eq!(top.elements[i], "C", "CD in {} must be carbon", top.residue_names[i]);
+        assert_eq!(
+            top.elements[i], "C",
+            "CD in {} must be carbon",
+            top.residue_names[i]
+        );
         assert_eq!(top.radii[i], 1.5);
     }
 }
@@ -75,7 +92,11 @@ fn adk_pdb_alone() {
 fn adk_water_box_gro_xtc() {
     let t = check("adk_oplsaa.gro", Some("adk_oplsaa.xtc"), 47681, 10);
     let top = t.topology();
-    let ow = top.names.iter().position(|n| n == "OW").expect("water oxygen");
+    let ow = top
+        .names
+        .iter()
+        .position(|n| n == "OW")
+        .expect("water oxygen");
     assert_eq!(top.elements[ow], "O");
     assert_eq!(top.radii[ow], 1.3);
 }
@@ -91,10 +112,20 @@ fn hiv_protease_wwpdb() {
     let t = check("1hpv.pdb", None, 1631, 1);
     let top = t.topology();
     let chains: std::collections::BTreeSet<&str> = top.chains.iter().map(String::as_str).collect();
-    assert!(chains.contains("A") && chains.contains("B"), "chains {chains:?}");
+    assert!(
+        chains.contains("A") && chains.contains("B"),
+        "chains {chains:?}"
+    );
     let b_lo = top.b_factors.iter().copied().fold(f32::INFINITY, f32::min);
-    let b_hi = top.b_factors.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-    assert!(b_hi > b_lo && b_lo >= 0.0, "B-factors read from the file: {b_lo}..{b_hi}");
+    let b_hi = top
+        .b_factors
+        .iter()
+        .copied()
+        .fold(f32::NEG_INFINITY, f32::max);
+    assert!(
+        b_hi > b_lo && b_lo >= 0.0,
+        "B-factors read from the file: {b_lo}..{b_hi}"
+    );
     assert!(top.elements.iter().all(|e| !e.is_empty()));
 }
 
@@ -102,8 +133,14 @@ fn hiv_protease_wwpdb() {
 fn martini_beads_get_bead_radius() {
     let t = check("martini_dppc_chol_bilayer.gro", None, 5040, 1);
     let top = t.topology();
-    assert!(top.radii.iter().all(|&r| (r - 2.35).abs() < 1e-6), "Martini beads are 2.35 Å");
-    assert!(top.elements.iter().all(String::is_empty), "beads have no element");
+    assert!(
+        top.radii.iter().all(|&r| (r - 2.35).abs() < 1e-6),
+        "Martini beads are 2.35 Å"
+    );
+    assert!(
+        top.elements.iter().all(String::is_empty),
+        "beads have no element"
+    );
 }
 
 #[test]

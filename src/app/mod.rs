@@ -56,13 +56,38 @@ pub enum ViewError {
     Script(String),
 }
 
-/// The surface engine for the window: the CPU reference engine (the GPU engine shares eframe's
-/// device once available).
-fn make_engine(
-    _state: Option<&egui_wgpu::RenderState>,
-    _cpu: bool,
-) -> Box<dyn SurfaceEngine + Send> {
-    Box::new(crate::surface::CpuEngine::new())
+/// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
+/// device is opened), else the CPU reference engine (`cpu` forces it).
+fn make_engine(state: Option<&egui_wgpu::RenderState>, cpu: bool) -> Box<dyn SurfaceEngine + Send> {
+    match state {
+        Some(s) if !cpu => Box::new(crate::gpu::GpuEngine::from_device(
+            s.device.clone(),
+            s.queue.clone(),
+        )),
+        _ => Box::new(crate::surface::CpuEngine::new()),
+    }
+}
+
+/// eframe's device asks for the limits and features the GPU surface engine needs (the adapter's
+/// buffer sizes, 16 storage buffers per stage, timestamps when offered), so the engine and the
+/// renderer share one device.
+fn wgpu_options() -> egui_wgpu::WgpuConfiguration {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.power_preference = wgpu::PowerPreference::HighPerformance;
+    setup.device_descriptor = Arc::new(|adapter: &wgpu::Adapter| {
+        let mut limits = crate::gpu::GpuContext::wanted_limits(&adapter.limits());
+        limits.max_texture_dimension_2d = adapter.limits().max_texture_dimension_2d;
+        wgpu::DeviceDescriptor {
+            label: Some("mdsurf viewer"),
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            required_limits: limits,
+            ..Default::default()
+        }
+    });
+    egui_wgpu::WgpuConfiguration {
+        wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup),
+        ..Default::default()
+    }
 }
 
 /// Opens the viewer window and runs it until it is closed.
@@ -85,6 +110,7 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
             .with_inner_size([1400.0, 900.0])
             .with_drag_and_drop(true),
         renderer: eframe::Renderer::Wgpu,
+        wgpu_options: wgpu_options(),
         ..Default::default()
     };
     let script_result = result.clone();

@@ -318,7 +318,9 @@ impl Viewer {
             self.script_played + 1,
             self.core.timeline.current,
             self.core.engine_name(),
-            error.as_deref().map_or(String::new(), |e| format!("; error: {e}"))
+            error
+                .as_deref()
+                .map_or(String::new(), |e| format!("; error: {e}"))
         );
         if let Ok(mut r) = self.script_result.lock() {
             *r = error;
