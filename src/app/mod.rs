@@ -90,6 +90,30 @@ fn wgpu_options() -> egui_wgpu::WgpuConfiguration {
     }
 }
 
+/// Builds the viewer inside eframe (or an egui_kittest harness): engine, worker, GPU view, and
+/// the first load of `top` (+ `traj`).
+pub fn create_viewer(
+    cc: &eframe::CreationContext<'_>,
+    options: &ViewOptions,
+    script_result: viewer::ScriptResult,
+    top: PathBuf,
+    traj: Option<PathBuf>,
+) -> Viewer {
+    let state = cc.wgpu_render_state.as_ref();
+    let ctx = cc.egui_ctx.clone();
+    let worker = worker::Worker::spawn(
+        make_engine(state, options.cpu),
+        Box::new(move || ctx.request_repaint()),
+    );
+    let mut core = AppCore::new(worker);
+    core.params = options.params;
+    core.options = options.particles.clone();
+    let gpu = state.map(viewport::GpuView::new);
+    let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
+    viewer.open(&cc.egui_ctx, top, traj);
+    viewer
+}
+
 /// Opens the viewer window and runs it until it is closed.
 pub fn run(options: ViewOptions) -> Result<(), ViewError> {
     if cfg!(target_os = "linux")
@@ -118,19 +142,13 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
         "mdsurf",
         native,
         Box::new(move |cc| {
-            let state = cc.wgpu_render_state.as_ref();
-            let ctx = cc.egui_ctx.clone();
-            let worker = worker::Worker::spawn(
-                make_engine(state, options.cpu),
-                Box::new(move || ctx.request_repaint()),
-            );
-            let mut core = AppCore::new(worker);
-            core.params = options.params;
-            core.options = options.particles.clone();
-            let gpu = state.map(viewport::GpuView::new);
-            let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
-            viewer.open(&cc.egui_ctx, top, traj);
-            Ok(Box::new(viewer))
+            Ok(Box::new(create_viewer(
+                cc,
+                &options,
+                script_result,
+                top,
+                traj,
+            )))
         }),
     );
     run.map_err(|e| ViewError::NoDisplay(e.to_string()))?;

@@ -164,7 +164,7 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
         }
         let mut f = t.current;
         let max = t.len.saturating_sub(1).max(1);
-        ui.spacing_mut().slider_width = (ui.available_width() - 420.0).max(120.0);
+        ui.spacing_mut().slider_width = (ui.available_width() - 560.0).max(100.0);
         if ui
             .add(egui::Slider::new(&mut f, 0..=max).text("frame"))
             .changed()

@@ -81,6 +81,11 @@ impl Viewer {
         }
     }
 
+    /// The state behind the window (for tests).
+    pub fn core(&self) -> &AppCore {
+        &self.core
+    }
+
     /// Starts loading `top` (+ `traj`) on a background thread; the current data stays until it
     /// succeeds.
     pub fn open(&mut self, ctx: &egui::Context, top: PathBuf, traj: Option<PathBuf>) {
