@@ -56,13 +56,62 @@ pub enum ViewError {
     Script(String),
 }
 
-/// The surface engine for the window: the CPU reference engine (the GPU engine shares eframe's
-/// device once available).
-fn make_engine(
-    _state: Option<&egui_wgpu::RenderState>,
-    _cpu: bool,
-) -> Box<dyn SurfaceEngine + Send> {
-    Box::new(crate::surface::CpuEngine::new())
+/// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
+/// device is opened), else the CPU reference engine (`cpu` forces it).
+fn make_engine(state: Option<&egui_wgpu::RenderState>, cpu: bool) -> Box<dyn SurfaceEngine + Send> {
+    match state {
+        Some(s) if !cpu => Box::new(crate::gpu::GpuEngine::from_device(
+            s.device.clone(),
+            s.queue.clone(),
+        )),
+        _ => Box::new(crate::surface::CpuEngine::new()),
+    }
+}
+
+/// eframe's device asks for the limits and features the GPU surface engine needs (the adapter's
+/// buffer sizes, 16 storage buffers per stage, timestamps when offered), so the engine and the
+/// renderer share one device.
+fn wgpu_options() -> egui_wgpu::WgpuConfiguration {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.power_preference = wgpu::PowerPreference::HighPerformance;
+    setup.device_descriptor = Arc::new(|adapter: &wgpu::Adapter| {
+        let mut limits = crate::gpu::GpuContext::wanted_limits(&adapter.limits());
+        limits.max_texture_dimension_2d = adapter.limits().max_texture_dimension_2d;
+        wgpu::DeviceDescriptor {
+            label: Some("mdsurf viewer"),
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            required_limits: limits,
+            ..Default::default()
+        }
+    });
+    egui_wgpu::WgpuConfiguration {
+        wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup),
+        ..Default::default()
+    }
+}
+
+/// Builds the viewer inside eframe (or an egui_kittest harness): engine, worker, GPU view, and
+/// the first load of `top` (+ `traj`).
+pub fn create_viewer(
+    cc: &eframe::CreationContext<'_>,
+    options: &ViewOptions,
+    script_result: viewer::ScriptResult,
+    top: PathBuf,
+    traj: Option<PathBuf>,
+) -> Viewer {
+    let state = cc.wgpu_render_state.as_ref();
+    let ctx = cc.egui_ctx.clone();
+    let worker = worker::Worker::spawn(
+        make_engine(state, options.cpu),
+        Box::new(move || ctx.request_repaint()),
+    );
+    let mut core = AppCore::new(worker);
+    core.params = options.params;
+    core.options = options.particles.clone();
+    let gpu = state.map(viewport::GpuView::new);
+    let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
+    viewer.open(&cc.egui_ctx, top, traj);
+    viewer
 }
 
 /// Opens the viewer window and runs it until it is closed.
@@ -85,6 +134,7 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
             .with_inner_size([1400.0, 900.0])
             .with_drag_and_drop(true),
         renderer: eframe::Renderer::Wgpu,
+        wgpu_options: wgpu_options(),
         ..Default::default()
     };
     let script_result = result.clone();
@@ -92,19 +142,13 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
         "mdsurf",
         native,
         Box::new(move |cc| {
-            let state = cc.wgpu_render_state.as_ref();
-            let ctx = cc.egui_ctx.clone();
-            let worker = worker::Worker::spawn(
-                make_engine(state, options.cpu),
-                Box::new(move || ctx.request_repaint()),
-            );
-            let mut core = AppCore::new(worker);
-            core.params = options.params;
-            core.options = options.particles.clone();
-            let gpu = state.map(viewport::GpuView::new);
-            let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
-            viewer.open(&cc.egui_ctx, top, traj);
-            Ok(Box::new(viewer))
+            Ok(Box::new(create_viewer(
+                cc,
+                &options,
+                script_result,
+                top,
+                traj,
+            )))
         }),
     );
     run.map_err(|e| ViewError::NoDisplay(e.to_string()))?;

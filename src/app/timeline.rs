@@ -146,25 +146,25 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
     let mut out = Vec::new();
     let mut cmd = |c: TimelineCmd| out.push(Command::Timeline(c));
     ui.horizontal(|ui| {
-        if ui.button("⏮").on_hover_text("first frame").clicked() {
+        if ui.button("|<").on_hover_text("first frame").clicked() {
             cmd(TimelineCmd::First);
         }
-        if ui.button("⏴").on_hover_text("step back").clicked() {
+        if ui.button("<").on_hover_text("step back").clicked() {
             cmd(TimelineCmd::Step(-1));
         }
-        let label = if t.playing { "⏸ Pause" } else { "▶ Play" };
+        let label = if t.playing { "Pause" } else { "Play" };
         if ui.button(label).clicked() {
             cmd(TimelineCmd::SetPlaying(!t.playing));
         }
-        if ui.button("⏵").on_hover_text("step forward").clicked() {
+        if ui.button(">").on_hover_text("step forward").clicked() {
             cmd(TimelineCmd::Step(1));
         }
-        if ui.button("⏭").on_hover_text("last frame").clicked() {
+        if ui.button(">|").on_hover_text("last frame").clicked() {
             cmd(TimelineCmd::Last);
         }
         let mut f = t.current;
         let max = t.len.saturating_sub(1).max(1);
-        ui.spacing_mut().slider_width = (ui.available_width() - 420.0).max(120.0);
+        ui.spacing_mut().slider_width = (ui.available_width() - 560.0).max(100.0);
         if ui
             .add(egui::Slider::new(&mut f, 0..=max).text("frame"))
             .changed()
@@ -197,7 +197,7 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
             cmd(TimelineCmd::SetStride(stride));
         }
         let mut mode = t.end_mode;
-        egui::ComboBox::from_id_salt("end mode")
+        egui::ComboBox::from_label("at end")
             .selected_text(format!("{mode:?}"))
             .show_ui(ui, |ui| {
                 for m in [EndMode::Once, EndMode::Loop, EndMode::Bounce] {

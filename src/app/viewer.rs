@@ -81,6 +81,11 @@ impl Viewer {
         }
     }
 
+    /// The state behind the window (for tests).
+    pub fn core(&self) -> &AppCore {
+        &self.core
+    }
+
     /// Starts loading `top` (+ `traj`) on a background thread; the current data stays until it
     /// succeeds.
     pub fn open(&mut self, ctx: &egui::Context, top: PathBuf, traj: Option<PathBuf>) {
@@ -313,6 +318,15 @@ impl Viewer {
     }
 
     fn finish_script(&mut self, ctx: &egui::Context, error: Option<String>) {
+        eprintln!(
+            "scripted run: showed {} frame(s), last frame {}, engine {}{}",
+            self.script_played + 1,
+            self.core.timeline.current,
+            self.core.engine_name(),
+            error
+                .as_deref()
+                .map_or(String::new(), |e| format!("; error: {e}"))
+        );
         if let Ok(mut r) = self.script_result.lock() {
             *r = error;
         }
@@ -395,7 +409,7 @@ impl eframe::App for Viewer {
             egui::Panel::top("error").show(ui, |ui| {
                 ui.horizontal(|ui| {
                     ui.colored_label(ui.visuals().error_fg_color, err);
-                    if ui.button("✖").clicked() {
+                    if ui.button("Dismiss").clicked() {
                         cmds.push(Command::DismissError);
                     }
                 });
