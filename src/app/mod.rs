@@ -59,13 +59,13 @@ pub enum ViewError {
 /// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
 /// device is opened), else the CPU reference engine (`cpu` forces it).
 fn make_engine(state: Option<&egui_wgpu::RenderState>, cpu: bool) -> Box<dyn SurfaceEngine + Send> {
-    match state {
-        Some(s) if !cpu => Box::new(crate::gpu::GpuEngine::from_device(
-            s.device.clone(),
-            s.queue.clone(),
-        )),
-        _ => Box::new(crate::surface::CpuEngine::new()),
+    if let Some(s) = state.filter(|_| !cpu) {
+        match crate::gpu::GpuEngine::from_device(s.device.clone(), s.queue.clone()) {
+            Ok(engine) => return Box::new(engine),
+            Err(err) => eprintln!("GPU surface engine unavailable ({err}); using the CPU engine"),
+        }
     }
+    Box::new(crate::surface::CpuEngine::new())
 }
 
 /// eframe's device asks for the limits and features the GPU surface engine needs (the adapter's
