@@ -1,7 +1,8 @@
 //! `mdsurf surface --backend gpu` on a small real protein gives the same statistics as
 //! `--backend cpu` (issue 3 section 2: same outputs and columns on every backend; tolerances of
-//! section 3). Without an adapter the test returns with a note, except under `REQUIRE_GPU=1`,
-//! where a missing adapter fails it.
+//! section 3), and `--backend auto` says on stderr which engine it used. Without an adapter the
+//! test checks that `auto` falls back to the CPU and returns with a note, except under
+//! `REQUIRE_GPU=1`, where a missing adapter fails it.
 
 mod cli_common;
 
@@ -33,6 +34,9 @@ fn gpu_backend_matches_the_cpu_backend_on_1hpv() {
         let required = std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1");
         let no_adapter = gpu.last_line().contains("no GPU adapter");
         if no_adapter && !required {
+            let (auto, _, _) = run_on("auto");
+            assert_eq!(auto.code, 0, "{}", auto.stderr);
+            assert!(auto.stderr.contains("backend: cpu"), "{}", auto.stderr);
             eprintln!("note: no GPU adapter, skipping (set REQUIRE_GPU=1 to fail instead)");
             return;
         }
@@ -72,4 +76,12 @@ fn gpu_backend_matches_the_cpu_backend_on_1hpv() {
         (v as f64, t as f64),
         (g.col("vertices")[0], g.col("triangles")[0])
     );
+
+    // With a working GPU, auto picks it, says so, and computes the same surface.
+    let (auto, auto_csv, _) = run_on("auto");
+    assert_eq!(auto.code, 0, "{}", auto.stderr);
+    assert!(auto.stderr.contains("backend: gpu"), "{}", auto.stderr);
+    let a = Csv::read(&dir.path().join(auto_csv));
+    assert_eq!(a.col("triangles"), g.col("triangles"));
+    assert_eq!(a.col("volume_A3"), g.col("volume_A3"));
 }
