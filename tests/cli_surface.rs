@@ -6,7 +6,7 @@ mod cli_common;
 
 use std::fs;
 
-use cli_common::{Csv, asset, data, mdsurf, read_ply_counts, read_stl, volume_of};
+use cli_common::{Csv, asset, data, mdsurf, mdsurf_env, read_ply_counts, read_stl, volume_of};
 
 /// The columns issue 2 requires, in order, at the start of the CSV.
 const REQUIRED: [&str; 11] = [
@@ -244,4 +244,44 @@ fn radius_scale_and_isovalue_move_the_surface_the_right_way() {
             "--radius", "C=2.0", "--radius", "N=2.0", "--radius", "O=2.0"
         ]) > base
     );
+}
+
+/// `--backend auto` without any adapter (wgpu restricted to DX12, which Linux builds lack) falls
+/// back to the CPU engine and says so; `--backend gpu` fails with one line instead.
+#[cfg(target_os = "linux")]
+#[test]
+fn auto_backend_falls_back_to_the_cpu_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = data("1hpv.pdb");
+    let no_gpu = [("WGPU_BACKEND", "dx12")];
+    let auto = ["surface", &pdb, "--spacing", "2", "--backend", "auto"];
+    let run = mdsurf_env(dir.path(), &auto, &no_gpu);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let line = run.stderr.lines().find(|l| l.starts_with("backend: "));
+    assert!(
+        line.is_some_and(|l| l.starts_with("backend: cpu (no usable GPU")),
+        "{}",
+        run.stderr
+    );
+    assert!(run.last_line().ends_with("on cpu"), "{}", run.stderr);
+
+    let gpu = [
+        "surface",
+        &pdb,
+        "--spacing",
+        "2",
+        "--backend",
+        "gpu",
+        "-o",
+        "g.ply",
+    ];
+    let run = mdsurf_env(dir.path(), &gpu, &no_gpu);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_eq!(run.stderr.lines().count(), 1, "{}", run.stderr);
+    assert!(
+        run.stderr.starts_with("error: --backend gpu"),
+        "{}",
+        run.stderr
+    );
+    assert!(!dir.path().join("g.ply").exists());
 }

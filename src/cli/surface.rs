@@ -38,7 +38,7 @@ pub struct SurfaceArgs {
     /// Per-frame statistics CSV (area, volume, counts, timings).
     #[arg(long, value_name = "STATS.csv")]
     pub stats: Option<PathBuf>,
-    /// Print only errors and the final line.
+    /// Print only errors (no per-frame lines, progress bar or final summary).
     #[arg(short, long)]
     pub quiet: bool,
 }

@@ -30,10 +30,16 @@ impl Run {
 
 /// Runs `mdsurf ARGS` in `dir`.
 pub fn mdsurf(dir: &Path, args: &[&str]) -> Run {
+    mdsurf_env(dir, args, &[])
+}
+
+/// Runs `mdsurf ARGS` in `dir` with extra environment variables.
+pub fn mdsurf_env(dir: &Path, args: &[&str], env: &[(&str, &str)]) -> Run {
     let out = Command::new(env!("CARGO_BIN_EXE_mdsurf"))
         .args(args)
         .current_dir(dir)
         .env_remove("RUST_BACKTRACE")
+        .envs(env.iter().copied())
         .output()
         .expect("cannot start the mdsurf binary");
     Run {
