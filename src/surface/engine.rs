@@ -16,6 +16,59 @@ pub struct AtomSet<'a> {
     pub colours: Option<&'a [[f32; 3]]>,
 }
 
+impl AtomSet<'_> {
+    /// Number of atoms.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// True when there are no atoms.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Checks the atoms: at least one, equal slice lengths, finite coordinates (Å), positive
+    /// finite radii (Å) and finite colours.
+    pub fn validate(&self) -> Result<(), SurfaceError> {
+        let n = self.positions.len();
+        if n == 0 {
+            return Err(SurfaceError::EmptySystem);
+        }
+        if self.radii.len() != n {
+            return Err(SurfaceError::LengthMismatch {
+                what: "radii",
+                expected: n,
+                got: self.radii.len(),
+            });
+        }
+        if let Some(c) = self.colours
+            && c.len() != n
+        {
+            return Err(SurfaceError::LengthMismatch {
+                what: "colours",
+                expected: n,
+                got: c.len(),
+            });
+        }
+        if let Some(atom) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(SurfaceError::NonFiniteCoordinate { atom });
+        }
+        if let Some(atom) = self.radii.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+            return Err(SurfaceError::InvalidRadius {
+                atom,
+                radius: self.radii[atom],
+            });
+        }
+        if let Some(atom) = self
+            .colours
+            .and_then(|c| c.iter().position(|c| !c.iter().all(|v| v.is_finite())))
+        {
+            return Err(SurfaceError::NonFiniteColour { atom });
+        }
+        Ok(())
+    }
+}
+
 /// Wall-clock or GPU-timestamp time of each stage, in milliseconds (0 where a stage did not run).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimings {

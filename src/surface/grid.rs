@@ -55,8 +55,8 @@ impl GridSpec {
         if dims64.iter().any(|&d| d > u32::MAX as u64 / 4) {
             return Err(SurfaceError::GridTooLarge {
                 dims: dims64,
-                bytes_needed: u64::MAX,
-                bytes_available: 0,
+                bytes_needed: estimate_grid_bytes(dims64, false),
+                bytes_available: available_memory_bytes(),
             });
         }
         Ok(GridSpec {
@@ -79,6 +79,11 @@ impl GridSpec {
             .product()
     }
 
+    /// Bytes the CPU engine needs for this grid (see [`estimate_grid_bytes`]).
+    pub fn estimated_bytes(&self, with_colour: bool) -> u64 {
+        estimate_grid_bytes(self.dims.map(u64::from), with_colour)
+    }
+
     /// Linear index of sample (i, j, k), x fastest.
     pub fn index(&self, i: u32, j: u32, k: u32) -> usize {
         (i as usize) + self.dims[0] as usize * (j as usize + self.dims[1] as usize * k as usize)
@@ -88,4 +93,27 @@ impl GridSpec {
     pub fn point(&self, i: u32, j: u32, k: u32) -> Vec3 {
         self.origin + self.spacing * Vec3::new(i as f32, j as f32, k as f32)
     }
+}
+
+/// Bytes the CPU engine needs for a grid of `dims` samples: 4 per sample for the f32 density,
+/// 12 more with a colour volume, plus a quarter on top for the mesh, the atom bins and the
+/// Marching Cubes slab buffers. Saturates instead of overflowing.
+pub fn estimate_grid_bytes(dims: [u64; 3], with_colour: bool) -> u64 {
+    let voxels = dims[0].saturating_mul(dims[1]).saturating_mul(dims[2]);
+    let per_voxel = if with_colour { 16 } else { 4 };
+    let volumes = voxels.saturating_mul(per_voxel);
+    volumes.saturating_add(volumes / 4)
+}
+
+/// Memory the engine may use in bytes: `MemAvailable` from `/proc/meminfo` on Linux, else
+/// `u64::MAX` (no limit known).
+pub fn available_memory_bytes() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kib.saturating_mul(1024))
+        })
+        .unwrap_or(u64::MAX)
 }

@@ -2,14 +2,21 @@
 //! volumes, Marching Cubes, area and volume (DESIGN section 2). The GPU engine in [`crate::gpu`]
 //! is tested against this module.
 
+pub mod bin;
+pub mod cpu;
+pub mod density;
 pub mod engine;
 pub mod grid;
+pub mod marching_cubes;
+pub mod mc_vertex;
 pub mod mesh;
 pub mod params;
 pub mod tables;
 
+pub use cpu::CpuEngine;
+pub use density::DensityVolume;
 pub use engine::{AtomSet, StageTimings, SurfaceEngine, SurfaceOutput};
-pub use grid::GridSpec;
+pub use grid::{GridSpec, available_memory_bytes, estimate_grid_bytes};
 pub use mesh::Mesh;
 pub use params::{Quality, SurfaceParams};
 pub use tables::McTables;
@@ -42,6 +49,25 @@ pub enum SurfaceError {
         /// Its radius in Å.
         radius: f32,
     },
+    /// The per-atom slices have different lengths.
+    #[error("{got} {what} given for {expected} atoms")]
+    LengthMismatch {
+        /// Which slice (`radii`, `colours`).
+        what: &'static str,
+        /// Number of atoms (positions).
+        expected: usize,
+        /// Length of the slice.
+        got: usize,
+    },
+    /// An atom had a NaN or infinite colour component.
+    #[error("atom {atom} has a NaN or infinite colour")]
+    NonFiniteColour {
+        /// Index of the atom (from 0).
+        atom: usize,
+    },
+    /// The GPU engine failed (no adapter, device lost, readback failed, too large).
+    #[error("{0}")]
+    Gpu(String),
     /// The grid would not fit in memory.
     #[error(
         "a {}x{}x{} grid needs {:.1} GB but only {:.1} GB is available; use a larger grid spacing H",

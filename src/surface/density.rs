@@ -1,0 +1,248 @@
+//! Stage 2 of the CPU engine (the paper's `t_d`): the Gaussian density volume and, when the atoms
+//! carry colours, the colour volume, sampled on a [`GridSpec`] (DESIGN section 2).
+//!
+//! Data flow: [`AtomBins`] (from [`super::bin`]) -> [`DensityVolume`] -> Marching Cubes
+//! ([`super::marching_cubes`]).
+//!
+//! Definitions: `rho(x) = sum_i exp(-|x - p_i|^2 / (2 alpha_i^2))` over the atoms with
+//! `|x - p_i|^2 < (q alpha_i)^2` (the per-pair cutoff, tested before the exponential), and
+//! `c(x) = sum_i w_i(x) colour_i / I` with the same weights. The exponential is evaluated per
+//! axis (`exp(-k d^2) = exp(-k dx^2) exp(-k dy^2) exp(-k dz^2)`), which matches the direct formula
+//! to a few f32 ulps; the cutoff test uses the full `d^2 = (dx^2 + dy^2) + dz^2`.
+//!
+//! Parallelism: rayon over z-slabs of the grid; each slab sums the atoms that reach it in
+//! canonical order (see [`super::bin`]), so every voxel's sum is the same for any permutation of
+//! the input, any slab size and any thread count.
+
+use rayon::prelude::*;
+
+use super::bin::{AtomBins, bin_atoms, sample_range};
+use super::{AtomSet, GridSpec, SurfaceError, SurfaceParams};
+
+/// The sampled density and (optionally) colour volume of one surface.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DensityVolume {
+    /// Density per grid sample (dimensionless), x fastest (see [`GridSpec::index`]).
+    pub values: Vec<f32>,
+    /// Colour per grid sample, `sum_i w_i colour_i / I` (linear RGB; about 0..1 on the surface),
+    /// present only when the atoms carry colours.
+    pub colours: Option<Vec<[f32; 3]>>,
+}
+
+/// Density (and colour volume when `atoms.colours` is set) of `atoms` on `grid` under `params`.
+///
+/// `grid` is normally [`GridSpec::for_atoms`] of the same atoms, but any grid works (atoms
+/// outside it simply contribute where they reach). Fails on bad parameters or atoms
+/// (see [`AtomSet::validate`]).
+pub fn compute(
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+    grid: &GridSpec,
+) -> Result<DensityVolume, SurfaceError> {
+    params.validate()?;
+    atoms.validate()?;
+    let planes = slab_planes(grid);
+    let bins = bin_atoms(atoms, params, grid, planes);
+    Ok(compute_binned(&bins, params, grid, atoms.colours.is_some()))
+}
+
+/// Grid planes per density slab: about eight slabs per thread for load balance, at least two
+/// planes each.
+pub fn slab_planes(grid: &GridSpec) -> u32 {
+    let threads = rayon::current_num_threads().max(1) as u32;
+    (grid.dims[2] / (8 * threads)).clamp(2, 64)
+}
+
+/// Density (and colour volume when `with_colour`) from atoms already binned for `grid`.
+/// Colours come from [`super::bin::PreparedAtom::colour`].
+pub fn compute_binned(
+    bins: &AtomBins,
+    params: &SurfaceParams,
+    grid: &GridSpec,
+    with_colour: bool,
+) -> DensityVolume {
+    let [nx, ny, nz] = grid.dims.map(|d| d as usize);
+    let plane = nx * ny;
+    let slab_len = plane * bins.slab_planes as usize;
+    let total = plane * nz;
+    if total == 0 {
+        return DensityVolume {
+            values: Vec::new(),
+            colours: with_colour.then(Vec::new),
+        };
+    }
+    let mut values = vec![0.0f32; total];
+    let mut colours = with_colour.then(|| vec![[0.0f32; 3]; total]);
+    let inv_iso = 1.0 / params.isovalue;
+    match colours.as_mut() {
+        None => values
+            .par_chunks_mut(slab_len)
+            .enumerate()
+            .for_each(|(s, vals)| fill_slab(bins, grid, s, vals, None)),
+        Some(cols) => values
+            .par_chunks_mut(slab_len)
+            .zip(cols.par_chunks_mut(slab_len))
+            .enumerate()
+            .for_each(|(s, (vals, cols))| {
+                fill_slab(bins, grid, s, vals, Some(&mut *cols));
+                for c in cols.iter_mut() {
+                    *c = c.map(|v| v * inv_iso);
+                }
+            }),
+    }
+    DensityVolume { values, colours }
+}
+
+/// Per-axis samples an atom reaches: first index, squared distances (Å²) and exponentials.
+#[derive(Default)]
+struct AxisTerms {
+    first: usize,
+    d2: Vec<f32>,
+    e: Vec<f32>,
+}
+
+impl AxisTerms {
+    /// Fills the terms for samples `lo..=hi` of an axis with origin `o` (Å), spacing `h` (Å),
+    /// atom coordinate `p` (Å) and exponent factor `k` (Å⁻²).
+    /// Samples with `d^2 >= cut2` along this axis alone are dropped from both ends: f32
+    /// addition of non-negative terms never decreases, so they fail the full cutoff test too,
+    /// and `d^2` is monotonic in `|i - p|`, so the samples kept are contiguous.
+    /// Returns false when no sample is kept.
+    #[allow(clippy::too_many_arguments)]
+    fn fill(&mut self, lo: u32, hi: u32, o: f32, h: f32, p: f32, k: f32, cut2: f32) -> bool {
+        self.d2.clear();
+        self.e.clear();
+        let mut first = None;
+        for i in lo..=hi {
+            let d = (o + h * i as f32) - p;
+            let d2 = d * d;
+            if d2 < cut2 {
+                first.get_or_insert(i);
+                self.d2.push(d2);
+            } else if first.is_some() {
+                break;
+            }
+        }
+        self.first = first.unwrap_or(lo) as usize;
+        self.e.extend(self.d2.iter().map(|&d2| (-k * d2).exp()));
+        !self.d2.is_empty()
+    }
+}
+
+/// Width of the fixed-size row kernel (samples along x).
+const LANES: usize = 16;
+
+/// The x terms of one atom padded to [`LANES`]: `d2 = +inf` and `e = 0` past its reach.
+struct Lanes {
+    d2: [f32; LANES],
+    e: [f32; LANES],
+}
+
+impl Lanes {
+    fn new(t: &AxisTerms) -> Lanes {
+        let mut l = Lanes {
+            d2: [f32::INFINITY; LANES],
+            e: [0.0; LANES],
+        };
+        l.d2[..t.d2.len()].copy_from_slice(&t.d2);
+        l.e[..t.e.len()].copy_from_slice(&t.e);
+        l
+    }
+}
+
+/// Adds every atom of slab `s` to that slab's samples (`vals`, and `cols` when colouring).
+fn fill_slab(
+    bins: &AtomBins,
+    grid: &GridSpec,
+    s: usize,
+    vals: &mut [f32],
+    mut cols: Option<&mut [[f32; 3]]>,
+) {
+    let [nx, ny, nz] = grid.dims;
+    let (o, h) = (grid.origin, grid.spacing);
+    let plane = nx as usize * ny as usize;
+    let z0 = s as u32 * bins.slab_planes;
+    let z1 = (z0 + bins.slab_planes).min(nz) - 1;
+    let (mut tx, mut ty, mut tz) = (
+        AxisTerms::default(),
+        AxisTerms::default(),
+        AxisTerms::default(),
+    );
+    for &a in bins.slab(s) {
+        let atom = &bins.atoms[a as usize];
+        let [px, py, pz] = atom.pos;
+        let (Some(rx), Some(ry), Some(rz)) = (
+            sample_range(px, atom.cut, o.x, h, nx),
+            sample_range(py, atom.cut, o.y, h, ny),
+            sample_range(pz, atom.cut, o.z, h, nz),
+        ) else {
+            continue;
+        };
+        let (k0, k1) = (rz.0.max(z0), rz.1.min(z1));
+        if k0 > k1 {
+            continue;
+        }
+        let cut2 = atom.cut2;
+        if !(tx.fill(rx.0, rx.1, o.x, h, px, atom.k, cut2)
+            && ty.fill(ry.0, ry.1, o.y, h, py, atom.k, cut2)
+            && tz.fill(k0, k1, o.z, h, pz, atom.k, cut2))
+        {
+            continue;
+        }
+        let wide = (tx.d2.len() <= LANES).then(|| Lanes::new(&tx));
+        for (kz, (&dz2, &ez)) in tz.d2.iter().zip(&tz.e).enumerate() {
+            let zoff = (tz.first + kz - z0 as usize) * plane;
+            for (jy, (&dy2, &ey)) in ty.d2.iter().zip(&ty.e).enumerate() {
+                if dy2 + dz2 >= cut2 {
+                    continue;
+                }
+                let eyz = ey * ez;
+                let row0 = zoff + (ty.first + jy) * nx as usize + tx.first;
+                if let Some(lanes) = wide.as_ref()
+                    && cols.is_none()
+                    && row0 + LANES <= vals.len()
+                {
+                    // Fixed-width path: lanes past the atom's reach (or failing the cutoff)
+                    // add exactly 0.0, which changes no sample.
+                    let out: &mut [f32; LANES] = match (&mut vals[row0..row0 + LANES]).try_into() {
+                        Ok(out) => out,
+                        Err(_) => continue,
+                    };
+                    for l in 0..LANES {
+                        let pass = (lanes.d2[l] + dy2) + dz2 < cut2;
+                        out[l] += if pass { lanes.e[l] * eyz } else { 0.0 };
+                    }
+                    continue;
+                }
+                // The samples of this row that pass the exact cutoff test are contiguous
+                // (the test is monotonic in dx^2): trim the failing ones from both ends, then
+                // add without a mask.
+                let pass = |d: f32| (d + dy2) + dz2 < cut2;
+                let mut a = 0;
+                let mut b = tx.d2.len();
+                while a < b && !pass(tx.d2[a]) {
+                    a += 1;
+                }
+                while b > a && !pass(tx.d2[b - 1]) {
+                    b -= 1;
+                }
+                let exs = &tx.e[a..b];
+                let row = row0 + a;
+                let out = &mut vals[row..row + exs.len()];
+                for (v, &ex) in out.iter_mut().zip(exs) {
+                    *v += ex * eyz;
+                }
+                if let Some(cols) = cols.as_deref_mut() {
+                    let c = atom.colour;
+                    let out = &mut cols[row..row + exs.len()];
+                    for (v, &ex) in out.iter_mut().zip(exs) {
+                        let w = ex * eyz;
+                        v[0] += w * c[0];
+                        v[1] += w * c[1];
+                        v[2] += w * c[2];
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,293 @@
+//! Stage 3 of the CPU engine (the paper's `t_MC`): Marching Cubes on a [`DensityVolume`],
+//! giving an indexed, closed [`Mesh`] with one vertex per crossed grid edge (DESIGN section 2).
+//!
+//! Data flow: [`DensityVolume`] + [`GridSpec`] + isovalue I -> [`Mesh`] -> area and volume
+//! ([`Mesh::area`], [`Mesh::volume`]), export and rendering.
+//!
+//! Conventions are those of [`super::tables`]: a sample is inside when `rho >= I`; the vertex of
+//! the edge from sample `a` to its neighbour `b = a + e_axis` belongs to `(a, axis)`.
+//!
+//! Parallelism: rayon over z-slabs of cells. A slab owns the vertices of the grid planes it
+//! starts (the last slab also owns the top plane) and numbers them plane by plane, points x
+//! fastest, axes x, y, z per point. Triangles of its top cell layer that use vertices of the next
+//! slab's first plane refer to them by that slab's own numbering (which the slab recomputes for
+//! that plane), so the merge just adds each slab's vertex offset: the result is the same as a
+//! serial pass, for any slab size or thread count. Per-edge maps exist only for two planes per
+//! slab at a time, never for the whole grid.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::mc_vertex::edge_vertex;
+use super::tables::{EDGE_CORNERS, McTables, corner_offset, edge_axis};
+use super::{DensityVolume, GridSpec, Mesh};
+
+/// Marks a slab-local vertex index that belongs to the next slab's first plane.
+const FOREIGN: u32 = 1 << 31;
+
+/// Case byte of every cell (`(nx-1) * (ny-1) * (nz-1)` entries, x fastest): bit `c` is set when
+/// corner `c` (see [`super::tables`]) has `rho >= iso`. `values` is the density on `grid`.
+pub fn classify(grid: &GridSpec, values: &[f32], iso: f32) -> Vec<u8> {
+    let [nx, ny, nz] = grid.dims.map(|d| d as usize);
+    if nx < 2 || ny < 2 || nz < 2 || values.len() < nx * ny * nz {
+        return Vec::new();
+    }
+    let (cx, cy) = (nx - 1, ny - 1);
+    let mut cases = vec![0u8; cx * cy * (nz - 1)];
+    cases
+        .par_chunks_mut(cx * cy)
+        .enumerate()
+        .for_each(|(k, out)| {
+            for j in 0..cy {
+                for i in 0..cx {
+                    let mut case = 0u8;
+                    for c in 0..8u8 {
+                        let [dx, dy, dz] = corner_offset(c).map(|d| d as usize);
+                        let p = (i + dx) + nx * ((j + dy) + ny * (k + dz));
+                        if values[p] >= iso {
+                            case |= 1 << c;
+                        }
+                    }
+                    out[i + cx * j] = case;
+                }
+            }
+        });
+    cases
+}
+
+/// The isosurface `rho = iso` of `density` sampled on `grid`: positions (Å), outward unit normals,
+/// colours (interpolated from the colour volume, white without one) and triangles wound
+/// counter-clockwise seen from outside. An empty mesh when nothing crosses the isovalue.
+pub fn extract(grid: &GridSpec, density: &DensityVolume, iso: f32) -> Mesh {
+    let [nx, ny, nz] = grid.dims.map(|d| d as usize);
+    let enough = density.values.len() >= nx * ny * nz
+        && density
+            .colours
+            .as_ref()
+            .is_none_or(|c| c.len() >= nx * ny * nz);
+    if nx < 2 || ny < 2 || nz < 2 || !enough {
+        return Mesh::default();
+    }
+    let layers = nz - 1;
+    let threads = rayon::current_num_threads().max(1);
+    let planes = (layers / (8 * threads)).clamp(1, 64);
+    let slabs = layers.div_ceil(planes);
+    let ctx = Ctx {
+        grid,
+        density,
+        iso,
+        tables: McTables::get(),
+    };
+    let parts: Vec<SlabMesh> = (0..slabs)
+        .into_par_iter()
+        .map(|s| ctx.slab(s * planes, ((s + 1) * planes).min(layers)))
+        .collect();
+    merge(parts)
+}
+
+/// What every slab reads.
+struct Ctx<'a> {
+    grid: &'a GridSpec,
+    density: &'a DensityVolume,
+    iso: f32,
+    tables: &'static McTables,
+}
+
+/// One slab's share of the mesh, vertex indices local (or [`FOREIGN`]-flagged).
+#[derive(Default)]
+struct SlabMesh {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    colours: Vec<[f32; 3]>,
+    indices: Vec<u32>,
+}
+
+/// Eight inside flags (bytes 0 or 1) starting at `q`, as one word.
+fn word(flags: &[u8], q: usize) -> u64 {
+    let mut b = [0u8; 8];
+    b.copy_from_slice(&flags[q..q + 8]);
+    u64::from_le_bytes(b)
+}
+
+/// Eight flags that are all 1.
+const ALL_ONE: u64 = 0x0101_0101_0101_0101;
+
+impl Ctx<'_> {
+    /// Inside flags (1 when `rho >= iso`) of plane `k`.
+    fn flags(&self, k: usize, out: &mut [u8]) {
+        let plane = out.len();
+        let v = &self.density.values[k * plane..(k + 1) * plane];
+        for (flag, &x) in out.iter_mut().zip(v) {
+            *flag = u8::from(x >= self.iso);
+        }
+    }
+
+    /// Cells of layers `c0..c1` (layer k lies between planes k and k + 1).
+    fn slab(&self, c0: usize, c1: usize) -> SlabMesh {
+        let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
+        let plane = nx * ny;
+        let last = c1 == nz - 1;
+        let mut out = SlabMesh::default();
+        // Inside flags of planes k, k + 1, k + 2 and edge maps of planes k, k + 1.
+        let (mut fa, mut fb, mut fc) = (vec![0u8; plane], vec![0u8; plane], vec![0u8; plane]);
+        let (mut cur, mut next) = (vec![0u32; plane * 3], vec![0u32; plane * 3]);
+        self.flags(c0, &mut fa);
+        self.flags(c0 + 1, &mut fb);
+        self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut out));
+        // Cell edge -> (plane 0 or 1, point offset within the plane, axis).
+        let edge_ref: [(usize, usize, usize); 12] = std::array::from_fn(|e| {
+            let [dx, dy, dz] = corner_offset(EDGE_CORNERS[e][0]).map(|d| d as usize);
+            (dz, dx + dy * nx, edge_axis(e as u8) as usize)
+        });
+        for k in c0..c1 {
+            let owned = k + 1 < c1 || last;
+            let up = k + 2 < nz;
+            if up {
+                self.flags(k + 2, &mut fc);
+            }
+            let emit = owned.then_some(&mut out);
+            self.plane(k + 1, &fb, up.then_some(&fc[..]), &mut next, emit);
+            let flag = if owned { 0 } else { FOREIGN };
+            let (a, b) = (&fa, &fb);
+            for j in 0..ny - 1 {
+                let r = j * nx;
+                let column = |i: usize| {
+                    let p = r + i;
+                    a[p] | a[p + nx] << 2 | b[p] << 4 | b[p + nx] << 6
+                };
+                let mut i = 0;
+                let mut left = column(0);
+                while i < nx - 1 {
+                    if i + 9 <= nx {
+                        let ws = [r + i, r + i + 1, r + nx + i, r + nx + i + 1];
+                        let (mut or, mut and) = (0u64, u64::MAX);
+                        for q in ws {
+                            for f in [a, b] {
+                                let w = word(f, q);
+                                or |= w;
+                                and &= w;
+                            }
+                        }
+                        if or == 0 || and == ALL_ONE {
+                            i += 8;
+                            left = column(i);
+                            continue;
+                        }
+                    }
+                    let right = column(i + 1);
+                    let case = left | right << 1;
+                    left = right;
+                    let p = r + i;
+                    i += 1;
+                    if case == 0 || case == 255 {
+                        continue;
+                    }
+                    for tri in self.tables.case_triangles(case) {
+                        for &e in tri {
+                            let (dz, off, axis) = edge_ref[e as usize];
+                            let idx = if dz == 0 {
+                                cur[(p + off) * 3 + axis]
+                            } else {
+                                next[(p + off) * 3 + axis] | flag
+                            };
+                            out.indices.push(idx);
+                        }
+                    }
+                }
+            }
+            std::mem::swap(&mut cur, &mut next);
+            std::mem::swap(&mut fa, &mut fb);
+            std::mem::swap(&mut fb, &mut fc);
+        }
+        out
+    }
+
+    /// Fills `map` with the index of each crossed edge starting on plane `k` (inside flags `a`,
+    /// flags of plane `k + 1` in `up` unless `k` is the top plane), numbered from the slab's
+    /// current vertex count when `emit` is given (and the vertex is appended), else from 0 (the
+    /// next slab's numbering of its first plane). Entries of uncrossed edges are left as they were.
+    fn plane(
+        &self,
+        k: usize,
+        a: &[u8],
+        up: Option<&[u8]>,
+        map: &mut [u32],
+        mut emit: Option<&mut SlabMesh>,
+    ) {
+        let [nx, ny, _] = self.grid.dims.map(|d| d as usize);
+        let mut count = emit.as_ref().map_or(0, |m| m.positions.len()) as u32;
+        for j in 0..ny {
+            let r = j * nx;
+            let mut i = 0;
+            while i < nx {
+                // Skip eight points at once when none of their x, y or z edges is crossed.
+                if i + 9 <= nx
+                    && j + 1 < ny
+                    && let Some(u) = up
+                {
+                    let w = word(a, r + i);
+                    let x = w ^ word(a, r + i + 1);
+                    let y = w ^ word(a, r + nx + i);
+                    let z = w ^ word(u, r + i);
+                    if x | y | z == 0 {
+                        i += 8;
+                        continue;
+                    }
+                }
+                let p = r + i;
+                let f = a[p];
+                let crossed = [
+                    i + 1 < nx && a[p + 1] != f,
+                    j + 1 < ny && a[p + nx] != f,
+                    up.is_some_and(|u| u[p] != f),
+                ];
+                for (axis, &c) in crossed.iter().enumerate() {
+                    if !c {
+                        continue;
+                    }
+                    map[p * 3 + axis] = count;
+                    count += 1;
+                    if let Some(m) = emit.as_deref_mut() {
+                        let vert = edge_vertex(self.grid, self.density, self.iso, [i, j, k], axis);
+                        m.positions.push(vert.position);
+                        m.normals.push(vert.normal);
+                        m.colours.push(vert.colour);
+                    }
+                }
+                i += 1;
+            }
+        }
+    }
+}
+
+/// Joins the slabs in order, turning local indices into global ones.
+fn merge(parts: Vec<SlabMesh>) -> Mesh {
+    let mut offsets = Vec::with_capacity(parts.len() + 1);
+    let mut total = 0u32;
+    for p in &parts {
+        offsets.push(total);
+        total += p.positions.len() as u32;
+    }
+    offsets.push(total);
+    let tri_total: usize = parts.iter().map(|p| p.indices.len()).sum();
+    let mut mesh = Mesh {
+        positions: Vec::with_capacity(total as usize),
+        normals: Vec::with_capacity(total as usize),
+        colours: Vec::with_capacity(total as usize),
+        indices: Vec::with_capacity(tri_total),
+    };
+    for (s, p) in parts.into_iter().enumerate() {
+        let (own, next) = (offsets[s], offsets[s + 1]);
+        mesh.indices.extend(p.indices.iter().map(|&i| {
+            if i & FOREIGN != 0 {
+                next + (i & !FOREIGN)
+            } else {
+                own + i
+            }
+        }));
+        mesh.positions.extend_from_slice(&p.positions);
+        mesh.normals.extend_from_slice(&p.normals);
+        mesh.colours.extend_from_slice(&p.colours);
+    }
+    mesh
+}
