@@ -186,7 +186,9 @@ fn drop_stops_the_reader_and_callbacks_fire() {
         counter.fetch_add(1, Ordering::SeqCst);
     }));
     s.wait(5, LONG).expect("in time").expect("readable");
-    eventually("the callback when a frame lands", || landed.load(Ordering::SeqCst) >= 1);
+    eventually("the callback when a frame lands", || {
+        landed.load(Ordering::SeqCst) >= 1
+    });
     s.set_playhead(0);
     drop(s); // mid-prefetch: must return, not hang
     assert_eq!(
@@ -194,4 +196,26 @@ fn drop_stops_the_reader_and_callbacks_fire() {
         1,
         "the reader thread has let go of the trajectory"
     );
+}
+
+#[test]
+fn trajectory_and_streamer_cross_threads() {
+    fn send_sync<T: Send + Sync>() {}
+    send_sync::<Trajectory>();
+    fn send<T: Send>() {}
+    send::<FrameStreamer>();
+    // Frames read from several threads at once equal sequential reads.
+    let t = rhodopsin();
+    let handles: Vec<_> = (0..4)
+        .map(|k| {
+            let t = t.clone();
+            std::thread::spawn(move || t.read_frame(k * 10).expect("frame"))
+        })
+        .collect();
+    for (k, h) in handles.into_iter().enumerate() {
+        assert_eq!(
+            h.join().expect("thread"),
+            t.read_frame(k * 10).expect("frame")
+        );
+    }
 }

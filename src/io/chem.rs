@@ -227,10 +227,9 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         }
     }
     // Atoms outside every residue each get a residue of their own, after the real ones.
-    let mut next = residues as u32;
-    for r in out.residue_index.iter_mut().filter(|r| **r == u32::MAX) {
+    let unplaced = out.residue_index.iter_mut().filter(|r| **r == u32::MAX);
+    for (r, next) in unplaced.zip(residues as u32..) {
         *r = next;
-        next += 1;
     }
     renumber_by_first_atom(&mut out.residue_index);
     out.bonds = top

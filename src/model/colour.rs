@@ -9,9 +9,10 @@ use super::{ModelError, Topology};
 
 /// How atoms are coloured. `FromStr` accepts `element`, `chain`, `residue-type`,
 /// `residue-index` (alias `rainbow`), `b-factor`, and `single:#rrggbb` (or just `#rrggbb`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub enum ColorScheme {
     /// CPK-like colours by element; particles without an element get a colour per name.
+    #[default]
     Element,
     /// One colour per chain or segment, in order of appearance.
     Chain,
@@ -23,12 +24,6 @@ pub enum ColorScheme {
     BFactor,
     /// The same linear RGB colour for every atom.
     Single([f32; 3]),
-}
-
-impl Default for ColorScheme {
-    fn default() -> Self {
-        ColorScheme::Element
-    }
 }
 
 impl FromStr for ColorScheme {

@@ -81,7 +81,7 @@ impl Topology {
         self.radii.resize(n, 0.0);
         if elements::looks_coarse_grained(self.names.iter().map(String::as_str)) {
             self.elements.iter_mut().for_each(String::clear);
-            for r in self.radii.iter_mut().filter(|r| !(**r > 0.0)) {
+            for r in self.radii.iter_mut().filter(|r| r.is_nan() || **r <= 0.0) {
                 *r = elements::BEAD_RADIUS;
             }
             return;
@@ -92,7 +92,7 @@ impl Topology {
                 let guess = elements::guess_element(&self.names[i], residue);
                 self.elements[i] = guess.unwrap_or_default().to_string();
             }
-            if !(self.radii[i] > 0.0) {
+            if self.radii[i].is_nan() || self.radii[i] <= 0.0 {
                 self.radii[i] = elements::element_radius(&self.elements[i]);
             }
         }
