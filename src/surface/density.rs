@@ -220,18 +220,25 @@ fn fill_slab(
                 let eyz = ey * ez;
                 let row0 = zoff + (ty.first + jy) * nx as usize + tx.first;
                 if let Some(lanes) = wide.as_ref()
-                    && cols.is_none()
                     && row0 + LANES <= vals.len()
+                    && let Ok(out) = <&mut [f32; LANES]>::try_from(&mut vals[row0..row0 + LANES])
                 {
                     // Fixed-width path: lanes past the atom's reach (or failing the cutoff)
-                    // add exactly 0.0, which changes no sample.
-                    let out: &mut [f32; LANES] = match (&mut vals[row0..row0 + LANES]).try_into() {
-                        Ok(out) => out,
-                        Err(_) => continue,
-                    };
+                    // get weight exactly 0.0, which changes no sample.
+                    let mut w = [0.0f32; LANES];
                     for l in 0..LANES {
                         let pass = (lanes.d2[l] + dy2) + dz2 < cut2;
-                        out[l] += if pass { lanes.e[l] * eyz } else { 0.0 };
+                        w[l] = if pass { lanes.e[l] * eyz } else { 0.0 };
+                        out[l] += w[l];
+                    }
+                    if let Some(cols) = cols.as_deref_mut() {
+                        let c = atom.colour;
+                        let n = tx.d2.len();
+                        for (v, &w) in cols[row0..row0 + n].iter_mut().zip(&w[..n]) {
+                            v[0] += w * c[0];
+                            v[1] += w * c[1];
+                            v[2] += w * c[2];
+                        }
                     }
                     continue;
                 }
