@@ -196,7 +196,8 @@ fn an_engine_reused_across_frames_gives_fresh_results() {
     let (small, small_r) = cluster(30, 8.0, Vec3::new(3.0, 0.0, 0.0), 32);
     let colours = vec![[0.3, 0.6, 0.9]; big.len()];
     let params = SurfaceParams::default();
-    let frames: [(&[Vec3], &[f32], Option<&[[f32; 3]]>); 4] = [
+    type Frame<'a> = (&'a [Vec3], &'a [f32], Option<&'a [[f32; 3]]>);
+    let frames: [Frame<'_>; 4] = [
         (&big, &big_r, None),
         (&small, &small_r, None),
         (&big, &big_r, Some(&colours)),
