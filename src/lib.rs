@@ -12,3 +12,4 @@ pub mod io;
 pub mod model;
 pub mod render;
 pub mod surface;
+pub mod synthetic;

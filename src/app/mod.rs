@@ -1,1 +1,159 @@
-//! placeholder: filled by the app work
+//! The desktop viewer (eframe): the top of the data flow. It reads frames through a
+//! [`source::FrameSource`], computes surfaces on a [`worker::Worker`] thread with a surface
+//! engine, and draws them with [`crate::render`]. UI functions end in `_ui` and return
+//! [`state::Command`]s, applied in one place ([`state::AppCore::apply`] and the window layer in
+//! [`viewer::Viewer`]). Nothing below this module imports it.
+
+pub mod export;
+pub mod panels;
+pub mod plot;
+pub mod recent;
+pub mod source;
+pub mod state;
+pub mod timeline;
+pub mod viewer;
+pub mod viewport;
+pub mod worker;
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+pub use state::{AppCore, Command};
+pub use viewer::{Script, Viewer};
+
+use crate::surface::SurfaceEngine;
+
+/// Bundled demo: topology of the adenylate kinase (1U19) trajectory in assets/.
+pub const DEMO_TOP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/md_1u19.gro");
+/// Bundled demo trajectory.
+pub const DEMO_TRAJ: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/md_1u19.xtc");
+
+/// How the window starts.
+#[derive(Debug, Clone, Default)]
+pub struct ViewOptions {
+    /// Files to open (`None`: the bundled demo).
+    pub files: Option<(PathBuf, Option<PathBuf>)>,
+    /// Scripted run.
+    pub script: Script,
+    /// Use the CPU engine even when a GPU one is available.
+    pub cpu: bool,
+    /// Initial surface parameters.
+    pub params: crate::surface::SurfaceParams,
+    /// Initial particle options (beads, colours, radius overrides).
+    pub particles: crate::model::ParticleOptions,
+}
+
+/// Why the window could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    /// No display to open a window on.
+    #[error(
+        "cannot open a window: {0}; use `mdsurf render TOP [TRAJ] -o out.png` to make pictures without a display"
+    )]
+    NoDisplay(String),
+    /// The scripted run failed.
+    #[error("scripted run failed: {0}")]
+    Script(String),
+}
+
+/// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
+/// device is opened), else the CPU reference engine (`cpu` forces it).
+fn make_engine(state: Option<&egui_wgpu::RenderState>, cpu: bool) -> Box<dyn SurfaceEngine + Send> {
+    if let Some(s) = state.filter(|_| !cpu) {
+        match crate::gpu::GpuEngine::from_device(s.device.clone(), s.queue.clone()) {
+            Ok(engine) => return Box::new(engine),
+            Err(err) => eprintln!("GPU surface engine unavailable ({err}); using the CPU engine"),
+        }
+    }
+    Box::new(crate::surface::CpuEngine::new())
+}
+
+/// eframe's device asks for the limits and features the GPU surface engine needs (the adapter's
+/// buffer sizes, 16 storage buffers per stage, timestamps when offered), so the engine and the
+/// renderer share one device.
+fn wgpu_options() -> egui_wgpu::WgpuConfiguration {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.power_preference = wgpu::PowerPreference::HighPerformance;
+    setup.device_descriptor = Arc::new(|adapter: &wgpu::Adapter| {
+        let mut limits = crate::gpu::GpuContext::wanted_limits(&adapter.limits());
+        limits.max_texture_dimension_2d = adapter.limits().max_texture_dimension_2d;
+        wgpu::DeviceDescriptor {
+            label: Some("mdsurf viewer"),
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            required_limits: limits,
+            ..Default::default()
+        }
+    });
+    egui_wgpu::WgpuConfiguration {
+        wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup),
+        ..Default::default()
+    }
+}
+
+/// Builds the viewer inside eframe (or an egui_kittest harness): engine, worker, GPU view, and
+/// the first load of `top` (+ `traj`).
+pub fn create_viewer(
+    cc: &eframe::CreationContext<'_>,
+    options: &ViewOptions,
+    script_result: viewer::ScriptResult,
+    top: PathBuf,
+    traj: Option<PathBuf>,
+) -> Viewer {
+    let state = cc.wgpu_render_state.as_ref();
+    let ctx = cc.egui_ctx.clone();
+    let worker = worker::Worker::spawn(
+        make_engine(state, options.cpu),
+        Box::new(move || ctx.request_repaint()),
+    );
+    let mut core = AppCore::new(worker);
+    core.params = options.params;
+    core.options = options.particles.clone();
+    let gpu = state.map(viewport::GpuView::new);
+    let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
+    viewer.open(&cc.egui_ctx, top, traj);
+    viewer
+}
+
+/// Opens the viewer window and runs it until it is closed.
+pub fn run(options: ViewOptions) -> Result<(), ViewError> {
+    if cfg!(target_os = "linux")
+        && std::env::var_os("DISPLAY").is_none()
+        && std::env::var_os("WAYLAND_DISPLAY").is_none()
+    {
+        return Err(ViewError::NoDisplay(
+            "neither DISPLAY nor WAYLAND_DISPLAY is set".into(),
+        ));
+    }
+    let result: viewer::ScriptResult = Arc::new(Mutex::new(None));
+    let (top, traj) = options
+        .files
+        .clone()
+        .unwrap_or_else(|| (PathBuf::from(DEMO_TOP), Some(PathBuf::from(DEMO_TRAJ))));
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([1400.0, 900.0])
+            .with_drag_and_drop(true),
+        renderer: eframe::Renderer::Wgpu,
+        wgpu_options: wgpu_options(),
+        ..Default::default()
+    };
+    let script_result = result.clone();
+    let run = eframe::run_native(
+        "mdsurf",
+        native,
+        Box::new(move |cc| {
+            Ok(Box::new(create_viewer(
+                cc,
+                &options,
+                script_result,
+                top,
+                traj,
+            )))
+        }),
+    );
+    run.map_err(|e| ViewError::NoDisplay(e.to_string()))?;
+    match result.lock().ok().and_then(|r| r.clone()) {
+        Some(e) => Err(ViewError::Script(e)),
+        None => Ok(()),
+    }
+}

@@ -1,10 +1,353 @@
-//! `mdsurf bench` (to be written).
+//! `mdsurf bench`: times each stage (read, upload, bin, density, Marching Cubes) as medians over
+//! repeats, per backend, on the bundled demo, on a file given, and on synthetic tiled systems
+//! (`--synthetic N`), and prints an aligned table (optionally a CSV too); `--table1` runs the
+//! GPU engine's reproduction of the paper's Table 1. Speed claims of the project are measured
+//! here, never in tests.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Result, anyhow, bail};
+use glam::Vec3;
+use mdsurf::export::write_atomic;
+use mdsurf::surface::{StageTimings, SurfaceEngine, SurfaceOutput, SurfaceParams};
+use mdsurf::synthetic::SyntheticSystem;
+
+use super::bench_table::{Table, peak_rss_bytes};
+use super::common::{
+    BenchBackend, InputArgs, ParamArgs, ParticleArgs, System, demo_files, engines_for, ms_since,
+};
 
 /// Arguments of `mdsurf bench`.
 #[derive(clap::Args, Debug)]
-pub struct BenchArgs {}
+pub struct BenchArgs {
+    /// Structure or topology file to benchmark (default: the bundled demo).
+    #[arg(value_name = "TOP")]
+    pub top: Option<PathBuf>,
+    /// Trajectory file.
+    #[arg(value_name = "TRAJ")]
+    pub traj: Option<PathBuf>,
+    /// Also (or only, without TOP) time a synthetic system of N particles, tiled from TOP or
+    /// the demo with per-frame jitter; accepts 1000000, 1e6, 950k, 2.37M (repeatable).
+    #[arg(long, value_name = "N", value_parser = parse_count)]
+    pub synthetic: Vec<usize>,
+    /// Run the GPU engine's reproduction of the paper's Table 1 (its sizes and spacings,
+    /// R = 1, I = 0.5) and print it beside the paper's figures.
+    #[arg(long)]
+    pub table1: bool,
+    /// With --table1: skip the rows with more atoms than N (quick checks, small GPUs).
+    #[arg(long, value_name = "N", value_parser = parse_count)]
+    pub max_atoms: Option<usize>,
+    /// Engines to time: cpu, gpu, or all that are available.
+    #[arg(long, value_enum, default_value_t = BenchBackend::All)]
+    pub backend: BenchBackend,
+    /// Timed frames per case (each a new frame); medians are reported.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub repeats: u32,
+    /// Untimed frames before timing (pipeline set-up, buffer growth).
+    #[arg(long, default_value_t = 1)]
+    pub warmup: u32,
+    #[command(flatten)]
+    pub params: ParamArgs,
+    #[command(flatten)]
+    pub particles: ParticleArgs,
+    /// Compute surfaces without per-atom colours (the paper timed with colours).
+    #[arg(long)]
+    pub no_color: bool,
+    /// Also write the table as CSV.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+}
+
+/// Parses an atom count: `1000000`, `1e6`, `950k`, `2.37M`.
+pub fn parse_count(s: &str) -> Result<usize, String> {
+    let t = s.trim();
+    let (num, mult) = match t.chars().last() {
+        Some('k' | 'K') => (&t[..t.len() - 1], 1e3),
+        Some('m' | 'M') => (&t[..t.len() - 1], 1e6),
+        _ => (t, 1.0),
+    };
+    let v: f64 = num
+        .replace(['_', ','], "")
+        .parse()
+        .map_err(|_| format!("bad atom count '{s}' (e.g. 1000000, 1e6, 950k, 2.37M)"))?;
+    let n = (v * mult).round();
+    if !(1.0..=1e10).contains(&n) {
+        return Err(format!("atom count '{s}' must be between 1 and 1e10"));
+    }
+    Ok(n as usize)
+}
+
+/// Where a case's frames come from.
+enum Source {
+    /// A real trajectory.
+    Real(Box<System>),
+    /// A tiled system with per-frame jitter.
+    Synthetic(SyntheticSystem),
+}
+
+/// One benchmark case.
+struct Case {
+    label: String,
+    source: Source,
+    params: SurfaceParams,
+}
+
+/// Medians of one case on one engine.
+#[derive(Debug, Clone, Default)]
+pub struct BenchResult {
+    /// Case label.
+    pub case: String,
+    /// Engine name.
+    pub backend: String,
+    /// Particles per frame.
+    pub atoms: usize,
+    /// Grid spacing H in Å.
+    pub spacing: f32,
+    /// Grid samples per axis (of the last timed frame).
+    pub dims: [u32; 3],
+    /// Triangles (of the last timed frame).
+    pub triangles: usize,
+    /// Median time to read (or generate) a frame, ms.
+    pub read_ms: f64,
+    /// Median stage times, ms.
+    pub stages: StageTimings,
+    /// Median wall time of `compute` (all stages plus any readback), ms.
+    pub compute_wall_ms: f64,
+    /// Frames per second including reading.
+    pub fps: f64,
+    /// Peak resident memory of the process so far, bytes.
+    pub peak_rss: Option<u64>,
+}
 
 /// Runs `mdsurf bench`.
-pub fn run(_args: BenchArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`mdsurf bench` is not written yet")
+pub fn run(args: BenchArgs) -> Result<()> {
+    let params = args.params.params()?;
+    if args.table1 {
+        print_table1(&args)?;
+        if args.top.is_none() && args.synthetic.is_empty() {
+            return Ok(());
+        }
+    }
+    let mut engines = engines_for(args.backend)?;
+    let cases = build_cases(&args, params)?;
+    let mut results = Vec::new();
+    for case in cases {
+        let Case {
+            label,
+            mut source,
+            params,
+        } = case;
+        for engine in engines.iter_mut() {
+            let name = engine.name().to_string();
+            eprintln!("timing {label} on {name} ...");
+            let mut r = time_case(&mut source, engine.as_mut(), &params, &args)
+                .map_err(|e| anyhow!("{label} on {name}: {e:#}"))?;
+            r.case = label.clone();
+            results.push(r);
+        }
+    }
+    let table = Table::from_results(&results);
+    println!("{}", table.to_text());
+    if let Some(csv) = &args.csv {
+        let text = table.to_csv();
+        write_atomic(csv, |w| w.write_all(text.as_bytes()))?;
+    }
+    Ok(())
+}
+
+/// Runs the GPU engine's Table 1 reproduction (tiling TOP or the demo) and prints its table.
+fn print_table1(args: &BenchArgs) -> Result<()> {
+    if args.backend == BenchBackend::Cpu {
+        bail!("--table1 times the GPU engine; use --backend gpu or all");
+    }
+    let (top, traj) = match &args.top {
+        Some(top) => (top.clone(), args.traj.clone()),
+        None => {
+            let (gro, xtc) = demo_files()?;
+            (gro, Some(xtc))
+        }
+    };
+    let opts = mdsurf::gpu::table1::Table1Options {
+        repeats: args.repeats as usize,
+        max_atoms: args.max_atoms,
+        colours: !args.no_color,
+    };
+    let text = mdsurf::gpu::table1::table1(&top, traj.as_deref(), &opts)
+        .map_err(|e| anyhow!("--table1: {e}"))?;
+    println!("{text}");
+    Ok(())
+}
+
+/// The cases the arguments ask for, in order: the file (or demo), then synthetic sizes.
+fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
+    let input = match &args.top {
+        Some(top) => InputArgs {
+            top: top.clone(),
+            traj: args.traj.clone(),
+            particles: args.particles.clone(),
+        },
+        None => {
+            let (gro, xtc) = demo_files()?;
+            InputArgs {
+                top: gro,
+                traj: Some(xtc),
+                particles: args.particles.clone(),
+            }
+        }
+    };
+    let (system, first) = System::open(&input, 0)?;
+    let mut cases = Vec::new();
+    let name = input
+        .traj
+        .as_ref()
+        .unwrap_or(&input.top)
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+
+    // The structure synthetic systems are tiled from: the first frame's particles.
+    let base_positions = system.particles.positions(&first)?;
+    let base_radii = system.particles.radii().to_vec();
+    let base_colours = system.particles.colours().to_vec();
+    let colours = (!args.no_color).then_some(base_colours.as_slice());
+    let tile = |n: usize| -> Result<SyntheticSystem> {
+        Ok(SyntheticSystem::tile(
+            &base_positions,
+            &base_radii,
+            colours,
+            n,
+        )?)
+    };
+
+    if args.top.is_some() || args.synthetic.is_empty() {
+        cases.push(Case {
+            label: name.clone(),
+            source: Source::Real(Box::new(system)),
+            params,
+        });
+    }
+    for &n in &args.synthetic {
+        cases.push(Case {
+            label: format!("synthetic {n} ({name})"),
+            source: Source::Synthetic(tile(n)?),
+            params,
+        });
+    }
+    Ok(cases)
+}
+
+/// Times one case on one engine: `warmup` untimed frames, then `repeats` timed ones.
+fn time_case(
+    source: &mut Source,
+    engine: &mut dyn SurfaceEngine,
+    params: &SurfaceParams,
+    args: &BenchArgs,
+) -> Result<BenchResult> {
+    let mut positions: Vec<Vec3> = Vec::new();
+    let (mut reads, mut walls, mut computes) = (Vec::new(), Vec::new(), Vec::new());
+    let mut stages: Vec<StageTimings> = Vec::new();
+    let mut last = SurfaceOutput::default();
+    let total = args.warmup + args.repeats;
+    for i in 0..total as usize {
+        let t0 = Instant::now();
+        let read_ms = read_frame(source, i, &mut positions)?;
+        let t1 = Instant::now();
+        let atoms = match source {
+            Source::Real(sys) => {
+                let mut set = sys.particles.atom_set(&positions);
+                if args.no_color {
+                    set.colours = None;
+                }
+                set
+            }
+            Source::Synthetic(s) => mdsurf::surface::AtomSet {
+                positions: &positions,
+                radii: s.radii(),
+                colours: s.colours(),
+            },
+        };
+        last = engine.compute(&atoms, params)?;
+        let compute_ms = ms_since(t1);
+        if i >= args.warmup as usize {
+            reads.push(read_ms);
+            computes.push(compute_ms);
+            walls.push(ms_since(t0));
+            stages.push(last.timings);
+        }
+    }
+    let med = |f: &dyn Fn(&StageTimings) -> f64| median(stages.iter().map(f).collect());
+    let wall = median(walls);
+    Ok(BenchResult {
+        case: String::new(),
+        backend: engine.name().to_string(),
+        atoms: positions.len(),
+        spacing: params.spacing,
+        dims: last.grid.dims,
+        triangles: last.mesh.triangle_count(),
+        read_ms: median(reads),
+        stages: StageTimings {
+            upload_ms: med(&|s| s.upload_ms),
+            bin_ms: med(&|s| s.bin_ms),
+            density_ms: med(&|s| s.density_ms),
+            mc_ms: med(&|s| s.mc_ms),
+        },
+        compute_wall_ms: median(computes),
+        fps: 1e3 / wall.max(1e-9),
+        peak_rss: peak_rss_bytes(),
+    })
+}
+
+/// Reads (or generates) the positions of the `i`-th timed frame; returns the time in ms.
+fn read_frame(source: &mut Source, i: usize, out: &mut Vec<Vec3>) -> Result<f64> {
+    match source {
+        Source::Real(sys) => {
+            let len = sys.len();
+            if len == 0 {
+                bail!("{}: no frames", sys.frames_path.display());
+            }
+            Ok(sys.read_positions(i % len, out)?.1)
+        }
+        Source::Synthetic(s) => {
+            let t0 = Instant::now();
+            s.frame_into(i, out);
+            Ok(ms_since(t0))
+        }
+    }
+}
+
+/// Median of `v` (0 for an empty list).
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_parse_with_suffixes() {
+        assert_eq!(parse_count("1000000"), Ok(1_000_000));
+        assert_eq!(parse_count("1e6"), Ok(1_000_000));
+        assert_eq!(parse_count("2.37M"), Ok(2_370_000));
+        assert_eq!(parse_count("950k"), Ok(950_000));
+        assert!(parse_count("0").is_err());
+        assert!(parse_count("lots").is_err());
+    }
+
+    #[test]
+    fn median_of_even_and_odd() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(median(vec![]), 0.0);
+    }
 }

@@ -1,6 +1,9 @@
-//! Subcommands of the `mdsurf` binary, one file each.
+//! Subcommands of the `mdsurf` binary, one file each, plus what they share ([`common`]) and the
+//! benchmark table ([`bench_table`]).
 
 pub mod bench;
+pub mod bench_table;
+pub mod common;
 pub mod render;
 pub mod surface;
 pub mod view;

@@ -1,10 +1,281 @@
-//! `mdsurf surface` (to be written).
+//! `mdsurf surface`: reads frames, computes each frame's surface with the chosen engine, writes
+//! meshes (`-o`, a `{frame}` pattern for several frames) and a stats CSV (`--stats`), and prints
+//! one summary line per frame (or a progress bar for long runs on a terminal).
+//!
+//! A failure in the middle (a truncated file, a bad frame) keeps the outputs of the frames
+//! before it, is reported as one line naming the file and frame, and exits with status 2.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
+
+use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
+
+/// Above this many frames on a terminal, a progress bar replaces the per-frame lines.
+const PROGRESS_BAR_FRAMES: usize = 20;
 
 /// Arguments of `mdsurf surface`.
 #[derive(clap::Args, Debug)]
-pub struct SurfaceArgs {}
+pub struct SurfaceArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Frames to process, START:STOP:STEP (STOP exclusive, parts optional), or one index.
+    #[arg(long, value_name = "START:STOP:STEP")]
+    pub frames: Option<FrameRange>,
+    #[command(flatten)]
+    pub params: ParamArgs,
+    /// Engine: cpu, gpu, or auto (the GPU when there is one).
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    pub backend: Backend,
+    /// Mesh output (.ply, .obj, .stl, .glb); with several frames a pattern such as
+    /// `out_{frame}.ply` or `out_{frame:04}.ply`.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Per-frame statistics CSV (area, volume, counts, timings).
+    #[arg(long, value_name = "STATS.csv")]
+    pub stats: Option<PathBuf>,
+    /// Print only errors and the final line.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
 
 /// Runs `mdsurf surface`.
-pub fn run(_args: SurfaceArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`mdsurf surface` is not written yet")
+pub fn run(args: SurfaceArgs) -> Result<()> {
+    // Everything that can be checked before reading data is checked first.
+    let params = args.params.params()?;
+    let output = args.output.as_deref().map(OutputPattern::new).transpose()?;
+    if let Some(stats) = &args.stats {
+        check_parent_dir(stats)?;
+    }
+
+    let start_frame = args.frames.map(|r| r.start).unwrap_or(0);
+    let (mut system, _first) = System::open(&args.input, start_frame)?;
+    let range = args.frames.unwrap_or_default();
+    let frames = range.indices(system.selectable_len());
+    if frames.is_empty() {
+        bail!(
+            "--frames {range} selects no frame of {} ({} frames)",
+            system.frames_path.display(),
+            system.len()
+        );
+    }
+    if let Some(out) = &output
+        && frames.len() > 1
+        && !out.has_frame
+    {
+        bail!(
+            "-o {}: {} frames selected, so the output needs a {{frame}} pattern (e.g. surf_{{frame}}.{})",
+            out.raw,
+            frames.len(),
+            out.format
+        );
+    }
+    let mut engine = make_engine(args.backend)?;
+    let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
+
+    let bar =
+        (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
+            .then(|| progress_bar(frames.len()));
+    let t_all = Instant::now();
+    let mut positions = Vec::new();
+    let mut failure = None;
+    let mut ok_frames = 0usize;
+    for &index in &frames {
+        let row = (|| -> Result<StatsRow> {
+            let t0 = Instant::now();
+            let (frame, read_ms) = system.read_positions(index, &mut positions)?;
+            let atoms = system.particles.atom_set(&positions);
+            let surf = engine
+                .compute(&atoms, &params)
+                .map_err(|e| anyhow!("{}: frame {index}: {e}", system.frames_path.display()))?;
+            let total_ms = ms_since(t0);
+            if let Some(out) = &output {
+                export::write_mesh(&out.path_for(index), &surf.mesh)?;
+            }
+            Ok(StatsRow {
+                frame: index,
+                time_ps: frame.time_ps,
+                atoms: positions.len(),
+                dims: surf.grid.dims,
+                vertices: surf.mesh.vertex_count(),
+                triangles: surf.mesh.triangle_count(),
+                area: surf.area,
+                volume: surf.volume,
+                total_ms,
+                read_ms,
+                timings: surf.timings,
+            })
+        })();
+        match row {
+            Ok(row) => {
+                ok_frames += 1;
+                if let Some(stats) = stats.as_mut() {
+                    stats.write_row(&row)?;
+                }
+                match &bar {
+                    Some(bar) => bar.inc(1),
+                    None if !args.quiet => eprintln!("{}", summary_line(&row)),
+                    None => {}
+                }
+            }
+            Err(err) => {
+                failure = Some(err);
+                break;
+            }
+        }
+    }
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+
+    // Keep what the good frames produced; a run where no frame succeeded changes no file.
+    if let Some(stats) = stats
+        && stats.rows() > 0
+    {
+        stats.finish()?;
+    }
+    if let Some(err) = failure {
+        if ok_frames == 0 {
+            return Err(err);
+        }
+        let kept = match (&output, &args.stats) {
+            (None, None) => "",
+            _ => " and written",
+        };
+        bail!("{err:#} (the {ok_frames} frame(s) before it were processed{kept})");
+    }
+    if !args.quiet || bar.is_some() {
+        let secs = t_all.elapsed().as_secs_f64();
+        eprintln!(
+            "{} frame(s) in {:.2} s ({:.1} frames/s) on {}",
+            ok_frames,
+            secs,
+            ok_frames as f64 / secs.max(1e-9),
+            engine.name()
+        );
+    }
+    Ok(())
+}
+
+/// The one-line summary of a frame.
+fn summary_line(r: &StatsRow) -> String {
+    let time = r
+        .time_ps
+        .map(|t| format!("{t:>9.1} ps"))
+        .unwrap_or_else(|| "        - ps".into());
+    format!(
+        "frame {:>5} {time} {:>9} atoms  grid {}x{}x{}  {:>9} tris  area {:>11.1} Å²  volume {:>12.1} Å³  {:>8.1} ms",
+        r.frame,
+        r.atoms,
+        r.dims[0],
+        r.dims[1],
+        r.dims[2],
+        r.triangles,
+        r.area,
+        r.volume,
+        r.total_ms
+    )
+}
+
+fn progress_bar(len: usize) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64);
+    if let Ok(style) =
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")
+    {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Fails with a one-line message when `path`'s directory does not exist.
+fn check_parent_dir(path: &Path) -> Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(dir) = dir
+        && !dir.is_dir()
+    {
+        bail!(
+            "cannot write {}: directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// A mesh output path, possibly with a `{frame}` or `{frame:0N}` placeholder.
+#[derive(Debug, Clone)]
+pub struct OutputPattern {
+    raw: String,
+    prefix: String,
+    suffix: String,
+    width: usize,
+    has_frame: bool,
+    format: MeshFormat,
+}
+
+impl OutputPattern {
+    /// Parses `path`, checking its placeholder, format and directory.
+    pub fn new(path: &Path) -> Result<OutputPattern> {
+        let raw = path
+            .to_str()
+            .with_context(|| format!("-o {}: the path is not valid UTF-8", path.display()))?
+            .to_string();
+        let (prefix, suffix, width, has_frame) = match raw.find("{frame") {
+            None => (raw.clone(), String::new(), 0, false),
+            Some(at) => {
+                let close = raw[at..]
+                    .find('}')
+                    .map(|c| at + c)
+                    .ok_or_else(|| anyhow!("-o {raw}: unclosed {{frame placeholder"))?;
+                let spec = &raw[at + "{frame".len()..close];
+                let width = match spec {
+                    "" => 0,
+                    s => s
+                        .strip_prefix(":0")
+                        .and_then(|w| w.parse().ok())
+                        .ok_or_else(|| {
+                            anyhow!("-o {raw}: use {{frame}} or {{frame:0N}}, e.g. {{frame:04}}")
+                        })?,
+                };
+                (
+                    raw[..at].to_string(),
+                    raw[close + 1..].to_string(),
+                    width,
+                    true,
+                )
+            }
+        };
+        if suffix.contains("{frame") {
+            bail!("-o {raw}: only one {{frame}} placeholder is allowed");
+        }
+        let pattern = OutputPattern {
+            format: MeshFormat::from_path(Path::new(&raw))?,
+            raw,
+            prefix,
+            suffix,
+            width,
+            has_frame,
+        };
+        check_parent_dir(&pattern.path_for(0))?;
+        Ok(pattern)
+    }
+
+    /// The output path of frame `index`.
+    pub fn path_for(&self, index: usize) -> PathBuf {
+        if self.has_frame {
+            PathBuf::from(format!(
+                "{}{:0width$}{}",
+                self.prefix,
+                index,
+                self.suffix,
+                width = self.width
+            ))
+        } else {
+            PathBuf::from(&self.prefix)
+        }
+    }
 }

@@ -1,1 +1,60 @@
-//! placeholder: filled by the gpu work
+//! The GPU surface engine: the whole per-frame surface computed in wgpu compute shaders
+//! (DESIGN section 3). Atoms are uploaded ([`engine`]), binned into cells by counting sort
+//! ([`bin`], [`scan`]), the density and colour volumes gathered per voxel ([`density`]), and the
+//! surface extracted by Marching Cubes ([`mc`]: classify, compact, emit) and measured
+//! ([`measure`]). [`GpuEngine`] runs a frame: blocking through [`crate::surface::SurfaceEngine`]
+//! (CLI, tests) or non-blocking into a [`GpuSurface`] the renderer draws from (viewer).
+//! The shaders live in `shaders/`, one file per stage.
+
+pub mod bin;
+pub mod context;
+pub mod density;
+pub mod engine;
+pub mod frame;
+pub mod inputs;
+pub mod kernel;
+pub mod mc;
+pub mod measure;
+pub mod output;
+pub mod plan;
+pub mod resources;
+pub mod scan;
+pub mod table1;
+pub mod timing;
+pub mod tolerance;
+pub mod types;
+
+pub use context::{GpuContext, gpu_required};
+pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
+pub use output::{FrameStats, GpuSurface};
+pub use types::{DrawIndexedArgs, GpuCounters, GpuVertex};
+
+/// Why the GPU engine failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No usable adapter was found.
+    #[error("no GPU adapter: {0}")]
+    NoAdapter(String),
+    /// Creating or using the device failed (lost device, validation error, out of memory).
+    #[error("GPU device error: {0}")]
+    Device(String),
+    /// Reading results back failed.
+    #[error("GPU readback failed: {0}")]
+    Readback(String),
+    /// A problem is too large for this device even when split into slabs.
+    #[error("{what} needs {needed} bytes but the device allows {limit}")]
+    TooLarge {
+        /// What did not fit.
+        what: &'static str,
+        /// Bytes it needs.
+        needed: u64,
+        /// Bytes the device allows.
+        limit: u64,
+    },
+}
+
+impl From<GpuError> for crate::surface::SurfaceError {
+    fn from(e: GpuError) -> Self {
+        crate::surface::SurfaceError::Gpu(e.to_string())
+    }
+}

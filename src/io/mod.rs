@@ -1,1 +1,26 @@
-//! placeholder: filled by the io work
+//! Reading structures and trajectories: the first stage of the data flow. [`open`] turns a
+//! topology file (and optionally a separate trajectory file) into a [`Trajectory`]: a constant
+//! [`Topology`](crate::model::Topology) plus random access to [`Frame`](crate::model::Frame)s,
+//! one at a time (the whole trajectory is never loaded). [`FrameStreamer`] wraps a trajectory in
+//! a reader thread with a bounded cache for the viewer.
+//!
+//! Every format goes through chemfiles (PDB, mmCIF, GRO, XTC, TRR, DCD, LAMMPS dump, XYZ, TNG,
+//! Amber NetCDF, with `.gz`/`.bz2`/`.xz` compression); wwPDB files are additionally read by pdbtbx
+//! for element columns, B-factors and chains. All failures are [`IoError`]s that print as one
+//! line naming the file (and frame, and atom); chemfiles' own warnings are captured (see
+//! [`take_warnings`]) rather than printed.
+
+mod chem;
+mod dcd;
+pub mod error;
+pub mod format;
+pub mod stream;
+mod trajectory;
+mod warnings;
+mod wwpdb;
+
+pub use error::IoError;
+pub use format::{FileFormat, WwFormat, detect};
+pub use stream::{FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions};
+pub use trajectory::{Damage, Trajectory, open};
+pub use warnings::take_warnings;

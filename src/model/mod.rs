@@ -3,6 +3,37 @@
 
 use glam::Vec3;
 
+pub mod beads;
+pub mod colour;
+pub mod elements;
+pub mod particles;
+pub mod radii;
+pub mod residues;
+
+pub use beads::BeadModel;
+pub use colour::ColorScheme;
+pub use particles::{ParticleOptions, Particles};
+pub use radii::{RadiusOverride, RadiusOverrides};
+pub use residues::ResidueClass;
+
+/// Why particles could not be built from a topology and frame.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// A radius override or colour scheme string could not be parsed.
+    #[error("{0}")]
+    Parse(String),
+    /// The frame does not match the topology.
+    #[error("frame {frame} has {frame_atoms} atoms but the topology has {topology_atoms}")]
+    AtomCountMismatch {
+        /// Index of the frame.
+        frame: usize,
+        /// Atoms in the frame.
+        frame_atoms: usize,
+        /// Atoms in the topology.
+        topology_atoms: usize,
+    },
+}
+
 /// Everything about the particles that does not change from frame to frame.
 ///
 /// All per-atom vectors have the same length, [`Topology::len`].
@@ -38,6 +69,41 @@ impl Topology {
     /// True when there are no atoms.
     pub fn is_empty(&self) -> bool {
         self.names.is_empty()
+    }
+
+    /// Fills what the file left open, per DESIGN section 2: in a coarse-grained system every
+    /// particle gets no element and the bead radius (2.35 Å); otherwise empty elements are
+    /// guessed from atom and residue names, and radii that are not positive (not given by the
+    /// file) come from the element table.
+    pub fn complete_elements_and_radii(&mut self) {
+        let n = self.len();
+        self.elements.resize(n, String::new());
+        self.radii.resize(n, 0.0);
+        if elements::looks_coarse_grained(self.names.iter().map(String::as_str)) {
+            self.elements.iter_mut().for_each(String::clear);
+            for r in self.radii.iter_mut().filter(|r| !(**r > 0.0)) {
+                *r = elements::BEAD_RADIUS;
+            }
+            return;
+        }
+        for i in 0..n {
+            if self.elements[i].is_empty() {
+                let residue = self.residue_names.get(i).map_or("", String::as_str);
+                let guess = elements::guess_element(&self.names[i], residue);
+                self.elements[i] = guess.unwrap_or_default().to_string();
+            }
+            if !(self.radii[i] > 0.0) {
+                self.radii[i] = elements::element_radius(&self.elements[i]);
+            }
+        }
+    }
+
+    /// Number of residues (one more than the largest [`Topology::residue_index`]).
+    pub fn residue_count(&self) -> usize {
+        self.residue_index
+            .iter()
+            .max()
+            .map_or(0, |&m| m as usize + 1)
     }
 }
 

@@ -1,1 +1,39 @@
-//! placeholder: filled by the render work
+//! Drawing: an orbit [`Camera`], the GPU-side [`GpuScene`] (surface mesh, atom spheres, bond
+//! cylinders), the [`Renderer`] with its one render-to-texture function [`Renderer::render`], and
+//! [`render_to_rgba`] + [`write_png`] for pictures. Used by the viewer window, `mdsurf render`,
+//! screenshots, movies and tests; it never imports the app.
+
+pub mod atoms;
+pub mod camera;
+pub mod headless;
+mod pipelines;
+pub mod readback;
+pub mod renderer;
+pub mod scene;
+pub mod settings;
+pub mod shapes;
+pub mod targets;
+
+pub use atoms::{atom_instances, guess_bonds};
+pub use camera::{Camera, Projection};
+pub use headless::HeadlessGpu;
+pub use pipelines::{POST_WGSL, SCENE_WGSL};
+pub use readback::{RgbaImage, read_texture, render_to_rgba, write_png};
+pub use renderer::Renderer;
+pub use scene::{CylinderInstance, GpuScene, SphereInstance};
+pub use settings::{AtomStyle, Background, RenderSettings, Stereo};
+pub use targets::{COLOUR_FORMAT, RenderTargets};
+
+/// Why a picture could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// No usable GPU adapter or device (not even a software one).
+    #[error("no GPU adapter for rendering: {0}")]
+    NoAdapter(String),
+    /// Copying the image back from the GPU failed.
+    #[error("reading the rendered image back failed: {0}")]
+    Readback(String),
+    /// A PNG could not be written or read.
+    #[error("PNG {0}: {1}")]
+    Png(String, String),
+}

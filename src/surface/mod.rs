@@ -65,6 +65,9 @@ pub enum SurfaceError {
         /// Index of the atom (from 0).
         atom: usize,
     },
+    /// The GPU engine failed (no adapter, device lost, readback failed, too large).
+    #[error("{0}")]
+    Gpu(String),
     /// The grid would not fit in memory.
     #[error(
         "a {}x{}x{} grid needs {:.1} GB but only {:.1} GB is available; use a larger grid spacing H",

@@ -1,0 +1,119 @@
+// Marching Cubes classification: per grid point of the slab (plus one layer above it), the case
+// byte of the cell based there, which of its own x/y/z edges the surface crosses, and its
+// triangle count; per workgroup of 256 points the sums of vertices, triangles and active cells,
+// which scan.wgsl then prefix-sums. Rust side: src/gpu/mc.rs (Classify).
+// Class word: case | crossed own edges << 8 | triangles << 12 | active << 16.
+
+// Twin of crate::gpu::types::SlabUniform (112 bytes).
+struct SlabUniform {
+    origin: vec3<f32>,
+    spacing: f32,
+    dims: vec3<u32>,
+    isovalue: f32,
+    cell_origin: vec3<f32>,
+    cell_size: f32,
+    cell_dims: vec3<u32>,
+    cutoff: f32,
+    dens_z0: u32,
+    dens_layers: u32,
+    own_z0: u32,
+    own_z1: u32,
+    class_points: u32,
+    class_layers: u32,
+    max_cut: f32,
+    has_extra_layer: u32,
+    centre: vec3<f32>,
+    atom_count: u32,
+}
+
+@group(0) @binding(0) var<uniform> u: SlabUniform;
+@group(0) @binding(1) var<storage, read> density: array<f32>;
+// Marching Cubes tables as a uniform (uniforms do not count against the device's 8 storage
+// buffers per stage). Twin of crate::gpu::types::McTablesUniform: case starts in words 0..257
+// (crate::surface::McTables::case_start), triangle edges, three per triangle, from word
+// MC_TRI_BASE (crate::surface::McTables::triangles_flat_u32).
+const MC_TRI_BASE: u32 = 260u;
+struct McTablesUniform {
+    words: array<vec4<u32>, 1025>,
+}
+
+fn table_word(i: u32) -> u32 {
+    return mc.words[i / 4u][i % 4u];
+}
+
+// Triangles per case: case start c + 1 minus case start c.
+@group(0) @binding(2) var<uniform> mc: McTablesUniform;
+@group(0) @binding(3) var<storage, read_write> classes: array<u32>;
+@group(0) @binding(4) var<storage, read_write> block_vertices: array<u32>;
+@group(0) @binding(5) var<storage, read_write> block_triangles: array<u32>;
+@group(0) @binding(6) var<storage, read_write> block_active: array<u32>;
+
+var<workgroup> sh: array<vec3<u32>, 256>;
+
+fn dens(i: u32, j: u32, k: u32) -> f32 {
+    return density[i + u.dims.x * (j + u.dims.y * (k - u.dens_z0))];
+}
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let block = wg.x + wg.y * nwg.x;
+    let n = block * 256u + lid;
+    let layer = u.dims.x * u.dims.y;
+    let k = u.own_z0 + n / layer;
+    let class_z1 = min(u.own_z1 + 1u, u.dims.z);
+    var counts = vec3<u32>(0u);
+    if (n < u.class_points && k < class_z1) {
+        let r = n % layer;
+        let i = r % u.dims.x;
+        let j = r / u.dims.x;
+        let iso = u.isovalue;
+        let d0 = dens(i, j, k);
+        let in0 = d0 >= iso;
+        var edges = 0u;
+        if (i + 1u < u.dims.x && (dens(i + 1u, j, k) >= iso) != in0) {
+            edges |= 1u;
+        }
+        if (j + 1u < u.dims.y && (dens(i, j + 1u, k) >= iso) != in0) {
+            edges |= 2u;
+        }
+        if (k + 1u < u.dims.z && (dens(i, j, k + 1u) >= iso) != in0) {
+            edges |= 4u;
+        }
+        var case_id = 0u;
+        var tris = 0u;
+        if (i + 1u < u.dims.x && j + 1u < u.dims.y && k + 1u < u.dims.z && k < u.own_z1) {
+            for (var c = 0u; c < 8u; c++) {
+                if (dens(i + (c & 1u), j + ((c >> 1u) & 1u), k + ((c >> 2u) & 1u)) >= iso) {
+                    case_id |= 1u << c;
+                }
+            }
+            tris = table_word(case_id + 1u) - table_word(case_id);
+        }
+        let verts = countOneBits(edges);
+        var is_active = 0u;
+        if (k < u.own_z1 && (verts > 0u || tris > 0u)) {
+            is_active = 1u;
+        }
+        classes[n] = case_id | (edges << 8u) | (tris << 12u) | (is_active << 16u);
+        counts = vec3<u32>(verts, tris, is_active);
+    } else if (n < u.class_points) {
+        classes[n] = 0u;
+    }
+    sh[lid] = counts;
+    workgroupBarrier();
+    for (var off = 128u; off > 0u; off >>= 1u) {
+        if (lid < off) {
+            sh[lid] += sh[lid + off];
+        }
+        workgroupBarrier();
+    }
+    if (lid == 0u) {
+        block_vertices[block] = sh[0].x;
+        block_triangles[block] = sh[0].y;
+        block_active[block] = sh[0].z;
+    }
+}

@@ -1,0 +1,86 @@
+// Marching Cubes compaction: turns the scanned block sums and a workgroup-local scan of the classes
+// words into each point's first vertex id (global, x-fastest order over the whole grid) and the
+// list of active cells with their first triangle id. Same 256-point blocks as classify.wgsl.
+// Rust side: src/gpu/mc.rs (Compact).
+
+// Twin of crate::gpu::types::SlabUniform (112 bytes).
+struct SlabUniform {
+    origin: vec3<f32>,
+    spacing: f32,
+    dims: vec3<u32>,
+    isovalue: f32,
+    cell_origin: vec3<f32>,
+    cell_size: f32,
+    cell_dims: vec3<u32>,
+    cutoff: f32,
+    dens_z0: u32,
+    dens_layers: u32,
+    own_z0: u32,
+    own_z1: u32,
+    class_points: u32,
+    class_layers: u32,
+    max_cut: f32,
+    has_extra_layer: u32,
+    centre: vec3<f32>,
+    atom_count: u32,
+}
+
+// Twin of crate::gpu::types::GpuCounters (64 bytes), viewed as u32 words; indices below.
+const C_SLAB_VERTEX_BASE: u32 = 3u;
+const C_SLAB_TRIANGLE_BASE: u32 = 4u;
+const C_SLAB_OWNED_VERTICES: u32 = 5u;
+
+@group(0) @binding(0) var<uniform> u: SlabUniform;
+@group(0) @binding(1) var<storage, read> classes: array<u32>;
+@group(0) @binding(2) var<storage, read> block_vertices: array<u32>;
+@group(0) @binding(3) var<storage, read> block_triangles: array<u32>;
+@group(0) @binding(4) var<storage, read> block_active: array<u32>;
+@group(0) @binding(5) var<storage, read_write> counters: array<u32>;
+// Global id of the first vertex on each point's crossed edges (valid where it has any).
+@group(0) @binding(6) var<storage, read_write> vertex_base: array<u32>;
+// Active cells: (local point index, global id of its first triangle).
+@group(0) @binding(7) var<storage, read_write> active_cells: array<vec2<u32>>;
+
+var<workgroup> sh: array<vec3<u32>, 256>;
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let block = wg.x + wg.y * nwg.x;
+    let n = block * 256u + lid;
+    var word = 0u;
+    if (n < u.class_points) {
+        word = classes[n];
+    }
+    let own = vec3<u32>(countOneBits((word >> 8u) & 7u), (word >> 12u) & 15u, (word >> 16u) & 1u);
+    sh[lid] = own;
+    workgroupBarrier();
+    for (var off = 1u; off < 256u; off *= 2u) {
+        var add = vec3<u32>(0u);
+        if (lid >= off) {
+            add = sh[lid - off];
+        }
+        workgroupBarrier();
+        sh[lid] += add;
+        workgroupBarrier();
+    }
+    let excl = sh[lid] - own;
+    if (n >= u.class_points) {
+        return;
+    }
+    let slab_vertices = block_vertices[block] + excl.x;
+    if (own.x > 0u) {
+        vertex_base[n] = counters[C_SLAB_VERTEX_BASE] + slab_vertices;
+    }
+    if (own.z > 0u) {
+        let tri = counters[C_SLAB_TRIANGLE_BASE] + block_triangles[block] + excl.y;
+        active_cells[block_active[block] + excl.z] = vec2<u32>(n, tri);
+    }
+    // Vertices owned by this slab end where the extra layer above it begins.
+    if (u.has_extra_layer != 0u && n == u.dims.x * u.dims.y * (u.own_z1 - u.own_z0)) {
+        counters[C_SLAB_OWNED_VERTICES] = slab_vertices;
+    }
+}

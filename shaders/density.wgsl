@@ -1,0 +1,131 @@
+// Density (and colour) gather: each thread computes RUN consecutive voxels along x of one slab
+// layer, looping over the atoms of the neighbouring bin cells once and sharing the y/z distance
+// work between its voxels (the paper's thread coarsening). Per-pair cutoff test before the
+// exponential; arithmetic mirrors the CPU reference (crate::surface density). Rust side:
+// src/gpu/density.rs. Output: density[v] and colour[3v..3v+3] (sum of w * colour, not yet
+// divided by I) for local voxel
+// v = i + nx * (j + ny * (k - dens_z0)).
+
+// Twin of crate::gpu::types::SlabUniform (112 bytes).
+struct SlabUniform {
+    origin: vec3<f32>,
+    spacing: f32,
+    dims: vec3<u32>,
+    isovalue: f32,
+    cell_origin: vec3<f32>,
+    cell_size: f32,
+    cell_dims: vec3<u32>,
+    cutoff: f32,
+    dens_z0: u32,
+    dens_layers: u32,
+    own_z0: u32,
+    own_z1: u32,
+    class_points: u32,
+    class_layers: u32,
+    max_cut: f32,
+    has_extra_layer: u32,
+    centre: vec3<f32>,
+    atom_count: u32,
+}
+
+// True when the colour volume is computed too.
+override WITH_COLOUR: bool = true;
+// False for a colour-only pass (colour scheme changed): the density volume is left as it is.
+override WRITE_DENSITY: bool = true;
+
+const RUN: u32 = 8u;
+
+@group(0) @binding(0) var<uniform> u: SlabUniform;
+@group(0) @binding(1) var<storage, read> sorted_atoms: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> sorted_colours: array<vec2<u32>>;
+@group(0) @binding(3) var<storage, read> cell_start: array<u32>;
+@group(0) @binding(4) var<storage, read> cell_end: array<u32>;
+@group(0) @binding(5) var<storage, read_write> density: array<f32>;
+@group(0) @binding(6) var<storage, read_write> colour: array<f32>;
+
+fn cell_coord(x: f32, o: f32, n: u32) -> u32 {
+    return u32(clamp(i32(floor((x - o) / u.cell_size)), 0, i32(n) - 1));
+}
+
+@compute @workgroup_size(4, 4, 4)
+fn main(@builtin(global_invocation_id) g: vec3<u32>) {
+    let i0 = g.x * RUN;
+    let j = g.y;
+    let kl = g.z;
+    if (i0 >= u.dims.x || j >= u.dims.y || kl >= u.dens_layers) {
+        return;
+    }
+    let k = u.dens_z0 + kl;
+    let y = u.origin.y + u.spacing * f32(j);
+    let z = u.origin.z + u.spacing * f32(k);
+    var xs: array<f32, RUN>;
+    var dens: array<f32, RUN>;
+    var col: array<vec3<f32>, RUN>;
+    for (var m = 0u; m < RUN; m++) {
+        xs[m] = u.origin.x + u.spacing * f32(i0 + m);
+        dens[m] = 0.0;
+        col[m] = vec3<f32>(0.0);
+    }
+    // A little slack so that rounding in floor() never drops a cell holding an atom in reach.
+    let reach = u.max_cut * 1.0001 + 1e-4;
+    let cx0 = cell_coord(xs[0] - reach, u.cell_origin.x, u.cell_dims.x);
+    let cx1 = cell_coord(xs[RUN - 1u] + reach, u.cell_origin.x, u.cell_dims.x);
+    let cy0 = cell_coord(y - reach, u.cell_origin.y, u.cell_dims.y);
+    let cy1 = cell_coord(y + reach, u.cell_origin.y, u.cell_dims.y);
+    let cz0 = cell_coord(z - reach, u.cell_origin.z, u.cell_dims.z);
+    let cz1 = cell_coord(z + reach, u.cell_origin.z, u.cell_dims.z);
+    for (var cz = cz0; cz <= cz1; cz++) {
+        for (var cy = cy0; cy <= cy1; cy++) {
+            // Cells cx0..=cx1 of one row are contiguous in the sorted atom array.
+            let row = u.cell_dims.x * (cy + u.cell_dims.y * cz);
+            let first = cell_start[row + cx0];
+            let last = cell_end[row + cx1];
+            for (var s = first; s < last; s++) {
+                let a = sorted_atoms[s];
+                let dy = y - a.y;
+                let dz = z - a.z;
+                let dy2 = dy * dy;
+                let dz2 = dz * dz;
+                let c = u.cutoff * a.w;
+                let cut2 = c * c;
+                // dx^2 >= 0, so no voxel of the run can pass when this fails (rounding is monotone).
+                if (dy2 + dz2 >= cut2) {
+                    continue;
+                }
+                let scale = -1.0 / (2.0 * a.w * a.w);
+                var rgb = vec3<f32>(0.0);
+                if (WITH_COLOUR) {
+                    let pc = sorted_colours[s];
+                    rgb = vec3<f32>(unpack2x16unorm(pc.x), unpack2x16unorm(pc.y).x);
+                }
+                for (var m = 0u; m < RUN; m++) {
+                    let dx = xs[m] - a.x;
+                    let d2 = dx * dx + dy2 + dz2;
+                    if (d2 < cut2) {
+                        let w = exp(d2 * scale);
+                        dens[m] += w;
+                        if (WITH_COLOUR) {
+                            col[m] += w * rgb;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let base = i0 + u.dims.x * (j + u.dims.y * kl);
+    for (var m = 0u; m < RUN; m++) {
+        if (i0 + m < u.dims.x) {
+            if (WRITE_DENSITY) {
+                density[base + m] = dens[m];
+            }
+            if (WITH_COLOUR) {
+                // Unnormalised sum of w * colour; emit.wgsl divides by I (so an I change
+                // re-runs only Marching Cubes).
+                let c = col[m];
+                colour[3u * (base + m)] = c.x;
+                colour[3u * (base + m) + 1u] = c.y;
+                colour[3u * (base + m) + 2u] = c.z;
+            }
+        }
+    }
+}

@@ -1,0 +1,133 @@
+// Area and volume of the finished mesh by a two-level deterministic reduction (fixed number of
+// workgroups, fixed order), plus the bookkeeping kernels that run between slabs and at the end of
+// a frame: emit dispatch arguments, slab bases, counts, overflow bits and the indirect draw
+// arguments for the renderer. Rust side: src/gpu/measure.rs.
+
+// Twin of crate::gpu::types::GpuCounters (64 bytes), viewed as u32 words.
+const C_VERTEX_COUNT: u32 = 0u;
+const C_TRIANGLE_COUNT: u32 = 1u;
+const C_OVERFLOW: u32 = 2u;
+const C_SLAB_VERTEX_BASE: u32 = 3u;
+const C_SLAB_TRIANGLE_BASE: u32 = 4u;
+const C_SLAB_OWNED_VERTICES: u32 = 5u;
+const C_SCAN_ACTIVE: u32 = 6u;
+const C_SCAN_VERTICES: u32 = 7u;
+const C_SCAN_TRIANGLES: u32 = 8u;
+const C_AREA: u32 = 9u;
+const C_VOLUME: u32 = 10u;
+const C_VERTEX_CAPACITY: u32 = 11u;
+const C_TRIANGLE_CAPACITY: u32 = 12u;
+const C_ACTIVE_TOTAL: u32 = 13u;
+
+// Twin of crate::gpu::types::MeasureUniform (16 bytes).
+struct MeasureUniform {
+    centre: vec3<f32>,
+    max_groups_x: u32,
+}
+
+const PARTIAL_GROUPS: u32 = 256u;
+
+@group(0) @binding(0) var<uniform> mu: MeasureUniform;
+@group(0) @binding(1) var<storage, read_write> counters: array<u32>;
+@group(0) @binding(2) var<storage, read> vertices: array<f32>;
+@group(0) @binding(3) var<storage, read> indices: array<u32>;
+@group(0) @binding(4) var<storage, read_write> partials: array<vec2<f32>>;
+// Emit dispatch (x, y, z) and draw-indexed-indirect arguments (index_count, instance_count,
+// first_index, base_vertex, first_instance).
+@group(0) @binding(5) var<storage, read_write> dispatch_args: array<u32>;
+@group(0) @binding(6) var<storage, read_write> draw_args: array<u32>;
+
+var<workgroup> sh: array<vec2<f32>, 256>;
+
+fn vertex(i: u32) -> vec3<f32> {
+    let o = 9u * i;
+    return vec3<f32>(vertices[o], vertices[o + 1u], vertices[o + 2u]) - mu.centre;
+}
+
+fn tree_sum(lid: u32) {
+    workgroupBarrier();
+    for (var off = 128u; off > 0u; off >>= 1u) {
+        if (lid < off) {
+            sh[lid] += sh[lid + off];
+        }
+        workgroupBarrier();
+    }
+}
+
+@compute @workgroup_size(256)
+fn partial_sums(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let ntri = min(counters[C_TRIANGLE_COUNT], counters[C_TRIANGLE_CAPACITY]);
+    let nvert = min(counters[C_VERTEX_COUNT], counters[C_VERTEX_CAPACITY]);
+    var acc = vec2<f32>(0.0);
+    for (var t = wg.x * 256u + lid; t < ntri; t += PARTIAL_GROUPS * 256u) {
+        let i0 = indices[3u * t];
+        let i1 = indices[3u * t + 1u];
+        let i2 = indices[3u * t + 2u];
+        if (i0 < nvert && i1 < nvert && i2 < nvert) {
+            let a = vertex(i0);
+            let b = vertex(i1);
+            let c = vertex(i2);
+            acc += vec2<f32>(0.5 * length(cross(b - a, c - a)), dot(a, cross(b, c)) / 6.0);
+        }
+    }
+    sh[lid] = acc;
+    tree_sum(lid);
+    if (lid == 0u) {
+        partials[wg.x] = sh[0];
+    }
+}
+
+@compute @workgroup_size(256)
+fn final_sum(@builtin(local_invocation_index) lid: u32) {
+    sh[lid] = partials[lid];
+    tree_sum(lid);
+    if (lid == 0u) {
+        counters[C_AREA] = bitcast<u32>(sh[0].x);
+        counters[C_VOLUME] = bitcast<u32>(sh[0].y);
+    }
+}
+
+// After the scans of a slab, before compaction: emit dispatch size and default owned vertices.
+@compute @workgroup_size(1)
+fn slab_begin() {
+    let groups = (counters[C_SCAN_ACTIVE] + 63u) / 64u;
+    let x = min(groups, mu.max_groups_x);
+    dispatch_args[0] = x;
+    dispatch_args[1] = select(0u, (groups + x - 1u) / max(x, 1u), groups > 0u);
+    dispatch_args[2] = 1u;
+    counters[C_SLAB_OWNED_VERTICES] = counters[C_SCAN_VERTICES];
+}
+
+// After a slab's emission: advance the global vertex and triangle bases.
+@compute @workgroup_size(1)
+fn slab_end() {
+    counters[C_SLAB_VERTEX_BASE] += counters[C_SLAB_OWNED_VERTICES];
+    counters[C_SLAB_TRIANGLE_BASE] += counters[C_SCAN_TRIANGLES];
+    counters[C_ACTIVE_TOTAL] += counters[C_SCAN_ACTIVE];
+}
+
+// After the last slab: totals, overflow bits and the renderer's indirect draw arguments.
+@compute @workgroup_size(1)
+fn frame_end() {
+    let nv = counters[C_SLAB_VERTEX_BASE];
+    let nt = counters[C_SLAB_TRIANGLE_BASE];
+    counters[C_VERTEX_COUNT] = nv;
+    counters[C_TRIANGLE_COUNT] = nt;
+    var overflow = counters[C_OVERFLOW];
+    if (nv > counters[C_VERTEX_CAPACITY]) {
+        overflow |= 1u;
+    }
+    if (nt > counters[C_TRIANGLE_CAPACITY]) {
+        overflow |= 2u;
+    }
+    counters[C_OVERFLOW] = overflow;
+    var draw = nt;
+    if (overflow != 0u) {
+        draw = 0u;
+    }
+    draw_args[0] = 3u * draw;
+    draw_args[1] = 1u;
+    draw_args[2] = 0u;
+    draw_args[3] = 0u;
+    draw_args[4] = 0u;
+}

@@ -1,0 +1,221 @@
+//! Pictures out of the viewer: the movie plan (a frame range, a turntable, or both) and its
+//! step list, the progress of a running export, and the numbered file names. The window layer
+//! renders each step with the same offscreen renderer as screenshots (`render_to_rgba`).
+
+use std::path::{Path, PathBuf};
+
+/// What a movie export records.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MoviePlan {
+    /// First and last trajectory frame (inclusive), or `None` to stay on the current frame.
+    pub frames: Option<(usize, usize)>,
+    /// Trajectory frames advanced per movie frame.
+    pub stride: usize,
+    /// Camera turn per movie frame in degrees (0: no turntable).
+    pub degrees_per_frame: f32,
+    /// Movie frames when `frames` is `None` (a pure turntable).
+    pub turntable_frames: usize,
+    /// Image size in pixels.
+    pub size: [u32; 2],
+    /// Folder the numbered PNGs go to.
+    pub dir: PathBuf,
+}
+
+impl Default for MoviePlan {
+    fn default() -> Self {
+        MoviePlan {
+            frames: None,
+            stride: 1,
+            degrees_per_frame: 2.0,
+            turntable_frames: 180,
+            size: [1280, 720],
+            dir: PathBuf::from("mdsurf-movie"),
+        }
+    }
+}
+
+/// One image of a movie: which trajectory frame, how far the camera has turned (degrees), and
+/// the file to write.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MovieStep {
+    /// Trajectory frame.
+    pub frame: usize,
+    /// Camera turn from the start in degrees.
+    pub degrees: f32,
+    /// Output PNG.
+    pub path: PathBuf,
+}
+
+/// `dir/frame_00042.png` for movie frame 42.
+pub fn numbered_path(dir: &Path, index: usize) -> PathBuf {
+    dir.join(format!("frame_{index:05}.png"))
+}
+
+impl MoviePlan {
+    /// The steps of this plan; `current` is the frame used when the plan has no range.
+    pub fn steps(&self, current: usize) -> Vec<MovieStep> {
+        let frames: Vec<usize> = match self.frames {
+            Some((a, b)) if a <= b => (a..=b).step_by(self.stride.max(1)).collect(),
+            Some((a, b)) => (b..=a).rev().step_by(self.stride.max(1)).collect(),
+            None => vec![current; self.turntable_frames.max(1)],
+        };
+        frames
+            .into_iter()
+            .enumerate()
+            .map(|(i, frame)| MovieStep {
+                frame,
+                degrees: self.degrees_per_frame * i as f32,
+                path: numbered_path(&self.dir, i),
+            })
+            .collect()
+    }
+}
+
+/// A running export.
+#[derive(Debug, Clone)]
+pub struct MovieJob {
+    /// All steps.
+    pub steps: Vec<MovieStep>,
+    /// Steps written so far.
+    pub done: usize,
+    /// Camera yaw at the start (radians).
+    pub start_yaw: f32,
+    /// Image size in pixels.
+    pub size: [u32; 2],
+}
+
+impl MovieJob {
+    /// Fraction done, 0 to 1.
+    pub fn progress(&self) -> f32 {
+        self.done as f32 / self.steps.len().max(1) as f32
+    }
+
+    /// The next step, or `None` when finished.
+    pub fn next(&self) -> Option<&MovieStep> {
+        self.steps.get(self.done)
+    }
+}
+
+/// Controls for screenshots and movies; edits `plan` (UI scratch) and returns commands.
+pub fn export_ui(
+    ui: &mut egui::Ui,
+    plan: &mut MoviePlan,
+    shot_scale: &mut u32,
+    frames: usize,
+    job: Option<&MovieJob>,
+) -> Vec<super::state::Command> {
+    use super::state::Command;
+    let mut out = Vec::new();
+    ui.heading("Export");
+    ui.horizontal(|ui| {
+        ui.add(egui::Slider::new(shot_scale, 1..=4).text("× window"));
+        if ui.button("Screenshot…").clicked() {
+            out.push(Command::Screenshot {
+                scale: *shot_scale,
+                size: None,
+                path: None,
+            });
+        }
+    });
+    if ui.button("Screenshot 3840×2160…").clicked() {
+        out.push(Command::Screenshot {
+            scale: 1,
+            size: Some([3840, 2160]),
+            path: None,
+        });
+    }
+    ui.separator();
+    let mut range = plan.frames.is_some();
+    ui.checkbox(&mut range, "trajectory range");
+    if range {
+        let last = frames.saturating_sub(1);
+        let (mut a, mut b) = plan.frames.unwrap_or((0, last));
+        ui.horizontal(|ui| {
+            ui.add(egui::DragValue::new(&mut a).range(0..=last).prefix("from "));
+            ui.add(egui::DragValue::new(&mut b).range(0..=last).prefix("to "));
+            ui.add(
+                egui::DragValue::new(&mut plan.stride)
+                    .range(1..=1000)
+                    .prefix("stride "),
+            );
+        });
+        plan.frames = Some((a, b));
+    } else {
+        plan.frames = None;
+        ui.add(
+            egui::DragValue::new(&mut plan.turntable_frames)
+                .range(1..=3600)
+                .prefix("images "),
+        );
+    }
+    ui.add(
+        egui::DragValue::new(&mut plan.degrees_per_frame)
+            .range(-90.0..=90.0)
+            .prefix("turn ")
+            .suffix(" °/image"),
+    );
+    ui.horizontal(|ui| {
+        ui.add(
+            egui::DragValue::new(&mut plan.size[0])
+                .range(16..=8192)
+                .prefix("w "),
+        );
+        ui.add(
+            egui::DragValue::new(&mut plan.size[1])
+                .range(16..=8192)
+                .prefix("h "),
+        );
+    });
+    let mut dir = plan.dir.display().to_string();
+    if ui
+        .add(egui::TextEdit::singleline(&mut dir).hint_text("output folder"))
+        .changed()
+    {
+        plan.dir = PathBuf::from(dir);
+    }
+    match job {
+        Some(j) => {
+            ui.add(egui::ProgressBar::new(j.progress()).text(format!(
+                "{}/{}",
+                j.done,
+                j.steps.len()
+            )));
+            if ui.button("Cancel").clicked() {
+                out.push(Command::CancelMovie);
+            }
+        }
+        None => {
+            if ui.button("Export movie (PNG sequence)").clicked() {
+                out.push(Command::StartMovie(plan.clone()));
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_cover_range_and_turn() {
+        let plan = MoviePlan {
+            frames: Some((2, 8)),
+            stride: 3,
+            degrees_per_frame: 10.0,
+            dir: "m".into(),
+            ..Default::default()
+        };
+        let s = plan.steps(0);
+        assert_eq!(s.iter().map(|s| s.frame).collect::<Vec<_>>(), [2, 5, 8]);
+        assert_eq!(s[2].degrees, 20.0);
+        assert_eq!(s[1].path, Path::new("m/frame_00001.png"));
+        let turn = MoviePlan {
+            turntable_frames: 4,
+            ..Default::default()
+        }
+        .steps(7);
+        assert_eq!(turn.len(), 4);
+        assert!(turn.iter().all(|s| s.frame == 7));
+    }
+}

@@ -1,0 +1,157 @@
+//! Area and volume against frame for the frames computed so far with the current parameters:
+//! the [`History`], a small line plot drawn with egui's painter ([`plot_ui`]), and CSV export.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+
+use super::state::Command;
+
+/// Area (Å²) and volume (Å³) per frame index.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct History {
+    values: BTreeMap<usize, (f64, f64)>,
+}
+
+impl History {
+    /// Forgets everything (parameters changed).
+    pub fn clear(&mut self) {
+        self.values.clear();
+    }
+
+    /// Records frame `frame`'s area (Å²) and volume (Å³).
+    pub fn record(&mut self, frame: usize, area: f64, volume: f64) {
+        self.values.insert(frame, (area, volume));
+    }
+
+    /// Number of frames recorded.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// True when nothing is recorded.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// (frame, area Å², volume Å³), in frame order.
+    pub fn rows(&self) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+        self.values.iter().map(|(&f, &(a, v))| (f, a, v))
+    }
+
+    /// The history as CSV text: a header line, then `frame,area_A2,volume_A3` rows.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from("frame,area_A2,volume_A3\n");
+        for (f, a, v) in self.rows() {
+            s.push_str(&format!("{f},{a:.4},{v:.4}\n"));
+        }
+        s
+    }
+
+    /// Writes [`History::to_csv`] to `path` atomically (temporary file, then rename).
+    pub fn write_csv(&self, path: &Path) -> Result<(), String> {
+        let err = |e: std::io::Error| format!("{}: {e}", path.display());
+        let dir = path
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(err)?;
+        tmp.write_all(self.to_csv().as_bytes()).map_err(err)?;
+        tmp.persist(path).map_err(|e| err(e.error))?;
+        Ok(())
+    }
+}
+
+/// Draws area and volume (each scaled to its own range) against frame, with the current frame
+/// marked, and a CSV export button.
+pub fn plot_ui(
+    ui: &mut egui::Ui,
+    history: &History,
+    current: usize,
+    frames: usize,
+) -> Vec<Command> {
+    let mut out = Vec::new();
+    ui.horizontal(|ui| {
+        ui.colored_label(AREA, "— area (Å²)");
+        ui.colored_label(VOLUME, "— volume (Å³)");
+        ui.label(format!("{} frames", history.len()));
+        if ui
+            .add_enabled(!history.is_empty(), egui::Button::new("Export CSV…"))
+            .clicked()
+        {
+            out.push(Command::ExportCsv(None));
+        }
+    });
+    let size = egui::vec2(ui.available_width(), 110.0);
+    let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
+    let x_of =
+        |f: usize| rect.left() + rect.width() * f as f32 / frames.saturating_sub(1).max(1) as f32;
+    let x = x_of(current);
+    painter.line_segment(
+        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
+        (1.0, egui::Color32::GRAY),
+    );
+    for (series, colour) in [(0, AREA), (1, VOLUME)] {
+        let vals: Vec<(usize, f64)> = history
+            .rows()
+            .map(|(f, a, v)| (f, if series == 0 { a } else { v }))
+            .collect();
+        let (lo, hi) = vals.iter().fold((f64::MAX, f64::MIN), |(lo, hi), (_, v)| {
+            (lo.min(*v), hi.max(*v))
+        });
+        let span = (hi - lo).max(hi.abs() * 1e-6).max(1e-9);
+        let pts: Vec<egui::Pos2> = vals
+            .iter()
+            .map(|&(f, v)| {
+                let y = rect.bottom() - 6.0 - (rect.height() - 12.0) * ((v - lo) / span) as f32;
+                egui::pos2(x_of(f), y)
+            })
+            .collect();
+        if pts.len() == 1 {
+            painter.circle_filled(pts[0], 2.5, colour);
+        } else {
+            painter.add(egui::Shape::line(pts, (1.5, colour)));
+        }
+        if !vals.is_empty() {
+            let text = format!("{lo:.0} … {hi:.0}");
+            let at = if series == 0 {
+                rect.left_top()
+            } else {
+                rect.left_bottom() - egui::vec2(0.0, 14.0)
+            };
+            painter.text(
+                at + egui::vec2(4.0, 2.0),
+                egui::Align2::LEFT_TOP,
+                text,
+                egui::FontId::monospace(10.0),
+                colour,
+            );
+        }
+    }
+    out
+}
+
+const AREA: egui::Color32 = egui::Color32::from_rgb(90, 170, 255);
+const VOLUME: egui::Color32 = egui::Color32::from_rgb(255, 160, 60);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_has_header_and_rows_in_frame_order() {
+        let mut h = History::default();
+        h.record(3, 10.0, 20.5);
+        h.record(1, 1.0, 2.0);
+        assert_eq!(
+            h.to_csv(),
+            "frame,area_A2,volume_A3\n1,1.0000,2.0000\n3,10.0000,20.5000\n"
+        );
+        let dir = tempfile::tempdir().expect("tempdir");
+        let p = dir.path().join("h.csv");
+        h.write_csv(&p).expect("write");
+        assert_eq!(std::fs::read_to_string(&p).expect("read"), h.to_csv());
+    }
+}

@@ -1,0 +1,476 @@
+//! The eframe application: lays out the menu, panels, timeline, plot and viewport, collects the
+//! commands the `*_ui` functions return and applies them in one place ([`Viewer::apply`]), runs
+//! background loads and file dialogs, screenshots and movie exports, and the scripted run
+//! (`--play-frames N --screenshot FILE --quit`).
+
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use super::export::{MovieJob, MoviePlan, export_ui};
+use super::panels::{SurfaceDraft, look_ui, readouts_ui, surface_ui};
+use super::plot::plot_ui;
+use super::recent::{Recent, RecentEntry};
+use super::source::{FrameSource, open_files};
+use super::state::{AppCore, Command};
+use super::timeline::{TimelineCmd, timeline_ui};
+use super::viewport::{GpuView, viewport_ui};
+use crate::render::write_png;
+
+/// What a scripted run does (all optional).
+#[derive(Debug, Clone, Default)]
+pub struct Script {
+    /// Frames to play (each computed and shown) before the screenshot.
+    pub play_frames: Option<usize>,
+    /// Screenshot written through the app's screenshot path.
+    pub screenshot: Option<PathBuf>,
+    /// Close the window when done.
+    pub quit: bool,
+}
+
+/// Where a scripted run reports failure (read after the window closes).
+pub type ScriptResult = Arc<Mutex<Option<String>>>;
+
+type Loaded = (Result<Arc<dyn FrameSource>, String>, RecentEntry);
+
+/// The viewer window.
+pub struct Viewer {
+    core: AppCore,
+    gpu: Option<GpuView>,
+    draft: SurfaceDraft,
+    plan: MoviePlan,
+    shot_scale: u32,
+    movie: Option<MovieJob>,
+    recent: Recent,
+    loading: Option<Receiver<Loaded>>,
+    picked: Option<Receiver<Command>>,
+    script: Script,
+    script_played: usize,
+    script_result: ScriptResult,
+    last_update: Instant,
+    fps: f64,
+}
+
+impl Viewer {
+    /// A viewer on `core`; `gpu` is `None` when eframe has no wgpu device (then nothing is drawn).
+    pub fn new(
+        core: AppCore,
+        gpu: Option<GpuView>,
+        script: Script,
+        script_result: ScriptResult,
+    ) -> Viewer {
+        let draft = SurfaceDraft {
+            params: core.params,
+        };
+        Viewer {
+            core,
+            gpu,
+            draft,
+            plan: MoviePlan::default(),
+            shot_scale: 1,
+            movie: None,
+            recent: Recent::load(),
+            loading: None,
+            picked: None,
+            script,
+            script_played: 0,
+            script_result,
+            last_update: Instant::now(),
+            fps: 0.0,
+        }
+    }
+
+    /// The state behind the window (for tests).
+    pub fn core(&self) -> &AppCore {
+        &self.core
+    }
+
+    /// Starts loading `top` (+ `traj`) on a background thread; the current data stays until it
+    /// succeeds.
+    pub fn open(&mut self, ctx: &egui::Context, top: PathBuf, traj: Option<PathBuf>) {
+        let (tx, rx) = channel();
+        let ctx = ctx.clone();
+        self.core.status = format!("loading {}…", top.display());
+        std::thread::spawn(move || {
+            let result = open_files(&top, traj.as_deref());
+            let _ = tx.send((result, RecentEntry { top, traj }));
+            ctx.request_repaint();
+        });
+        self.loading = Some(rx);
+    }
+
+    /// Applies one command: window-level ones here, the rest in [`AppCore::apply`].
+    fn apply(&mut self, ctx: &egui::Context, cmd: Command) {
+        self.core.apply(cmd);
+        for cmd in std::mem::take(&mut self.core.outbox) {
+            match cmd {
+                Command::Open(top, traj) => self.open(ctx, top, traj),
+                Command::OpenDialog => self.dialog(
+                    ctx,
+                    |paths| {
+                        let mut it = paths.into_iter();
+                        it.next().map(|top| Command::Open(top, it.next()))
+                    },
+                    true,
+                ),
+                Command::Screenshot {
+                    scale,
+                    size,
+                    path: Some(path),
+                } => {
+                    if let Err(e) = self.screenshot(scale, size, &path) {
+                        self.core.error = Some(e);
+                    }
+                }
+                Command::Screenshot {
+                    scale,
+                    size,
+                    path: None,
+                } => self.dialog(
+                    ctx,
+                    move |p| {
+                        p.into_iter().next().map(|path| Command::Screenshot {
+                            scale,
+                            size,
+                            path: Some(path),
+                        })
+                    },
+                    false,
+                ),
+                Command::ExportCsv(Some(path)) => match self.core.history.write_csv(&path) {
+                    Ok(()) => self.core.status = format!("wrote {}", path.display()),
+                    Err(e) => self.core.error = Some(e),
+                },
+                Command::ExportCsv(None) => self.dialog(
+                    ctx,
+                    |p| p.into_iter().next().map(|p| Command::ExportCsv(Some(p))),
+                    false,
+                ),
+                Command::StartMovie(plan) => {
+                    let steps = plan.steps(self.core.timeline.current);
+                    self.core.timeline.playing = false;
+                    self.movie = Some(MovieJob {
+                        steps,
+                        done: 0,
+                        start_yaw: self.core.camera.yaw,
+                        size: plan.size,
+                    });
+                }
+                Command::CancelMovie => {
+                    if let Some(job) = self.movie.take() {
+                        self.core.status = format!("movie cancelled after {} images", job.done);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Runs a file dialog on a background thread (open: several files; else save) and turns the
+    /// chosen paths into a command.
+    fn dialog(
+        &mut self,
+        ctx: &egui::Context,
+        then: impl FnOnce(Vec<PathBuf>) -> Option<Command> + Send + 'static,
+        open: bool,
+    ) {
+        let (tx, rx) = channel();
+        let ctx = ctx.clone();
+        std::thread::spawn(move || {
+            let d = rfd::FileDialog::new();
+            let paths = if open {
+                d.pick_files().unwrap_or_default()
+            } else {
+                d.save_file().into_iter().collect()
+            };
+            if let Some(cmd) = then(paths) {
+                let _ = tx.send(cmd);
+            }
+            ctx.request_repaint();
+        });
+        self.picked = Some(rx);
+    }
+
+    /// Renders the current view at `scale` × the viewport (or `size`) and writes a PNG.
+    fn screenshot(
+        &mut self,
+        scale: u32,
+        size: Option<[u32; 2]>,
+        path: &std::path::Path,
+    ) -> Result<(), String> {
+        let gpu = self.gpu.as_mut().ok_or("no GPU device for screenshots")?;
+        let base = gpu.size().unwrap_or([1280, 720]);
+        let size = size.unwrap_or([base[0] * scale.clamp(1, 4), base[1] * scale.clamp(1, 4)]);
+        gpu.sync(&mut self.core);
+        let image = gpu
+            .snapshot(&self.core.camera, &self.core.render, size)
+            .map_err(|e| e.to_string())?;
+        write_png(path, &image).map_err(|e| e.to_string())?;
+        self.core.status = format!("wrote {} ({}×{})", path.display(), size[0], size[1]);
+        Ok(())
+    }
+
+    fn poll_background(&mut self, ctx: &egui::Context) {
+        if let Some((result, entry)) = self.loading.as_ref().and_then(|rx| rx.try_recv().ok()) {
+            self.loading = None;
+            match result {
+                Ok(source) => {
+                    self.core.set_source(source);
+                    self.recent.push(entry);
+                }
+                Err(e) => {
+                    self.core.error = Some(format!("could not open {}: {e}", entry.top.display()))
+                }
+            }
+        }
+        if let Some(cmd) = self.picked.as_ref().and_then(|rx| rx.try_recv().ok()) {
+            self.picked = None;
+            self.apply(ctx, cmd);
+        }
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .filter(|p| !p.as_os_str().is_empty())
+                .collect()
+        });
+        if let Some(top) = dropped.first().cloned() {
+            self.apply(ctx, Command::Open(top, dropped.get(1).cloned()));
+        }
+    }
+
+    /// Advances a running movie by at most one image per UI update.
+    fn step_movie(&mut self) {
+        let Some(job) = self.movie.as_mut() else {
+            return;
+        };
+        let Some(step) = job.next().cloned() else {
+            self.core.status = format!("movie: wrote {} images", job.done);
+            self.movie = None;
+            return;
+        };
+        if self.core.timeline.current != step.frame {
+            self.core
+                .apply(Command::Timeline(TimelineCmd::Seek(step.frame)));
+            return;
+        }
+        if self.core.computing()
+            || self
+                .core
+                .shown
+                .as_ref()
+                .is_none_or(|s| s.computed.frame != step.frame)
+        {
+            return;
+        }
+        let (Some(gpu), Some(job)) = (self.gpu.as_mut(), self.movie.as_mut()) else {
+            return;
+        };
+        gpu.sync(&mut self.core);
+        let mut camera = self.core.camera;
+        camera.yaw = job.start_yaw;
+        camera.turn(step.degrees);
+        let result = gpu
+            .snapshot(&camera, &self.core.render, job.size)
+            .map_err(|e| e.to_string())
+            .and_then(|img| write_png(&step.path, &img).map_err(|e| e.to_string()));
+        match result {
+            Ok(()) => job.done += 1,
+            Err(e) => {
+                self.core.error = Some(format!("movie stopped: {e}"));
+                self.movie = None;
+            }
+        }
+    }
+
+    /// The scripted run: show frames 0..N one by one, then screenshot, then quit.
+    fn step_script(&mut self, ctx: &egui::Context) {
+        if self.core.source.is_none() {
+            if self.loading.is_none() && (self.core.error.is_some()) && self.script.quit {
+                self.finish_script(ctx, self.core.error.clone());
+            }
+            return;
+        }
+        if let Some(e) = self.core.error.clone().filter(|_| self.script.quit) {
+            return self.finish_script(ctx, Some(e));
+        }
+        let want = self
+            .script
+            .play_frames
+            .unwrap_or(1)
+            .min(self.core.timeline.len.max(1));
+        let shown = self.core.shown.as_ref().map(|s| s.computed.frame);
+        if self.core.computing() || shown != Some(self.core.timeline.current) {
+            return;
+        }
+        if self.script_played + 1 < want {
+            self.script_played += 1;
+            self.core.apply(Command::Timeline(TimelineCmd::Step(1)));
+            return;
+        }
+        let result = match self.script.screenshot.clone() {
+            Some(path) => self.screenshot(1, None, &path).err(),
+            None => None,
+        };
+        self.finish_script(ctx, result);
+    }
+
+    fn finish_script(&mut self, ctx: &egui::Context, error: Option<String>) {
+        eprintln!(
+            "scripted run: showed {} frame(s), last frame {}, engine {}{}",
+            self.script_played + 1,
+            self.core.timeline.current,
+            self.core.engine_name(),
+            error
+                .as_deref()
+                .map_or(String::new(), |e| format!("; error: {e}"))
+        );
+        if let Ok(mut r) = self.script_result.lock() {
+            *r = error;
+        }
+        if self.script.quit {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+        self.script = Script::default();
+        self.script.play_frames = Some(0);
+    }
+
+    fn scripted(&self) -> bool {
+        self.script.play_frames.is_some_and(|n| n > 0)
+            || self.script.screenshot.is_some()
+            || self.script.quit
+    }
+
+    fn menu_ui(&mut self, ui: &mut egui::Ui) -> Vec<Command> {
+        let mut out = Vec::new();
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open…").clicked() {
+                    out.push(Command::OpenDialog);
+                }
+                ui.menu_button("Recent", |ui| {
+                    for e in &self.recent.entries {
+                        let label = match &e.traj {
+                            Some(t) => format!("{} + {}", e.top.display(), t.display()),
+                            None => e.top.display().to_string(),
+                        };
+                        if ui.button(label).clicked() {
+                            out.push(Command::Open(e.top.clone(), e.traj.clone()));
+                        }
+                    }
+                });
+                if ui.button("Screenshot…").clicked() {
+                    out.push(Command::Screenshot {
+                        scale: 1,
+                        size: None,
+                        path: None,
+                    });
+                }
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.label(&self.core.status);
+        });
+        out
+    }
+}
+
+impl eframe::App for Viewer {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        let now = Instant::now();
+        let dt = now.duration_since(self.last_update).as_secs_f64();
+        self.last_update = now;
+        self.poll_background(&ctx);
+        if self.core.poll() {
+            self.fps = if dt > 0.0 {
+                0.8 * self.fps + 0.2 / dt
+            } else {
+                self.fps
+            };
+        }
+        if self.movie.is_none() && !self.scripted() && self.core.timeline.advance(dt) {
+            self.core.request_current();
+        }
+        if let Some(speed) = self.core.turntable.filter(|_| self.movie.is_none()) {
+            self.core.camera.turn(speed * dt as f32);
+        }
+        if self.scripted() {
+            self.step_script(&ctx);
+        }
+        self.step_movie();
+
+        let mut cmds = Vec::new();
+        egui::Panel::top("menu").show(ui, |ui| cmds.extend(self.menu_ui(ui)));
+        if let Some(err) = self.core.error.clone() {
+            egui::Panel::top("error").show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    ui.colored_label(ui.visuals().error_fg_color, err);
+                    if ui.button("Dismiss").clicked() {
+                        cmds.push(Command::DismissError);
+                    }
+                });
+            });
+        }
+        egui::Panel::left("controls")
+            .resizable(true)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    cmds.extend(surface_ui(ui, &self.core, &mut self.draft));
+                    ui.separator();
+                    cmds.extend(look_ui(ui, &self.core));
+                    ui.separator();
+                    let frames = self.core.timeline.len;
+                    cmds.extend(export_ui(
+                        ui,
+                        &mut self.plan,
+                        &mut self.shot_scale,
+                        frames,
+                        self.movie.as_ref(),
+                    ));
+                });
+            });
+        let render_ms = self.gpu.as_ref().map_or(0.0, |g| g.render_ms);
+        egui::Panel::right("readouts")
+            .show(ui, |ui| readouts_ui(ui, &self.core, render_ms, self.fps));
+        egui::Panel::bottom("timeline").show(ui, |ui| {
+            let time = self.core.shown.as_ref().and_then(|s| s.computed.time_ps);
+            cmds.extend(timeline_ui(ui, &self.core.timeline, time));
+            let (h, cur, len) = (
+                &self.core.history,
+                self.core.timeline.current,
+                self.core.timeline.len,
+            );
+            cmds.extend(plot_ui(ui, h, cur, len));
+        });
+        egui::CentralPanel::default().show(ui, |ui| {
+            let (view_cmds, size) = viewport_ui(ui, self.gpu_texture());
+            cmds.extend(view_cmds);
+            if let Some(gpu) = self.gpu.as_mut() {
+                gpu.sync(&mut self.core);
+                gpu.render(&self.core.camera, &self.core.render, size);
+            }
+        });
+        for cmd in cmds {
+            self.apply(&ctx, cmd);
+        }
+        if self.core.timeline.playing
+            || self.core.computing()
+            || self.core.turntable.is_some()
+            || self.movie.is_some()
+            || self.scripted()
+            || self.loading.is_some()
+        {
+            ctx.request_repaint();
+        }
+    }
+}
+
+impl Viewer {
+    fn gpu_texture(&self) -> Option<egui::TextureId> {
+        self.gpu.as_ref().and_then(|g| g.texture_id())
+    }
+}

@@ -1,0 +1,158 @@
+//! The result table of `mdsurf bench`: one row per case and engine with per-stage medians (ms),
+//! frames per second and peak memory, as aligned text for the terminal and as CSV.
+
+use super::bench::BenchResult;
+
+/// Column headers, in order (text and CSV share them).
+pub const COLUMNS: [&str; 14] = [
+    "case",
+    "backend",
+    "atoms",
+    "H_A",
+    "grid",
+    "triangles",
+    "read_ms",
+    "upload_ms",
+    "bin_ms",
+    "density_ms",
+    "mc_ms",
+    "compute_ms",
+    "frames_per_s",
+    "peak_rss_MB",
+];
+
+/// A formatted benchmark table.
+#[derive(Debug, Clone, Default)]
+pub struct Table {
+    rows: Vec<[String; COLUMNS.len()]>,
+}
+
+impl Table {
+    /// One row per result.
+    pub fn from_results(results: &[BenchResult]) -> Table {
+        let rows = results
+            .iter()
+            .map(|r| {
+                let s = &r.stages;
+                [
+                    r.case.clone(),
+                    r.backend.clone(),
+                    r.atoms.to_string(),
+                    format!("{}", r.spacing),
+                    format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2]),
+                    r.triangles.to_string(),
+                    format!("{:.2}", r.read_ms),
+                    format!("{:.2}", s.upload_ms),
+                    format!("{:.2}", s.bin_ms),
+                    format!("{:.2}", s.density_ms),
+                    format!("{:.2}", s.mc_ms),
+                    format!("{:.2}", r.compute_wall_ms),
+                    format!("{:.2}", r.fps),
+                    r.peak_rss
+                        .map(|b| format!("{:.0}", b as f64 / 1e6))
+                        .unwrap_or_else(|| "-".into()),
+                ]
+            })
+            .collect();
+        Table { rows }
+    }
+
+    /// Aligned text: the first two columns left-aligned, numbers right-aligned.
+    pub fn to_text(&self) -> String {
+        let mut widths = COLUMNS.map(str::len);
+        for row in &self.rows {
+            for (w, cell) in widths.iter_mut().zip(row) {
+                *w = (*w).max(cell.chars().count());
+            }
+        }
+        let line = |cells: &[String]| -> String {
+            let parts: Vec<String> = cells
+                .iter()
+                .zip(widths)
+                .enumerate()
+                .map(|(i, (c, w))| {
+                    if i < 2 {
+                        format!("{c:<w$}")
+                    } else {
+                        format!("{c:>w$}")
+                    }
+                })
+                .collect();
+            parts.join("  ").trim_end().to_string()
+        };
+        let header: Vec<String> = COLUMNS.iter().map(|s| s.to_string()).collect();
+        let mut out = vec![line(&header)];
+        out.extend(self.rows.iter().map(|r| line(r)));
+        out.join("\n")
+    }
+
+    /// CSV with a header line; fields containing commas or quotes are quoted.
+    pub fn to_csv(&self) -> String {
+        let mut out = COLUMNS.join(",");
+        out.push('\n');
+        for row in &self.rows {
+            let fields: Vec<String> = row.iter().map(|f| csv_field(f)).collect();
+            out.push_str(&fields.join(","));
+            out.push('\n');
+        }
+        out
+    }
+}
+
+fn csv_field(f: &str) -> String {
+    if f.contains([',', '"', '\n']) {
+        format!("\"{}\"", f.replace('"', "\"\""))
+    } else {
+        f.to_string()
+    }
+}
+
+/// Peak resident set size of this process in bytes (Linux `VmHWM`), `None` elsewhere.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(case: &str) -> BenchResult {
+        BenchResult {
+            case: case.into(),
+            backend: "cpu".into(),
+            atoms: 5547,
+            spacing: 1.0,
+            dims: [60, 70, 80],
+            triangles: 12345,
+            read_ms: 0.5,
+            compute_wall_ms: 12.0,
+            fps: 80.0,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn text_is_aligned_and_csv_is_quoted() {
+        let t = Table::from_results(&[result("demo"), result("synthetic 10, tiled")]);
+        let text = t.to_text();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 3);
+        // Right-aligned numbers end in the same column on every line.
+        let end = |l: &str| l.find("80.00").map(|i| i + 5);
+        assert_eq!(end(lines[1]), end(lines[2]));
+        assert!(lines[0].starts_with("case"));
+        let csv = t.to_csv();
+        assert!(csv.contains("\"synthetic 10, tiled\",cpu,5547,1,60x70x80,12345"));
+        assert_eq!(csv.lines().count(), 3);
+    }
+
+    #[test]
+    fn peak_rss_is_known_on_linux() {
+        if cfg!(target_os = "linux") {
+            assert!(peak_rss_bytes().is_some_and(|b| b > 0));
+        }
+    }
+}

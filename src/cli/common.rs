@@ -1,0 +1,329 @@
+//! What the headless subcommands share: the input options (files, beads, colours, radii), the
+//! surface parameters (H, R, I, quality), the frame selection, the backend choice, and loading
+//! a system into the particles an engine consumes. Sits between the command line and the
+//! library's `io`, `model`, `surface` and `gpu` modules.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use glam::Vec3;
+use mdsurf::gpu::GpuEngine;
+use mdsurf::io::{self, Trajectory};
+use mdsurf::model::{ColorScheme, Frame, ParticleOptions, Particles, RadiusOverrides};
+use mdsurf::surface::{CpuEngine, Quality, SurfaceEngine, SurfaceParams};
+
+/// Input files and how their atoms become particles.
+#[derive(clap::Args, Debug, Clone)]
+pub struct InputArgs {
+    /// Structure or topology file (PDB, mmCIF, GRO, XYZ, ...); may be the trajectory itself.
+    #[arg(value_name = "TOP")]
+    pub top: PathBuf,
+    /// Trajectory file (XTC, TRR, DCD, LAMMPS dump, TNG, NetCDF, ...).
+    #[arg(value_name = "TRAJ")]
+    pub traj: Option<PathBuf>,
+    #[command(flatten)]
+    pub particles: ParticleArgs,
+}
+
+/// How atoms become particles: beads, colours, radius overrides.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ParticleArgs {
+    /// One bead per residue instead of one particle per atom.
+    #[arg(long)]
+    pub beads: bool,
+    /// Colour scheme: element, chain, residue-type, residue-index, b-factor or single:#rrggbb.
+    #[arg(long = "color", value_name = "SCHEME", default_value = "element")]
+    pub color: String,
+    /// Radius override in Å per element or particle type, e.g. `C=1.7` or `2=1.2` (repeatable).
+    #[arg(long = "radius", value_name = "TYPE=Å")]
+    pub radius: Vec<String>,
+}
+
+impl ParticleArgs {
+    /// The library's particle options; fails with a one-line message on a bad scheme or radius.
+    pub fn options(&self) -> Result<ParticleOptions> {
+        let colours = ColorScheme::from_str(&self.color).map_err(|e| anyhow!("--color: {e}"))?;
+        let radius_overrides =
+            RadiusOverrides::parse_all(&self.radius).map_err(|e| anyhow!("--radius: {e}"))?;
+        Ok(ParticleOptions {
+            beads: self.beads,
+            radius_overrides,
+            colours,
+        })
+    }
+}
+
+/// The surface parameters H, R, I and quality.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ParamArgs {
+    /// Grid spacing H in Å.
+    #[arg(
+        long,
+        value_name = "H",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
+    pub spacing: f32,
+    /// Radius scale R: Gaussian width = radius * R.
+    #[arg(
+        long,
+        value_name = "R",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
+    pub radius_scale: f32,
+    /// Isovalue I of the density (1.0 = peak of one isolated atom).
+    #[arg(
+        long,
+        value_name = "I",
+        default_value_t = 0.5,
+        allow_negative_numbers = true
+    )]
+    pub isovalue: f32,
+    /// Gaussian cutoff: low (2 alpha), medium (2.5), high (3), max (4).
+    #[arg(long, value_name = "Q", default_value = "medium")]
+    pub quality: Quality,
+}
+
+impl ParamArgs {
+    /// Checked parameters: H, R and I must be positive and finite.
+    pub fn params(&self) -> Result<SurfaceParams> {
+        let params = SurfaceParams {
+            spacing: self.spacing,
+            radius_scale: self.radius_scale,
+            isovalue: self.isovalue,
+            quality: self.quality,
+        };
+        params.validate()?;
+        Ok(params)
+    }
+}
+
+/// Which engine computes the surfaces.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    /// The multi-threaded CPU reference engine.
+    Cpu,
+    /// The wgpu compute engine.
+    Gpu,
+    /// The GPU when an adapter exists, else the CPU.
+    Auto,
+}
+
+/// Creates the engine for `backend`; `auto` says on stderr which one it picked and why.
+pub fn make_engine(backend: Backend) -> Result<Box<dyn SurfaceEngine>> {
+    match backend {
+        Backend::Cpu => Ok(Box::new(CpuEngine::new())),
+        Backend::Gpu => Ok(Box::new(
+            GpuEngine::new().context("--backend gpu: cannot start the GPU engine")?,
+        )),
+        Backend::Auto => match GpuEngine::new() {
+            Ok(gpu) => {
+                eprintln!("backend: gpu ({})", gpu.context().adapter_name);
+                Ok(Box::new(gpu))
+            }
+            Err(err) => {
+                eprintln!("backend: cpu (no usable GPU: {err:#})");
+                Ok(Box::new(CpuEngine::new()))
+            }
+        },
+    }
+}
+
+/// Which engines `mdsurf bench` times.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BenchBackend {
+    /// Only the CPU engine.
+    Cpu,
+    /// Only the GPU engine (an error when there is none).
+    Gpu,
+    /// Every engine that starts on this machine.
+    All,
+}
+
+/// The engines `backend` asks for; `all` skips a GPU that does not start, saying so on stderr.
+pub fn engines_for(backend: BenchBackend) -> Result<Vec<Box<dyn SurfaceEngine>>> {
+    let mut engines: Vec<Box<dyn SurfaceEngine>> = Vec::new();
+    if backend != BenchBackend::Gpu {
+        engines.push(Box::new(CpuEngine::new()));
+    }
+    if backend == BenchBackend::Cpu {
+        return Ok(engines);
+    }
+    match GpuEngine::new() {
+        Ok(gpu) => {
+            eprintln!("gpu: {}", gpu.context().adapter_name);
+            engines.push(Box::new(gpu));
+        }
+        Err(err) if backend == BenchBackend::Gpu => {
+            return Err(
+                anyhow::Error::new(err).context("--backend gpu: cannot start the GPU engine")
+            );
+        }
+        Err(err) => eprintln!("note: no GPU engine ({err}); timing the CPU only"),
+    }
+    Ok(engines)
+}
+
+/// A `START:STOP:STEP` frame selection (STOP exclusive; each part optional; a single number
+/// selects one frame).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameRange {
+    /// First frame, from 0.
+    pub start: usize,
+    /// One past the last frame; `None` for the end of the trajectory.
+    pub stop: Option<usize>,
+    /// Step between frames (at least 1).
+    pub step: usize,
+}
+
+impl Default for FrameRange {
+    fn default() -> Self {
+        FrameRange {
+            start: 0,
+            stop: None,
+            step: 1,
+        }
+    }
+}
+
+impl FromStr for FrameRange {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let bad = || format!("bad frame range '{s}': expected START:STOP:STEP, e.g. 0:50:5 or 10");
+        let num = |p: &str| -> Result<Option<usize>, String> {
+            let p = p.trim();
+            if p.is_empty() {
+                Ok(None)
+            } else {
+                p.parse().map(Some).map_err(|_| bad())
+            }
+        };
+        let parts: Vec<&str> = s.split(':').collect();
+        let range = match parts.as_slice() {
+            [one] => {
+                let n = num(one)?.ok_or_else(bad)?;
+                FrameRange {
+                    start: n,
+                    stop: Some(n + 1),
+                    step: 1,
+                }
+            }
+            [a, b] | [a, b, ""] => FrameRange {
+                start: num(a)?.unwrap_or(0),
+                stop: num(b)?,
+                step: 1,
+            },
+            [a, b, c] => FrameRange {
+                start: num(a)?.unwrap_or(0),
+                stop: num(b)?,
+                step: num(c)?.unwrap_or(1),
+            },
+            _ => return Err(bad()),
+        };
+        if range.step == 0 {
+            return Err(format!(
+                "bad frame range '{s}': the step must be at least 1"
+            ));
+        }
+        Ok(range)
+    }
+}
+
+impl fmt::Display for FrameRange {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.stop {
+            Some(stop) => write!(f, "{}:{}:{}", self.start, stop, self.step),
+            None => write!(f, "{}::{}", self.start, self.step),
+        }
+    }
+}
+
+impl FrameRange {
+    /// The selected frame indices of a trajectory with `len` frames.
+    pub fn indices(&self, len: usize) -> Vec<usize> {
+        let stop = self.stop.unwrap_or(len).min(len);
+        (self.start..stop).step_by(self.step).collect()
+    }
+}
+
+/// An opened system: its trajectory and the particles the engine gets.
+pub struct System {
+    /// The trajectory (or single structure).
+    pub trajectory: Trajectory,
+    /// Radii and colours per particle; positions per frame.
+    pub particles: Particles,
+    /// The file frames come from (the trajectory, else the topology), for messages.
+    pub frames_path: PathBuf,
+}
+
+impl System {
+    /// Opens `input`, reads `first_frame` to size beads, and builds the particles.
+    /// Returns the system and that frame.
+    pub fn open(input: &InputArgs, first_frame: usize) -> Result<(System, Frame)> {
+        let options = input.particles.options()?;
+        let trajectory = io::open(&input.top, input.traj.as_deref())?;
+        let frames_path = trajectory.path().to_path_buf();
+        if trajectory.is_empty() {
+            bail!("{}: the trajectory has no frames", frames_path.display());
+        }
+        let first = trajectory.read_frame(first_frame.min(trajectory.len() - 1))?;
+        let particles = Particles::new(trajectory.topology(), &first, &options)
+            .map_err(|e| anyhow!("{}: {e}", frames_path.display()))?;
+        Ok((
+            System {
+                trajectory,
+                particles,
+                frames_path,
+            },
+            first,
+        ))
+    }
+
+    /// Number of readable frames.
+    pub fn len(&self) -> usize {
+        self.trajectory.len()
+    }
+
+    /// Frames a selection may name: the readable ones plus, in a damaged (truncated) file, the
+    /// first unreadable one, so that a run over the whole file reaches it and reports its error
+    /// after processing the good frames.
+    pub fn selectable_len(&self) -> usize {
+        match self.trajectory.damage() {
+            Some(damage) => damage.frame + 1,
+            None => self.trajectory.len(),
+        }
+    }
+
+    /// Reads frame `index` and writes its particle positions (Å) into `out`. Returns the frame
+    /// (for its time) and the time the read took in ms.
+    pub fn read_positions(&mut self, index: usize, out: &mut Vec<Vec3>) -> Result<(Frame, f64)> {
+        let t0 = Instant::now();
+        let frame = self.trajectory.read_frame(index)?;
+        self.particles
+            .positions_into(&frame, out)
+            .map_err(|e| anyhow!("{}: frame {index}: {e}", self.frames_path.display()))?;
+        Ok((frame, ms_since(t0)))
+    }
+}
+
+/// Milliseconds elapsed since `t0`.
+pub fn ms_since(t0: Instant) -> f64 {
+    t0.elapsed().as_secs_f64() * 1e3
+}
+
+/// The bundled demo (`assets/md_1u19.gro` + `.xtc`): next to the working directory, else in
+/// the source tree the binary was built from.
+pub fn demo_files() -> Result<(PathBuf, PathBuf)> {
+    for root in [Path::new("."), Path::new(env!("CARGO_MANIFEST_DIR"))] {
+        let gro = root.join("assets/md_1u19.gro");
+        let xtc = root.join("assets/md_1u19.xtc");
+        if gro.is_file() && xtc.is_file() {
+            return Ok((gro, xtc));
+        }
+    }
+    bail!("the bundled demo assets/md_1u19.gro + .xtc was not found; give TOP [TRAJ]")
+}

@@ -1,0 +1,144 @@
+//! Device setup: the wgpu device and queue every GPU stage runs on, created headless (CLI,
+//! tests, benchmarks) or shared with the viewer's eframe device, with the adapter's real limits
+//! and timestamp queries where the adapter has them.
+
+use super::GpuError;
+
+/// A wgpu device plus what the engine needs to know about it.
+#[derive(Debug, Clone)]
+pub struct GpuContext {
+    /// The device (cheap to clone).
+    pub device: wgpu::Device,
+    /// Its queue (cheap to clone).
+    pub queue: wgpu::Queue,
+    /// The limits the device was created with.
+    pub limits: wgpu::Limits,
+    /// True when the device has `TIMESTAMP_QUERY` (per-pass GPU timings).
+    pub timestamps: bool,
+    /// Adapter name and backend, for messages.
+    pub adapter_name: String,
+}
+
+impl GpuContext {
+    /// Opens the best adapter without a window, requesting its full storage-buffer, buffer-size
+    /// and workgroup limits and timestamp queries when supported.
+    pub fn new_headless() -> Result<GpuContext, GpuError> {
+        pollster::block_on(Self::new_headless_async())
+    }
+
+    async fn new_headless_async() -> Result<GpuContext, GpuError> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: None,
+                apply_limit_buckets: false,
+            })
+            .await
+            .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        let limits = Self::wanted_limits(&adapter.limits());
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("mdsurf compute"),
+                required_features: features,
+                required_limits: limits.clone(),
+                experimental_features: wgpu::ExperimentalFeatures::disabled(),
+                memory_hints: wgpu::MemoryHints::Performance,
+                trace: wgpu::Trace::Off,
+            })
+            .await
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        Ok(Self::from_device(
+            device,
+            queue,
+            format!("{} ({:?})", info.name, info.backend),
+        ))
+    }
+
+    /// The limits mdsurf asks for: the adapter's own maxima for what bounds problem size, the
+    /// WebGPU defaults elsewhere.
+    pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
+        wgpu::Limits {
+            max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
+            max_buffer_size: adapter.max_buffer_size,
+            max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
+            max_storage_buffers_per_shader_stage: adapter
+                .max_storage_buffers_per_shader_stage
+                .min(16),
+            ..wgpu::Limits::default().using_resolution(adapter.clone())
+        }
+    }
+
+    /// Wraps a device created elsewhere (the viewer's eframe device). `name` is for messages.
+    /// Timestamps are used when the device was created with `TIMESTAMP_QUERY`.
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, name: String) -> GpuContext {
+        let limits = device.limits();
+        let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        GpuContext {
+            device,
+            queue,
+            limits,
+            timestamps,
+            adapter_name: name,
+        }
+    }
+
+    /// For tests and `--backend auto`: a headless context, or `Ok(None)` with a note on stderr
+    /// when no adapter exists, except under `REQUIRE_GPU=1`, where a missing adapter is an error.
+    pub fn headless_or_skip() -> Result<Option<GpuContext>, GpuError> {
+        match Self::new_headless() {
+            Ok(ctx) => Ok(Some(ctx)),
+            Err(e) if !gpu_required() => {
+                eprintln!(
+                    "note: no GPU adapter ({e}); skipping GPU work (set REQUIRE_GPU=1 to fail instead)"
+                );
+                Ok(None)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// Largest single storage binding in bytes.
+    pub fn max_binding(&self) -> u64 {
+        self.limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes, so a GPU error becomes a
+    /// [`GpuError::Device`] instead of wgpu's default panic.
+    pub fn scoped<T>(&self, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let result = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        match (result, v.or(o)) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Some(e)) => Err(GpuError::Device(one_line(&e.to_string()))),
+            (Ok(t), None) => Ok(t),
+        }
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Device(e.to_string()))
+    }
+}
+
+/// Joins a multi-line wgpu error into one line.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// True when the environment variable `REQUIRE_GPU` is set to `1` (CI).
+pub fn gpu_required() -> bool {
+    std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1")
+}

@@ -1,0 +1,539 @@
+//! The per-frame orchestrator of the GPU engine: validates and uploads atoms (radii and colours
+//! only when they change), sizes the frame ([`super::plan`]), decides which stages must re-run
+//! (positions/radii/H/R/quality: everything; colours: the colour pass; I: Marching Cubes only),
+//! records them ([`super::frame`]), submits, and hands the counters back asynchronously.
+//! [`GpuEngine::submit`] + [`GpuEngine::poll_stats`] + [`GpuEngine::surface`] are the viewer's
+//! non-blocking path; [`SurfaceEngine::compute`] waits, grows on overflow and reads the mesh back.
+
+use std::time::Instant;
+
+use glam::Vec3;
+
+use super::context::GpuContext;
+use super::frame::{Recorder, Stages, Work};
+use super::output::{FrameStats, GpuSurface, Readbacks, read_mesh, read_pod};
+use super::plan::{FramePlan, plan_frame};
+use super::resources::Buffers;
+use super::timing::Timer;
+use super::types::{GpuCounters, pack_colour};
+use super::{GpuError, inputs};
+use crate::surface::{
+    AtomSet, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput, SurfaceParams,
+};
+
+/// Tuning knobs (tests force slabs and overflows with them).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EngineOptions {
+    /// Most owned z layers per slab (None: as many as the device limits allow).
+    pub max_slab_layers: Option<u32>,
+    /// Bytes the per-voxel slab buffers may take (default: a quarter of the largest buffer,
+    /// at most 4 GiB).
+    pub volume_budget: u64,
+    /// Initial mesh capacity (vertices, triangles); None estimates it from the grid.
+    pub initial_mesh_capacity: Option<(u32, u32)>,
+    /// Factor by which the mesh buffers exceed the last frame's counts when they grow.
+    pub headroom: f32,
+}
+
+impl EngineOptions {
+    fn defaults(ctx: &GpuContext) -> EngineOptions {
+        EngineOptions {
+            max_slab_layers: None,
+            volume_budget: (ctx.limits.max_buffer_size / 4).clamp(64 << 20, 4 << 30),
+            initial_mesh_capacity: None,
+            headroom: 1.25,
+        }
+    }
+}
+
+/// What the caller knows changed since its previous frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Changes {
+    /// Positions changed (new trajectory frame).
+    pub positions: bool,
+    /// Radii changed (or the atom set itself).
+    pub radii: bool,
+    /// Colours changed (colour scheme).
+    pub colours: bool,
+}
+
+impl Changes {
+    /// Everything changed.
+    pub const ALL: Changes = Changes {
+        positions: true,
+        radii: true,
+        colours: true,
+    };
+}
+
+/// What one submit did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameInfo {
+    /// Frame number (matches [`FrameStats::frame`]).
+    pub frame: u64,
+    /// The grid.
+    pub grid: GridSpec,
+    /// Number of z-slabs the grid was split into.
+    pub slabs: usize,
+    /// Wall-clock time of validation and upload in ms.
+    pub upload_ms: f64,
+    /// Which stages ran.
+    pub work: Work,
+}
+
+#[derive(Debug, Default)]
+struct State {
+    atoms: u64,
+    params: Option<SurfaceParams>,
+    plan: Option<FramePlan>,
+    last: Option<FrameInfo>,
+    with_colour: bool,
+    bounds: Option<(Vec3, Vec3, f32)>,
+    fingerprints: inputs::Fingerprints,
+    mesh_want: (u64, u64),
+}
+
+/// The GPU surface engine (see the module docs).
+pub struct GpuEngine {
+    ctx: GpuContext,
+    stages: Stages,
+    buffers: Buffers,
+    timer: Timer,
+    readbacks: Readbacks,
+    options: EngineOptions,
+    state: State,
+    frame: u64,
+    latest: Option<FrameStats>,
+}
+
+impl std::fmt::Debug for GpuEngine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuEngine")
+            .field("adapter", &self.ctx.adapter_name)
+            .field("frame", &self.frame)
+            .finish_non_exhaustive()
+    }
+}
+
+impl GpuEngine {
+    /// Opens the best adapter headless (its own limits, timestamps when supported). Under
+    /// `REQUIRE_GPU=1` and without it alike, a missing adapter is [`GpuError::NoAdapter`].
+    pub fn new() -> Result<GpuEngine, GpuError> {
+        Self::with_context(GpuContext::new_headless()?)
+    }
+
+    /// Wraps a device created elsewhere (the viewer shares eframe's device); its limits bound
+    /// the problem sizes and slabs.
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Result<GpuEngine, GpuError> {
+        Self::with_context(GpuContext::from_device(
+            device,
+            queue,
+            "shared device".into(),
+        ))
+    }
+
+    /// An engine on `ctx` (compiles every stage).
+    pub fn with_context(ctx: GpuContext) -> Result<GpuEngine, GpuError> {
+        let max_groups = ctx.limits.max_compute_workgroups_per_dimension;
+        let (stages, buffers) = ctx.scoped(|| {
+            Ok((
+                Stages::new(&ctx.device, max_groups),
+                Buffers::new(&ctx.device)?,
+            ))
+        })?;
+        Ok(GpuEngine {
+            stages,
+            buffers,
+            timer: Timer::new(&ctx.queue, ctx.timestamps),
+            readbacks: Readbacks::default(),
+            options: EngineOptions::defaults(&ctx),
+            state: State::default(),
+            frame: 0,
+            latest: None,
+            ctx,
+        })
+    }
+
+    /// The device context.
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// Current options.
+    pub fn options(&self) -> EngineOptions {
+        self.options
+    }
+
+    /// Replaces the options (the next frame re-runs every stage).
+    pub fn set_options(&mut self, options: EngineOptions) {
+        self.options = options;
+        self.state.params = None;
+    }
+
+    /// The plan of the last submitted frame.
+    pub fn plan(&self) -> Option<&FramePlan> {
+        self.state.plan.as_ref()
+    }
+
+    /// What the last submit did (which stages ran, grid, slabs).
+    pub fn last_frame(&self) -> Option<&FrameInfo> {
+        self.state.last.as_ref()
+    }
+
+    /// Bytes of GPU memory the engine's buffers hold.
+    pub fn gpu_bytes(&self) -> u64 {
+        self.buffers.bytes()
+    }
+
+    /// The GPU-resident surface of the last submitted frame (for the renderer).
+    pub fn surface(&self) -> GpuSurface {
+        GpuSurface {
+            vertices: self.buffers.vertices.buffer.clone(),
+            indices: self.buffers.indices.buffer.clone(),
+            draw_args: self.buffers.draw_args.clone(),
+            grid: self.state.plan.as_ref().map(|p| p.grid).unwrap_or_default(),
+            frame: self.frame,
+            stats: self.latest,
+        }
+    }
+
+    /// Computes a surface without waiting: uploads what changed, records and submits the frame.
+    /// Counters arrive later through [`GpuEngine::poll_stats`]. `changes` says what changed
+    /// since the previous submit (parameter changes are detected here).
+    pub fn submit(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        changes: Changes,
+    ) -> Result<FrameInfo, SurfaceError> {
+        self.submit_inner(atoms, params, changes, false)
+            .map(|(info, _)| info)
+    }
+
+    fn submit_inner(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        changes: Changes,
+        wall_clock: bool,
+    ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
+        let ctx = self.ctx.clone();
+        let mut inner = Ok(None);
+        let scoped = ctx.scoped(|| {
+            inner = self
+                .submit_unscoped(atoms, params, changes, wall_clock)
+                .map(Some);
+            Ok(())
+        });
+        match (inner, scoped) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Err(e)) => {
+                // The frame is broken: forget the state so the next one starts afresh.
+                self.state.params = None;
+                Err(e.into())
+            }
+            (Ok(Some(r)), Ok(())) => Ok(r),
+            (Ok(None), Ok(())) => Err(SurfaceError::Gpu("frame was not submitted".into())),
+        }
+    }
+
+    fn submit_unscoped(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        changes: Changes,
+        wall_clock: bool,
+    ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
+        let start = Instant::now();
+        params.validate()?;
+        inputs::check_lengths(atoms)?;
+        let n = atoms.positions.len() as u64;
+        let st = &mut self.state;
+        let colour = atoms.colours.is_some();
+        let first = st.params.is_none() || st.atoms != n || st.with_colour != colour;
+        let changes = if first { Changes::ALL } else { changes };
+        let prev = st.params.unwrap_or(*params);
+        let density_params = prev.spacing != params.spacing
+            || prev.radius_scale != params.radius_scale
+            || prev.quality != params.quality;
+        if changes.positions || changes.radii || st.bounds.is_none() {
+            let old_r = st.bounds.map(|b| b.2);
+            let (lo, hi, max_r) = inputs::bounds(atoms, changes.radii, old_r)?;
+            st.bounds = Some((lo, hi, max_r));
+        }
+        let Some((lo, hi, max_r)) = st.bounds else {
+            return Err(SurfaceError::EmptySystem);
+        };
+        let grid = GridSpec::for_atoms(&[lo, hi], &[max_r], params)?;
+        let plan = plan_frame(
+            grid,
+            params,
+            max_r,
+            self.ctx.max_binding(),
+            self.options.volume_budget,
+            self.options.max_slab_layers,
+        )
+        .map_err(SurfaceError::from)?;
+        let single = plan.slabs.len() == 1 && st.plan.as_ref().is_some_and(|p| p.slabs.len() == 1);
+        let work = if first || changes.positions || changes.radii || density_params || !single {
+            Work::Full
+        } else if changes.colours {
+            Work::Colour
+        } else {
+            Work::Mc
+        };
+
+        // Buffers: replaced per-atom buffers lose their contents, so re-upload everything then.
+        let d = &self.ctx.device;
+        // The sorted atoms (16 bytes each) are the largest per-atom binding.
+        if n * 16 > self.ctx.max_binding() {
+            return Err(GpuError::TooLarge {
+                what: "the sorted atom array",
+                needed: n * 16,
+                limit: self.ctx.max_binding(),
+            }
+            .into());
+        }
+        let replaced = self.buffers.ensure_atoms(d, n);
+        self.buffers.ensure_plan(d, &plan, colour);
+        let (want_v, want_t) = if st.mesh_want == (0, 0) {
+            self.options
+                .initial_mesh_capacity
+                .map(|(v, t)| (v as u64, t as u64))
+                .unwrap_or_else(|| estimate_mesh(&plan))
+        } else {
+            st.mesh_want
+        };
+        st.mesh_want = (want_v, want_t);
+        let cap_v = want_v.min(self.ctx.max_binding() / 36);
+        let cap_t = want_t.min(self.ctx.max_binding() / 12);
+        self.buffers.ensure_mesh(d, cap_v, cap_t);
+        let q = &self.ctx.queue;
+        if changes.positions || replaced {
+            q.write_buffer(
+                &self.buffers.positions.buffer,
+                0,
+                bytemuck::cast_slice(atoms.positions),
+            );
+        }
+        if changes.radii || replaced {
+            q.write_buffer(
+                &self.buffers.radii.buffer,
+                0,
+                bytemuck::cast_slice(atoms.radii),
+            );
+        }
+        if let Some(c) = atoms.colours
+            && (changes.colours || replaced)
+        {
+            let packed: Vec<[u32; 2]> = c.iter().map(|&c| pack_colour(c)).collect();
+            q.write_buffer(
+                &self.buffers.colours.buffer,
+                0,
+                bytemuck::cast_slice(&packed),
+            );
+        }
+        let (vcap, tcap) = self.buffers.mesh_capacity();
+        let counters = GpuCounters {
+            vertex_capacity: vcap,
+            triangle_capacity: tcap,
+            ..Default::default()
+        };
+        q.write_buffer(&self.buffers.counters, 0, bytemuck::bytes_of(&counters));
+        let upload_ms = start.elapsed().as_secs_f64() * 1e3;
+
+        self.frame += 1;
+        let frame = self.frame;
+        self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);
+        let mut rec = Recorder::new(&self.ctx, wall_clock && !self.timer.enabled());
+        self.stages
+            .record(
+                &mut rec,
+                &mut self.timer,
+                &self.buffers,
+                &plan,
+                params,
+                n,
+                work,
+                colour,
+            )
+            .map_err(SurfaceError::from)?;
+        let slot =
+            self.readbacks
+                .record(d, rec.encoder(), &self.buffers.counters, &self.timer, frame);
+        let (cmd, wall) = rec.finish();
+        self.ctx.queue.submit([cmd]);
+        if let Some(slot) = slot {
+            self.readbacks.map(slot);
+        }
+        let st = &mut self.state;
+        st.atoms = n;
+        st.params = Some(*params);
+        st.with_colour = colour;
+        let info = FrameInfo {
+            frame,
+            grid,
+            slabs: plan.slabs.len(),
+            upload_ms,
+            work,
+        };
+        st.plan = Some(plan);
+        st.last = Some(info.clone());
+        Ok((info, wall))
+    }
+
+    /// Non-blocking: the newest counters that have arrived since the last call, if any. Grows
+    /// the mesh buffers for the next frame when a frame overflowed or came close.
+    pub fn poll_stats(&mut self) -> Result<Option<FrameStats>, GpuError> {
+        let _ = self.ctx.device.poll(wgpu::PollType::Poll);
+        self.take_arrived()
+    }
+
+    fn take_arrived(&mut self) -> Result<Option<FrameStats>, GpuError> {
+        let arrived = self.readbacks.collect(&self.timer)?;
+        for s in &arrived {
+            let h = self.options.headroom.max(1.0) as f64;
+            let want = |c: u32| (c as f64 * h).ceil() as u64 + 64;
+            let m = &mut self.state.mesh_want;
+            m.0 = m.0.max(want(s.vertex_count));
+            m.1 = m.1.max(want(s.triangle_count));
+        }
+        if let Some(last) = arrived.last() {
+            self.latest = Some(*last);
+        }
+        Ok(arrived.last().copied())
+    }
+
+    /// Blocks until frame `frame`'s counters have arrived.
+    fn wait_for(&mut self, frame: u64) -> Result<FrameStats, GpuError> {
+        loop {
+            self.ctx.wait()?;
+            let arrived = self.take_arrived()?;
+            if let Some(s) = self.latest.filter(|s| s.frame >= frame) {
+                return Ok(s);
+            }
+            if arrived.is_none() && !self.readbacks.pending() {
+                return Err(GpuError::Readback(format!(
+                    "counters of frame {frame} never arrived"
+                )));
+            }
+        }
+    }
+
+    /// Computes one frame and waits for its counters, growing the mesh buffers and re-running
+    /// Marching Cubes when it overflowed. Stage timings come from timestamps when the device has
+    /// them, else from waiting after each stage.
+    pub fn run_blocking(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        changes: Changes,
+    ) -> Result<FrameStats, SurfaceError> {
+        let mut changes = changes;
+        for _ in 0..4 {
+            let (info, wall) = self.submit_inner(atoms, params, changes, true)?;
+            let mut stats = self.wait_for(info.frame)?;
+            if let Some(w) = wall {
+                stats.timings = w;
+            }
+            stats.timings.upload_ms = info.upload_ms;
+            if !stats.overflow {
+                return Ok(stats);
+            }
+            changes = Changes::default();
+        }
+        Err(
+            GpuError::Device("the mesh kept overflowing its buffers after 4 attempts".into())
+                .into(),
+        )
+    }
+
+    /// Reads the mesh of the last finished frame back to the host.
+    pub fn read_mesh(&self, stats: &FrameStats) -> Result<crate::surface::Mesh, GpuError> {
+        read_mesh(
+            &self.ctx.device,
+            &self.ctx.queue,
+            &self.surface(),
+            stats.vertex_count,
+            stats.triangle_count,
+        )
+    }
+
+    /// Test hook: the density volume of the last slab (whole grid when there was one slab).
+    pub fn read_density(&self) -> Result<Vec<f32>, GpuError> {
+        let n = self
+            .state
+            .plan
+            .as_ref()
+            .map(|p| p.slab_voxels())
+            .unwrap_or(0);
+        read_pod(
+            &self.ctx.device,
+            &self.ctx.queue,
+            &self.buffers.density.buffer,
+            n,
+        )
+    }
+
+    /// Test hook: class words of the last slab (see `shaders/classify.wgsl`).
+    pub fn read_classes(&self) -> Result<Vec<u32>, GpuError> {
+        let n = self
+            .state
+            .plan
+            .as_ref()
+            .map(|p| p.class_points())
+            .unwrap_or(0);
+        read_pod(
+            &self.ctx.device,
+            &self.ctx.queue,
+            &self.buffers.classes.buffer,
+            n,
+        )
+    }
+
+    /// Test hook: first slot of every bin cell after the scan.
+    pub fn read_cell_starts(&self) -> Result<Vec<u32>, GpuError> {
+        let n = self
+            .state
+            .plan
+            .as_ref()
+            .map(|p| p.cell_count())
+            .unwrap_or(0);
+        read_pod(
+            &self.ctx.device,
+            &self.ctx.queue,
+            &self.buffers.cell_start.buffer,
+            n,
+        )
+    }
+}
+
+/// A first guess of the mesh size: a surface through about an eighth of the grid's layers.
+fn estimate_mesh(plan: &FramePlan) -> (u64, u64) {
+    let [nx, ny, nz] = plan.grid.dims.map(|d| d as u64);
+    let v = (nx * ny + ny * nz + nx * nz) * 2 + plan.grid.voxel_count() / 16;
+    (v.max(4096), 2 * v.max(4096))
+}
+
+impl SurfaceEngine for GpuEngine {
+    fn name(&self) -> &str {
+        "gpu"
+    }
+
+    fn compute(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+    ) -> Result<SurfaceOutput, SurfaceError> {
+        let changes = self.state.fingerprints.update(atoms);
+        let stats = self.run_blocking(atoms, params, changes)?;
+        let mesh = self.read_mesh(&stats)?;
+        Ok(SurfaceOutput {
+            grid: self.surface().grid,
+            mesh,
+            area: stats.area,
+            volume: stats.volume,
+            timings: stats.timings,
+        })
+    }
+}

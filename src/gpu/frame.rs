@@ -1,0 +1,249 @@
+//! Recording one frame's compute work (DESIGN section 3, steps 2 to 5): binning, then per z-slab
+//! the density pass and the Marching Cubes pass (classify, three scans, compaction, emission),
+//! then the end-of-frame bookkeeping, area/volume reduction and indirect draw arguments. Which
+//! stages run depends on what changed ([`Work`]). Called by [`super::engine::GpuEngine`].
+
+use std::time::Instant;
+
+use super::GpuError;
+use super::bin::Binner;
+use super::context::GpuContext;
+use super::density::{DensityMode, DensityStage};
+use super::kernel::uniform;
+use super::mc::{Classify, Compact, Emit};
+use super::measure::Measure;
+use super::plan::{FramePlan, Slab};
+use super::resources::Buffers;
+use super::scan::Scanner;
+use super::timing::{Stage, Timer};
+use super::types::{C_SCAN_ACTIVE, C_SCAN_TRIANGLES, C_SCAN_VERTICES, MeasureUniform, SlabUniform};
+use crate::surface::{StageTimings, SurfaceParams};
+
+/// Which stages a frame re-runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Work {
+    /// Binning, density (and colour), Marching Cubes: positions, radii, H, R or quality changed.
+    Full,
+    /// Binning (for the sorted colours), the colour pass and Marching Cubes: colours changed.
+    Colour,
+    /// Marching Cubes only: the isovalue changed, or a rerun after a mesh overflow.
+    Mc,
+}
+
+/// The compiled stages of one device.
+#[derive(Debug)]
+pub struct Stages {
+    scanner: Scanner,
+    binner: Binner,
+    density: DensityStage,
+    classify: Classify,
+    compact: Compact,
+    emit: Emit,
+    measure: Measure,
+    max_groups: u32,
+}
+
+/// Encoder plus optional wall-clock timing: without timestamp queries a blocking frame submits
+/// and waits after each stage and charges the elapsed time to it.
+pub struct Recorder<'a> {
+    ctx: &'a GpuContext,
+    encoder: wgpu::CommandEncoder,
+    wall: Option<(StageTimings, Instant)>,
+}
+
+impl<'a> Recorder<'a> {
+    /// A recorder; `wall_clock` times stages by waiting after each.
+    pub fn new(ctx: &'a GpuContext, wall_clock: bool) -> Recorder<'a> {
+        Recorder {
+            ctx,
+            encoder: ctx.device.create_command_encoder(&Default::default()),
+            wall: wall_clock.then(|| (StageTimings::default(), Instant::now())),
+        }
+    }
+
+    /// The current encoder.
+    pub fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        &mut self.encoder
+    }
+
+    /// Ends a stage: in wall-clock mode submits, waits and charges the time to `stage`.
+    pub fn end_stage(&mut self, stage: Stage) -> Result<(), GpuError> {
+        let Some((t, start)) = &mut self.wall else {
+            return Ok(());
+        };
+        let enc = std::mem::replace(
+            &mut self.encoder,
+            self.ctx.device.create_command_encoder(&Default::default()),
+        );
+        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.wait()?;
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        match stage {
+            Stage::Bin => t.bin_ms += ms,
+            Stage::Density => t.density_ms += ms,
+            Stage::Mc => t.mc_ms += ms,
+        }
+        *start = Instant::now();
+        Ok(())
+    }
+
+    /// Finishes: the last command buffer and the wall-clock timings (None in timestamp mode).
+    pub fn finish(self) -> (wgpu::CommandBuffer, Option<StageTimings>) {
+        (self.encoder.finish(), self.wall.map(|w| w.0))
+    }
+}
+
+/// The uniform of one slab.
+pub fn slab_uniform(
+    plan: &FramePlan,
+    params: &SurfaceParams,
+    slab: &Slab,
+    atoms: u64,
+) -> SlabUniform {
+    let g = &plan.grid;
+    SlabUniform {
+        origin: g.origin.to_array(),
+        spacing: g.spacing,
+        dims: g.dims,
+        isovalue: params.isovalue,
+        cell_origin: g.origin.to_array(),
+        cell_size: plan.cell_size,
+        cell_dims: plan.cell_dims,
+        cutoff: params.cutoff(),
+        dens_z0: slab.dens_z0,
+        dens_layers: slab.dens_layers,
+        own_z0: slab.own_z0,
+        own_z1: slab.own_z1,
+        class_points: plan.class_points() as u32,
+        class_layers: plan.class_layers,
+        max_cut: plan.max_cut,
+        has_extra_layer: u32::from(slab.own_z1 < g.dims[2]),
+        centre: grid_centre(plan).to_array(),
+        atom_count: atoms as u32,
+    }
+}
+
+fn grid_centre(plan: &FramePlan) -> glam::Vec3 {
+    let g = &plan.grid;
+    let d = glam::Vec3::new(g.dims[0] as f32, g.dims[1] as f32, g.dims[2] as f32) - 1.0;
+    g.origin + 0.5 * g.spacing * d
+}
+
+impl Stages {
+    /// Compiles every stage.
+    pub fn new(device: &wgpu::Device, max_groups: u32) -> Stages {
+        Stages {
+            scanner: Scanner::new(device, max_groups),
+            binner: Binner::new(device, max_groups),
+            density: DensityStage::new(device),
+            classify: Classify::new(device),
+            compact: Compact::new(device),
+            emit: Emit::new(device),
+            measure: Measure::new(device),
+            max_groups,
+        }
+    }
+
+    /// Records the frame's stages into `rec` (after the caller reset the counters).
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        rec: &mut Recorder<'_>,
+        timer: &mut Timer,
+        b: &Buffers,
+        plan: &FramePlan,
+        params: &SurfaceParams,
+        atoms: u64,
+        work: Work,
+        colour: bool,
+    ) -> Result<(), GpuError> {
+        let device = &rec.ctx.device.clone();
+        if work != Work::Mc {
+            let f = self
+                .binner
+                .frame(device, &self.scanner, b, plan, atoms, params.radius_scale);
+            let ts = timer.pass(Stage::Bin);
+            self.binner.record(rec.encoder(), &self.scanner, b, &f, ts);
+            rec.end_stage(Stage::Bin)?;
+        }
+        let mode = match (work, colour) {
+            (Work::Mc, _) => None,
+            (Work::Colour, _) => Some(DensityMode::ColourOnly),
+            (Work::Full, true) => Some(DensityMode::WithColour),
+            (Work::Full, false) => Some(DensityMode::Plain),
+        };
+        let blocks = plan.class_blocks();
+        // Block sums of vertices, triangles, active cells; totals into their counter words.
+        let scans = [
+            (0, C_SCAN_VERTICES),
+            (1, C_SCAN_TRIANGLES),
+            (2, C_SCAN_ACTIVE),
+        ]
+        .map(|(i, slot)| {
+            self.scanner
+                .plan(device, &b.block_sums[i].buffer, blocks, (&b.counters, slot))
+        });
+        let mu = uniform(
+            device,
+            "measure uniform",
+            &MeasureUniform {
+                centre: grid_centre(plan).to_array(),
+                max_groups_x: self.max_groups,
+            },
+        );
+        let mf = self.measure.frame(device, b, &mu);
+        for slab in &plan.slabs {
+            let u = uniform(
+                device,
+                "slab uniform",
+                &slab_uniform(plan, params, slab, atoms),
+            );
+            if let Some(mode) = mode {
+                let bind = self.density.bind(device, b, u.as_entire_binding(), mode);
+                let ts = timer.pass(Stage::Density);
+                let mut pass = rec
+                    .encoder()
+                    .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("density"),
+                        timestamp_writes: ts,
+                    });
+                self.density
+                    .record(&mut pass, &bind, plan.grid.dims, slab.dens_layers, mode);
+                drop(pass);
+                rec.end_stage(Stage::Density)?;
+            }
+            let classify = self.classify.bind(device, b, u.as_entire_binding());
+            let compact = self.compact.bind(device, b, u.as_entire_binding());
+            let emit = self.emit.bind(device, b, u.as_entire_binding(), colour);
+            let ts = timer.pass(Stage::Mc);
+            let mut pass = rec
+                .encoder()
+                .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("marching cubes"),
+                    timestamp_writes: ts,
+                });
+            self.classify
+                .record(&mut pass, &classify, blocks, self.max_groups);
+            for s in &scans {
+                self.scanner.record(&mut pass, s);
+            }
+            self.measure.slab_begin(&mut pass, &mf);
+            self.compact
+                .record(&mut pass, &compact, blocks, self.max_groups);
+            self.emit.record(&mut pass, &emit, b, colour);
+            self.measure.slab_end(&mut pass, &mf);
+            drop(pass);
+            rec.end_stage(Stage::Mc)?;
+        }
+        let ts = timer.pass(Stage::Mc);
+        let mut pass = rec
+            .encoder()
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("measure"),
+                timestamp_writes: ts,
+            });
+        self.measure.frame_end(&mut pass, &mf);
+        drop(pass);
+        rec.end_stage(Stage::Mc)
+    }
+}

@@ -1,0 +1,137 @@
+//! The one error type of the reading layer: every variant names the file (and the frame and atom
+//! where it applies), and prints as one line.
+
+use std::path::PathBuf;
+
+/// Why a structure or trajectory could not be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IoError {
+    /// The file does not exist or cannot be opened.
+    #[error("{}: file not found or not readable ({reason})", path.display())]
+    NotFound {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        reason: String,
+    },
+    /// The file name does not say which format it is in.
+    #[error(
+        "{}: unknown file format '{ext}' (known: pdb, ent, cif, mmcif, gro, xtc, trr, dcd, lammpstrj, lammpsdump, xyz, tng, nc, ncdf; optionally .gz/.bz2/.xz)",
+        path.display()
+    )]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+        /// Its extension as written (empty when it has none).
+        ext: String,
+    },
+    /// The file could not be parsed.
+    #[error("{}: cannot read: {message}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// What the parser said (one line).
+        message: String,
+    },
+    /// One frame could not be read (truncated or corrupt file).
+    #[error("{}: frame {frame}: cannot read: {message}", path.display())]
+    BadFrame {
+        /// The file.
+        path: PathBuf,
+        /// Index of the frame, from 0.
+        frame: usize,
+        /// What the parser said (one line).
+        message: String,
+    },
+    /// A frame index past the end of the trajectory was asked for.
+    #[error("{}: frame {frame} does not exist (the trajectory has {len} frames)", path.display())]
+    FrameOutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// The frame asked for.
+        frame: usize,
+        /// Number of frames in the file.
+        len: usize,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("{}: frame {frame}: atom {atom} has a NaN or infinite coordinate", path.display())]
+    NonFiniteCoordinate {
+        /// The file.
+        path: PathBuf,
+        /// Index of the frame, from 0.
+        frame: usize,
+        /// Index of the atom, from 0.
+        atom: usize,
+    },
+    /// Topology and trajectory disagree on the number of atoms.
+    #[error(
+        "atom count mismatch: topology {} has {topology_atoms} atoms but trajectory {} has {trajectory_atoms} (frame {frame})",
+        topology.display(), trajectory.display()
+    )]
+    AtomCountMismatch {
+        /// The topology file.
+        topology: PathBuf,
+        /// Its atom count.
+        topology_atoms: usize,
+        /// The trajectory file.
+        trajectory: PathBuf,
+        /// Atoms in the frame that disagreed.
+        trajectory_atoms: usize,
+        /// The frame that disagreed.
+        frame: usize,
+    },
+    /// The file holds no atoms or no frames.
+    #[error("{}: nothing to read: {what}", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// What is missing ("no atoms", "no frames", "the file is empty").
+        what: &'static str,
+    },
+    /// A coordinates-only trajectory was opened without a topology.
+    #[error(
+        "{}: this format has no atom names; give a topology file (pdb, gro, ...) before it",
+        path.display()
+    )]
+    NeedsTopology {
+        /// The trajectory file.
+        path: PathBuf,
+    },
+}
+
+impl IoError {
+    /// Builds an [`IoError::Unreadable`], squeezing a multi-line message onto one line.
+    pub(crate) fn unreadable(path: &std::path::Path, message: impl AsRef<str>) -> Self {
+        IoError::Unreadable {
+            path: path.to_path_buf(),
+            message: one_line(message.as_ref()),
+        }
+    }
+
+    /// Builds an [`IoError::BadFrame`], squeezing a multi-line message onto one line.
+    pub(crate) fn bad_frame(
+        path: &std::path::Path,
+        frame: usize,
+        message: impl AsRef<str>,
+    ) -> Self {
+        IoError::BadFrame {
+            path: path.to_path_buf(),
+            frame,
+            message: one_line(message.as_ref()),
+        }
+    }
+}
+
+/// Joins the lines of a parser message with "; " so errors stay on one line.
+pub(crate) fn one_line(message: &str) -> String {
+    let parts: Vec<&str> = message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    if parts.is_empty() {
+        "unknown error".to_string()
+    } else {
+        parts.join("; ")
+    }
+}

@@ -1,0 +1,230 @@
+//! [`open`] and [`Trajectory`]: a topology file plus an optional trajectory file become one
+//! thread-safe source of frames with random access. Frames are read on demand (one at a time,
+//! under an interior mutex), checked against the topology's atom count and for finite
+//! coordinates.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+use super::chem::ChemReader;
+use super::format::detect;
+use super::{IoError, dcd, wwpdb};
+use crate::model::{Frame, Topology};
+
+/// How many frames at the end of a file are probed for damage when it opens (a truncated
+/// file loses its last frame or two; probing every frame of a long trajectory would be slow).
+const TAIL_PROBE: usize = 4;
+
+/// Where a damaged (truncated or corrupt) trajectory stops being readable.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Damage {
+    /// Index of the first unreadable frame (from 0); equal to [`Trajectory::len`].
+    pub frame: usize,
+    /// The error reading it gives.
+    pub error: IoError,
+}
+
+/// A structure and its frames, read lazily from disk.
+///
+/// `Send + Sync`: frames may be read from any thread (reads are serialised by a mutex).
+pub struct Trajectory {
+    topology: Topology,
+    topology_path: PathBuf,
+    frames_path: PathBuf,
+    reader: Mutex<ChemReader>,
+    len: usize,
+    damage: Option<Damage>,
+}
+
+impl std::fmt::Debug for Trajectory {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Trajectory")
+            .field("topology", &self.topology_path)
+            .field("frames", &self.frames_path)
+            .field("atoms", &self.topology.len())
+            .field("len", &self.len)
+            .field("damage", &self.damage)
+            .finish()
+    }
+}
+
+/// Opens `top` (a structure file with atom names: PDB, mmCIF, GRO, LAMMPS dump, XYZ, TNG, ...)
+/// and, when given, `traj` (the frames: XTC, TRR, DCD, NetCDF, or any format above). Without
+/// `traj` the frames come from `top` itself (a multi-model PDB, a GRO or LAMMPS trajectory).
+///
+/// Fails with a one-line [`IoError`] when a file is missing, has an unknown extension, cannot be
+/// parsed, holds no atoms or frames, or when the two files disagree on the atom count. A
+/// trajectory whose last frames are damaged (truncated) still opens: [`Trajectory::len`] counts
+/// the good frames and [`Trajectory::damage`] says where it breaks.
+pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
+    let top_format = detect(top)?;
+    if traj.is_none() && !top_format.has_names {
+        return Err(IoError::NeedsTopology {
+            path: top.to_path_buf(),
+        });
+    }
+    let mut top_reader = ChemReader::open(top, &top_format)?;
+    let mut topology = top_reader.read_topology(0)?;
+    if topology.is_empty() {
+        return Err(IoError::Empty {
+            path: top.to_path_buf(),
+            what: "no atoms",
+        });
+    }
+    if let Some(format) = top_format.wwpdb {
+        let first = top_reader.read_positions(0)?;
+        wwpdb::enrich(top, format, &mut topology, &first);
+    }
+    topology.complete_elements_and_radii();
+    let reader = match traj {
+        None => top_reader,
+        Some(path) => {
+            let format = detect(path)?;
+            drop(top_reader);
+            ChemReader::open(path, &format)?
+        }
+    };
+    let mut trajectory = Trajectory {
+        topology,
+        topology_path: top.to_path_buf(),
+        frames_path: reader.path().to_path_buf(),
+        len: reader.len(),
+        reader: Mutex::new(reader),
+        damage: None,
+    };
+    // A count mismatch is reported at once, not at the first frame the user asks for.
+    trajectory.read_frame(0)?;
+    trajectory.probe_tail();
+    trajectory.check_dcd_size();
+    Ok(trajectory)
+}
+
+impl Trajectory {
+    /// The atoms (constant over the trajectory).
+    pub fn topology(&self) -> &Topology {
+        &self.topology
+    }
+
+    /// The file the frames are read from (the trajectory file, or the topology file when it is
+    /// its own trajectory).
+    pub fn path(&self) -> &Path {
+        &self.frames_path
+    }
+
+    /// The topology file.
+    pub fn topology_path(&self) -> &Path {
+        &self.topology_path
+    }
+
+    /// Number of readable frames (frames from [`Trajectory::damage`] on are not counted).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True when there is no readable frame (never the case for an opened trajectory).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Where the file is damaged, if its last frames could not be read when it was opened.
+    pub fn damage(&self) -> Option<&Damage> {
+        self.damage.as_ref()
+    }
+
+    /// Reads frame `index` (from 0): positions in Å, box in Å, time in ps.
+    ///
+    /// Fails with [`IoError::FrameOutOfRange`] past the end, the damage error at the damaged
+    /// frame, [`IoError::BadFrame`] for an unreadable frame, [`IoError::AtomCountMismatch`] when
+    /// the frame's atom count differs from the topology's, and
+    /// [`IoError::NonFiniteCoordinate`] (naming frame and atom) for NaN or infinite positions.
+    pub fn read_frame(&self, index: usize) -> Result<Frame, IoError> {
+        if let Some(damage) = &self.damage
+            && index == damage.frame
+        {
+            return Err(damage.error.clone());
+        }
+        if index >= self.len {
+            return Err(IoError::FrameOutOfRange {
+                path: self.frames_path.clone(),
+                frame: index,
+                len: self.len,
+            });
+        }
+        let frame = self.lock().read_frame(index)?;
+        if frame.positions.len() != self.topology.len() {
+            return Err(IoError::AtomCountMismatch {
+                topology: self.topology_path.clone(),
+                topology_atoms: self.topology.len(),
+                trajectory: self.frames_path.clone(),
+                trajectory_atoms: frame.positions.len(),
+                frame: index,
+            });
+        }
+        Ok(frame)
+    }
+
+    /// Reads frames `start..end` (clamped to the readable frames) one after the other, calling
+    /// `visit` with each result; stops early when `visit` returns false.
+    pub fn for_each_frame(
+        &self,
+        start: usize,
+        end: usize,
+        mut visit: impl FnMut(Result<Frame, IoError>) -> bool,
+    ) {
+        for index in start..end.min(self.len) {
+            if !visit(self.read_frame(index)) {
+                break;
+            }
+        }
+    }
+
+    fn lock(&self) -> MutexGuard<'_, ChemReader> {
+        // A panic while holding the lock cannot leave our state inconsistent (the reader is
+        // re-positioned on every read), so a poisoned lock is still usable.
+        self.reader
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// A DCD file whose size leaves a partial frame after the last complete one was truncated:
+    /// chemfiles drops that frame silently, this records it as [`Damage`].
+    fn check_dcd_size(&mut self) {
+        if self.damage.is_some() || self.lock().base() != "DCD" {
+            return;
+        }
+        let Some(tail) = dcd::measure(&self.frames_path) else {
+            return;
+        };
+        if tail.trailing > 0 && tail.complete == self.len {
+            let message = format!(
+                "the file ends inside this frame (truncated: {} of {} bytes)",
+                tail.trailing, tail.frame_bytes
+            );
+            let error = IoError::bad_frame(&self.frames_path, self.len, message);
+            self.damage = Some(Damage {
+                frame: self.len,
+                error,
+            });
+        }
+    }
+
+    /// Checks the last few frames; if some fail to read, the readable length ends at the first
+    /// failing one (a truncated file) and the failure is kept as [`Damage`].
+    fn probe_tail(&mut self) {
+        let start = self.len.saturating_sub(TAIL_PROBE).max(1);
+        let mut first_bad = None;
+        for index in start..self.len {
+            let result = self.lock().read_frame(index);
+            if let Err(error) = result
+                && !matches!(error, IoError::NonFiniteCoordinate { .. })
+            {
+                first_bad = Some((index, error));
+                break;
+            }
+        }
+        if let Some((frame, error)) = first_bad {
+            self.len = frame;
+            self.damage = Some(Damage { frame, error });
+        }
+    }
+}

@@ -1,0 +1,279 @@
+//! Per-atom colour schemes (element, chain, residue type, residue index, B-factor or any number,
+//! single colour). Colours are linear RGB in 0..1, as the colour volume and renderer expect.
+
+use std::fmt;
+use std::str::FromStr;
+
+use super::residues::{ResidueClass, residue_class};
+use super::{ModelError, Topology};
+
+/// How atoms are coloured. `FromStr` accepts `element`, `chain`, `residue-type`,
+/// `residue-index` (alias `rainbow`), `b-factor`, and `single:#rrggbb` (or just `#rrggbb`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ColorScheme {
+    /// CPK-like colours by element; particles without an element get a colour per name.
+    Element,
+    /// One colour per chain or segment, in order of appearance.
+    Chain,
+    /// Hydrophobic white, polar green, acid red, base blue, anything else tan.
+    ResidueType,
+    /// A blue-to-red rainbow along the residue index.
+    ResidueIndex,
+    /// Blue (low) through white to red (high) over the B-factor range.
+    BFactor,
+    /// The same linear RGB colour for every atom.
+    Single([f32; 3]),
+}
+
+impl Default for ColorScheme {
+    fn default() -> Self {
+        ColorScheme::Element
+    }
+}
+
+impl FromStr for ColorScheme {
+    type Err = ModelError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let lower = s.trim().to_ascii_lowercase();
+        Ok(match lower.as_str() {
+            "element" => ColorScheme::Element,
+            "chain" | "segment" => ColorScheme::Chain,
+            "residue-type" | "restype" | "residue_type" => ColorScheme::ResidueType,
+            "residue-index" | "residue_index" | "rainbow" => ColorScheme::ResidueIndex,
+            "b-factor" | "bfactor" | "b_factor" => ColorScheme::BFactor,
+            _ => {
+                let hex = lower.strip_prefix("single:").unwrap_or(&lower);
+                ColorScheme::Single(parse_hex(hex).ok_or_else(|| {
+                    ModelError::Parse(format!(
+                        "bad colour scheme '{s}': use element, chain, residue-type, residue-index, b-factor or single:#rrggbb"
+                    ))
+                })?)
+            }
+        })
+    }
+}
+
+impl fmt::Display for ColorScheme {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ColorScheme::Element => write!(f, "element"),
+            ColorScheme::Chain => write!(f, "chain"),
+            ColorScheme::ResidueType => write!(f, "residue-type"),
+            ColorScheme::ResidueIndex => write!(f, "residue-index"),
+            ColorScheme::BFactor => write!(f, "b-factor"),
+            ColorScheme::Single(c) => {
+                let [r, g, b] = c.map(|v| (linear_to_srgb(v) * 255.0).round() as u8);
+                write!(f, "single:#{r:02x}{g:02x}{b:02x}")
+            }
+        }
+    }
+}
+
+impl ColorScheme {
+    /// The linear RGB colour of every atom of `topology`.
+    pub fn atom_colours(&self, topology: &Topology) -> Vec<[f32; 3]> {
+        let n = topology.len();
+        match self {
+            ColorScheme::Element => (0..n)
+                .map(|i| element_colour(&topology.elements[i], &topology.names[i]))
+                .collect(),
+            ColorScheme::Chain => chain_colours(&topology.chains),
+            ColorScheme::ResidueType => (0..n)
+                .map(|i| {
+                    let residue = topology.residue_names.get(i).map_or("", String::as_str);
+                    residue_type_colour(residue_class(residue))
+                })
+                .collect(),
+            ColorScheme::ResidueIndex => {
+                let last = topology.residue_count().saturating_sub(1).max(1) as f32;
+                let t = |i: usize| {
+                    topology
+                        .residue_index
+                        .get(i)
+                        .map_or(0.0, |&r| r as f32 / last)
+                };
+                (0..n).map(|i| rainbow(t(i))).collect()
+            }
+            ColorScheme::BFactor => colours_from_values(&topology.b_factors),
+            ColorScheme::Single(c) => vec![*c; n],
+        }
+    }
+}
+
+/// Maps per-atom numbers to blue (minimum) - white - red (maximum); all white if they are all
+/// equal; non-finite values are grey.
+pub fn colours_from_values(values: &[f32]) -> Vec<[f32; 3]> {
+    let finite = values.iter().copied().filter(|v| v.is_finite());
+    let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    let span = hi - lo;
+    values
+        .iter()
+        .map(|&v| {
+            if !v.is_finite() {
+                return [0.2; 3];
+            }
+            let t = if span > 0.0 { (v - lo) / span } else { 0.5 };
+            if t < 0.5 {
+                let s = t * 2.0;
+                [s, s, 1.0]
+            } else {
+                let s = (1.0 - t) * 2.0;
+                [1.0, s, s]
+            }
+        })
+        .collect()
+}
+
+/// Converts one sRGB channel (0..1) to linear.
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Converts one linear channel (0..1) to sRGB.
+pub fn linear_to_srgb(c: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.0031308 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Parses `#rrggbb` (or `rrggbb`) as sRGB into linear RGB.
+fn parse_hex(hex: &str) -> Option<[f32; 3]> {
+    let h = hex.strip_prefix('#').unwrap_or(hex);
+    if h.len() != 6 || !h.is_ascii() {
+        return None;
+    }
+    let channel = |k: usize| u8::from_str_radix(&h[k..k + 2], 16).ok();
+    Some([channel(0)?, channel(2)?, channel(4)?].map(|v| srgb_to_linear(f32::from(v) / 255.0)))
+}
+
+/// An sRGB byte triple as linear RGB.
+fn rgb(r: u8, g: u8, b: u8) -> [f32; 3] {
+    [r, g, b].map(|v| srgb_to_linear(f32::from(v) / 255.0))
+}
+
+/// Distinct colours for chains and unnamed particle types.
+const PALETTE: [(u8, u8, u8); 10] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+];
+
+fn palette(k: usize) -> [f32; 3] {
+    let (r, g, b) = PALETTE[k % PALETTE.len()];
+    rgb(r, g, b)
+}
+
+/// CPK-like element colour; particles without element get a palette colour from their name.
+fn element_colour(element: &str, name: &str) -> [f32; 3] {
+    match element {
+        "C" => rgb(144, 144, 144),
+        "N" => rgb(48, 80, 248),
+        "O" => rgb(255, 13, 13),
+        "H" => rgb(240, 240, 240),
+        "S" => rgb(255, 200, 50),
+        "P" => rgb(255, 128, 0),
+        "" => {
+            let hash = name.bytes().fold(7usize, |h, b| {
+                h.wrapping_mul(31).wrapping_add(usize::from(b))
+            });
+            palette(hash)
+        }
+        _ => rgb(220, 120, 220),
+    }
+}
+
+/// One palette colour per distinct chain id, in order of first appearance.
+fn chain_colours(chains: &[String]) -> Vec<[f32; 3]> {
+    let mut seen: Vec<&str> = Vec::new();
+    chains
+        .iter()
+        .map(|c| {
+            let k = seen.iter().position(|s| *s == c).unwrap_or_else(|| {
+                seen.push(c);
+                seen.len() - 1
+            });
+            palette(k)
+        })
+        .collect()
+}
+
+fn residue_type_colour(class: ResidueClass) -> [f32; 3] {
+    match class {
+        ResidueClass::Hydrophobic => rgb(235, 235, 235),
+        ResidueClass::Polar => rgb(60, 180, 75),
+        ResidueClass::Acid => rgb(220, 40, 40),
+        ResidueClass::Base => rgb(40, 80, 220),
+        ResidueClass::Other => rgb(210, 180, 140),
+    }
+}
+
+/// Hue from blue (t = 0) to red (t = 1), full saturation, as linear RGB.
+fn rainbow(t: f32) -> [f32; 3] {
+    let h = (1.0 - t.clamp(0.0, 1.0)) * 4.0; // 4 = blue, 0 = red, through cyan, green, yellow
+    let x = 1.0 - (h % 2.0 - 1.0).abs();
+    let srgb = match h as u32 {
+        0 => [1.0, x, 0.0],
+        1 => [x, 1.0, 0.0],
+        2 => [0.0, 1.0, x],
+        _ => [0.0, x, 1.0],
+    };
+    srgb.map(srgb_to_linear)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_round_trip() {
+        for s in [
+            "element",
+            "chain",
+            "residue-type",
+            "residue-index",
+            "b-factor",
+            "single:#ff8800",
+        ] {
+            let scheme: ColorScheme = s.parse().expect(s);
+            assert_eq!(scheme.to_string(), s);
+        }
+        let c: ColorScheme = "#ff8800".parse().expect("hex");
+        assert_eq!(c, "single:#FF8800".parse().expect("hex"));
+        assert!("single:#ff88".parse::<ColorScheme>().is_err());
+        assert!(
+            "plaid"
+                .parse::<ColorScheme>()
+                .unwrap_err()
+                .to_string()
+                .contains("plaid")
+        );
+    }
+
+    #[test]
+    fn rainbow_ends_and_values() {
+        assert_eq!(rainbow(0.0), [0.0, 0.0, 1.0]);
+        assert_eq!(rainbow(1.0), [1.0, 0.0, 0.0]);
+        let c = colours_from_values(&[0.0, 5.0, 10.0, f32::NAN]);
+        assert_eq!(c[0], [0.0, 0.0, 1.0]);
+        assert_eq!(c[1], [1.0, 1.0, 1.0]);
+        assert_eq!(c[2], [1.0, 0.0, 0.0]);
+        assert_eq!(c[3], [0.2; 3]);
+    }
+}

@@ -1,0 +1,123 @@
+//! The glue between a topology and a surface engine: which particles (atoms or residue beads)
+//! enter the surface, with which radii (Å) and colours, and where they are in a given frame.
+//! Both the command line and the viewer build their `AtomSet`s through this.
+
+use glam::Vec3;
+
+use super::beads::check_count;
+use super::{BeadModel, ColorScheme, Frame, ModelError, RadiusOverrides, Topology};
+use crate::surface::AtomSet;
+
+/// How particles are derived from atoms.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParticleOptions {
+    /// One bead per residue instead of one particle per atom.
+    pub beads: bool,
+    /// User radius overrides (applied to atoms; beads size themselves from their atoms).
+    pub radius_overrides: RadiusOverrides,
+    /// Colour scheme per atom (beads take the mean colour of their atoms).
+    pub colours: ColorScheme,
+}
+
+/// Per-particle radii and colours, constant over the trajectory, plus the per-frame positions.
+#[derive(Debug, Clone)]
+pub struct Particles {
+    atom_count: usize,
+    beads: Option<BeadModel>,
+    radii: Vec<f32>,
+    colours: Vec<[f32; 3]>,
+}
+
+impl Particles {
+    /// Builds particles from `topology`; `first` sizes the beads (see [`BeadModel`]) and must
+    /// have the topology's atom count.
+    pub fn new(
+        topology: &Topology,
+        first: &Frame,
+        options: &ParticleOptions,
+    ) -> Result<Self, ModelError> {
+        check_count(first, topology.len())?;
+        let atom_colours = options.colours.atom_colours(topology);
+        let (beads, radii, colours) = if options.beads {
+            let model = BeadModel::new(topology, first)?;
+            let colours = model.colours(&atom_colours);
+            (Some(model.clone()), model.radii().to_vec(), colours)
+        } else {
+            (None, options.radius_overrides.apply(topology), atom_colours)
+        };
+        Ok(Particles {
+            atom_count: topology.len(),
+            beads,
+            radii,
+            colours,
+        })
+    }
+
+    /// Number of particles (atoms, or beads).
+    pub fn len(&self) -> usize {
+        self.radii.len()
+    }
+
+    /// True when there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.radii.is_empty()
+    }
+
+    /// True when particles are residue beads.
+    pub fn is_beads(&self) -> bool {
+        self.beads.is_some()
+    }
+
+    /// The bead model, when particles are beads.
+    pub fn bead_model(&self) -> Option<&BeadModel> {
+        self.beads.as_ref()
+    }
+
+    /// Radius of each particle in Å.
+    pub fn radii(&self) -> &[f32] {
+        &self.radii
+    }
+
+    /// Linear RGB colour of each particle.
+    pub fn colours(&self) -> &[[f32; 3]] {
+        &self.colours
+    }
+
+    /// Recolours the particles with another scheme (radii and positions are unaffected).
+    pub fn set_colours(&mut self, topology: &Topology, scheme: ColorScheme) {
+        let atom_colours = scheme.atom_colours(topology);
+        self.colours = match &self.beads {
+            Some(model) => model.colours(&atom_colours),
+            None => atom_colours,
+        };
+    }
+
+    /// Particle positions in Å for `frame`, written into `out` (cleared first).
+    pub fn positions_into(&self, frame: &Frame, out: &mut Vec<Vec3>) -> Result<(), ModelError> {
+        check_count(frame, self.atom_count)?;
+        match &self.beads {
+            Some(model) => model.centres_into(frame, out)?,
+            None => {
+                out.clear();
+                out.extend_from_slice(&frame.positions);
+            }
+        }
+        Ok(())
+    }
+
+    /// Particle positions in Å for `frame`.
+    pub fn positions(&self, frame: &Frame) -> Result<Vec<Vec3>, ModelError> {
+        let mut out = Vec::with_capacity(self.len());
+        self.positions_into(frame, &mut out)?;
+        Ok(out)
+    }
+
+    /// The engine input for `positions` (from [`Particles::positions`]), with colours.
+    pub fn atom_set<'a>(&'a self, positions: &'a [Vec3]) -> AtomSet<'a> {
+        AtomSet {
+            positions,
+            radii: &self.radii,
+            colours: Some(&self.colours),
+        }
+    }
+}

@@ -1,0 +1,279 @@
+//! The render pipelines, built once per device from shaders/render_scene.wgsl and
+//! shaders/render_post.wgsl: opaque mesh, transparent mesh (weighted blended OIT), sphere
+//! impostors, cylinders, the transparency resolve and the anaglyph composition.
+
+use super::scene::{CylinderInstance, SphereInstance};
+use super::targets::{ACCUM_FORMAT, COLOUR_FORMAT, DEPTH_FORMAT, REVEAL_FORMAT};
+
+/// WGSL of the scene pass.
+pub const SCENE_WGSL: &str = include_str!("../../shaders/render_scene.wgsl");
+/// WGSL of the full-screen passes.
+pub const POST_WGSL: &str = include_str!("../../shaders/render_post.wgsl");
+
+/// Vertices per cylinder instance (12 segments, two triangles each; see `vs_cylinder`).
+pub const CYLINDER_VERTICES: u32 = 12 * 6;
+
+pub(crate) struct Pipelines {
+    pub view_layout: wgpu::BindGroupLayout,
+    pub post_layout: wgpu::BindGroupLayout,
+    pub mesh_opaque: wgpu::RenderPipeline,
+    pub mesh_oit: wgpu::RenderPipeline,
+    pub sphere: wgpu::RenderPipeline,
+    pub cylinder: wgpu::RenderPipeline,
+    pub resolve: wgpu::RenderPipeline,
+    pub anaglyph: wgpu::RenderPipeline,
+}
+
+fn vec3_buffer(location: u32) -> [wgpu::VertexAttribute; 1] {
+    [wgpu::VertexAttribute {
+        format: wgpu::VertexFormat::Float32x3,
+        offset: 0,
+        shader_location: location,
+    }]
+}
+
+fn vec3_layout(attributes: &[wgpu::VertexAttribute]) -> wgpu::VertexBufferLayout<'_> {
+    wgpu::VertexBufferLayout {
+        array_stride: 12,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes,
+    }
+}
+
+const SPHERE_ATTRS: [wgpu::VertexAttribute; 2] =
+    wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4];
+const CYLINDER_ATTRS: [wgpu::VertexAttribute; 3] =
+    wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4];
+
+fn depth(write: bool) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
+    })
+}
+
+fn colour_target(blend: Option<wgpu::BlendState>) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format: COLOUR_FORMAT,
+        blend,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+struct PipelineSpec<'a> {
+    label: &'a str,
+    module: &'a wgpu::ShaderModule,
+    layout: &'a wgpu::PipelineLayout,
+    vs: &'a str,
+    fs: &'a str,
+    buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    depth: Option<wgpu::DepthStencilState>,
+    targets: &'a [Option<wgpu::ColorTargetState>],
+}
+
+fn pipeline(device: &wgpu::Device, s: PipelineSpec<'_>) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(s.label),
+        layout: Some(s.layout),
+        vertex: wgpu::VertexState {
+            module: s.module,
+            entry_point: Some(s.vs),
+            compilation_options: Default::default(),
+            buffers: s.buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: s.depth,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: s.module,
+            entry_point: Some(s.fs),
+            compilation_options: Default::default(),
+            targets: s.targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+impl Pipelines {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let scene = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render_scene.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SCENE_WGSL.into()),
+        });
+        let post = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render_post.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(POST_WGSL.into()),
+        });
+        let view_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("view uniform"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let tex = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let post_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("post textures"),
+            entries: &[tex(0), tex(1)],
+        });
+        let scene_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&view_layout)],
+            immediate_size: 0,
+        });
+        let post_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("post"),
+            bind_group_layouts: &[Some(&post_layout)],
+            immediate_size: 0,
+        });
+
+        let p = vec3_buffer(0);
+        let n = vec3_buffer(1);
+        let c = vec3_buffer(2);
+        let mesh_buffers = [
+            Some(vec3_layout(&p)),
+            Some(vec3_layout(&n)),
+            Some(vec3_layout(&c)),
+        ];
+        let sphere_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: size_of::<SphereInstance>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &SPHERE_ATTRS,
+        })];
+        let cylinder_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: size_of::<CylinderInstance>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &CYLINDER_ATTRS,
+        })];
+
+        let opaque_target = [colour_target(None)];
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let reveal = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Zero,
+            dst_factor: wgpu::BlendFactor::OneMinusSrc,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let oit_targets = [
+            Some(wgpu::ColorTargetState {
+                format: ACCUM_FORMAT,
+                blend: Some(wgpu::BlendState {
+                    color: additive,
+                    alpha: additive,
+                }),
+                write_mask: wgpu::ColorWrites::ALL,
+            }),
+            Some(wgpu::ColorTargetState {
+                format: REVEAL_FORMAT,
+                blend: Some(wgpu::BlendState {
+                    color: reveal,
+                    alpha: reveal,
+                }),
+                write_mask: wgpu::ColorWrites::RED,
+            }),
+        ];
+        let scene_spec = |label, vs, fs, buffers, depth, targets| PipelineSpec {
+            label,
+            module: &scene,
+            layout: &scene_layout,
+            vs,
+            fs,
+            buffers,
+            depth,
+            targets,
+        };
+        let mesh_opaque = pipeline(
+            device,
+            scene_spec(
+                "mesh opaque",
+                "vs_mesh",
+                "fs_mesh",
+                &mesh_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+        );
+        let mesh_oit = pipeline(
+            device,
+            scene_spec(
+                "mesh oit",
+                "vs_mesh",
+                "fs_mesh_oit",
+                &mesh_buffers,
+                depth(false),
+                &oit_targets,
+            ),
+        );
+        let sphere = pipeline(
+            device,
+            scene_spec(
+                "spheres",
+                "vs_sphere",
+                "fs_sphere",
+                &sphere_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+        );
+        let cylinder = pipeline(
+            device,
+            scene_spec(
+                "cylinders",
+                "vs_cylinder",
+                "fs_cylinder",
+                &cylinder_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+        );
+        let over = [colour_target(Some(wgpu::BlendState::ALPHA_BLENDING))];
+        let post_spec = |label, fs, targets| PipelineSpec {
+            label,
+            module: &post,
+            layout: &post_pl,
+            vs: "vs_fullscreen",
+            fs,
+            buffers: &[],
+            depth: None,
+            targets,
+        };
+        let resolve = pipeline(device, post_spec("oit resolve", "fs_oit_resolve", &over));
+        let anaglyph = pipeline(device, post_spec("anaglyph", "fs_anaglyph", &opaque_target));
+        Pipelines {
+            view_layout,
+            post_layout,
+            mesh_opaque,
+            mesh_oit,
+            sphere,
+            cylinder,
+            resolve,
+            anaglyph,
+        }
+    }
+}

@@ -1,0 +1,355 @@
+//! The renderer: draws a [`GpuScene`] through a [`Camera`] with [`RenderSettings`] into
+//! [`RenderTargets`]. [`Renderer::render`] is the one render-to-texture function; the window shows
+//! its output texture, and screenshots, movies and tests read it back (see `readback`).
+
+use glam::{Mat4, Vec3};
+
+use super::camera::{Camera, Projection};
+use super::pipelines::{CYLINDER_VERTICES, Pipelines};
+use super::scene::GpuScene;
+use super::settings::{RenderSettings, Stereo};
+use super::targets::RenderTargets;
+
+/// Per-view uniforms. Twin of `View` in shaders/render_scene.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct ViewUniform {
+    view: [[f32; 4]; 4],
+    proj: [[f32; 4]; 4],
+    light_dir: [f32; 4],
+    background: [f32; 4],
+    fog: [f32; 4],
+    surface: [f32; 4],
+    surface_colour: [f32; 4],
+    misc: [f32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<ViewUniform>() == 224);
+
+impl ViewUniform {
+    fn new(camera: &Camera, aspect: f32, settings: &RenderSettings) -> Self {
+        let bg = settings.background.linear_rgb();
+        // Depth cue from the front to the back of the scene's bounding sphere.
+        let r = camera.scene_radius.max(1.0);
+        let (cue_start, cue_end) = (camera.distance - r * 0.5, camera.distance + r);
+        let ortho = if camera.projection == Projection::Orthographic {
+            1.0
+        } else {
+            0.0
+        };
+        let light = Vec3::new(-0.4, 0.6, 0.7).normalize();
+        let (single, sc) = match settings.surface_colour {
+            Some(c) => (1.0, c),
+            None => (0.0, [1.0; 3]),
+        };
+        ViewUniform {
+            view: camera.view_matrix().to_cols_array_2d(),
+            proj: camera.projection_matrix(aspect).to_cols_array_2d(),
+            light_dir: [light.x, light.y, light.z, 0.0],
+            background: [bg[0], bg[1], bg[2], 1.0],
+            fog: [
+                cue_start,
+                cue_end,
+                settings.depth_cue.clamp(0.0, 1.0),
+                ortho,
+            ],
+            surface: [settings.surface_opacity.clamp(0.0, 1.0), single, 0.0, 0.0],
+            surface_colour: [sc[0], sc[1], sc[2], 1.0],
+            misc: [0.35, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// Draws scenes on one wgpu device. Create once; reuse for every frame and image.
+pub struct Renderer {
+    pipelines: Pipelines,
+    /// One uniform buffer per eye, so both eyes can be encoded before one submit.
+    view_buffers: [wgpu::Buffer; 2],
+    view_groups: [wgpu::BindGroup; 2],
+}
+
+/// One eye's pass: its camera, the part of the output it covers, and where it draws.
+struct EyePass<'a> {
+    camera: Camera,
+    /// x, y, width, height in pixels.
+    viewport: [u32; 4],
+    target: &'a wgpu::TextureView,
+    clear: bool,
+}
+
+impl Renderer {
+    /// Builds the pipelines for `device`.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let pipelines = Pipelines::new(device);
+        let make = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size_of::<ViewUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let view_buffers = [make("view uniform 0"), make("view uniform 1")];
+        let group = |b: &wgpu::Buffer| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("view"),
+                layout: &pipelines.view_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: b.as_entire_binding(),
+                }],
+            })
+        };
+        let view_groups = [group(&view_buffers[0]), group(&view_buffers[1])];
+        Renderer {
+            pipelines,
+            view_buffers,
+            view_groups,
+        }
+    }
+
+    /// Renders `scene` into `targets` (the output texture ends up in
+    /// [`RenderTargets::colour_texture`]) and submits the work to `queue`.
+    pub fn render(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        targets: &mut RenderTargets,
+        scene: &GpuScene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) {
+        let [w, h] = targets.size();
+        if settings.stereo == Stereo::Anaglyph {
+            targets.ensure_eyes(device);
+        }
+        let sep = settings.eye_separation;
+        let passes: Vec<EyePass<'_>> = match (settings.stereo, &targets.eyes) {
+            (Stereo::SideBySide, _) => {
+                let half = (w / 2).max(1);
+                vec![
+                    EyePass {
+                        camera: camera.eye_camera(-1.0, sep),
+                        viewport: [0, 0, half, h],
+                        target: &targets.colour_view,
+                        clear: true,
+                    },
+                    EyePass {
+                        camera: camera.eye_camera(1.0, sep),
+                        viewport: [half, 0, w - half, h],
+                        target: &targets.colour_view,
+                        clear: false,
+                    },
+                ]
+            }
+            (Stereo::Anaglyph, Some([l, r])) => vec![
+                EyePass {
+                    camera: camera.eye_camera(-1.0, sep),
+                    viewport: [0, 0, w, h],
+                    target: l,
+                    clear: true,
+                },
+                EyePass {
+                    camera: camera.eye_camera(1.0, sep),
+                    viewport: [0, 0, w, h],
+                    target: r,
+                    clear: true,
+                },
+            ],
+            _ => vec![EyePass {
+                camera: *camera,
+                viewport: [0, 0, w, h],
+                target: &targets.colour_view,
+                clear: true,
+            }],
+        };
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("render"),
+        });
+        for (i, pass) in passes.iter().enumerate() {
+            let aspect = pass.viewport[2] as f32 / pass.viewport[3].max(1) as f32;
+            let u = ViewUniform::new(&pass.camera, aspect, settings);
+            queue.write_buffer(&self.view_buffers[i], 0, bytemuck::bytes_of(&u));
+            self.encode_eye(
+                device,
+                &mut encoder,
+                targets,
+                scene,
+                settings,
+                pass,
+                &self.view_groups[i],
+            );
+        }
+        if let (Stereo::Anaglyph, Some([l, r])) = (settings.stereo, &targets.eyes) {
+            let group = self.post_group(device, l, r);
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("anaglyph"),
+                color_attachments: &[Some(colour_attachment(&targets.colour_view, None))],
+                ..Default::default()
+            });
+            rp.set_pipeline(&self.pipelines.anaglyph);
+            rp.set_bind_group(0, &group, &[]);
+            rp.draw(0..3, 0..1);
+        }
+        queue.submit([encoder.finish()]);
+    }
+
+    fn post_group(
+        &self,
+        device: &wgpu::Device,
+        a: &wgpu::TextureView,
+        b: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("post"),
+            layout: &self.pipelines.post_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(a),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(b),
+                },
+            ],
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn encode_eye(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &RenderTargets,
+        scene: &GpuScene,
+        settings: &RenderSettings,
+        pass: &EyePass<'_>,
+        view_group: &wgpu::BindGroup,
+    ) {
+        let [x, y, w, h] = pass.viewport.map(|v| v as f32);
+        let bg = settings.background.linear_rgb();
+        let clear = pass.clear.then_some(wgpu::Color {
+            r: bg[0] as f64,
+            g: bg[1] as f64,
+            b: bg[2] as f64,
+            a: 1.0,
+        });
+        let mesh_ready = settings.show_surface && scene.index_count > 0;
+        let transparent =
+            mesh_ready && settings.surface_is_transparent() && settings.surface_opacity > 0.0;
+        {
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("opaque"),
+                color_attachments: &[Some(colour_attachment(pass.target, clear))],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &targets.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            rp.set_viewport(x, y, w, h, 0.0, 1.0);
+            rp.set_bind_group(0, view_group, &[]);
+            if let Some(s) = scene.spheres.as_ref().filter(|_| scene.sphere_count > 0) {
+                rp.set_pipeline(&self.pipelines.sphere);
+                rp.set_vertex_buffer(0, s.buffer.slice(..));
+                rp.draw(0..6, 0..scene.sphere_count);
+            }
+            if let Some(c) = scene
+                .cylinders
+                .as_ref()
+                .filter(|_| scene.cylinder_count > 0)
+            {
+                rp.set_pipeline(&self.pipelines.cylinder);
+                rp.set_vertex_buffer(0, c.buffer.slice(..));
+                rp.draw(0..CYLINDER_VERTICES, 0..scene.cylinder_count);
+            }
+            if mesh_ready && !settings.surface_is_transparent() {
+                rp.set_pipeline(&self.pipelines.mesh_opaque);
+                self.draw_mesh(&mut rp, scene);
+            }
+        }
+        if !transparent {
+            return;
+        }
+        {
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("transparent surface"),
+                color_attachments: &[
+                    Some(colour_attachment(
+                        &targets.accum_view,
+                        Some(wgpu::Color::TRANSPARENT),
+                    )),
+                    Some(colour_attachment(
+                        &targets.reveal_view,
+                        Some(wgpu::Color::WHITE),
+                    )),
+                ],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &targets.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            rp.set_viewport(x, y, w, h, 0.0, 1.0);
+            rp.set_bind_group(0, view_group, &[]);
+            rp.set_pipeline(&self.pipelines.mesh_oit);
+            self.draw_mesh(&mut rp, scene);
+        }
+        let group = self.post_group(device, &targets.accum_view, &targets.reveal_view);
+        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("oit resolve"),
+            color_attachments: &[Some(colour_attachment(pass.target, None))],
+            ..Default::default()
+        });
+        rp.set_viewport(x, y, w, h, 0.0, 1.0);
+        rp.set_pipeline(&self.pipelines.resolve);
+        rp.set_bind_group(0, &group, &[]);
+        rp.draw(0..3, 0..1);
+    }
+
+    fn draw_mesh(&self, rp: &mut wgpu::RenderPass<'_>, scene: &GpuScene) {
+        let (Some(p), Some(n), Some(c), Some(i)) = (
+            &scene.positions,
+            &scene.normals,
+            &scene.colours,
+            &scene.indices,
+        ) else {
+            return;
+        };
+        rp.set_vertex_buffer(0, p.buffer.slice(..));
+        rp.set_vertex_buffer(1, n.buffer.slice(..));
+        rp.set_vertex_buffer(2, c.buffer.slice(..));
+        rp.set_index_buffer(i.buffer.slice(..), wgpu::IndexFormat::Uint32);
+        rp.draw_indexed(0..scene.index_count, 0, 0..1);
+    }
+}
+
+fn colour_attachment(
+    view: &wgpu::TextureView,
+    clear: Option<wgpu::Color>,
+) -> wgpu::RenderPassColorAttachment<'_> {
+    wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load: clear.map_or(wgpu::LoadOp::Load, wgpu::LoadOp::Clear),
+            store: wgpu::StoreOp::Store,
+        },
+    }
+}
+
+/// The model-view-projection matrix the renderer uses for `camera` at `aspect` (for picking and
+/// tests).
+pub fn view_projection(camera: &Camera, aspect: f32) -> Mat4 {
+    camera.projection_matrix(aspect) * camera.view_matrix()
+}

@@ -1,0 +1,66 @@
+//! Smoke test of the real window: runs the `mdsurf` binary under `xvfb-run -a` on the bundled
+//! demo with `--play-frames 3 --screenshot FILE --quit`, and checks that it exits 0 and that the
+//! screenshot shows a surface (many colours, the centre differs from the corner). Without Xvfb
+//! or a wgpu adapter the test returns early with a note, unless `REQUIRE_GPU=1`, where it fails.
+
+use std::path::Path;
+use std::process::Command;
+
+use mdsurf::render::RgbaImage;
+
+fn require_gpu() -> bool {
+    std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+fn skip_or_fail(reason: &str) {
+    if require_gpu() {
+        panic!("REQUIRE_GPU=1 but {reason}");
+    }
+    eprintln!("note: skipping the window smoke test: {reason}");
+}
+
+#[test]
+fn scripted_run_plays_frames_and_saves_a_non_uniform_screenshot() {
+    if Command::new("xvfb-run").arg("--help").output().is_err() {
+        return skip_or_fail("xvfb-run is not installed (apt install xvfb)");
+    }
+    if let Err(e) = mdsurf::render::HeadlessGpu::new() {
+        return skip_or_fail(&format!("no wgpu adapter: {e}"));
+    }
+    let dir = tempfile::tempdir().expect("temp dir");
+    let shot = dir.path().join("shot.png");
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x800x24"])
+        .arg(env!("CARGO_BIN_EXE_mdsurf"))
+        .arg(demo.join("md_1u19.gro"))
+        .arg(demo.join("md_1u19.xtc"))
+        .args(["--play-frames", "3", "--screenshot"])
+        .arg(&shot)
+        .args(["--quit", "--cpu"])
+        .env("XDG_RUNTIME_DIR", dir.path())
+        .output()
+        .expect("run xvfb-run");
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "mdsurf exited with {}: {log}",
+        out.status
+    );
+    assert!(
+        log.contains("showed 3 frame(s), last frame 2"),
+        "did not play 3 frames: {log}"
+    );
+    let image = RgbaImage::read_png(&shot).unwrap_or_else(|e| panic!("{e}; log: {log}"));
+    assert!(
+        image.width >= 200 && image.height >= 200,
+        "{}x{}",
+        image.width,
+        image.height
+    );
+    let colours = image.distinct_colours();
+    assert!(colours > 500, "screenshot looks blank: {colours} colours");
+    let centre = image.pixel(image.width / 2, image.height / 2);
+    let corner = image.pixel(0, 0);
+    assert_ne!(centre, corner, "no surface in the middle of the view");
+}

@@ -1,0 +1,88 @@
+//! The whole viewer window inside an egui_kittest harness with a wgpu renderer: it loads the
+//! bundled demo, computes a surface (CPU engine), and the rendered window shows the panels and a
+//! 3D view that is not uniform. Needs a wgpu adapter; without one it returns early with a note,
+//! unless `REQUIRE_GPU=1`.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use mdsurf::app::{DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
+
+#[test]
+fn window_loads_demo_and_draws_the_surface() {
+    if let Err(e) = mdsurf::render::HeadlessGpu::new() {
+        if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") {
+            panic!("REQUIRE_GPU=1 but {e}");
+        }
+        eprintln!("note: skipping: {e}");
+        return;
+    }
+    let config = tempfile::tempdir().expect("tempdir");
+    // Keep the recent-files list out of the user's config.
+    // SAFETY: this test binary has one test, and nothing else reads the environment concurrently.
+    unsafe { std::env::set_var("XDG_CONFIG_HOME", config.path()) };
+    let options = ViewOptions {
+        cpu: true,
+        ..Default::default()
+    };
+    let mut h = Harness::builder()
+        .with_size([1200.0, 800.0])
+        .wgpu()
+        .build_eframe(|cc| -> Viewer {
+            let result = Arc::new(Mutex::new(None));
+            create_viewer(
+                cc,
+                &options,
+                result,
+                PathBuf::from(DEMO_TOP),
+                Some(PathBuf::from(DEMO_TRAJ)),
+            )
+        });
+    let start = Instant::now();
+    while h.state().core().shown.is_none() && h.state().core().error.is_none() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no surface after 2 minutes"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+        h.step();
+    }
+    assert!(
+        h.state().core().error.is_none(),
+        "{:?}",
+        h.state().core().error
+    );
+    h.step();
+    h.step();
+    let core = h.state().core();
+    let shown = &core.shown.as_ref().expect("surface").computed;
+    assert_eq!(
+        shown.particles.positions.len(),
+        core.source.as_ref().expect("data").topology().len()
+    );
+    assert!(shown.output.mesh.triangle_count() > 1000);
+    // Panels and readouts are there.
+    h.get_by_label("Play");
+    h.get_by_label("Export movie (PNG sequence)");
+    assert!(h.query_by_label_contains("triangles").is_some());
+    let image = h.render().expect("render the window");
+    if let Ok(dir) = std::env::var("MDSURF_SAVE_WINDOW") {
+        let _ = image.save(PathBuf::from(dir).join("window.png"));
+    }
+    // The centre of the window is the 3D view: it must not be one flat colour.
+    let (w, hgt) = image.dimensions();
+    let mut colours: Vec<[u8; 4]> = (0..40)
+        .flat_map(|dy| (0..40).map(move |dx| (w / 2 - 20 + dx, hgt / 2 - 20 + dy)))
+        .map(|(x, y)| image.get_pixel(x, y).0)
+        .collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(
+        colours.len() > 50,
+        "3D view looks flat: {} colours",
+        colours.len()
+    );
+}

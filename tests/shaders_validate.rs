@@ -1,0 +1,98 @@
+//! Validates every WGSL file under `shaders/` with naga (parse + full validation), no GPU needed,
+//! and checks that the constants the compute shaders hard-code agree with the Rust side.
+
+use std::path::{Path, PathBuf};
+
+fn wgsl_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let entries =
+        std::fs::read_dir(dir).unwrap_or_else(|e| panic!("reading {}: {e}", dir.display()));
+    for entry in entries {
+        let path = entry.expect("directory entry").path();
+        if path.is_dir() {
+            wgsl_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "wgsl") {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn every_shader_parses_and_validates() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let mut files = Vec::new();
+    wgsl_files(&dir, &mut files);
+    files.sort();
+    assert!(
+        files.iter().any(|f| f.ends_with("density.wgsl")),
+        "compute shaders missing from {}",
+        dir.display()
+    );
+    let mut failures = Vec::new();
+    for file in &files {
+        let source = std::fs::read_to_string(file).expect("readable shader");
+        let module = match naga::front::wgsl::parse_str(&source) {
+            Ok(m) => m,
+            Err(e) => {
+                failures.push(format!("{}: {}", file.display(), e.emit_to_string(&source)));
+                continue;
+            }
+        };
+        let mut validator = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        );
+        if let Err(e) = validator.validate(&module) {
+            failures.push(format!("{}: {}", file.display(), e.emit_to_string(&source)));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "invalid shaders:\n{}",
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn edge_corner_table_in_emit_matches_the_rust_tables() {
+    let source = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/emit.wgsl"))
+        .expect("emit.wgsl");
+    let line = source
+        .lines()
+        .find(|l| l.starts_with("const EDGE_CORNER0"))
+        .expect("EDGE_CORNER0 in emit.wgsl");
+    let inner = line
+        .rsplit_once("array<u32, 12>(")
+        .expect("array literal")
+        .1;
+    let values: Vec<u8> = inner
+        .trim_end_matches(");")
+        .split(',')
+        .map(|v| v.trim().trim_end_matches('u').parse().expect("number"))
+        .collect();
+    let expected: Vec<u8> = mdsurf::surface::tables::EDGE_CORNERS
+        .iter()
+        .map(|e| e[0])
+        .collect();
+    assert_eq!(values, expected);
+    for (e, corners) in mdsurf::surface::tables::EDGE_CORNERS.iter().enumerate() {
+        let (a, b) = (corners[0], corners[1]);
+        assert_eq!(
+            b - a,
+            1 << (e / 4),
+            "edge {e} must run along axis {}",
+            e / 4
+        );
+    }
+}
+
+#[test]
+fn mc_table_layout_in_the_shaders_matches_the_rust_side() {
+    for name in ["classify.wgsl", "emit.wgsl"] {
+        let path = format!("{}/shaders/{name}", env!("CARGO_MANIFEST_DIR"));
+        let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let base = format!("const MC_TRI_BASE: u32 = {}u;", mdsurf::gpu::types::MC_TRI_BASE);
+        assert!(source.contains(&base), "{name}: expected `{base}`");
+        let rows = format!("array<vec4<u32>, {}>", mdsurf::gpu::types::MC_TABLE_ROWS);
+        assert!(source.contains(&rows), "{name}: expected `{rows}`");
+    }
+}
