@@ -69,17 +69,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     drop(out);
     let grid = engine.plan(&atoms, &params)?;
+    // The engine keeps its buffers; free them so the stage runs below measure their own.
+    drop(engine);
     let mut rows = Vec::new();
+    let mut vol = mdsurf::surface::DensityVolume::default();
+    let mut scratch = marching_cubes::McScratch::default();
     for r in 0..repeats {
         let mut row = [0.0f64; 6];
         let (bins, w, c) = timed(|| bin_atoms(&atoms, &params, &grid, density::slab_planes(&grid)));
         (row[0], row[1]) = (w, c);
-        let (vol, w, c) = timed(|| density::compute_binned(&bins, &params, &grid, colour));
+        let ((), w, c) =
+            timed(|| density::compute_binned_into(&bins, &params, &grid, colour, &mut vol));
         (row[2], row[3]) = (w, c);
         drop(bins);
         let ((mesh, area, volume), w, c) = timed(|| {
-            let mesh = marching_cubes::extract(&grid, &vol, params.isovalue);
-            let (a, v) = (mesh.area(), mesh.volume());
+            let mesh = marching_cubes::extract_with(&grid, &vol, params.isovalue, &mut scratch);
+            let (a, v) = mesh.area_and_volume();
             (mesh, a, v)
         });
         (row[4], row[5]) = (w, c);

@@ -188,3 +188,32 @@ fn stages_run_alone_give_the_engine_mesh() {
     }
     assert_eq!(mesh.vertex_count(), crossed);
 }
+
+#[test]
+fn an_engine_reused_across_frames_gives_fresh_results() {
+    use mdsurf::surface::{CpuEngine, SurfaceEngine};
+    let (big, big_r) = cluster(120, 18.0, Vec3::ZERO, 31);
+    let (small, small_r) = cluster(30, 8.0, Vec3::new(3.0, 0.0, 0.0), 32);
+    let colours = vec![[0.3, 0.6, 0.9]; big.len()];
+    let params = SurfaceParams::default();
+    type Frame<'a> = (&'a [Vec3], &'a [f32], Option<&'a [[f32; 3]]>);
+    let frames: [Frame<'_>; 4] = [
+        (&big, &big_r, None),
+        (&small, &small_r, None),
+        (&big, &big_r, Some(&colours)),
+        (&big, &big_r, None),
+    ];
+    let mut engine = CpuEngine::new();
+    for (positions, radii, colours) in frames {
+        let atoms = AtomSet {
+            positions,
+            radii,
+            colours,
+        };
+        let kept = engine.compute(&atoms, &params).expect("surface");
+        let fresh = surface(positions, radii, colours, &params);
+        assert_eq!(kept.mesh, fresh.mesh);
+        assert_eq!(kept.area, fresh.area);
+        assert_eq!(kept.volume, fresh.volume);
+    }
+}

@@ -6,15 +6,31 @@
 use std::time::Instant;
 
 use super::bin::bin_atoms;
+use super::marching_cubes::{McScratch, extract_with};
 use super::{
-    AtomSet, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput, SurfaceParams,
-    available_memory_bytes, density, marching_cubes,
+    AtomSet, DensityVolume, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
+    SurfaceParams, available_memory_bytes, density,
 };
 
-/// The multi-threaded CPU surface engine (uses rayon's global thread pool).
-#[derive(Debug, Clone, Default)]
+/// The multi-threaded CPU surface engine (uses rayon's global thread pool). It keeps the last
+/// density volume and the Marching Cubes buffers between calls (about 4 bytes per grid sample,
+/// 16 with colours), so a sequence of frames allocates them once.
+#[derive(Default)]
 pub struct CpuEngine {
     memory_limit: Option<u64>,
+    /// Density volume kept between calls (reused when the grid keeps its size).
+    volume: DensityVolume,
+    /// Marching Cubes working memory kept between calls.
+    mc: McScratch,
+}
+
+impl std::fmt::Debug for CpuEngine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CpuEngine")
+            .field("memory_limit", &self.memory_limit)
+            .field("kept_samples", &self.volume.values.len())
+            .finish()
+    }
 }
 
 impl CpuEngine {
@@ -28,6 +44,7 @@ impl CpuEngine {
     pub fn with_memory_limit(bytes: u64) -> CpuEngine {
         CpuEngine {
             memory_limit: Some(bytes),
+            ..CpuEngine::default()
         }
     }
 
@@ -72,15 +89,14 @@ impl SurfaceEngine for CpuEngine {
         let bin_ms = ms(t);
 
         let t = Instant::now();
-        let volume = density::compute_binned(&bins, params, &grid, atoms.colours.is_some());
+        let with_colour = atoms.colours.is_some();
+        density::compute_binned_into(&bins, params, &grid, with_colour, &mut self.volume);
         drop(bins);
         let density_ms = ms(t);
 
         let t = Instant::now();
-        let mesh = marching_cubes::extract(&grid, &volume, params.isovalue);
-        drop(volume);
-        let area = mesh.area();
-        let enclosed = mesh.volume();
+        let mesh = extract_with(&grid, &self.volume, params.isovalue, &mut self.mc);
+        let (area, enclosed) = mesh.area_and_volume();
         let mc_ms = ms(t);
 
         Ok(SurfaceOutput {

@@ -61,36 +61,57 @@ pub fn compute_binned(
     grid: &GridSpec,
     with_colour: bool,
 ) -> DensityVolume {
+    let mut out = DensityVolume::default();
+    compute_binned_into(bins, params, grid, with_colour, &mut out);
+    out
+}
+
+/// [`compute_binned`] into `out`, reusing its buffers when they already have the grid's size
+/// (one frame after another), which saves allocating and page-faulting them again.
+pub fn compute_binned_into(
+    bins: &AtomBins,
+    params: &SurfaceParams,
+    grid: &GridSpec,
+    with_colour: bool,
+    out: &mut DensityVolume,
+) {
     let [nx, ny, nz] = grid.dims.map(|d| d as usize);
     let plane = nx * ny;
-    let slab_len = plane * bins.slab_planes as usize;
+    let slab_len = (plane * bins.slab_planes as usize).max(1);
     let total = plane * nz;
-    if total == 0 {
-        return DensityVolume {
-            values: Vec::new(),
-            colours: with_colour.then(Vec::new),
-        };
+    if out.values.len() != total {
+        out.values = Vec::new();
+        out.values = vec![0.0f32; total];
     }
-    let mut values = vec![0.0f32; total];
-    let mut colours = with_colour.then(|| vec![[0.0f32; 3]; total]);
+    if !with_colour {
+        out.colours = None;
+    } else if out.colours.as_ref().is_none_or(|c| c.len() != total) {
+        out.colours = None;
+        out.colours = Some(vec![[0.0f32; 3]; total]);
+    }
     let inv_iso = 1.0 / params.isovalue;
-    match colours.as_mut() {
+    let values = &mut out.values;
+    match out.colours.as_mut() {
         None => values
             .par_chunks_mut(slab_len)
             .enumerate()
-            .for_each(|(s, vals)| fill_slab(bins, grid, s, vals, None)),
+            .for_each(|(s, vals)| {
+                vals.fill(0.0);
+                fill_slab(bins, grid, s, vals, None);
+            }),
         Some(cols) => values
             .par_chunks_mut(slab_len)
             .zip(cols.par_chunks_mut(slab_len))
             .enumerate()
             .for_each(|(s, (vals, cols))| {
+                vals.fill(0.0);
+                cols.fill([0.0; 3]);
                 fill_slab(bins, grid, s, vals, Some(&mut *cols));
                 for c in cols.iter_mut() {
                     *c = c.map(|v| v * inv_iso);
                 }
             }),
     }
-    DensityVolume { values, colours }
 }
 
 /// Per-axis samples an atom reaches: first index, squared distances (Å²) and exponentials.
@@ -199,18 +220,25 @@ fn fill_slab(
                 let eyz = ey * ez;
                 let row0 = zoff + (ty.first + jy) * nx as usize + tx.first;
                 if let Some(lanes) = wide.as_ref()
-                    && cols.is_none()
                     && row0 + LANES <= vals.len()
+                    && let Ok(out) = <&mut [f32; LANES]>::try_from(&mut vals[row0..row0 + LANES])
                 {
                     // Fixed-width path: lanes past the atom's reach (or failing the cutoff)
-                    // add exactly 0.0, which changes no sample.
-                    let out: &mut [f32; LANES] = match (&mut vals[row0..row0 + LANES]).try_into() {
-                        Ok(out) => out,
-                        Err(_) => continue,
-                    };
+                    // get weight exactly 0.0, which changes no sample.
+                    let mut w = [0.0f32; LANES];
                     for l in 0..LANES {
                         let pass = (lanes.d2[l] + dy2) + dz2 < cut2;
-                        out[l] += if pass { lanes.e[l] * eyz } else { 0.0 };
+                        w[l] = if pass { lanes.e[l] * eyz } else { 0.0 };
+                        out[l] += w[l];
+                    }
+                    if let Some(cols) = cols.as_deref_mut() {
+                        let c = atom.colour;
+                        let n = tx.d2.len();
+                        for (v, &w) in cols[row0..row0 + n].iter_mut().zip(&w[..n]) {
+                            v[0] += w * c[0];
+                            v[1] += w * c[1];
+                            v[2] += w * c[2];
+                        }
                     }
                     continue;
                 }

@@ -59,6 +59,23 @@ pub fn classify(grid: &GridSpec, values: &[f32], iso: f32) -> Vec<u8> {
 /// colours (interpolated from the colour volume, white without one) and triangles wound
 /// counter-clockwise seen from outside. An empty mesh when nothing crosses the isovalue.
 pub fn extract(grid: &GridSpec, density: &DensityVolume, iso: f32) -> Mesh {
+    extract_with(grid, density, iso, &mut McScratch::default())
+}
+
+/// Working memory of [`extract_with`], kept between calls so that repeated extractions (one
+/// per frame) neither grow nor page-fault their buffers again.
+#[derive(Default)]
+pub struct McScratch {
+    slabs: Vec<SlabMesh>,
+}
+
+/// [`extract`] reusing the buffers in `scratch`; gives the same mesh.
+pub fn extract_with(
+    grid: &GridSpec,
+    density: &DensityVolume,
+    iso: f32,
+    scratch: &mut McScratch,
+) -> Mesh {
     let [nx, ny, nz] = grid.dims.map(|d| d as usize);
     let enough = density.values.len() >= nx * ny * nz
         && density
@@ -78,11 +95,13 @@ pub fn extract(grid: &GridSpec, density: &DensityVolume, iso: f32) -> Mesh {
         iso,
         tables: McTables::get(),
     };
-    let parts: Vec<SlabMesh> = (0..slabs)
-        .into_par_iter()
-        .map(|s| ctx.slab(s * planes, ((s + 1) * planes).min(layers)))
-        .collect();
-    merge(parts)
+    scratch.slabs.resize_with(slabs, SlabMesh::default);
+    scratch
+        .slabs
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(s, out)| ctx.slab(s * planes, ((s + 1) * planes).min(layers), out));
+    merge(&scratch.slabs)
 }
 
 /// What every slab reads.
@@ -93,13 +112,18 @@ struct Ctx<'a> {
     tables: &'static McTables,
 }
 
-/// One slab's share of the mesh, vertex indices local (or [`FOREIGN`]-flagged).
+/// One slab's share of the mesh, vertex indices local (or [`FOREIGN`]-flagged), plus its
+/// per-plane working buffers.
 #[derive(Default)]
 struct SlabMesh {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
     colours: Vec<[f32; 3]>,
     indices: Vec<u32>,
+    /// Inside flags of three consecutive planes.
+    flags: [Vec<u8>; 3],
+    /// Edge maps of two consecutive planes.
+    maps: [Vec<u32>; 2],
 }
 
 /// Eight inside flags (bytes 0 or 1) starting at `q`, as one word.
@@ -123,17 +147,26 @@ impl Ctx<'_> {
     }
 
     /// Cells of layers `c0..c1` (layer k lies between planes k and k + 1).
-    fn slab(&self, c0: usize, c1: usize) -> SlabMesh {
+    fn slab(&self, c0: usize, c1: usize, out: &mut SlabMesh) {
         let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
         let plane = nx * ny;
         let last = c1 == nz - 1;
-        let mut out = SlabMesh::default();
+        out.positions.clear();
+        out.normals.clear();
+        out.colours.clear();
+        out.indices.clear();
         // Inside flags of planes k, k + 1, k + 2 and edge maps of planes k, k + 1.
-        let (mut fa, mut fb, mut fc) = (vec![0u8; plane], vec![0u8; plane], vec![0u8; plane]);
-        let (mut cur, mut next) = (vec![0u32; plane * 3], vec![0u32; plane * 3]);
+        let [mut fa, mut fb, mut fc] = std::mem::take(&mut out.flags);
+        let [mut cur, mut next] = std::mem::take(&mut out.maps);
+        for f in [&mut fa, &mut fb, &mut fc] {
+            f.resize(plane, 0);
+        }
+        for m in [&mut cur, &mut next] {
+            m.resize(plane * 3, 0);
+        }
         self.flags(c0, &mut fa);
         self.flags(c0 + 1, &mut fb);
-        self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut out));
+        self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut *out));
         // Cell edge -> (plane 0 or 1, point offset within the plane, axis).
         let edge_ref: [(usize, usize, usize); 12] = std::array::from_fn(|e| {
             let [dx, dy, dz] = corner_offset(EDGE_CORNERS[e][0]).map(|d| d as usize);
@@ -145,7 +178,7 @@ impl Ctx<'_> {
             if up {
                 self.flags(k + 2, &mut fc);
             }
-            let emit = owned.then_some(&mut out);
+            let emit = owned.then_some(&mut *out);
             self.plane(k + 1, &fb, up.then_some(&fc[..]), &mut next, emit);
             let flag = if owned { 0 } else { FOREIGN };
             let (a, b) = (&fa, &fb);
@@ -199,7 +232,8 @@ impl Ctx<'_> {
             std::mem::swap(&mut fa, &mut fb);
             std::mem::swap(&mut fb, &mut fc);
         }
-        out
+        out.flags = [fa, fb, fc];
+        out.maps = [cur, next];
     }
 
     /// Fills `map` with the index of each crossed edge starting on plane `k` (inside flags `a`,
@@ -260,34 +294,54 @@ impl Ctx<'_> {
     }
 }
 
-/// Joins the slabs in order, turning local indices into global ones.
-fn merge(parts: Vec<SlabMesh>) -> Mesh {
+/// Joins the slabs in order, turning local indices into global ones (in parallel, each slab
+/// into its own part of the output).
+fn merge(parts: &[SlabMesh]) -> Mesh {
     let mut offsets = Vec::with_capacity(parts.len() + 1);
-    let mut total = 0u32;
-    for p in &parts {
-        offsets.push(total);
-        total += p.positions.len() as u32;
+    let mut total = 0usize;
+    for p in parts {
+        offsets.push(total as u32);
+        total += p.positions.len();
     }
-    offsets.push(total);
+    offsets.push(total as u32);
     let tri_total: usize = parts.iter().map(|p| p.indices.len()).sum();
     let mut mesh = Mesh {
-        positions: Vec::with_capacity(total as usize),
-        normals: Vec::with_capacity(total as usize),
-        colours: Vec::with_capacity(total as usize),
-        indices: Vec::with_capacity(tri_total),
+        positions: vec![Vec3::ZERO; total],
+        normals: vec![Vec3::ZERO; total],
+        colours: vec![[0.0; 3]; total],
+        indices: vec![0; tri_total],
     };
-    for (s, p) in parts.into_iter().enumerate() {
-        let (own, next) = (offsets[s], offsets[s + 1]);
-        mesh.indices.extend(p.indices.iter().map(|&i| {
-            if i & FOREIGN != 0 {
-                next + (i & !FOREIGN)
-            } else {
-                own + i
-            }
-        }));
-        mesh.positions.extend_from_slice(&p.positions);
-        mesh.normals.extend_from_slice(&p.normals);
-        mesh.colours.extend_from_slice(&p.colours);
+    let mut jobs = Vec::with_capacity(parts.len());
+    let (mut pos, mut nor, mut col, mut idx) = (
+        &mut mesh.positions[..],
+        &mut mesh.normals[..],
+        &mut mesh.colours[..],
+        &mut mesh.indices[..],
+    );
+    for (s, p) in parts.iter().enumerate() {
+        let n = p.positions.len();
+        let (a, rest) = pos.split_at_mut(n);
+        pos = rest;
+        let (b, rest) = nor.split_at_mut(n);
+        nor = rest;
+        let (c, rest) = col.split_at_mut(n);
+        col = rest;
+        let (d, rest) = idx.split_at_mut(p.indices.len());
+        idx = rest;
+        jobs.push((p, offsets[s], offsets[s + 1], a, b, c, d));
     }
+    jobs.into_par_iter()
+        .for_each(|(p, own, next, pos, nor, col, idx)| {
+            pos.copy_from_slice(&p.positions);
+            nor.copy_from_slice(&p.normals);
+            col.copy_from_slice(&p.colours);
+            for (o, &i) in idx.iter_mut().zip(&p.indices) {
+                *o = if i & FOREIGN != 0 {
+                    next + (i & !FOREIGN)
+                } else {
+                    own + i
+                };
+            }
+        });
     mesh
 }

@@ -83,6 +83,13 @@ fn point(grid: &GridSpec, p: [usize; 3]) -> Vec3 {
 /// Central-difference gradient of `values` at sample `p` in Å⁻¹ (one-sided on the boundary).
 pub fn gradient(grid: &GridSpec, values: &[f32], p: [usize; 3]) -> Vec3 {
     let dims = grid.dims.map(|d| d as usize);
+    if (0..3).all(|a| p[a] >= 1 && p[a] + 1 < dims[a]) {
+        // Interior: plain central differences with strides 1, nx, nx * ny.
+        let i = index(grid, p);
+        let (sy, sz) = (dims[0], dims[0] * dims[1]);
+        let d = |s: usize| (values[i + s] - values[i - s]) / (2.0 * grid.spacing);
+        return Vec3::new(d(1), d(sy), d(sz));
+    }
     let mut g = Vec3::ZERO;
     for axis in 0..3 {
         let (mut lo, mut hi) = (p, p);

@@ -43,16 +43,31 @@ impl Mesh {
 
     /// Surface area in Å² (sum of triangle areas, accumulated in f64).
     pub fn area(&self) -> f64 {
-        self.sum_over_triangles(|[a, b, c]| {
-            0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length()
-        })
+        self.sum_over_triangles(|[a, b, c]| triangle_area(a, b, c))
     }
 
     /// Enclosed volume in Å³ (sum of `v0 . (v1 x v2) / 6`, accumulated in f64).
     pub fn volume(&self) -> f64 {
-        self.sum_over_triangles(|[a, b, c]| {
-            a.as_dvec3().dot(b.as_dvec3().cross(c.as_dvec3())) / 6.0
-        })
+        self.sum_over_triangles(|[a, b, c]| signed_volume(a, b, c))
+    }
+
+    /// Area in Å² and enclosed volume in Å³ in one pass (same values as [`Mesh::area`] and
+    /// [`Mesh::volume`]).
+    pub fn area_and_volume(&self) -> (f64, f64) {
+        const CHUNK: usize = 3 * 16384;
+        let partial: Vec<(f64, f64)> = self
+            .indices
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                chunk.chunks_exact(3).fold((0.0, 0.0), |(a, v), t| {
+                    let [p, q, r] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+                    (a + triangle_area(p, q, r), v + signed_volume(p, q, r))
+                })
+            })
+            .collect();
+        partial
+            .iter()
+            .fold((0.0, 0.0), |(a, v), (pa, pv)| (a + pa, v + pv))
     }
 
     /// Sum of `f` over the triangles in f64, in parallel over fixed chunks summed in order, so
@@ -112,4 +127,14 @@ impl Mesh {
                 .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
         )
     }
+}
+
+/// Area of triangle (a, b, c) in Å², in f64.
+fn triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length()
+}
+
+/// Signed volume `a . (b x c) / 6` of the tetrahedron (origin, a, b, c) in Å³, in f64.
+fn signed_volume(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    a.as_dvec3().dot(b.as_dvec3().cross(c.as_dvec3())) / 6.0
 }
