@@ -10,12 +10,13 @@ use std::time::Instant;
 use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 use mdsurf::export::write_atomic;
-use mdsurf::surface::{StageTimings, SurfaceEngine, SurfaceOutput, SurfaceParams};
+use mdsurf::surface::{StageTimings, SurfaceOutput, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
 
 use super::bench_table::{Table, peak_rss_bytes};
 use super::common::{
-    BenchBackend, InputArgs, ParamArgs, ParticleArgs, System, demo_files, engines_for, ms_since,
+    BenchBackend, BenchEngine, InputArgs, ParamArgs, ParticleArgs, System, demo_files, engines_for,
+    ms_since,
 };
 
 /// Arguments of `mdsurf bench`.
@@ -116,6 +117,8 @@ pub struct BenchResult {
     pub compute_wall_ms: f64,
     /// Frames per second including reading.
     pub fps: f64,
+    /// GPU memory held by the engine's buffers in bytes (GPU engine only).
+    pub gpu_bytes: Option<u64>,
     /// Peak resident memory of the process so far, bytes.
     pub peak_rss: Option<u64>,
 }
@@ -141,7 +144,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         for engine in engines.iter_mut() {
             let name = engine.name().to_string();
             eprintln!("timing {label} on {name} ...");
-            let mut r = time_case(&mut source, engine.as_mut(), &params, &args)
+            let mut r = time_case(&mut source, engine, &params, &args)
                 .map_err(|e| anyhow!("{label} on {name}: {e:#}"))?;
             r.case = label.clone();
             results.push(r);
@@ -240,7 +243,7 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
 /// Times one case on one engine: `warmup` untimed frames, then `repeats` timed ones.
 fn time_case(
     source: &mut Source,
-    engine: &mut dyn SurfaceEngine,
+    engine: &mut BenchEngine,
     params: &SurfaceParams,
     args: &BenchArgs,
 ) -> Result<BenchResult> {
@@ -267,7 +270,7 @@ fn time_case(
                 colours: s.colours(),
             },
         };
-        last = engine.compute(&atoms, params)?;
+        last = engine.engine().compute(&atoms, params)?;
         let compute_ms = ms_since(t1);
         if i >= args.warmup as usize {
             reads.push(read_ms);
@@ -281,6 +284,7 @@ fn time_case(
     Ok(BenchResult {
         case: String::new(),
         backend: engine.name().to_string(),
+        gpu_bytes: engine.gpu_bytes(),
         atoms: positions.len(),
         spacing: params.spacing,
         dims: last.grid.dims,

@@ -4,7 +4,7 @@
 use super::bench::BenchResult;
 
 /// Column headers, in order (text and CSV share them).
-pub const COLUMNS: [&str; 14] = [
+pub const COLUMNS: [&str; 15] = [
     "case",
     "backend",
     "atoms",
@@ -19,6 +19,7 @@ pub const COLUMNS: [&str; 14] = [
     "compute_ms",
     "frames_per_s",
     "peak_rss_MB",
+    "gpu_MB",
 ];
 
 /// A formatted benchmark table.
@@ -49,6 +50,9 @@ impl Table {
                     format!("{:.2}", r.compute_wall_ms),
                     format!("{:.2}", r.fps),
                     r.peak_rss
+                        .map(|b| format!("{:.0}", b as f64 / 1e6))
+                        .unwrap_or_else(|| "-".into()),
+                    r.gpu_bytes
                         .map(|b| format!("{:.0}", b as f64 / 1e6))
                         .unwrap_or_else(|| "-".into()),
                 ]

@@ -144,11 +144,45 @@ pub enum BenchBackend {
     All,
 }
 
+/// An engine being benchmarked; the GPU one also reports its memory.
+pub enum BenchEngine {
+    /// The CPU reference engine.
+    Cpu(CpuEngine),
+    /// The wgpu compute engine.
+    Gpu(Box<GpuEngine>),
+}
+
+impl BenchEngine {
+    /// The engine to compute with.
+    pub fn engine(&mut self) -> &mut dyn SurfaceEngine {
+        match self {
+            BenchEngine::Cpu(e) => e,
+            BenchEngine::Gpu(e) => e.as_mut(),
+        }
+    }
+
+    /// Short name (`cpu`, `gpu`).
+    pub fn name(&self) -> &str {
+        match self {
+            BenchEngine::Cpu(e) => e.name(),
+            BenchEngine::Gpu(e) => e.name(),
+        }
+    }
+
+    /// Bytes of GPU memory the engine's buffers hold; `None` for the CPU engine.
+    pub fn gpu_bytes(&self) -> Option<u64> {
+        match self {
+            BenchEngine::Cpu(_) => None,
+            BenchEngine::Gpu(e) => Some(e.gpu_bytes()),
+        }
+    }
+}
+
 /// The engines `backend` asks for; `all` skips a GPU that does not start, saying so on stderr.
-pub fn engines_for(backend: BenchBackend) -> Result<Vec<Box<dyn SurfaceEngine>>> {
-    let mut engines: Vec<Box<dyn SurfaceEngine>> = Vec::new();
+pub fn engines_for(backend: BenchBackend) -> Result<Vec<BenchEngine>> {
+    let mut engines = Vec::new();
     if backend != BenchBackend::Gpu {
-        engines.push(Box::new(CpuEngine::new()));
+        engines.push(BenchEngine::Cpu(CpuEngine::new()));
     }
     if backend == BenchBackend::Cpu {
         return Ok(engines);
@@ -156,7 +190,7 @@ pub fn engines_for(backend: BenchBackend) -> Result<Vec<Box<dyn SurfaceEngine>>>
     match GpuEngine::new() {
         Ok(gpu) => {
             eprintln!("gpu: {}", gpu.context().adapter_name);
-            engines.push(Box::new(gpu));
+            engines.push(BenchEngine::Gpu(Box::new(gpu)));
         }
         Err(err) if backend == BenchBackend::Gpu => {
             return Err(
