@@ -258,7 +258,7 @@ fn runs_on_a_device_with_webgpu_default_limits() {
         ..Default::default()
     }))
     .expect("device with default limits");
-    let mut engine = GpuEngine::from_device(device, queue).expect("engine on default limits");
+    let mut engine = GpuEngine::try_from_device(device, queue).expect("engine on default limits");
     compare(
         &mut engine,
         "default limits",

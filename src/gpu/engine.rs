@@ -104,6 +104,7 @@ pub struct GpuEngine {
     state: State,
     frame: u64,
     latest: Option<FrameStats>,
+    init_error: Option<String>,
 }
 
 impl std::fmt::Debug for GpuEngine {
@@ -123,8 +124,25 @@ impl GpuEngine {
     }
 
     /// Wraps a device created elsewhere (the viewer shares eframe's device); its limits bound
-    /// the problem sizes and slabs.
-    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Result<GpuEngine, GpuError> {
+    /// the problem sizes and slabs. Never fails itself: when the device cannot build the
+    /// pipelines, every frame returns that error (see [`GpuEngine::try_from_device`]).
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> GpuEngine {
+        let (engine, error) = Self::build(GpuContext::from_device(
+            device,
+            queue,
+            "shared device".into(),
+        ));
+        GpuEngine {
+            init_error: error.map(|e| e.to_string()),
+            ..engine
+        }
+    }
+
+    /// Like [`GpuEngine::from_device`], failing at once when the pipelines cannot be built.
+    pub fn try_from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<GpuEngine, GpuError> {
         Self::with_context(GpuContext::from_device(
             device,
             queue,
@@ -134,14 +152,21 @@ impl GpuEngine {
 
     /// An engine on `ctx` (compiles every stage).
     pub fn with_context(ctx: GpuContext) -> Result<GpuEngine, GpuError> {
+        match Self::build(ctx) {
+            (engine, None) => Ok(engine),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    fn build(ctx: GpuContext) -> (GpuEngine, Option<GpuError>) {
         let max_groups = ctx.limits.max_compute_workgroups_per_dimension;
-        let (stages, buffers) = ctx.scoped(|| {
-            Ok((
+        let ((stages, (buffers, table_error)), scope_error) = ctx.capture(|| {
+            (
                 Stages::new(&ctx.device, max_groups),
-                Buffers::new(&ctx.device)?,
-            ))
-        })?;
-        Ok(GpuEngine {
+                Buffers::new(&ctx.device),
+            )
+        });
+        let engine = GpuEngine {
             stages,
             buffers,
             timer: Timer::new(&ctx.queue, ctx.timestamps),
@@ -150,8 +175,10 @@ impl GpuEngine {
             state: State::default(),
             frame: 0,
             latest: None,
+            init_error: None,
             ctx,
-        })
+        };
+        (engine, scope_error.or(table_error))
     }
 
     /// The device context.
@@ -217,6 +244,11 @@ impl GpuEngine {
         changes: Changes,
         wall_clock: bool,
     ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
+        if let Some(e) = &self.init_error {
+            return Err(SurfaceError::Gpu(format!(
+                "the GPU engine could not start: {e}"
+            )));
+        }
         let ctx = self.ctx.clone();
         let mut inner = Ok(None);
         let scoped = ctx.scoped(|| {
