@@ -15,6 +15,7 @@ pub mod inputs;
 pub mod kernel;
 pub mod mc;
 pub mod measure;
+pub mod options;
 pub mod output;
 pub mod plan;
 pub mod resources;
@@ -26,6 +27,7 @@ pub mod types;
 
 pub use context::{GpuContext, gpu_required};
 pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
+pub use frame::Work;
 pub use output::{FrameStats, GpuSurface};
 pub use types::{DrawIndexedArgs, GpuCounters, GpuVertex};
 
