@@ -54,7 +54,7 @@ impl Changes {
 /// What one submit did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameInfo {
-    /// Frame number (matches [`FrameStats::frame`]).
+    /// Frame number (matches [`super::FrameStats::frame`]).
     pub frame: u64,
     /// The grid.
     pub grid: GridSpec,
