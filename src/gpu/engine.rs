@@ -198,16 +198,18 @@ impl GpuEngine {
                 .map(Some);
             Ok(())
         });
-        match (inner, scoped) {
+        let result = match (inner, scoped) {
             (Err(e), _) => Err(e),
-            (Ok(_), Err(e)) => {
-                // The frame is broken: forget the state so the next one starts afresh.
-                self.state.params = None;
-                Err(e.into())
-            }
+            (Ok(_), Err(e)) => Err(e.into()),
             (Ok(Some(r)), Ok(())) => Ok(r),
             (Ok(None), Ok(())) => Err(SurfaceError::Gpu("frame was not submitted".into())),
+        };
+        if result.is_err() {
+            // Whatever was half uploaded: the next frame starts afresh and uploads everything.
+            self.state.params = None;
+            self.state.fingerprints = Default::default();
         }
+        result
     }
 
     fn submit_unscoped(
@@ -356,7 +358,9 @@ impl GpuEngine {
     }
 
     /// Non-blocking: the newest counters that have arrived since the last call, if any. Grows
-    /// the mesh buffers for the next frame when a frame overflowed or came close.
+    /// the mesh buffers for the next frame when a frame overflowed or came close. A frame with
+    /// `overflow` set draws nothing: submit again (with `Changes::default()` only Marching
+    /// Cubes re-runs) to get its surface.
     pub fn poll_stats(&mut self) -> Result<Option<FrameStats>, GpuError> {
         let _ = self.ctx.device.poll(wgpu::PollType::Poll);
         self.take_arrived()
