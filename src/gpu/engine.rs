@@ -514,3 +514,14 @@ impl SurfaceEngine for GpuEngine {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// The viewer keeps the engine as `Box<dyn SurfaceEngine + Send>`.
+    #[test]
+    fn engine_is_send() {
+        fn send<T: Send>() {}
+        send::<super::GpuEngine>();
+        send::<super::GpuSurface>();
+    }
+}
