@@ -258,7 +258,7 @@ fn runs_on_a_device_with_webgpu_default_limits() {
         ..Default::default()
     }))
     .expect("device with default limits");
-    let mut engine = GpuEngine::from_device(device, queue).expect("engine on default limits");
+    let mut engine = GpuEngine::try_from_device(device, queue).expect("engine on default limits");
     compare(
         &mut engine,
         "default limits",
@@ -268,4 +268,26 @@ fn runs_on_a_device_with_webgpu_default_limits() {
             ..Default::default()
         },
     );
+}
+
+#[test]
+fn a_failed_frame_does_not_leave_stale_atoms_behind() {
+    let Some(mut engine) = engine() else { return };
+    let a = cluster(50, 1, 4.0);
+    let p = SurfaceParams {
+        spacing: 0.7,
+        ..Default::default()
+    };
+    engine.compute(&a.set(), &p).expect("first");
+    let b = jitter(&a, 2, 1.0);
+    let bad = SurfaceParams {
+        isovalue: -1.0,
+        ..p
+    };
+    assert!(
+        engine.compute(&b.set(), &bad).is_err(),
+        "negative isovalue must fail"
+    );
+    // Same atoms again with good parameters: they must be uploaded, not taken as unchanged.
+    compare(&mut engine, "after a failed frame", &b, &p);
 }

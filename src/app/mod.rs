@@ -60,7 +60,7 @@ pub enum ViewError {
 /// device is opened), else the CPU reference engine (`cpu` forces it).
 fn make_engine(state: Option<&egui_wgpu::RenderState>, cpu: bool) -> Box<dyn SurfaceEngine + Send> {
     if let Some(s) = state.filter(|_| !cpu) {
-        match crate::gpu::GpuEngine::from_device(s.device.clone(), s.queue.clone()) {
+        match crate::gpu::GpuEngine::try_from_device(s.device.clone(), s.queue.clone()) {
             Ok(engine) => return Box::new(engine),
             Err(err) => eprintln!("GPU surface engine unavailable ({err}); using the CPU engine"),
         }

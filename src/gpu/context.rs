@@ -112,16 +112,23 @@ impl GpuContext {
     /// Runs `f` inside validation and out-of-memory error scopes, so a GPU error becomes a
     /// [`GpuError::Device`] instead of wgpu's default panic.
     pub fn scoped<T>(&self, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
-        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let result = f();
-        let v = pollster::block_on(validation.pop());
-        let o = pollster::block_on(oom.pop());
-        match (result, v.or(o)) {
+        match self.capture(f) {
             (Err(e), _) => Err(e),
-            (Ok(_), Some(e)) => Err(GpuError::Device(one_line(&e.to_string()))),
+            (Ok(_), Some(e)) => Err(e),
             (Ok(t), None) => Ok(t),
         }
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes and returns its value with the
+    /// first GPU error it caused (objects created with errors exist but are invalid).
+    pub fn capture<T>(&self, f: impl FnOnce() -> T) -> (T, Option<GpuError>) {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        let error = v.or(o).map(|e| GpuError::Device(one_line(&e.to_string())));
+        (value, error)
     }
 
     /// Blocks until all submitted work is done.

@@ -11,6 +11,7 @@ use glam::Vec3;
 
 use super::context::GpuContext;
 use super::frame::{Recorder, Stages, Work};
+pub use super::options::{Changes, EngineOptions, FrameInfo};
 use super::output::{FrameStats, GpuSurface, Readbacks, read_mesh, read_pod};
 use super::plan::{FramePlan, plan_frame};
 use super::resources::Buffers;
@@ -20,66 +21,6 @@ use super::{GpuError, inputs};
 use crate::surface::{
     AtomSet, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput, SurfaceParams,
 };
-
-/// Tuning knobs (tests force slabs and overflows with them).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct EngineOptions {
-    /// Most owned z layers per slab (None: as many as the device limits allow).
-    pub max_slab_layers: Option<u32>,
-    /// Bytes the per-voxel slab buffers may take (default: a quarter of the largest buffer,
-    /// at most 4 GiB).
-    pub volume_budget: u64,
-    /// Initial mesh capacity (vertices, triangles); None estimates it from the grid.
-    pub initial_mesh_capacity: Option<(u32, u32)>,
-    /// Factor by which the mesh buffers exceed the last frame's counts when they grow.
-    pub headroom: f32,
-}
-
-impl EngineOptions {
-    fn defaults(ctx: &GpuContext) -> EngineOptions {
-        EngineOptions {
-            max_slab_layers: None,
-            volume_budget: (ctx.limits.max_buffer_size / 4).clamp(64 << 20, 4 << 30),
-            initial_mesh_capacity: None,
-            headroom: 1.25,
-        }
-    }
-}
-
-/// What the caller knows changed since its previous frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Changes {
-    /// Positions changed (new trajectory frame).
-    pub positions: bool,
-    /// Radii changed (or the atom set itself).
-    pub radii: bool,
-    /// Colours changed (colour scheme).
-    pub colours: bool,
-}
-
-impl Changes {
-    /// Everything changed.
-    pub const ALL: Changes = Changes {
-        positions: true,
-        radii: true,
-        colours: true,
-    };
-}
-
-/// What one submit did.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FrameInfo {
-    /// Frame number (matches [`FrameStats::frame`]).
-    pub frame: u64,
-    /// The grid.
-    pub grid: GridSpec,
-    /// Number of z-slabs the grid was split into.
-    pub slabs: usize,
-    /// Wall-clock time of validation and upload in ms.
-    pub upload_ms: f64,
-    /// Which stages ran.
-    pub work: Work,
-}
 
 #[derive(Debug, Default)]
 struct State {
@@ -104,6 +45,7 @@ pub struct GpuEngine {
     state: State,
     frame: u64,
     latest: Option<FrameStats>,
+    init_error: Option<String>,
 }
 
 impl std::fmt::Debug for GpuEngine {
@@ -123,8 +65,25 @@ impl GpuEngine {
     }
 
     /// Wraps a device created elsewhere (the viewer shares eframe's device); its limits bound
-    /// the problem sizes and slabs.
-    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> Result<GpuEngine, GpuError> {
+    /// the problem sizes and slabs. Never fails itself: when the device cannot build the
+    /// pipelines, every frame returns that error (see [`GpuEngine::try_from_device`]).
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue) -> GpuEngine {
+        let (engine, error) = Self::build(GpuContext::from_device(
+            device,
+            queue,
+            "shared device".into(),
+        ));
+        GpuEngine {
+            init_error: error.map(|e| e.to_string()),
+            ..engine
+        }
+    }
+
+    /// Like [`GpuEngine::from_device`], failing at once when the pipelines cannot be built.
+    pub fn try_from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<GpuEngine, GpuError> {
         Self::with_context(GpuContext::from_device(
             device,
             queue,
@@ -134,14 +93,21 @@ impl GpuEngine {
 
     /// An engine on `ctx` (compiles every stage).
     pub fn with_context(ctx: GpuContext) -> Result<GpuEngine, GpuError> {
+        match Self::build(ctx) {
+            (engine, None) => Ok(engine),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    fn build(ctx: GpuContext) -> (GpuEngine, Option<GpuError>) {
         let max_groups = ctx.limits.max_compute_workgroups_per_dimension;
-        let (stages, buffers) = ctx.scoped(|| {
-            Ok((
+        let ((stages, (buffers, table_error)), scope_error) = ctx.capture(|| {
+            (
                 Stages::new(&ctx.device, max_groups),
-                Buffers::new(&ctx.device)?,
-            ))
-        })?;
-        Ok(GpuEngine {
+                Buffers::new(&ctx.device),
+            )
+        });
+        let engine = GpuEngine {
             stages,
             buffers,
             timer: Timer::new(&ctx.queue, ctx.timestamps),
@@ -150,8 +116,10 @@ impl GpuEngine {
             state: State::default(),
             frame: 0,
             latest: None,
+            init_error: None,
             ctx,
-        })
+        };
+        (engine, scope_error.or(table_error))
     }
 
     /// The device context.
@@ -217,6 +185,11 @@ impl GpuEngine {
         changes: Changes,
         wall_clock: bool,
     ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
+        if let Some(e) = &self.init_error {
+            return Err(SurfaceError::Gpu(format!(
+                "the GPU engine could not start: {e}"
+            )));
+        }
         let ctx = self.ctx.clone();
         let mut inner = Ok(None);
         let scoped = ctx.scoped(|| {
@@ -225,16 +198,18 @@ impl GpuEngine {
                 .map(Some);
             Ok(())
         });
-        match (inner, scoped) {
+        let result = match (inner, scoped) {
             (Err(e), _) => Err(e),
-            (Ok(_), Err(e)) => {
-                // The frame is broken: forget the state so the next one starts afresh.
-                self.state.params = None;
-                Err(e.into())
-            }
+            (Ok(_), Err(e)) => Err(e.into()),
             (Ok(Some(r)), Ok(())) => Ok(r),
             (Ok(None), Ok(())) => Err(SurfaceError::Gpu("frame was not submitted".into())),
+        };
+        if result.is_err() {
+            // Whatever was half uploaded: the next frame starts afresh and uploads everything.
+            self.state.params = None;
+            self.state.fingerprints = Default::default();
         }
+        result
     }
 
     fn submit_unscoped(
@@ -383,7 +358,9 @@ impl GpuEngine {
     }
 
     /// Non-blocking: the newest counters that have arrived since the last call, if any. Grows
-    /// the mesh buffers for the next frame when a frame overflowed or came close.
+    /// the mesh buffers for the next frame when a frame overflowed or came close. A frame with
+    /// `overflow` set draws nothing: submit again (with `Changes::default()` only Marching
+    /// Cubes re-runs) to get its surface.
     pub fn poll_stats(&mut self) -> Result<Option<FrameStats>, GpuError> {
         let _ = self.ctx.device.poll(wgpu::PollType::Poll);
         self.take_arrived()
@@ -535,5 +512,16 @@ impl SurfaceEngine for GpuEngine {
             volume: stats.volume,
             timings: stats.timings,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The viewer keeps the engine as `Box<dyn SurfaceEngine + Send>`.
+    #[test]
+    fn engine_is_send() {
+        fn send<T: Send>() {}
+        send::<super::GpuEngine>();
+        send::<super::GpuSurface>();
     }
 }

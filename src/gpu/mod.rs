@@ -2,9 +2,12 @@
 //! (DESIGN section 3). Atoms are uploaded ([`engine`]), binned into cells by counting sort
 //! ([`bin`], [`scan`]), the density and colour volumes gathered per voxel ([`density`]), and the
 //! surface extracted by Marching Cubes ([`mc`]: classify, compact, emit) and measured
-//! ([`measure`]). [`GpuEngine`] runs a frame: blocking through [`crate::surface::SurfaceEngine`]
-//! (CLI, tests) or non-blocking into a [`GpuSurface`] the renderer draws from (viewer).
-//! The shaders live in `shaders/`, one file per stage.
+//! ([`measure`]). [`frame`] records a frame's passes, [`plan`] sizes it (cells, z-slabs),
+//! [`timing`] reads timestamp queries, [`output`] brings counters back asynchronously.
+//! [`GpuEngine`] runs a frame: blocking through [`crate::surface::SurfaceEngine`] (CLI, tests)
+//! or non-blocking into a [`GpuSurface`] the renderer draws from (viewer). [`tolerance`] holds
+//! the CPU-parity tolerances, [`table1`] reproduces the paper's Table 1. The shaders live in
+//! `shaders/`, one file per stage.
 
 pub mod bin;
 pub mod context;
@@ -15,6 +18,7 @@ pub mod inputs;
 pub mod kernel;
 pub mod mc;
 pub mod measure;
+pub mod options;
 pub mod output;
 pub mod plan;
 pub mod resources;
@@ -26,6 +30,7 @@ pub mod types;
 
 pub use context::{GpuContext, gpu_required};
 pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
+pub use frame::Work;
 pub use output::{FrameStats, GpuSurface};
 pub use types::{DrawIndexedArgs, GpuCounters, GpuVertex};
 

@@ -87,16 +87,23 @@ pub struct Buffers {
 }
 
 impl Buffers {
-    /// Empty buffers plus the Marching Cubes tables.
-    pub fn new(device: &wgpu::Device) -> Result<Buffers, GpuError> {
+    /// Empty buffers plus the Marching Cubes tables; the error says the tables did not fit
+    /// their uniform (never for the shared tables; `types` tests it), the buffers exist anyway.
+    pub fn new(device: &wgpu::Device) -> (Buffers, Option<GpuError>) {
         use wgpu::BufferUsages as U;
-        let mc_tables = McTablesUniform::new(McTables::get()).ok_or(GpuError::TooLarge {
-            what: "the Marching Cubes tables",
-            needed: 0,
-            limit: 16 * super::types::MC_TABLE_ROWS as u64,
-        })?;
+        let (mc_tables, error) = match McTablesUniform::new(McTables::get()) {
+            Some(t) => (t, None),
+            None => (
+                bytemuck::zeroed_box(),
+                Some(GpuError::TooLarge {
+                    what: "the Marching Cubes tables",
+                    needed: 0,
+                    limit: 16 * super::types::MC_TABLE_ROWS as u64,
+                }),
+            ),
+        };
         let copy = U::COPY_DST | U::COPY_SRC;
-        Ok(Buffers {
+        let buffers = Buffers {
             positions: Grow::new(device, "positions", U::COPY_DST),
             radii: Grow::new(device, "radii", U::COPY_DST),
             colours: Grow::new(device, "colours", U::COPY_DST),
@@ -126,7 +133,8 @@ impl Buffers {
             ),
             partials: storage(device, "area/volume partials", 256 * 8, U::empty()),
             mc_tables: uniform(device, "mc tables", &*mc_tables),
-        })
+        };
+        (buffers, error)
     }
 
     /// Grows the per-atom buffers for `atoms`; true when any was replaced.

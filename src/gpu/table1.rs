@@ -2,7 +2,7 @@
 //! by tiling a real structure with fresh jitter every frame ([`crate::synthetic`]), run through
 //! [`GpuEngine::run_blocking`] a number of times; medians per stage (upload, binning, density,
 //! Marching Cubes), whole-frame wall-clock time and fps, GPU memory, and the speed-up over the
-//! paper's GTX 580 figures. `mdsurf bench --table1 --backend gpu` prints [`format`]'s table.
+//! paper's GTX 580 figures. `mdsurf bench --table1 --backend gpu` prints [`format()`]'s table.
 
 use std::path::Path;
 use std::time::Instant;
