@@ -33,6 +33,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    quiet_vulkan_device_select();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(err) if !err.use_stderr() => {
@@ -72,4 +73,17 @@ fn one_line_usage_error(text: &str) -> String {
     let line = parts.join(" ");
     let line = line.strip_prefix("error: ").unwrap_or(&line);
     format!("error: {line} (see --help)")
+}
+
+/// Mesa's Vulkan device-select layer connects to a Wayland compositor to choose the default GPU
+/// and, with no session (`XDG_RUNTIME_DIR` unset: SSH, CI, Xvfb), prints a two-line complaint on
+/// stderr that would break our one-line errors. Without a session it has nothing to choose by,
+/// so it is switched off there (`NODEVICE_SELECT`, Mesa's own switch).
+fn quiet_vulkan_device_select() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("NODEVICE_SELECT").is_none()
+    {
+        // SAFETY: called first thing in `main`, before any other thread exists.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
 }

@@ -57,9 +57,12 @@ pub enum ViewError {
 }
 
 /// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
-/// device is opened), else the CPU reference engine (`cpu` forces it).
+/// device is opened), else the CPU reference engine (`cpu` forces it). A software adapter
+/// (lavapipe) still draws the window but is slower than the CPU engine, so it does not compute.
 fn make_engine(state: Option<&egui_wgpu::RenderState>, cpu: bool) -> Box<dyn SurfaceEngine + Send> {
-    if let Some(s) = state.filter(|_| !cpu) {
+    let hardware =
+        |s: &&egui_wgpu::RenderState| s.adapter.get_info().device_type != wgpu::DeviceType::Cpu;
+    if let Some(s) = state.filter(|_| !cpu).filter(hardware) {
         match crate::gpu::GpuEngine::try_from_device(s.device.clone(), s.queue.clone()) {
             Ok(engine) => return Box::new(engine),
             Err(err) => eprintln!("GPU surface engine unavailable ({err}); using the CPU engine"),

@@ -109,7 +109,8 @@ pub enum Backend {
     Cpu,
     /// The wgpu compute engine.
     Gpu,
-    /// The GPU when an adapter exists, else the CPU.
+    /// The GPU when a hardware adapter exists, else the CPU (a software adapter such as
+    /// lavapipe is slower than the CPU engine).
     Auto,
 }
 
@@ -121,6 +122,14 @@ pub fn make_engine(backend: Backend) -> Result<Box<dyn SurfaceEngine>> {
             GpuEngine::new().context("--backend gpu: cannot start the GPU engine")?,
         )),
         Backend::Auto => match GpuEngine::new() {
+            Ok(gpu) if gpu.context().software_adapter => {
+                eprintln!(
+                    "backend: cpu (the only GPU adapter, {}, is a software rasterizer, slower than \
+                     the CPU engine; --backend gpu uses it anyway)",
+                    gpu.context().adapter_name
+                );
+                Ok(Box::new(CpuEngine::new()))
+            }
             Ok(gpu) => {
                 eprintln!("backend: gpu ({})", gpu.context().adapter_name);
                 Ok(Box::new(gpu))

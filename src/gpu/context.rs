@@ -17,6 +17,9 @@ pub struct GpuContext {
     pub timestamps: bool,
     /// Adapter name and backend, for messages.
     pub adapter_name: String,
+    /// True when the adapter is a software rasterizer on the CPU (Mesa lavapipe, WARP):
+    /// correct but slower than the CPU engine, so `--backend auto` passes it over.
+    pub software_adapter: bool,
 }
 
 impl GpuContext {
@@ -52,11 +55,10 @@ impl GpuContext {
             })
             .await
             .map_err(|e| GpuError::Device(e.to_string()))?;
-        Ok(Self::from_device(
-            device,
-            queue,
-            format!("{} ({:?})", info.name, info.backend),
-        ))
+        let mut context =
+            Self::from_device(device, queue, format!("{} ({:?})", info.name, info.backend));
+        context.software_adapter = info.device_type == wgpu::DeviceType::Cpu;
+        Ok(context)
     }
 
     /// The limits mdsurf asks for: the adapter's own maxima for what bounds problem size, the
@@ -84,6 +86,7 @@ impl GpuContext {
             limits,
             timestamps,
             adapter_name: name,
+            software_adapter: false,
         }
     }
 
