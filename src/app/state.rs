@@ -290,11 +290,11 @@ impl AppCore {
                 if self.in_flight == Some((c.generation, c.frame)) {
                     self.in_flight = None;
                 }
-                if self.fit_pending {
-                    if let Some((centre, radius)) = scene_bounds(&c) {
-                        self.camera.fit_sphere(centre, radius);
-                        self.fit_pending = false;
-                    }
+                if self.fit_pending
+                    && let Some((centre, radius)) = scene_bounds(&c)
+                {
+                    self.camera.fit_sphere(centre, radius);
+                    self.fit_pending = false;
                 }
                 self.shown = Some(Shown {
                     computed: *c,
