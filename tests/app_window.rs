@@ -1,6 +1,6 @@
 //! The whole viewer window inside an egui_kittest harness with a wgpu renderer: it loads the
 //! bundled demo, computes a surface (CPU engine), and the rendered window shows the panels and a
-//! 3D view that is not uniform. Needs a wgpu adapter; without one it returns early with a note,
+//! 3D view that is not uniform; then a movie export writes its numbered PNGs. Needs a wgpu adapter; without one it returns early with a note,
 //! unless `REQUIRE_GPU=1`.
 
 use std::path::PathBuf;
@@ -9,7 +9,9 @@ use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use mdsurf::app::{DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
+use mdsurf::app::export::MoviePlan;
+use mdsurf::app::{Command, DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
+use mdsurf::render::RgbaImage;
 
 #[test]
 fn window_loads_demo_and_draws_the_surface() {

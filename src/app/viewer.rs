@@ -83,6 +83,16 @@ impl Viewer {
         }
     }
 
+    /// Applies a command as if the UI had issued it (tests, scripted use).
+    pub fn command(&mut self, ctx: &egui::Context, cmd: Command) {
+        self.apply(ctx, cmd);
+    }
+
+    /// True while a movie export runs.
+    pub fn movie_running(&self) -> bool {
+        self.movie.is_some()
+    }
+
     /// The state behind the window (for tests).
     pub fn core(&self) -> &AppCore {
         &self.core
