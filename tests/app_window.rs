@@ -87,4 +87,42 @@ fn window_loads_demo_and_draws_the_surface() {
         "3D view looks flat: {} colours",
         colours.len()
     );
+
+    // Movie export: three trajectory frames with a turntable, written as numbered PNGs.
+    let movie = config.path().join("movie");
+    let plan = MoviePlan {
+        frames: Some((0, 2)),
+        stride: 1,
+        degrees_per_frame: 15.0,
+        turntable_frames: 1,
+        size: [64, 48],
+        dir: movie.clone(),
+    };
+    let ctx = h.ctx.clone();
+    h.state_mut().command(&ctx, Command::StartMovie(plan));
+    let start = Instant::now();
+    while h.state().movie_running() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "movie not done after 2 minutes"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+        h.step();
+    }
+    assert!(
+        h.state().core().error.is_none(),
+        "{:?}",
+        h.state().core().error
+    );
+    let frames: Vec<RgbaImage> = (0..3)
+        .map(|i| {
+            RgbaImage::read_png(&movie.join(format!("frame_{i:05}.png"))).expect("movie frame")
+        })
+        .collect();
+    assert!(frames.iter().all(|f| (f.width, f.height) == (64, 48)));
+    assert_ne!(
+        frames[0].pixels, frames[2].pixels,
+        "camera and frame should change"
+    );
+    assert!(!movie.join("frame_00003.png").exists());
 }
