@@ -2,7 +2,7 @@
 // weighted blended OIT targets when semi-transparent), atoms as ray-cast sphere impostors and
 // bonds as instanced cylinders. All shading happens in view space, in linear colour.
 
-// Twin of `ViewUniform` in src/render/uniforms.rs (224 bytes).
+// Twin of `ViewUniform` in src/render/renderer.rs (240 bytes); mirrored in render_post.wgsl.
 struct View {
     view: mat4x4<f32>,
     proj: mat4x4<f32>,
@@ -16,8 +16,10 @@ struct View {
     surface: vec4<f32>,
     // rgb: single surface colour (linear).
     surface_colour: vec4<f32>,
-    // x: specular strength, yzw: unused.
+    // x: specular strength, y: near clip (Å), z: far clip (Å), w: unused.
     misc: vec4<f32>,
+    // x: ambient occlusion strength, y: its reach (Å), z: viewport height (px), w: unused.
+    ao: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> u: View;

@@ -1,6 +1,6 @@
 //! The whole viewer window inside an egui_kittest harness with a wgpu renderer: it loads the
 //! bundled demo, computes a surface (CPU engine), and the rendered window shows the panels and a
-//! 3D view that is not uniform. Needs a wgpu adapter; without one it returns early with a note,
+//! 3D view that is not uniform; then a movie export writes its numbered PNGs. Needs a wgpu adapter; without one it returns early with a note,
 //! unless `REQUIRE_GPU=1`.
 
 use std::path::PathBuf;
@@ -9,7 +9,9 @@ use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use mdsurf::app::{DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
+use mdsurf::app::export::MoviePlan;
+use mdsurf::app::{Command, DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
+use mdsurf::render::RgbaImage;
 
 #[test]
 fn window_loads_demo_and_draws_the_surface() {
@@ -85,4 +87,42 @@ fn window_loads_demo_and_draws_the_surface() {
         "3D view looks flat: {} colours",
         colours.len()
     );
+
+    // Movie export: three trajectory frames with a turntable, written as numbered PNGs.
+    let movie = config.path().join("movie");
+    let plan = MoviePlan {
+        frames: Some((0, 2)),
+        stride: 1,
+        degrees_per_frame: 15.0,
+        turntable_frames: 1,
+        size: [64, 48],
+        dir: movie.clone(),
+    };
+    let ctx = h.ctx.clone();
+    h.state_mut().command(&ctx, Command::StartMovie(plan));
+    let start = Instant::now();
+    while h.state().movie_running() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "movie not done after 2 minutes"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+        h.step();
+    }
+    assert!(
+        h.state().core().error.is_none(),
+        "{:?}",
+        h.state().core().error
+    );
+    let frames: Vec<RgbaImage> = (0..3)
+        .map(|i| {
+            RgbaImage::read_png(&movie.join(format!("frame_{i:05}.png"))).expect("movie frame")
+        })
+        .collect();
+    assert!(frames.iter().all(|f| (f.width, f.height) == (64, 48)));
+    assert_ne!(
+        frames[0].pixels, frames[2].pixels,
+        "camera and frame should change"
+    );
+    assert!(!movie.join("frame_00003.png").exists());
 }

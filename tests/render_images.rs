@@ -239,3 +239,58 @@ fn stereo_outputs_have_the_requested_size_and_differ_per_eye() {
     assert_eq!(fringes(&mono), 0);
     assert!(fringes(&ana) > 20, "anaglyph fringes: {}", fringes(&ana));
 }
+
+#[test]
+fn ambient_occlusion_darkens_creases_but_not_the_background() {
+    let Some(g) = gpu() else { return };
+    // Three touching spheres make creases where they meet.
+    let settings = |ao: f32| RenderSettings {
+        ambient_occlusion: ao,
+        depth_cue: 0.0,
+        show_surface: false,
+        atom_style: AtomStyle::Spheres,
+        ..Default::default()
+    };
+    let renderer = Renderer::new(&g.device);
+    let atoms = [
+        Vec3::new(-1.5, 0.0, 0.0),
+        Vec3::new(1.5, 0.0, 0.0),
+        Vec3::new(0.0, 1.8, 1.0),
+    ];
+    let mut scene = GpuScene::new();
+    let (s, c) = atom_instances(&atoms, &[2.0; 3], None, &[], &settings(0.0));
+    scene.set_atoms(&g.device, &g.queue, &s, &c);
+    let mut camera = Camera::default();
+    let (lo, hi) = scene.bounds().expect("bounds");
+    camera.fit(lo, hi);
+    let shot = |ao| {
+        render_to_rgba(
+            &g.device,
+            &g.queue,
+            &renderer,
+            &scene,
+            &camera,
+            &settings(ao),
+            [96, 96],
+        )
+        .expect("render")
+    };
+    let (off, on) = (shot(0.0), shot(1.0));
+    let sum = |img: &RgbaImage| {
+        img.pixels
+            .chunks_exact(4)
+            .map(|p| p[0] as u64 + p[1] as u64 + p[2] as u64)
+            .sum::<u64>()
+    };
+    assert!(
+        sum(&on) < sum(&off) * 97 / 100,
+        "AO should darken: {} vs {}",
+        sum(&on),
+        sum(&off)
+    );
+    assert_eq!(
+        on.pixel(0, 0),
+        off.pixel(0, 0),
+        "background must not change"
+    );
+}

@@ -141,6 +141,7 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
         ui.selectable_value(&mut s.background, Background::Light, "light");
     });
     ui.add(egui::Slider::new(&mut s.depth_cue, 0.0..=1.0).text("depth cue"));
+    ui.add(egui::Slider::new(&mut s.ambient_occlusion, 0.0..=1.0).text("ambient occlusion"));
     egui::ComboBox::from_label("stereo")
         .selected_text(s.stereo.name())
         .show_ui(ui, |ui| {

@@ -205,8 +205,9 @@ impl AppCore {
     }
 
     fn fit_camera(&mut self) {
-        if let Some((lo, hi)) = self.shown.as_ref().and_then(|s| scene_bounds(&s.computed)) {
-            self.camera.fit(lo, hi);
+        if let Some((centre, radius)) = self.shown.as_ref().and_then(|s| scene_bounds(&s.computed))
+        {
+            self.camera.fit_sphere(centre, radius);
         } else {
             self.fit_pending = true;
         }
@@ -289,11 +290,11 @@ impl AppCore {
                 if self.in_flight == Some((c.generation, c.frame)) {
                     self.in_flight = None;
                 }
-                if self.fit_pending {
-                    if let Some((lo, hi)) = scene_bounds(&c) {
-                        self.camera.fit(lo, hi);
-                        self.fit_pending = false;
-                    }
+                if self.fit_pending
+                    && let Some((centre, radius)) = scene_bounds(&c)
+                {
+                    self.camera.fit_sphere(centre, radius);
+                    self.fit_pending = false;
                 }
                 self.shown = Some(Shown {
                     computed: *c,
@@ -331,16 +332,11 @@ impl AppCore {
     }
 }
 
-/// Bounds of the surface (or the particles when there is no surface) in Å.
-fn scene_bounds(c: &Computed) -> Option<(glam::Vec3, glam::Vec3)> {
-    c.output.mesh.bounds().or_else(|| {
-        let p = &c.particles.positions;
-        let first = *p.first()?;
-        Some(
-            p.iter()
-                .fold((first, first), |(lo, hi), q| (lo.min(*q), hi.max(*q))),
-        )
-    })
+/// Bounding sphere (centre, radius in Å) of the surface, or of the particles when there is no
+/// surface.
+fn scene_bounds(c: &Computed) -> Option<(glam::Vec3, f32)> {
+    crate::render::bounding_sphere(&c.output.mesh.positions)
+        .or_else(|| crate::render::bounding_sphere(&c.particles.positions))
 }
 
 /// Half of the memory available now (or 8 GB when unknown), at most 16 GB.

@@ -90,7 +90,13 @@ impl Timeline {
             TimelineCmd::Seek(f) => self.current = f.min(self.last()),
             TimelineCmd::SetFps(f) => self.fps = f.clamp(0.5, 240.0),
             TimelineCmd::SetStride(s) => self.stride = s.clamp(1, self.len.max(1)),
-            TimelineCmd::SetEndMode(m) => self.end_mode = m,
+            TimelineCmd::SetEndMode(m) => {
+                self.end_mode = m;
+                // Only bounce plays backwards.
+                if m != EndMode::Bounce {
+                    self.direction = 1;
+                }
+            }
         }
     }
 

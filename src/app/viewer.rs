@@ -14,9 +14,11 @@ use super::plot::plot_ui;
 use super::recent::{Recent, RecentEntry};
 use super::source::{FrameSource, open_files};
 use super::state::{AppCore, Command};
-use super::timeline::{TimelineCmd, timeline_ui};
+use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
 use crate::render::write_png;
+
+mod scripted;
 
 /// What a scripted run does (all optional).
 #[derive(Debug, Clone, Default)]
@@ -79,6 +81,16 @@ impl Viewer {
             last_update: Instant::now(),
             fps: 0.0,
         }
+    }
+
+    /// Applies a command as if the UI had issued it (tests, scripted use).
+    pub fn command(&mut self, ctx: &egui::Context, cmd: Command) {
+        self.apply(ctx, cmd);
+    }
+
+    /// True while a movie export runs.
+    pub fn movie_running(&self) -> bool {
+        self.movie.is_some()
     }
 
     /// The state behind the window (for tests).
@@ -239,108 +251,6 @@ impl Viewer {
         if let Some(top) = dropped.first().cloned() {
             self.apply(ctx, Command::Open(top, dropped.get(1).cloned()));
         }
-    }
-
-    /// Advances a running movie by at most one image per UI update.
-    fn step_movie(&mut self) {
-        let Some(job) = self.movie.as_mut() else {
-            return;
-        };
-        let Some(step) = job.next().cloned() else {
-            self.core.status = format!("movie: wrote {} images", job.done);
-            self.movie = None;
-            return;
-        };
-        if self.core.timeline.current != step.frame {
-            self.core
-                .apply(Command::Timeline(TimelineCmd::Seek(step.frame)));
-            return;
-        }
-        if self.core.computing()
-            || self
-                .core
-                .shown
-                .as_ref()
-                .is_none_or(|s| s.computed.frame != step.frame)
-        {
-            return;
-        }
-        let (Some(gpu), Some(job)) = (self.gpu.as_mut(), self.movie.as_mut()) else {
-            return;
-        };
-        gpu.sync(&mut self.core);
-        let mut camera = self.core.camera;
-        camera.yaw = job.start_yaw;
-        camera.turn(step.degrees);
-        let result = gpu
-            .snapshot(&camera, &self.core.render, job.size)
-            .map_err(|e| e.to_string())
-            .and_then(|img| write_png(&step.path, &img).map_err(|e| e.to_string()));
-        match result {
-            Ok(()) => job.done += 1,
-            Err(e) => {
-                self.core.error = Some(format!("movie stopped: {e}"));
-                self.movie = None;
-            }
-        }
-    }
-
-    /// The scripted run: show frames 0..N one by one, then screenshot, then quit.
-    fn step_script(&mut self, ctx: &egui::Context) {
-        if self.core.source.is_none() {
-            if self.loading.is_none() && (self.core.error.is_some()) && self.script.quit {
-                self.finish_script(ctx, self.core.error.clone());
-            }
-            return;
-        }
-        if let Some(e) = self.core.error.clone().filter(|_| self.script.quit) {
-            return self.finish_script(ctx, Some(e));
-        }
-        let want = self
-            .script
-            .play_frames
-            .unwrap_or(1)
-            .min(self.core.timeline.len.max(1));
-        let shown = self.core.shown.as_ref().map(|s| s.computed.frame);
-        if self.core.computing() || shown != Some(self.core.timeline.current) {
-            return;
-        }
-        if self.script_played + 1 < want {
-            self.script_played += 1;
-            self.core.apply(Command::Timeline(TimelineCmd::Step(1)));
-            return;
-        }
-        let result = match self.script.screenshot.clone() {
-            Some(path) => self.screenshot(1, None, &path).err(),
-            None => None,
-        };
-        self.finish_script(ctx, result);
-    }
-
-    fn finish_script(&mut self, ctx: &egui::Context, error: Option<String>) {
-        eprintln!(
-            "scripted run: showed {} frame(s), last frame {}, engine {}{}",
-            self.script_played + 1,
-            self.core.timeline.current,
-            self.core.engine_name(),
-            error
-                .as_deref()
-                .map_or(String::new(), |e| format!("; error: {e}"))
-        );
-        if let Ok(mut r) = self.script_result.lock() {
-            *r = error;
-        }
-        if self.script.quit {
-            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-        }
-        self.script = Script::default();
-        self.script.play_frames = Some(0);
-    }
-
-    fn scripted(&self) -> bool {
-        self.script.play_frames.is_some_and(|n| n > 0)
-            || self.script.screenshot.is_some()
-            || self.script.quit
     }
 
     fn menu_ui(&mut self, ui: &mut egui::Ui) -> Vec<Command> {

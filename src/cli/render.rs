@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use mdsurf::render::{
     AtomStyle, Background, Camera, GpuScene, HeadlessGpu, Projection, RenderSettings, Renderer,
-    Stereo, atom_instances, guess_bonds, render_to_rgba, write_png,
+    Stereo, atom_instances, bounding_sphere, guess_bonds, render_to_rgba, write_png,
 };
 
 use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
@@ -52,6 +52,12 @@ pub struct RenderArgs {
     /// Atoms: none, spheres, sticks or ball-and-stick.
     #[arg(long, value_name = "STYLE", default_value = "none")]
     pub atoms: AtomStyle,
+    /// Ambient occlusion strength 0..1 (0: off).
+    #[arg(long, value_name = "S", default_value_t = 0.7)]
+    pub ao: f32,
+    /// Depth cue strength 0..1 (far parts fade towards the background).
+    #[arg(long, value_name = "S", default_value_t = 0.6)]
+    pub depth_cue: f32,
     /// Orthographic instead of perspective projection.
     #[arg(long)]
     pub ortho: bool,
@@ -134,6 +140,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         atom_style: args.atoms,
         stereo: args.stereo,
         eye_separation: args.eye_separation,
+        ambient_occlusion: args.ao.clamp(0.0, 1.0),
+        depth_cue: args.depth_cue.clamp(0.0, 1.0),
         ..RenderSettings::default()
     };
     let gpu = HeadlessGpu::new()
@@ -175,10 +183,17 @@ pub fn run(args: RenderArgs) -> Result<()> {
         );
         scene.set_atoms(&gpu.device, &gpu.queue, &s, &c);
         if i == 0 {
-            let (lo, hi) = scene.bounds().ok_or_else(|| {
+            let shown_atoms =
+                if settings.atom_style == AtomStyle::Hidden && !out.mesh.positions.is_empty() {
+                    &[][..]
+                } else {
+                    &positions[..]
+                };
+            let points = out.mesh.positions.iter().chain(shown_atoms);
+            let (centre, radius) = bounding_sphere(points).ok_or_else(|| {
                 anyhow!("frame {f}: nothing to draw (empty surface and no atoms)")
             })?;
-            camera.fit(lo, hi);
+            camera.fit_sphere(centre, radius);
             if let Some([yaw, pitch]) = args.view {
                 camera.yaw = yaw.to_radians();
                 camera.pitch = pitch.to_radians();

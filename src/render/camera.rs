@@ -63,6 +63,15 @@ impl Camera {
         self.distance = radius / (self.fov_y * 0.5).sin() * 1.1;
     }
 
+    /// Centres the camera on a sphere (centre and radius in Å) and backs off until it fills
+    /// the view with a small margin, keeping the current direction and projection.
+    pub fn fit_sphere(&mut self, centre: Vec3, radius: f32) {
+        let radius = radius.max(1.0);
+        self.target = centre;
+        self.scene_radius = radius;
+        self.distance = radius / (self.fov_y * 0.5).sin() * 1.05;
+    }
+
     /// Unit vector from the target towards the eye.
     pub fn back(&self) -> Vec3 {
         let (sy, cy) = self.yaw.sin_cos();
@@ -158,6 +167,29 @@ impl Camera {
     }
 }
 
+/// A sphere around `points` (Å): the centre of their bounding box and the largest distance from
+/// it; tighter than the box for round molecules. `None` when there are no finite points.
+pub fn bounding_sphere<'a>(
+    points: impl IntoIterator<Item = &'a Vec3> + Clone,
+) -> Option<(Vec3, f32)> {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for p in points.clone().into_iter().filter(|p| p.is_finite()) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    let centre = (lo + hi) * 0.5;
+    let r2 = points
+        .into_iter()
+        .filter(|p| p.is_finite())
+        .map(|p| p.distance_squared(centre))
+        .fold(0.0f32, f32::max);
+    Some((centre, r2.sqrt()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -175,6 +207,33 @@ mod tests {
                 "{p}"
             );
         }
+    }
+
+    #[test]
+    fn sphere_fit_keeps_every_point_in_view_from_any_side() {
+        let pts: Vec<Vec3> = (0..200)
+            .map(|i| {
+                let t = i as f32 * 0.37;
+                Vec3::new(t.cos(), (t * 1.3).sin(), (t * 0.7).cos()) * 10.0
+                    + Vec3::new(5.0, -3.0, 2.0)
+            })
+            .collect();
+        let (c, r) = bounding_sphere(&pts).expect("points");
+        assert!(pts.iter().all(|p| p.distance(c) <= r + 1e-4));
+        let mut cam = Camera::default();
+        cam.fit_sphere(c, r);
+        for yaw in [0.0f32, 1.0, 2.5, 4.0] {
+            cam.yaw = yaw;
+            let vp = cam.projection_matrix(1.0) * cam.view_matrix();
+            for p in &pts {
+                let q = vp.project_point3(*p);
+                assert!(
+                    q.x.abs() < 1.0 && q.y.abs() < 1.0 && (0.0..1.0).contains(&q.z),
+                    "{q}"
+                );
+            }
+        }
+        assert!(bounding_sphere(&[]).is_none());
     }
 
     #[test]

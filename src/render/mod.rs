@@ -15,9 +15,9 @@ pub mod shapes;
 pub mod targets;
 
 pub use atoms::{atom_instances, guess_bonds};
-pub use camera::{Camera, Projection};
+pub use camera::{Camera, Projection, bounding_sphere};
 pub use headless::HeadlessGpu;
-pub use pipelines::{POST_WGSL, SCENE_WGSL};
+pub use pipelines::{AO_WGSL, POST_WGSL, SCENE_WGSL};
 pub use readback::{RgbaImage, read_texture, render_to_rgba, write_png};
 pub use renderer::Renderer;
 pub use scene::{CylinderInstance, GpuScene, SphereInstance};

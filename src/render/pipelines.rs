@@ -9,6 +9,8 @@ use super::targets::{ACCUM_FORMAT, COLOUR_FORMAT, DEPTH_FORMAT, REVEAL_FORMAT};
 pub const SCENE_WGSL: &str = include_str!("../../shaders/render_scene.wgsl");
 /// WGSL of the full-screen passes.
 pub const POST_WGSL: &str = include_str!("../../shaders/render_post.wgsl");
+/// WGSL of the ambient occlusion pass.
+pub const AO_WGSL: &str = include_str!("../../shaders/render_ao.wgsl");
 
 /// Vertices per cylinder instance (12 segments, two triangles each; see `vs_cylinder`).
 pub const CYLINDER_VERTICES: u32 = 12 * 6;
@@ -16,6 +18,8 @@ pub const CYLINDER_VERTICES: u32 = 12 * 6;
 pub(crate) struct Pipelines {
     pub view_layout: wgpu::BindGroupLayout,
     pub post_layout: wgpu::BindGroupLayout,
+    pub depth_layout: wgpu::BindGroupLayout,
+    pub ambient_occlusion: wgpu::RenderPipeline,
     pub mesh_opaque: wgpu::RenderPipeline,
     pub mesh_oit: wgpu::RenderPipeline,
     pub sphere: wgpu::RenderPipeline,
@@ -138,6 +142,28 @@ impl Pipelines {
         let post_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("post textures"),
             entries: &[tex(0), tex(1)],
+        });
+        let ao = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render_ao.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(AO_WGSL.into()),
+        });
+        let depth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("ao depth"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let ao_pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("ambient occlusion"),
+            bind_group_layouts: &[Some(&view_layout), Some(&depth_layout)],
+            immediate_size: 0,
         });
         let scene_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("scene"),
@@ -265,9 +291,37 @@ impl Pipelines {
         };
         let resolve = pipeline(device, post_spec("oit resolve", "fs_oit_resolve", &over));
         let anaglyph = pipeline(device, post_spec("anaglyph", "fs_anaglyph", &opaque_target));
+        // Multiplies the image by the occlusion factor (colour = dst * src; alpha kept).
+        let multiply = [colour_target(Some(wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::Src,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+        }))];
+        let ambient_occlusion = pipeline(
+            device,
+            PipelineSpec {
+                label: "ambient occlusion",
+                module: &ao,
+                layout: &ao_pl,
+                vs: "vs_fullscreen",
+                fs: "fs_ambient_occlusion",
+                buffers: &[],
+                depth: None,
+                targets: &multiply,
+            },
+        );
         Pipelines {
             view_layout,
             post_layout,
+            depth_layout,
+            ambient_occlusion,
             mesh_opaque,
             mesh_oit,
             sphere,

@@ -22,12 +22,15 @@ pub(crate) struct ViewUniform {
     surface: [f32; 4],
     surface_colour: [f32; 4],
     misc: [f32; 4],
+    ao: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<ViewUniform>() == 224);
+const _: () = assert!(std::mem::size_of::<ViewUniform>() == 240);
 
 impl ViewUniform {
-    fn new(camera: &Camera, aspect: f32, settings: &RenderSettings) -> Self {
+    fn new(camera: &Camera, viewport: [u32; 4], settings: &RenderSettings) -> Self {
+        let aspect = viewport[2] as f32 / viewport[3].max(1) as f32;
+        let (near, far) = camera.clip_range();
         let bg = settings.background.linear_rgb();
         // Depth cue from the front to the back of the scene's bounding sphere.
         let r = camera.scene_radius.max(1.0);
@@ -55,10 +58,19 @@ impl ViewUniform {
             ],
             surface: [settings.surface_opacity.clamp(0.0, 1.0), single, 0.0, 0.0],
             surface_colour: [sc[0], sc[1], sc[2], 1.0],
-            misc: [0.35, 0.0, 0.0, 0.0],
+            misc: [0.35, near, far, 0.0],
+            ao: [
+                settings.ambient_occlusion.clamp(0.0, 1.0),
+                AO_RADIUS,
+                viewport[3] as f32,
+                0.0,
+            ],
         }
     }
 }
+
+/// Reach of the screen-space ambient occlusion in Å (about one atom diameter).
+pub const AO_RADIUS: f32 = 3.0;
 
 /// Draws scenes on one wgpu device. Create once; reuse for every frame and image.
 pub struct Renderer {
@@ -167,8 +179,7 @@ impl Renderer {
             label: Some("render"),
         });
         for (i, pass) in passes.iter().enumerate() {
-            let aspect = pass.viewport[2] as f32 / pass.viewport[3].max(1) as f32;
-            let u = ViewUniform::new(&pass.camera, aspect, settings);
+            let u = ViewUniform::new(&pass.camera, pass.viewport, settings);
             queue.write_buffer(&self.view_buffers[i], 0, bytemuck::bytes_of(&u));
             self.encode_eye(
                 device,
@@ -272,6 +283,26 @@ impl Renderer {
                 rp.set_pipeline(&self.pipelines.mesh_opaque);
                 self.draw_mesh(&mut rp, scene);
             }
+        }
+        if settings.ambient_occlusion > 0.0 {
+            let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("ao depth"),
+                layout: &self.pipelines.depth_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&targets.depth_view),
+                }],
+            });
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("ambient occlusion"),
+                color_attachments: &[Some(colour_attachment(pass.target, None))],
+                ..Default::default()
+            });
+            rp.set_viewport(x, y, w, h, 0.0, 1.0);
+            rp.set_pipeline(&self.pipelines.ambient_occlusion);
+            rp.set_bind_group(0, view_group, &[]);
+            rp.set_bind_group(1, &depth_group, &[]);
+            rp.draw(0..3, 0..1);
         }
         if !transparent {
             return;

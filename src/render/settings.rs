@@ -126,6 +126,8 @@ pub struct RenderSettings {
     pub stick_radius: f32,
     /// Depth-cue strength, 0 (off) to 1 (the far side fades fully into the background).
     pub depth_cue: f32,
+    /// Screen-space ambient occlusion strength, 0 (off) to 1: creases and pockets darken.
+    pub ambient_occlusion: f32,
     /// Stereo mode.
     pub stereo: Stereo,
     /// Distance between the eyes as a fraction of the viewing distance (0.02 to 0.1 is comfortable).
@@ -143,6 +145,7 @@ impl Default for RenderSettings {
             atom_scale: 1.0,
             stick_radius: 0.25,
             depth_cue: 0.6,
+            ambient_occlusion: 0.7,
             stereo: Stereo::Off,
             eye_separation: 0.05,
         }

@@ -64,7 +64,7 @@ impl RenderTargets {
             COLOUR_FORMAT,
             sampled | wgpu::TextureUsages::COPY_SRC,
         );
-        let (_, depth_view) = texture(device, "render depth", size, DEPTH_FORMAT, attach);
+        let (_, depth_view) = texture(device, "render depth", size, DEPTH_FORMAT, sampled);
         let (_, accum_view) = texture(device, "oit accum", size, ACCUM_FORMAT, sampled);
         let (_, reveal_view) = texture(device, "oit reveal", size, REVEAL_FORMAT, sampled);
         RenderTargets {

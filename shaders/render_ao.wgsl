@@ -1,0 +1,87 @@
+// Screen-space ambient occlusion of the renderer (src/render/renderer.rs), run after the opaque
+// scene pass and before the transparent surface: each pixel compares its depth with 16 samples
+// on a disc of about AO_RADIUS Å around it; neighbours in front of it (creases, pockets, atoms
+// nestled in the surface) darken it. The output multiplies the image (blend: dst * src).
+
+// Twin of `ViewUniform` in src/render/renderer.rs (240 bytes); see render_scene.wgsl for fields.
+struct View {
+    view: mat4x4<f32>,
+    proj: mat4x4<f32>,
+    light_dir: vec4<f32>,
+    background: vec4<f32>,
+    // w: 1 = orthographic.
+    fog: vec4<f32>,
+    surface: vec4<f32>,
+    surface_colour: vec4<f32>,
+    // y: near clip (Å), z: far clip (Å).
+    misc: vec4<f32>,
+    // x: strength 0..1, y: reach (Å), z: viewport height (px).
+    ao: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> u: View;
+@group(1) @binding(0) var depth_tex: texture_depth_2d;
+
+struct FullscreenOut {
+    @builtin(position) clip: vec4<f32>,
+};
+
+// One triangle that covers the viewport.
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> FullscreenOut {
+    let x = f32((vi << 1u) & 2u);
+    let y = f32(vi & 2u);
+    var o: FullscreenOut;
+    o.clip = vec4<f32>(x * 2.0 - 1.0, 1.0 - y * 2.0, 0.0, 1.0);
+    return o;
+}
+
+// Distance from the eye in Å for a depth-buffer value (0 near, 1 far).
+fn eye_distance(d: f32) -> f32 {
+    let n = u.misc.y;
+    let f = u.misc.z;
+    if (u.fog.w > 0.5) {
+        return n + d * (f - n);
+    }
+    return n * f / (f - d * (f - n));
+}
+
+const SAMPLES: u32 = 16u;
+
+@fragment
+fn fs_ambient_occlusion(i: FullscreenOut) -> @location(0) vec4<f32> {
+    let p = vec2<i32>(i.clip.xy);
+    let dims = vec2<i32>(textureDimensions(depth_tex));
+    let d0 = textureLoad(depth_tex, p, 0);
+    if (d0 >= 1.0) {
+        return vec4<f32>(1.0);
+    }
+    let z0 = eye_distance(d0);
+    let reach = u.ao.y;
+    // Reach in pixels: Å times pixels per Å at this depth.
+    var px_per_a = u.proj[1][1] * 0.5 * u.ao.z;
+    if (u.fog.w < 0.5) {
+        px_per_a = px_per_a / max(z0, 1e-3);
+    }
+    let radius = clamp(reach * px_per_a, 2.0, 48.0);
+    // Interleaved gradient noise rotates the sample pattern per pixel.
+    let noise = fract(52.9829189 * fract(0.06711056 * i.clip.x + 0.00583715 * i.clip.y));
+    var occlusion = 0.0;
+    for (var k = 0u; k < SAMPLES; k = k + 1u) {
+        let t = (f32(k) + 0.5) / f32(SAMPLES);
+        let angle = f32(k) * 2.3999632 + noise * 6.2831853;
+        let offset = vec2<f32>(cos(angle), sin(angle)) * sqrt(t) * radius;
+        let q = clamp(p + vec2<i32>(offset), vec2<i32>(0), dims - vec2<i32>(1));
+        let dq = textureLoad(depth_tex, q, 0);
+        if (dq >= 1.0) {
+            continue;
+        }
+        let dz = z0 - eye_distance(dq);
+        // In front by up to `reach`: occludes; much further in front: a separate object, fade out.
+        let near = clamp(dz / reach, 0.0, 1.0);
+        let range = 1.0 - smoothstep(reach, 3.0 * reach, dz);
+        occlusion = occlusion + near * range;
+    }
+    let a = 1.0 - u.ao.x * clamp(occlusion / f32(SAMPLES) * 2.2, 0.0, 1.0);
+    return vec4<f32>(a, a, a, 1.0);
+}
