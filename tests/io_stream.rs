@@ -186,7 +186,9 @@ fn drop_stops_the_reader_and_callbacks_fire() {
         counter.fetch_add(1, Ordering::SeqCst);
     }));
     s.wait(5, LONG).expect("in time").expect("readable");
-    eventually("the callback when a frame lands", || landed.load(Ordering::SeqCst) >= 1);
+    eventually("the callback when a frame lands", || {
+        landed.load(Ordering::SeqCst) >= 1
+    });
     s.set_playhead(0);
     drop(s); // mid-prefetch: must return, not hang
     assert_eq!(
