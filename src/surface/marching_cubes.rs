@@ -306,10 +306,9 @@ fn merge(parts: &mut [SlabMesh]) -> Mesh {
         colours: Vec::with_capacity(total),
         indices: Vec::with_capacity(tri_total),
     };
-    for s in 0..parts.len() {
+    for p in parts.iter_mut() {
         let own = mesh.positions.len() as u32;
-        let next = own + parts[s].positions.len() as u32;
-        let p = &mut parts[s];
+        let next = own + p.positions.len() as u32;
         mesh.indices.extend(p.indices.iter().map(|&i| {
             if i & FOREIGN != 0 {
                 next + (i & !FOREIGN)
