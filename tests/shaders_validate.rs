@@ -90,7 +90,10 @@ fn mc_table_layout_in_the_shaders_matches_the_rust_side() {
     for name in ["classify.wgsl", "emit.wgsl"] {
         let path = format!("{}/shaders/{name}", env!("CARGO_MANIFEST_DIR"));
         let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-        let base = format!("const MC_TRI_BASE: u32 = {}u;", mdsurf::gpu::types::MC_TRI_BASE);
+        let base = format!(
+            "const MC_TRI_BASE: u32 = {}u;",
+            mdsurf::gpu::types::MC_TRI_BASE
+        );
         assert!(source.contains(&base), "{name}: expected `{base}`");
         let rows = format!("array<vec4<u32>, {}>", mdsurf::gpu::types::MC_TABLE_ROWS);
         assert!(source.contains(&rows), "{name}: expected `{rows}`");
