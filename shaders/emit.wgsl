@@ -5,27 +5,8 @@
 // Rust side: src/gpu/mc.rs (Emit). Vertex layout: twin of crate::gpu::types::GpuVertex
 // (9 f32: position, normal, colour; 36 bytes).
 
-// Twin of crate::gpu::types::SlabUniform (112 bytes).
-struct SlabUniform {
-    origin: vec3<f32>,
-    spacing: f32,
-    dims: vec3<u32>,
-    isovalue: f32,
-    cell_origin: vec3<f32>,
-    cell_size: f32,
-    cell_dims: vec3<u32>,
-    cutoff: f32,
-    dens_z0: u32,
-    dens_layers: u32,
-    own_z0: u32,
-    own_z1: u32,
-    class_points: u32,
-    class_layers: u32,
-    max_cut: f32,
-    has_extra_layer: u32,
-    centre: vec3<f32>,
-    atom_count: u32,
-}
+// SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
+// prepended by src/gpu/shaders.rs.
 
 // Word indices into the counters (twin of crate::gpu::types::GpuCounters).
 const C_OVERFLOW: u32 = 2u;

@@ -37,7 +37,7 @@ pub struct BinFrame {
 impl Binner {
     /// Compiles the kernels.
     pub fn new(device: &wgpu::Device, max_groups: u32) -> Binner {
-        let m = module(device, "bin.wgsl", include_str!("../../shaders/bin.wgsl"));
+        let m = module(device, "bin.wgsl", super::shaders::BIN);
         Binner {
             count: Kernel::new(device, &m, "count", &[]),
             copy_starts: Kernel::new(device, &m, "copy_starts", &[]),

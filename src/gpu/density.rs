@@ -31,11 +31,7 @@ pub struct DensityStage {
 impl DensityStage {
     /// Compiles both variants.
     pub fn new(device: &wgpu::Device) -> DensityStage {
-        let m = module(
-            device,
-            "density.wgsl",
-            include_str!("../../shaders/density.wgsl"),
-        );
+        let m = module(device, "density.wgsl", super::shaders::DENSITY);
         DensityStage {
             with_colour: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 1.0)]),
             plain: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 0.0)]),

@@ -25,11 +25,7 @@ pub struct Emit {
 impl Classify {
     /// Compiles the kernel.
     pub fn new(device: &wgpu::Device) -> Classify {
-        let m = module(
-            device,
-            "classify.wgsl",
-            include_str!("../../shaders/classify.wgsl"),
-        );
+        let m = module(device, "classify.wgsl", super::shaders::CLASSIFY);
         Classify(Kernel::new(device, &m, "main", &[]))
     }
 
@@ -69,11 +65,7 @@ impl Classify {
 impl Compact {
     /// Compiles the kernel.
     pub fn new(device: &wgpu::Device) -> Compact {
-        let m = module(
-            device,
-            "compact.wgsl",
-            include_str!("../../shaders/compact.wgsl"),
-        );
+        let m = module(device, "compact.wgsl", super::shaders::COMPACT);
         Compact(Kernel::new(device, &m, "main", &[]))
     }
 
@@ -114,7 +106,7 @@ impl Compact {
 impl Emit {
     /// Compiles both variants.
     pub fn new(device: &wgpu::Device) -> Emit {
-        let m = module(device, "emit.wgsl", include_str!("../../shaders/emit.wgsl"));
+        let m = module(device, "emit.wgsl", super::shaders::EMIT);
         Emit {
             with_colour: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 1.0)]),
             plain: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 0.0)]),

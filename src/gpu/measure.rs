@@ -28,11 +28,7 @@ pub struct MeasureFrame {
 impl Measure {
     /// Compiles the kernels.
     pub fn new(device: &wgpu::Device) -> Measure {
-        let m = module(
-            device,
-            "measure.wgsl",
-            include_str!("../../shaders/measure.wgsl"),
-        );
+        let m = module(device, "measure.wgsl", super::shaders::MEASURE);
         let k = |e| Kernel::new(device, &m, e, &[]);
         Measure {
             slab_begin: k("slab_begin"),

@@ -23,6 +23,7 @@ pub mod output;
 pub mod plan;
 pub mod resources;
 pub mod scan;
+pub mod shaders;
 pub mod table1;
 pub mod timing;
 pub mod tolerance;

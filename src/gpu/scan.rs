@@ -29,7 +29,7 @@ pub struct ScanPlan {
 impl Scanner {
     /// Compiles the scan kernels.
     pub fn new(device: &wgpu::Device, max_groups: u32) -> Scanner {
-        let m = module(device, "scan.wgsl", include_str!("../../shaders/scan.wgsl"));
+        let m = module(device, "scan.wgsl", super::shaders::SCAN);
         Scanner {
             scan_blocks: Kernel::new(device, &m, "scan_blocks", &[]),
             add_sums: Kernel::new(device, &m, "add_sums", &[]),

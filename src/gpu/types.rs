@@ -38,7 +38,7 @@ pub struct ScanUniform {
 const _: () = assert!(std::mem::size_of::<ScanUniform>() == 16);
 
 /// Per-slab parameters of density, classification, compaction and emission.
-/// Twin: `SlabUniform` in `shaders/density.wgsl` (copied verbatim into classify, compact, emit).
+/// Twin: `SlabUniform` in `shaders/slab_uniform.wgsl` (prepended to the four slab stages).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct SlabUniform {
