@@ -2,7 +2,8 @@
 //! the GPU (empty host mesh, `gpu_surface` set) and its readouts (triangles, area, volume) come
 //! from the engine's counters; they must match the CPU engine's within
 //! `mdsurf::gpu::tolerance`, frame after frame (positions change, radii and colours do not).
-//! Without an adapter the test returns early with a note, unless `REQUIRE_GPU=1`.
+//! A second run starts with mesh buffers far too small: the overflowing frame is resubmitted
+//! and the reply still carries the whole surface. Without an adapter the test returns early with a note, unless `REQUIRE_GPU=1`.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -45,11 +46,24 @@ fn gpu_worker_keeps_the_mesh_on_the_gpu_and_reads_out_like_the_cpu() {
         Err(e) if require_gpu() => panic!("REQUIRE_GPU=1 but no adapter: {e}"),
         Err(e) => return eprintln!("note: skipping: {e}"),
     };
-    let engine = match GpuEngine::try_from_device(g.device.clone(), g.queue.clone()) {
-        Ok(e) => e,
-        Err(e) if require_gpu() => panic!("REQUIRE_GPU=1 but the GPU engine cannot start: {e}"),
-        Err(e) => return eprintln!("note: skipping: {e}"),
-    };
+    for tiny in [false, true] {
+        let mut engine = match GpuEngine::try_from_device(g.device.clone(), g.queue.clone()) {
+            Ok(e) => e,
+            Err(e) if require_gpu() => {
+                panic!("REQUIRE_GPU=1 but the GPU engine cannot start: {e}")
+            }
+            Err(e) => return eprintln!("note: skipping: {e}"),
+        };
+        if tiny {
+            let mut o = engine.options();
+            o.initial_mesh_capacity = Some((16, 16));
+            engine.set_options(o);
+        }
+        compare_frames(engine);
+    }
+}
+
+fn compare_frames(engine: GpuEngine) {
     let gpu = Worker::spawn_engine(Engine::Gpu(Box::new(engine)), Box::new(|| {}));
     let cpu = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
     assert_eq!(gpu.engine_name(), "gpu");
