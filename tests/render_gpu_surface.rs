@@ -45,14 +45,23 @@ fn demo_atoms() -> (Vec<Vec3>, Particles) {
 }
 
 fn render(g: &HeadlessGpu, renderer: &Renderer, scene: &GpuScene, camera: &Camera) -> RgbaImage {
-    let settings = RenderSettings::default();
+    render_with(g, renderer, scene, camera, &RenderSettings::default())
+}
+
+fn render_with(
+    g: &HeadlessGpu,
+    renderer: &Renderer,
+    scene: &GpuScene,
+    camera: &Camera,
+    settings: &RenderSettings,
+) -> RgbaImage {
     render_to_rgba(
         &g.device,
         &g.queue,
         renderer,
         scene,
         camera,
-        &settings,
+        settings,
         [320, 240],
     )
     .expect("render")
@@ -124,6 +133,26 @@ fn gpu_buffers_render_like_the_uploaded_mesh() {
         &from_readback,
         0.05,
         0.0005,
+    );
+
+    // The transparent (order-independent) pipeline for GPU buffers too.
+    let glass = RenderSettings {
+        surface_opacity: 0.5,
+        ..RenderSettings::default()
+    };
+    assert!(glass.surface_is_transparent());
+    let glass_buffers = render_with(&g, &renderer, &direct, &camera, &glass);
+    let glass_readback = render_with(&g, &renderer, &uploaded, &camera, &glass);
+    assert_close(
+        "transparent: GPU buffers vs readback",
+        &glass_buffers,
+        &glass_readback,
+        0.05,
+        0.0005,
+    );
+    assert!(
+        glass_buffers.difference(&from_buffers).expect("size").0 > 1.0,
+        "the transparent surface looks like the opaque one"
     );
 
     uploaded.set_mesh(&g.device, &g.queue, &cpu.mesh);
