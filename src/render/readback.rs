@@ -216,3 +216,31 @@ pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), RenderError> {
     tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(w: u32, h: u32, v: u8) -> RgbaImage {
+        RgbaImage {
+            width: w,
+            height: h,
+            pixels: vec![v; (w * h * 4) as usize],
+        }
+    }
+
+    #[test]
+    fn difference_counts_mean_and_outliers() {
+        let a = image(2, 2, 100);
+        assert_eq!(a.difference(&a), Some((0.0, 0.0)));
+        let mut b = a.clone();
+        b.pixels[5] = 130; // one channel of pixel 1 differs by 30 > OUTLIER_LEVEL
+        let (mean, frac) = a.difference(&b).expect("same size");
+        assert!((mean - 30.0 / 16.0).abs() < 1e-12, "{mean}");
+        assert!((frac - 0.25).abs() < 1e-12, "{frac}");
+        assert!(!a.close_to(&b));
+        b.pixels[5] = 101;
+        assert!(a.close_to(&b));
+        assert_eq!(a.difference(&image(4, 1, 100)), None);
+    }
+}
