@@ -219,3 +219,19 @@ fn colour_schemes_on_a_real_protein() {
     assert_eq!(set.positions.len(), set.radii.len());
     assert_eq!(set.colours.map(<[_]>::len), Some(n));
 }
+
+#[test]
+fn untyped_particles_get_a_radius_from_their_spacing() {
+    // SPC/E water as LAMMPS types: type 1 (oxygen) sits about 2.8 Å from the next oxygen.
+    let t = open("spce_all_coords.lammpstrj.bz2");
+    let top = t.topology();
+    let radius_of = |name: &str| top.radii[top.names.iter().position(|n| n == name).expect(name)];
+    let (r1, r2) = (radius_of("1"), radius_of("2"));
+    println!("LAMMPS SPC/E fitted radii: type 1 {r1} Å, type 2 {r2} Å");
+    assert!((1.2..1.6).contains(&r1), "type 1 (water oxygen): {r1} Å");
+    assert!(r2 < r1, "type 2 (hydrogen) packs closer: {r2} Å");
+    assert!(
+        (0..top.len()).all(|i| top.radii[i] == radius_of(&top.names[i])),
+        "one radius per type"
+    );
+}

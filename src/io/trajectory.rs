@@ -9,7 +9,7 @@ use std::sync::{Mutex, MutexGuard};
 use super::chem::ChemReader;
 use super::format::detect;
 use super::{IoError, dcd, wwpdb};
-use crate::model::{Frame, Topology};
+use crate::model::{Frame, Topology, sizing};
 
 /// How many frames at the end of a file are probed for damage when it opens (a truncated
 /// file loses its last frame or two; probing every frame of a long trajectory would be slow).
@@ -71,11 +71,12 @@ pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
             what: "no atoms",
         });
     }
+    let first = top_reader.read_positions(0)?;
     if let Some(format) = top_format.wwpdb {
-        let first = top_reader.read_positions(0)?;
         wwpdb::enrich(top, format, &mut topology, &first);
     }
     topology.complete_elements_and_radii();
+    sizing::fit_untyped_radii(&mut topology, &first);
     let reader = match traj {
         None => top_reader,
         Some(path) => {

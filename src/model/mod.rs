@@ -9,6 +9,7 @@ pub mod elements;
 pub mod particles;
 pub mod radii;
 pub mod residues;
+pub mod sizing;
 
 pub use beads::BeadModel;
 pub use colour::ColorScheme;

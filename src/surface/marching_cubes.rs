@@ -62,8 +62,8 @@ pub fn extract(grid: &GridSpec, density: &DensityVolume, iso: f32) -> Mesh {
     extract_with(grid, density, iso, &mut McScratch::default())
 }
 
-/// Working memory of [`extract_with`], kept between calls so that repeated extractions (one
-/// per frame) neither grow nor page-fault their buffers again.
+/// Working memory of [`extract_with`] (the per-plane buffers of each slab), kept between calls
+/// so that repeated extractions (one per frame) do not allocate them again.
 #[derive(Default)]
 pub struct McScratch {
     slabs: Vec<SlabMesh>,
@@ -101,7 +101,7 @@ pub fn extract_with(
         .par_iter_mut()
         .enumerate()
         .for_each(|(s, out)| ctx.slab(s * planes, ((s + 1) * planes).min(layers), out));
-    merge(&scratch.slabs)
+    merge(&mut scratch.slabs)
 }
 
 /// What every slab reads.
@@ -294,54 +294,35 @@ impl Ctx<'_> {
     }
 }
 
-/// Joins the slabs in order, turning local indices into global ones (in parallel, each slab
-/// into its own part of the output).
-fn merge(parts: &[SlabMesh]) -> Mesh {
-    let mut offsets = Vec::with_capacity(parts.len() + 1);
-    let mut total = 0usize;
-    for p in parts {
-        offsets.push(total as u32);
-        total += p.positions.len();
-    }
-    offsets.push(total as u32);
+/// Joins the slabs in order, turning local indices into global ones. Each slab's vertex and
+/// index buffers are freed as soon as they are copied, and the output only reserves its
+/// capacity up front, so memory holds about one copy of the mesh rather than two.
+fn merge(parts: &mut [SlabMesh]) -> Mesh {
+    let total: usize = parts.iter().map(|p| p.positions.len()).sum();
     let tri_total: usize = parts.iter().map(|p| p.indices.len()).sum();
     let mut mesh = Mesh {
-        positions: vec![Vec3::ZERO; total],
-        normals: vec![Vec3::ZERO; total],
-        colours: vec![[0.0; 3]; total],
-        indices: vec![0; tri_total],
+        positions: Vec::with_capacity(total),
+        normals: Vec::with_capacity(total),
+        colours: Vec::with_capacity(total),
+        indices: Vec::with_capacity(tri_total),
     };
-    let mut jobs = Vec::with_capacity(parts.len());
-    let (mut pos, mut nor, mut col, mut idx) = (
-        &mut mesh.positions[..],
-        &mut mesh.normals[..],
-        &mut mesh.colours[..],
-        &mut mesh.indices[..],
-    );
-    for (s, p) in parts.iter().enumerate() {
-        let n = p.positions.len();
-        let (a, rest) = pos.split_at_mut(n);
-        pos = rest;
-        let (b, rest) = nor.split_at_mut(n);
-        nor = rest;
-        let (c, rest) = col.split_at_mut(n);
-        col = rest;
-        let (d, rest) = idx.split_at_mut(p.indices.len());
-        idx = rest;
-        jobs.push((p, offsets[s], offsets[s + 1], a, b, c, d));
-    }
-    jobs.into_par_iter()
-        .for_each(|(p, own, next, pos, nor, col, idx)| {
-            pos.copy_from_slice(&p.positions);
-            nor.copy_from_slice(&p.normals);
-            col.copy_from_slice(&p.colours);
-            for (o, &i) in idx.iter_mut().zip(&p.indices) {
-                *o = if i & FOREIGN != 0 {
-                    next + (i & !FOREIGN)
-                } else {
-                    own + i
-                };
+    for p in parts.iter_mut() {
+        let own = mesh.positions.len() as u32;
+        let next = own + p.positions.len() as u32;
+        mesh.indices.extend(p.indices.iter().map(|&i| {
+            if i & FOREIGN != 0 {
+                next + (i & !FOREIGN)
+            } else {
+                own + i
             }
-        });
+        }));
+        mesh.positions.extend_from_slice(&p.positions);
+        mesh.normals.extend_from_slice(&p.normals);
+        mesh.colours.extend_from_slice(&p.colours);
+        p.positions = Vec::new();
+        p.normals = Vec::new();
+        p.colours = Vec::new();
+        p.indices = Vec::new();
+    }
     mesh
 }
