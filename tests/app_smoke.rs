@@ -1,5 +1,7 @@
-//! Smoke test of the real window: runs the `mdsurf` binary under `xvfb-run -a` on the bundled
-//! demo with `--play-frames 3 --screenshot FILE --quit`, and checks that it exits 0 and that the
+//! Smoke tests of the real window: run the `mdsurf` binary under `xvfb-run -a` on the bundled
+//! demo with `--play-frames 3 --screenshot FILE --quit`, once with the CPU engine (`--cpu`) and
+//! once with `--backend gpu` (the GPU engine on the window's device, its surface drawn straight
+//! from its buffers), and check that it exits 0 with the engine asked for and that the
 //! screenshot shows a surface (many colours, the centre differs from the corner). Without Xvfb
 //! or a wgpu adapter the test returns early with a note, unless `REQUIRE_GPU=1`, where it fails.
 
@@ -19,13 +21,16 @@ fn skip_or_fail(reason: &str) {
     eprintln!("note: skipping the window smoke test: {reason}");
 }
 
-#[test]
-fn scripted_run_plays_frames_and_saves_a_non_uniform_screenshot() {
+/// Runs the scripted window with `engine_args` and checks its log and screenshot; returns the
+/// log (stderr).
+fn scripted_run(engine_args: &[&str], engine: &str) -> Option<String> {
     if Command::new("xvfb-run").arg("--help").output().is_err() {
-        return skip_or_fail("xvfb-run is not installed (apt install xvfb)");
+        skip_or_fail("xvfb-run is not installed (apt install xvfb)");
+        return None;
     }
     if let Err(e) = mdsurf::render::HeadlessGpu::new() {
-        return skip_or_fail(&format!("no wgpu adapter: {e}"));
+        skip_or_fail(&format!("no wgpu adapter: {e}"));
+        return None;
     }
     let dir = tempfile::tempdir().expect("temp dir");
     let shot = dir.path().join("shot.png");
@@ -37,19 +42,20 @@ fn scripted_run_plays_frames_and_saves_a_non_uniform_screenshot() {
         .arg(demo.join("md_1u19.xtc"))
         .args(["--play-frames", "3", "--screenshot"])
         .arg(&shot)
-        .args(["--quit", "--cpu"])
+        .arg("--quit")
+        .args(engine_args)
         .env("XDG_RUNTIME_DIR", dir.path())
         .output()
         .expect("run xvfb-run");
-    let log = String::from_utf8_lossy(&out.stderr);
+    let log = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(
         out.status.success(),
         "mdsurf exited with {}: {log}",
         out.status
     );
     assert!(
-        log.contains("showed 3 frame(s), last frame 2"),
-        "did not play 3 frames: {log}"
+        log.contains(&format!("showed 3 frame(s), last frame 2, engine {engine}")),
+        "did not play 3 frames with the {engine} engine: {log}"
     );
     let image = RgbaImage::read_png(&shot).unwrap_or_else(|e| panic!("{e}; log: {log}"));
     assert!(
@@ -63,4 +69,21 @@ fn scripted_run_plays_frames_and_saves_a_non_uniform_screenshot() {
     let centre = image.pixel(image.width / 2, image.height / 2);
     let corner = image.pixel(0, 0);
     assert_ne!(centre, corner, "no surface in the middle of the view");
+    Some(log)
+}
+
+#[test]
+fn scripted_run_plays_frames_and_saves_a_non_uniform_screenshot() {
+    scripted_run(&["--cpu"], "cpu");
+}
+
+#[test]
+fn scripted_run_with_the_gpu_engine_draws_from_its_buffers() {
+    let Some(log) = scripted_run(&["--backend", "gpu"], "gpu") else {
+        return;
+    };
+    assert!(
+        log.contains("surface engine: gpu on"),
+        "the GPU engine did not start on the window's device: {log}"
+    );
 }

@@ -27,7 +27,7 @@ fn window_loads_demo_and_draws_the_surface() {
     // SAFETY: this test binary has one test, and nothing else reads the environment concurrently.
     unsafe { std::env::set_var("XDG_CONFIG_HOME", config.path()) };
     let options = ViewOptions {
-        cpu: true,
+        backend: mdsurf::app::Backend::Cpu,
         ..Default::default()
     };
     let mut h = Harness::builder()

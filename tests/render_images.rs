@@ -7,14 +7,10 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 use mdsurf::render::{
-    AtomStyle, Background, Camera, GpuScene, HeadlessGpu, RenderSettings, Renderer, RgbaImage,
-    Stereo, atom_instances, render_to_rgba, shapes::icosphere, write_png,
+    AtomStyle, Background, Camera, GpuScene, HeadlessGpu, MEAN_TOLERANCE, OUTLIER_FRACTION,
+    RenderSettings, Renderer, RgbaImage, Stereo, atom_instances, render_to_rgba, shapes::icosphere,
+    write_png,
 };
-
-/// Golden comparison tolerance: mean absolute difference per channel (0..255) ...
-const MEAN_TOLERANCE: f64 = 1.5;
-/// ... and the fraction of pixels allowed to differ by more than 24 in some channel.
-const OUTLIER_FRACTION: f64 = 0.01;
 
 fn gpu() -> Option<HeadlessGpu> {
     match HeadlessGpu::new() {
@@ -77,20 +73,7 @@ fn compare_golden(name: &str, image: &RgbaImage) {
         (image.width, image.height),
         "{name}: size"
     );
-    let mut sum = 0u64;
-    let mut outliers = 0usize;
-    for (a, b) in golden
-        .pixels
-        .chunks_exact(4)
-        .zip(image.pixels.chunks_exact(4))
-    {
-        let d: Vec<u8> = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).collect();
-        sum += d.iter().map(|&x| x as u64).sum::<u64>();
-        outliers += usize::from(d.iter().any(|&x| x > 24));
-    }
-    let n = (image.width * image.height) as f64;
-    let mean = sum as f64 / (n * 4.0);
-    let frac = outliers as f64 / n;
+    let (mean, frac) = golden.difference(image).expect("same size");
     if mean > MEAN_TOLERANCE || frac > OUTLIER_FRACTION {
         let out = std::env::temp_dir().join(format!("mdsurf-actual-{name}"));
         let _ = write_png(&out, image);

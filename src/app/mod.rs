@@ -21,8 +21,6 @@ use std::sync::{Arc, Mutex};
 pub use state::{AppCore, Command};
 pub use viewer::{Script, Viewer};
 
-use crate::surface::SurfaceEngine;
-
 /// Bundled demo: topology of the adenylate kinase (1U19) trajectory in assets/.
 pub const DEMO_TOP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/md_1u19.gro");
 /// Bundled demo trajectory.
@@ -35,12 +33,25 @@ pub struct ViewOptions {
     pub files: Option<(PathBuf, Option<PathBuf>)>,
     /// Scripted run.
     pub script: Script,
-    /// Use the CPU engine even when a GPU one is available.
-    pub cpu: bool,
+    /// Which surface engine computes (default: [`Backend::Auto`]).
+    pub backend: Backend,
     /// Initial surface parameters.
     pub params: crate::surface::SurfaceParams,
     /// Initial particle options (beads, colours, radius overrides).
     pub particles: crate::model::ParticleOptions,
+}
+
+/// Which surface engine the window uses.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Backend {
+    /// The CPU reference engine (the mesh is uploaded for drawing).
+    Cpu,
+    /// The GPU engine on the window's device, even on a software adapter (lavapipe); the
+    /// surface is drawn straight from its buffers.
+    Gpu,
+    /// The GPU engine on a hardware adapter, the CPU engine on a software one.
+    #[default]
+    Auto,
 }
 
 /// Why the window could not run.
@@ -57,18 +68,32 @@ pub enum ViewError {
 }
 
 /// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
-/// device is opened), else the CPU reference engine (`cpu` forces it). A software adapter
-/// (lavapipe) still draws the window but is slower than the CPU engine, so it does not compute.
-fn make_engine(state: Option<&egui_wgpu::RenderState>, cpu: bool) -> Box<dyn SurfaceEngine + Send> {
-    let hardware =
-        |s: &&egui_wgpu::RenderState| s.adapter.get_info().device_type != wgpu::DeviceType::Cpu;
-    if let Some(s) = state.filter(|_| !cpu).filter(hardware) {
-        match crate::gpu::GpuEngine::try_from_device(s.device.clone(), s.queue.clone()) {
-            Ok(engine) => return Box::new(engine),
-            Err(err) => eprintln!("GPU surface engine unavailable ({err}); using the CPU engine"),
+/// device is opened, and the renderer draws the engine's buffers in place), else the CPU
+/// reference engine. [`Backend::Auto`] passes over a software adapter (lavapipe: it still draws
+/// the window but computes slower than the CPU engine); [`Backend::Gpu`] uses it anyway. When the
+/// GPU engine cannot start, the CPU engine takes over with a note on stderr.
+fn make_engine(state: Option<&egui_wgpu::RenderState>, backend: Backend) -> worker::Engine {
+    let cpu = || worker::Engine::Host(Box::new(crate::surface::CpuEngine::new()));
+    let Some(s) = state.filter(|_| backend != Backend::Cpu) else {
+        if backend == Backend::Gpu {
+            eprintln!("--backend gpu: the window has no wgpu device; using the CPU engine");
+        }
+        return cpu();
+    };
+    let info = s.adapter.get_info();
+    if backend == Backend::Auto && info.device_type == wgpu::DeviceType::Cpu {
+        return cpu();
+    }
+    match crate::gpu::GpuEngine::try_from_device(s.device.clone(), s.queue.clone()) {
+        Ok(engine) => {
+            eprintln!("surface engine: gpu on {} ({:?})", info.name, info.backend);
+            worker::Engine::Gpu(Box::new(engine))
+        }
+        Err(err) => {
+            eprintln!("GPU surface engine unavailable ({err}); using the CPU engine");
+            cpu()
         }
     }
-    Box::new(crate::surface::CpuEngine::new())
 }
 
 /// eframe's device asks for the limits and features the GPU surface engine needs (the adapter's
@@ -104,8 +129,8 @@ pub fn create_viewer(
 ) -> Viewer {
     let state = cc.wgpu_render_state.as_ref();
     let ctx = cc.egui_ctx.clone();
-    let worker = worker::Worker::spawn(
-        make_engine(state, options.cpu),
+    let worker = worker::Worker::spawn_engine(
+        make_engine(state, options.backend),
         Box::new(move || ctx.request_repaint()),
     );
     let mut core = AppCore::new(worker);

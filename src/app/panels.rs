@@ -210,7 +210,7 @@ pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) 
             if c.beads { "beads" } else { "atoms" },
             c.particles.positions.len().to_string(),
         );
-        row("triangles", c.output.mesh.triangle_count().to_string());
+        row("triangles", c.triangle_count().to_string());
         row("area", format!("{:.1} Å²", c.output.area));
         row("volume", format!("{:.1} Å³", c.output.volume));
         let [x, y, z] = c.output.grid.dims;

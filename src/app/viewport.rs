@@ -55,8 +55,18 @@ impl GpuView {
         }
         shown.dirty = false;
         let c = &shown.computed;
-        self.scene
-            .set_mesh(&self.device, &self.queue, &c.output.mesh);
+        match &c.gpu_surface {
+            Some(g) => {
+                let grid = &c.output.grid;
+                let far = glam::UVec3::from(grid.dims).saturating_sub(glam::UVec3::ONE);
+                let hi = grid.origin + far.as_vec3() * grid.spacing;
+                self.scene
+                    .set_gpu_surface(g.clone(), Some((grid.origin, hi)));
+            }
+            None => self
+                .scene
+                .set_mesh(&self.device, &self.queue, &c.output.mesh),
+        }
         let p = &c.particles;
         let (s, cyl) = atom_instances(
             &p.positions,

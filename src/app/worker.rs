@@ -1,7 +1,10 @@
 //! The compute worker: one background thread that reads a frame, turns it into particles
 //! (atoms or beads) and runs the surface engine, so the UI thread never waits for I/O or for a
 //! surface. Requests replace each other (latest wins): when computing falls behind playback,
-//! the frames in between are dropped instead of queueing up.
+//! the frames in between are dropped instead of queueing up. With the GPU engine on the
+//! window's device ([`Engine::Gpu`]) the mesh stays on the GPU: the reply carries the engine's
+//! [`GpuSurface`] buffers for the renderer and the counters (triangles, area, volume) that came
+//! back with the frame; a frame that overflowed its buffers is submitted again.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -12,9 +15,10 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::source::FrameSource;
+use crate::gpu::{Changes, GpuEngine, GpuSurface};
 use crate::model::{ParticleOptions, Particles};
 use crate::render::guess_bonds;
-use crate::surface::{SurfaceEngine, SurfaceOutput, SurfaceParams};
+use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams};
 
 /// Frames kept in the worker's cache (around the playhead; oldest evicted first).
 const FRAME_CACHE: usize = 16;
@@ -56,8 +60,11 @@ pub struct Computed {
     pub frame: usize,
     /// Simulation time in ps, when known.
     pub time_ps: Option<f64>,
-    /// Mesh, area, volume, stage times.
+    /// Mesh, area, volume, stage times. With the GPU engine the mesh is empty: the surface is
+    /// in [`Computed::gpu_surface`].
     pub output: SurfaceOutput,
+    /// The GPU engine's surface buffers (drawn in place), when the GPU engine computed it.
+    pub gpu_surface: Option<GpuSurface>,
     /// The particles the surface was built from.
     pub particles: ParticleData,
     /// True when the particles are residue beads.
@@ -82,6 +89,66 @@ pub enum Reply {
     },
 }
 
+impl Computed {
+    /// Triangles of the surface (from the GPU counters when the mesh stayed on the GPU).
+    pub fn triangle_count(&self) -> usize {
+        match &self.gpu_surface {
+            Some(g) => g.stats.map_or(0, |s| s.triangle_count as usize),
+            None => self.output.mesh.triangle_count(),
+        }
+    }
+}
+
+/// The engine the worker runs.
+pub enum Engine {
+    /// Any engine through [`SurfaceEngine::compute`] (the mesh comes back to the host).
+    Host(Box<dyn SurfaceEngine + Send>),
+    /// The GPU engine on the window's device: the mesh stays in its buffers.
+    Gpu(Box<GpuEngine>),
+}
+
+impl Engine {
+    /// Name of the engine (`cpu`, `gpu`).
+    pub fn name(&self) -> &str {
+        match self {
+            Engine::Host(e) => e.name(),
+            Engine::Gpu(e) => e.name(),
+        }
+    }
+
+    /// Computes one surface. For [`Engine::Gpu`] it submits the frame, waits for its counters
+    /// (resubmitting after an overflow, see [`GpuEngine::run_blocking`]) and returns an empty
+    /// mesh plus the surface buffers.
+    fn compute(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        changes: Changes,
+    ) -> Result<(SurfaceOutput, Option<GpuSurface>), String> {
+        match self {
+            Engine::Host(e) => e
+                .compute(atoms, params)
+                .map(|o| (o, None))
+                .map_err(|e| e.to_string()),
+            Engine::Gpu(e) => {
+                let stats = e
+                    .run_blocking(atoms, params, changes)
+                    .map_err(|e| e.to_string())?;
+                let mut surface = e.surface();
+                surface.stats = Some(stats);
+                let output = SurfaceOutput {
+                    grid: surface.grid,
+                    mesh: Mesh::default(),
+                    area: stats.area,
+                    volume: stats.volume,
+                    timings: stats.timings,
+                };
+                Ok((output, Some(surface)))
+            }
+        }
+    }
+}
+
 type Slot = Arc<(Mutex<Option<Request>>, Condvar)>;
 
 /// Handle to the worker thread. Dropping it stops the thread after its current job.
@@ -96,6 +163,11 @@ pub struct Worker {
 impl Worker {
     /// Starts the worker with `engine`; `notify` is called after each reply (to wake the UI).
     pub fn spawn(engine: Box<dyn SurfaceEngine + Send>, notify: Box<dyn Fn() + Send>) -> Worker {
+        Self::spawn_engine(Engine::Host(engine), notify)
+    }
+
+    /// Like [`Worker::spawn`] for either kind of [`Engine`].
+    pub fn spawn_engine(engine: Engine, notify: Box<dyn Fn() + Send>) -> Worker {
         let slot: Slot = Arc::new((Mutex::new(None), Condvar::new()));
         let (tx, replies) = channel();
         let busy = Arc::new(AtomicBool::new(false));
@@ -163,7 +235,7 @@ struct Cache {
 }
 
 fn run(
-    mut engine: Box<dyn SurfaceEngine + Send>,
+    mut engine: Engine,
     slot: Slot,
     tx: Sender<Reply>,
     busy: Arc<AtomicBool>,
@@ -195,7 +267,7 @@ fn run(
             }
         };
         let (generation, frame) = (request.generation, request.frame);
-        let reply = match compute(&mut *engine, &mut cache, &request) {
+        let reply = match compute(&mut engine, &mut cache, &request) {
             Ok(c) => Reply::Done(Box::new(c)),
             Err(message) => Reply::Failed {
                 generation,
@@ -240,11 +312,7 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
     Ok((frame, ms))
 }
 
-fn compute(
-    engine: &mut dyn SurfaceEngine,
-    cache: &mut Cache,
-    req: &Request,
-) -> Result<Computed, String> {
+fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Computed, String> {
     let (frame, read_ms) = frame_of(cache, req)?;
     let topology = req.source.topology();
     let rebuild = cache
@@ -283,14 +351,21 @@ fn compute(
     particles
         .positions_into(&frame, &mut positions)
         .map_err(|e| format!("frame {}: {e}", req.frame))?;
-    let output = engine
-        .compute(&particles.atom_set(&positions), &req.params)
+    // Radii and colours change only with the particles; positions with every frame.
+    let changes = Changes {
+        radii: rebuild,
+        colours: rebuild,
+        ..Changes::ALL
+    };
+    let (output, gpu_surface) = engine
+        .compute(&particles.atom_set(&positions), &req.params, changes)
         .map_err(|e| format!("frame {}: {e}", req.frame))?;
     Ok(Computed {
         generation: req.generation,
         frame: req.frame,
         time_ps: frame.time_ps,
         output,
+        gpu_surface,
         particles: ParticleData {
             positions,
             ..data.clone()

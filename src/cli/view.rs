@@ -5,9 +5,9 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use mdsurf::app::{Script, ViewOptions};
+use mdsurf::app::{self, Script, ViewOptions};
 
-use super::common::{ParamArgs, ParticleArgs};
+use super::common::{Backend, ParamArgs, ParticleArgs};
 
 /// Arguments of the viewer.
 #[derive(clap::Args, Debug)]
@@ -31,8 +31,12 @@ pub struct ViewArgs {
     /// Scripted run: then close the window (exit status 0 when everything worked).
     #[arg(long)]
     pub quit: bool,
-    /// Compute surfaces with the CPU engine even when a GPU is available.
-    #[arg(long)]
+    /// Surface engine: `gpu` (drawn straight from its buffers; even on a software adapter),
+    /// `cpu`, or `auto` (GPU on a hardware adapter, else CPU).
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    pub backend: Backend,
+    /// Same as `--backend cpu`.
+    #[arg(long, conflicts_with = "backend")]
     pub cpu: bool,
 }
 
@@ -45,10 +49,24 @@ pub fn run(args: ViewArgs) -> Result<()> {
             screenshot: args.screenshot,
             quit: args.quit,
         },
-        cpu: args.cpu,
+        backend: if args.cpu {
+            app::Backend::Cpu
+        } else {
+            args.backend.into()
+        },
         params: args.params.params()?,
         particles: args.particles.options()?,
     };
     mdsurf::app::run(options)?;
     Ok(())
+}
+
+impl From<Backend> for app::Backend {
+    fn from(b: Backend) -> app::Backend {
+        match b {
+            Backend::Cpu => app::Backend::Cpu,
+            Backend::Gpu => app::Backend::Gpu,
+            Backend::Auto => app::Backend::Auto,
+        }
+    }
 }

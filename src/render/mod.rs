@@ -18,7 +18,10 @@ pub use atoms::{atom_instances, guess_bonds};
 pub use camera::{Camera, Projection, bounding_sphere};
 pub use headless::HeadlessGpu;
 pub use pipelines::{AO_WGSL, POST_WGSL, SCENE_WGSL};
-pub use readback::{RgbaImage, read_texture, render_to_rgba, write_png};
+pub use readback::{
+    MEAN_TOLERANCE, OUTLIER_FRACTION, OUTLIER_LEVEL, RgbaImage, read_texture, render_to_rgba,
+    write_png,
+};
 pub use renderer::Renderer;
 pub use scene::{CylinderInstance, GpuScene, SphereInstance};
 pub use settings::{AtomStyle, Background, RenderSettings, Stereo};

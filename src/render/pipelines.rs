@@ -22,6 +22,10 @@ pub(crate) struct Pipelines {
     pub ambient_occlusion: wgpu::RenderPipeline,
     pub mesh_opaque: wgpu::RenderPipeline,
     pub mesh_oit: wgpu::RenderPipeline,
+    /// The opaque and transparent mesh pipelines for one interleaved vertex buffer
+    /// ([`crate::gpu::GpuSurface::vertex_layout`]: the GPU engine's output).
+    pub gpu_mesh_opaque: wgpu::RenderPipeline,
+    pub gpu_mesh_oit: wgpu::RenderPipeline,
     pub sphere: wgpu::RenderPipeline,
     pub cylinder: wgpu::RenderPipeline,
     pub resolve: wgpu::RenderPipeline,
@@ -184,6 +188,7 @@ impl Pipelines {
             Some(vec3_layout(&n)),
             Some(vec3_layout(&c)),
         ];
+        let gpu_mesh_buffers = [Some(crate::gpu::GpuSurface::vertex_layout())];
         let sphere_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: size_of::<SphereInstance>() as u64,
             step_mode: wgpu::VertexStepMode::Instance,
@@ -256,6 +261,28 @@ impl Pipelines {
                 &oit_targets,
             ),
         );
+        let gpu_mesh_opaque = pipeline(
+            device,
+            scene_spec(
+                "gpu mesh opaque",
+                "vs_mesh",
+                "fs_mesh",
+                &gpu_mesh_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+        );
+        let gpu_mesh_oit = pipeline(
+            device,
+            scene_spec(
+                "gpu mesh oit",
+                "vs_mesh",
+                "fs_mesh_oit",
+                &gpu_mesh_buffers,
+                depth(false),
+                &oit_targets,
+            ),
+        );
         let sphere = pipeline(
             device,
             scene_spec(
@@ -324,6 +351,8 @@ impl Pipelines {
             ambient_occlusion,
             mesh_opaque,
             mesh_oit,
+            gpu_mesh_opaque,
+            gpu_mesh_oit,
             sphere,
             cylinder,
             resolve,

@@ -23,7 +23,42 @@ pub struct RgbaImage {
     pub pixels: Vec<u8>,
 }
 
+/// Image comparison tolerance (goldens, CPU-mesh vs GPU-buffer renders): mean absolute
+/// difference per channel (0..255) ...
+pub const MEAN_TOLERANCE: f64 = 1.5;
+/// ... and the fraction of pixels allowed to differ by more than [`OUTLIER_LEVEL`] in some
+/// channel.
+pub const OUTLIER_FRACTION: f64 = 0.01;
+/// Channel difference (0..255) above which a pixel counts as an outlier.
+pub const OUTLIER_LEVEL: u8 = 24;
+
 impl RgbaImage {
+    /// Mean absolute channel difference (0..255) and fraction of outlier pixels against
+    /// `other`, or `None` when the sizes differ.
+    pub fn difference(&self, other: &RgbaImage) -> Option<(f64, f64)> {
+        if (self.width, self.height) != (other.width, other.height) {
+            return None;
+        }
+        let mut sum = 0u64;
+        let mut outliers = 0usize;
+        for (a, b) in self
+            .pixels
+            .chunks_exact(4)
+            .zip(other.pixels.chunks_exact(4))
+        {
+            let d = [0, 1, 2, 3].map(|i| a[i].abs_diff(b[i]));
+            sum += d.iter().map(|&x| x as u64).sum::<u64>();
+            outliers += usize::from(d.iter().any(|&x| x > OUTLIER_LEVEL));
+        }
+        let n = (self.width as f64 * self.height as f64).max(1.0);
+        Some((sum as f64 / (n * 4.0), outliers as f64 / n))
+    }
+
+    /// True when `other` is within [`MEAN_TOLERANCE`] and [`OUTLIER_FRACTION`] of this image.
+    pub fn close_to(&self, other: &RgbaImage) -> bool {
+        self.difference(other)
+            .is_some_and(|(m, f)| m <= MEAN_TOLERANCE && f <= OUTLIER_FRACTION)
+    }
     /// The RGBA value at (x, y).
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
         let i = ((y * self.width + x) * 4) as usize;
@@ -180,4 +215,32 @@ pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), RenderError> {
     tmp.as_file_mut().flush().map_err(|e| err(e.to_string()))?;
     tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(w: u32, h: u32, v: u8) -> RgbaImage {
+        RgbaImage {
+            width: w,
+            height: h,
+            pixels: vec![v; (w * h * 4) as usize],
+        }
+    }
+
+    #[test]
+    fn difference_counts_mean_and_outliers() {
+        let a = image(2, 2, 100);
+        assert_eq!(a.difference(&a), Some((0.0, 0.0)));
+        let mut b = a.clone();
+        b.pixels[5] = 130; // one channel of pixel 1 differs by 30 > OUTLIER_LEVEL
+        let (mean, frac) = a.difference(&b).expect("same size");
+        assert!((mean - 30.0 / 16.0).abs() < 1e-12, "{mean}");
+        assert!((frac - 0.25).abs() < 1e-12, "{frac}");
+        assert!(!a.close_to(&b));
+        b.pixels[5] = 101;
+        assert!(a.close_to(&b));
+        assert_eq!(a.difference(&image(4, 1, 100)), None);
+    }
 }

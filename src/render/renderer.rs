@@ -246,7 +246,7 @@ impl Renderer {
             b: bg[2] as f64,
             a: 1.0,
         });
-        let mesh_ready = settings.show_surface && scene.index_count > 0;
+        let mesh_ready = settings.show_surface && scene.has_surface();
         let transparent =
             mesh_ready && settings.surface_is_transparent() && settings.surface_opacity > 0.0;
         {
@@ -280,8 +280,7 @@ impl Renderer {
                 rp.draw(0..CYLINDER_VERTICES, 0..scene.cylinder_count);
             }
             if mesh_ready && !settings.surface_is_transparent() {
-                rp.set_pipeline(&self.pipelines.mesh_opaque);
-                self.draw_mesh(&mut rp, scene);
+                self.draw_mesh(&mut rp, scene, false);
             }
         }
         if settings.ambient_occlusion > 0.0 {
@@ -332,8 +331,7 @@ impl Renderer {
             });
             rp.set_viewport(x, y, w, h, 0.0, 1.0);
             rp.set_bind_group(0, view_group, &[]);
-            rp.set_pipeline(&self.pipelines.mesh_oit);
-            self.draw_mesh(&mut rp, scene);
+            self.draw_mesh(&mut rp, scene, true);
         }
         let group = self.post_group(device, &targets.accum_view, &targets.reveal_view);
         let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -347,7 +345,25 @@ impl Renderer {
         rp.draw(0..3, 0..1);
     }
 
-    fn draw_mesh(&self, rp: &mut wgpu::RenderPass<'_>, scene: &GpuScene) {
+    /// Draws the surface: from the GPU engine's buffers with the indirect arguments it wrote,
+    /// or from the uploaded mesh.
+    fn draw_mesh(&self, rp: &mut wgpu::RenderPass<'_>, scene: &GpuScene, transparent: bool) {
+        if let Some(g) = &scene.gpu_surface {
+            rp.set_pipeline(if transparent {
+                &self.pipelines.gpu_mesh_oit
+            } else {
+                &self.pipelines.gpu_mesh_opaque
+            });
+            rp.set_vertex_buffer(0, g.vertices.slice(..));
+            rp.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);
+            rp.draw_indexed_indirect(&g.draw_args, 0);
+            return;
+        }
+        rp.set_pipeline(if transparent {
+            &self.pipelines.mesh_oit
+        } else {
+            &self.pipelines.mesh_opaque
+        });
         let (Some(p), Some(n), Some(c), Some(i)) = (
             &scene.positions,
             &scene.normals,

@@ -1,5 +1,6 @@
 //! What the renderer draws, living in GPU buffers: the surface mesh (positions, normals, colours,
-//! indices) and the atom/bond instances. Buffers are reused from frame to frame and grow only
+//! indices) or the GPU engine's own surface buffers (drawn in place, never read back), and the
+//! atom/bond instances. Buffers are reused from frame to frame and grow only
 //! when a frame needs more room, so playback does not reallocate.
 
 use glam::Vec3;
@@ -115,6 +116,8 @@ pub struct GpuScene {
     pub(crate) colours: Option<GrowBuffer>,
     pub(crate) indices: Option<GrowBuffer>,
     pub(crate) index_count: u32,
+    /// The GPU engine's surface, drawn instead of the uploaded mesh when set.
+    pub(crate) gpu_surface: Option<crate::gpu::GpuSurface>,
     pub(crate) spheres: Option<GrowBuffer>,
     pub(crate) sphere_count: u32,
     pub(crate) cylinders: Option<GrowBuffer>,
@@ -173,12 +176,32 @@ impl GpuScene {
         );
         self.index_count = mesh.indices.len() as u32;
         self.mesh_bounds = mesh.bounds();
+        self.gpu_surface = None;
+    }
+
+    /// Draws the GPU engine's surface in place of an uploaded mesh: its vertex and index buffers
+    /// with `draw_indexed_indirect` on the arguments the engine wrote (no readback). `bounds`
+    /// (Å) are those of the surface, for fitting the camera (e.g. the grid's box).
+    pub fn set_gpu_surface(
+        &mut self,
+        surface: crate::gpu::GpuSurface,
+        bounds: Option<(Vec3, Vec3)>,
+    ) {
+        self.gpu_surface = Some(surface);
+        self.index_count = 0;
+        self.mesh_bounds = bounds;
     }
 
     /// Removes the surface.
     pub fn clear_mesh(&mut self) {
         self.index_count = 0;
         self.mesh_bounds = None;
+        self.gpu_surface = None;
+    }
+
+    /// True when there is a surface to draw (uploaded mesh or GPU buffers).
+    pub fn has_surface(&self) -> bool {
+        self.index_count > 0 || self.gpu_surface.is_some()
     }
 
     /// Uploads the atom spheres and bond cylinders, replacing the previous ones.
@@ -218,9 +241,12 @@ impl GpuScene {
         });
     }
 
-    /// Number of surface triangles uploaded.
+    /// Number of surface triangles uploaded (for GPU buffers: the newest counters, if any).
     pub fn triangle_count(&self) -> u32 {
-        self.index_count / 3
+        match &self.gpu_surface {
+            Some(g) => g.stats.map_or(0, |s| s.triangle_count),
+            None => self.index_count / 3,
+        }
     }
 
     /// Number of atom spheres uploaded.

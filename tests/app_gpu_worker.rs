@@ -1,0 +1,102 @@
+//! The viewer's compute worker with the GPU engine ([`Engine::Gpu`]): the reply keeps the mesh on
+//! the GPU (empty host mesh, `gpu_surface` set) and its readouts (triangles, area, volume) come
+//! from the engine's counters; they must match the CPU engine's within
+//! `mdsurf::gpu::tolerance`, frame after frame (positions change, radii and colours do not).
+//! A second run starts with mesh buffers far too small: the overflowing frame is resubmitted
+//! and the reply still carries the whole surface. Without an adapter the test returns early with a note, unless `REQUIRE_GPU=1`.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use mdsurf::app::source::{FrameSource, helix_source};
+use mdsurf::app::worker::{Computed, Engine, Reply, Request, Worker};
+use mdsurf::gpu::{GpuEngine, tolerance as tol};
+use mdsurf::model::ParticleOptions;
+use mdsurf::render::HeadlessGpu;
+use mdsurf::surface::{CpuEngine, SurfaceParams};
+
+fn require_gpu() -> bool {
+    std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+fn compute(worker: &Worker, source: &Arc<dyn FrameSource>, frame: usize) -> Computed {
+    worker.submit(Request {
+        generation: 1,
+        frame,
+        source: source.clone(),
+        params: SurfaceParams {
+            spacing: 0.5,
+            ..SurfaceParams::default()
+        },
+        options: ParticleOptions::default(),
+    });
+    match worker.recv_timeout(Duration::from_secs(60)) {
+        Some(Reply::Done(c)) => *c,
+        Some(Reply::Failed { message, .. }) => {
+            panic!("{} frame {frame}: {message}", worker.engine_name())
+        }
+        None => panic!("{} frame {frame}: no reply in 60 s", worker.engine_name()),
+    }
+}
+
+#[test]
+fn gpu_worker_keeps_the_mesh_on_the_gpu_and_reads_out_like_the_cpu() {
+    let g = match HeadlessGpu::new() {
+        Ok(g) => g,
+        Err(e) if require_gpu() => panic!("REQUIRE_GPU=1 but no adapter: {e}"),
+        Err(e) => return eprintln!("note: skipping: {e}"),
+    };
+    for tiny in [false, true] {
+        let mut engine = match GpuEngine::try_from_device(g.device.clone(), g.queue.clone()) {
+            Ok(e) => e,
+            Err(e) if require_gpu() => {
+                panic!("REQUIRE_GPU=1 but the GPU engine cannot start: {e}")
+            }
+            Err(e) => return eprintln!("note: skipping: {e}"),
+        };
+        if tiny {
+            let mut o = engine.options();
+            o.initial_mesh_capacity = Some((16, 16));
+            engine.set_options(o);
+        }
+        compare_frames(engine);
+    }
+}
+
+fn compare_frames(engine: GpuEngine) {
+    let gpu = Worker::spawn_engine(Engine::Gpu(Box::new(engine)), Box::new(|| {}));
+    let cpu = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
+    assert_eq!(gpu.engine_name(), "gpu");
+    let source: Arc<dyn FrameSource> = Arc::new(helix_source(20, 4));
+    for frame in [0, 1, 3, 2] {
+        let (a, b) = (compute(&gpu, &source, frame), compute(&cpu, &source, frame));
+        assert_eq!(a.frame, frame);
+        let surface = a
+            .gpu_surface
+            .as_ref()
+            .expect("GPU reply carries its surface");
+        assert!(
+            a.output.mesh.positions.is_empty(),
+            "frame {frame}: the mesh was read back"
+        );
+        let stats = surface.stats.expect("counters of the frame");
+        assert!(!stats.overflow, "frame {frame}: reply after an overflow");
+        assert!(b.gpu_surface.is_none());
+        let (tg, tc) = (a.triangle_count(), b.triangle_count());
+        assert!(tc > 100, "frame {frame}: CPU surface has {tc} triangles");
+        assert!(
+            tol::triangles_close(tg, tc),
+            "frame {frame}: {tg} GPU vs {tc} CPU triangles"
+        );
+        for (what, x, y) in [
+            ("area", a.output.area, b.output.area),
+            ("volume", a.output.volume, b.output.volume),
+        ] {
+            assert!(
+                tol::rel_close(x, y, tol::AREA_VOLUME_REL),
+                "frame {frame}: {what} {x} GPU vs {y} CPU"
+            );
+        }
+        assert_eq!(a.output.grid, b.output.grid, "frame {frame}: grid");
+    }
+}
