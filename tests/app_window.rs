@@ -41,6 +41,7 @@ fn window_loads_demo_and_draws_the_surface() {
                 result,
                 PathBuf::from(DEMO_TOP),
                 Some(PathBuf::from(DEMO_TRAJ)),
+                Default::default(),
             )
         });
     let start = Instant::now();

@@ -4,6 +4,7 @@
 //! [`state::Command`]s, applied in one place ([`state::AppCore::apply`] and the window layer in
 //! [`viewer::Viewer`]). Nothing below this module imports it.
 
+pub mod device_loss;
 pub mod export;
 pub mod panels;
 pub mod plot;
@@ -21,7 +22,7 @@ use std::sync::{Arc, Mutex};
 pub use state::{AppCore, Command};
 pub use viewer::{Script, Viewer};
 
-/// Bundled demo: topology of the adenylate kinase (1U19) trajectory in assets/.
+/// Bundled demo: topology of the rhodopsin (PDB 1U19) trajectory in assets/.
 pub const DEMO_TOP: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/md_1u19.gro");
 /// Bundled demo trajectory.
 pub const DEMO_TRAJ: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/md_1u19.xtc");
@@ -65,6 +66,9 @@ pub enum ViewError {
     /// The scripted run failed.
     #[error("scripted run failed: {0}")]
     Script(String),
+    /// The GPU device kept getting lost.
+    #[error("the GPU device was lost ({0}); giving up")]
+    DeviceLost(String),
 }
 
 /// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
@@ -126,6 +130,7 @@ pub fn create_viewer(
     script_result: viewer::ScriptResult,
     top: PathBuf,
     traj: Option<PathBuf>,
+    reopen: device_loss::ReopenSlot,
 ) -> Viewer {
     let state = cc.wgpu_render_state.as_ref();
     let ctx = cc.egui_ctx.clone();
@@ -138,12 +143,19 @@ pub fn create_viewer(
     core.options = options.particles.clone();
     let gpu = state.map(viewport::GpuView::new);
     let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
+    if let Some(s) = state {
+        let ctx = cc.egui_ctx.clone();
+        let watch = device_loss::DeviceWatch::attach(&s.device, move || ctx.request_repaint());
+        viewer.watch_device(watch, reopen);
+    }
     viewer.open(&cc.egui_ctx, top, traj);
     viewer
 }
 
-/// Opens the viewer window and runs it until it is closed.
-pub fn run(options: ViewOptions) -> Result<(), ViewError> {
+/// Opens the viewer window and runs it until it is closed. When the GPU device is lost, the
+/// window closes and a new one opens on a new device with the same files and settings (at most
+/// [`device_loss::MAX_REOPENS`] times).
+pub fn run(mut options: ViewOptions) -> Result<(), ViewError> {
     if cfg!(target_os = "linux")
         && std::env::var_os("DISPLAY").is_none()
         && std::env::var_os("WAYLAND_DISPLAY").is_none()
@@ -153,6 +165,40 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
         ));
     }
     let result: viewer::ScriptResult = Arc::new(Mutex::new(None));
+    for reopens in 0.. {
+        let reopen: device_loss::ReopenSlot = Arc::new(Mutex::new(None));
+        run_window(&options, result.clone(), reopen.clone())?;
+        let Some(lost) = reopen.lock().ok().and_then(|mut r| r.take()) else {
+            break;
+        };
+        if reopens >= device_loss::MAX_REOPENS {
+            return Err(ViewError::DeviceLost(format!(
+                "{} times, last: {}",
+                reopens + 1,
+                lost.reason
+            )));
+        }
+        eprintln!(
+            "the GPU device was lost ({}); reopening the window on a new device",
+            lost.reason
+        );
+        options.files = lost.files;
+        options.params = lost.params;
+        options.particles = lost.particles;
+    }
+    match result.lock().ok().and_then(|r| r.clone()) {
+        Some(e) => Err(ViewError::Script(e)),
+        None => Ok(()),
+    }
+}
+
+/// One window on one wgpu device, until it closes (by the user, a scripted run, or a lost
+/// device, which leaves its state in `reopen`).
+fn run_window(
+    options: &ViewOptions,
+    script_result: viewer::ScriptResult,
+    reopen: device_loss::ReopenSlot,
+) -> Result<(), ViewError> {
     let (top, traj) = options
         .files
         .clone()
@@ -165,8 +211,8 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
         wgpu_options: wgpu_options(),
         ..Default::default()
     };
-    let script_result = result.clone();
-    let run = eframe::run_native(
+    let options = options.clone();
+    eframe::run_native(
         "mdsurf",
         native,
         Box::new(move |cc| {
@@ -176,12 +222,9 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
                 script_result,
                 top,
                 traj,
+                reopen,
             )))
         }),
-    );
-    run.map_err(|e| ViewError::NoDisplay(e.to_string()))?;
-    match result.lock().ok().and_then(|r| r.clone()) {
-        Some(e) => Err(ViewError::Script(e)),
-        None => Ok(()),
-    }
+    )
+    .map_err(|e| ViewError::NoDisplay(e.to_string()))
 }

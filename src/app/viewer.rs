@@ -8,6 +8,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use super::device_loss::{DeviceWatch, Reopen, ReopenSlot};
 use super::export::{MovieJob, MoviePlan, export_ui};
 use super::panels::{SurfaceDraft, look_ui, readouts_ui, surface_ui};
 use super::plot::plot_ui;
@@ -52,6 +53,10 @@ pub struct Viewer {
     script_result: ScriptResult,
     last_update: Instant,
     fps: f64,
+    /// Files of the trajectory on screen (set when a load succeeds).
+    files: Option<(PathBuf, Option<PathBuf>)>,
+    /// Watch on eframe's wgpu device, and where to leave the state when it is lost.
+    device: Option<(DeviceWatch, ReopenSlot)>,
 }
 
 impl Viewer {
@@ -80,6 +85,8 @@ impl Viewer {
             script_result,
             last_update: Instant::now(),
             fps: 0.0,
+            files: None,
+            device: None,
         }
     }
 
@@ -229,6 +236,7 @@ impl Viewer {
             match result {
                 Ok(source) => {
                     self.core.set_source(source);
+                    self.files = Some((entry.top.clone(), entry.traj.clone()));
                     self.recent.push(entry);
                 }
                 Err(e) => {
@@ -291,6 +299,9 @@ impl Viewer {
 impl eframe::App for Viewer {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
+        if self.leave_if_device_lost(&ctx) {
+            return;
+        }
         let now = Instant::now();
         let dt = now.duration_since(self.last_update).as_secs_f64();
         self.last_update = now;
@@ -380,6 +391,34 @@ impl eframe::App for Viewer {
 }
 
 impl Viewer {
+    /// Watches eframe's device: once it is lost, the window leaves its files and settings in
+    /// `reopen` and closes, and [`crate::app::run`] opens a new window on a new device.
+    pub fn watch_device(&mut self, watch: DeviceWatch, reopen: ReopenSlot) {
+        self.device = Some((watch, reopen));
+    }
+
+    /// When the device was lost: saves what a new window restores and asks this one to close.
+    fn leave_if_device_lost(&mut self, ctx: &egui::Context) -> bool {
+        let Some((watch, slot)) = &self.device else {
+            return false;
+        };
+        let Some(reason) = watch.lost() else {
+            return false;
+        };
+        if let Ok(mut slot) = slot.lock()
+            && slot.is_none()
+        {
+            *slot = Some(Reopen {
+                files: self.files.clone(),
+                params: self.core.params,
+                particles: self.core.options.clone(),
+                reason,
+            });
+        }
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        true
+    }
+
     fn gpu_texture(&self) -> Option<egui::TextureId> {
         self.gpu.as_ref().and_then(|g| g.texture_id())
     }
