@@ -2,7 +2,8 @@
 //! demo with `--play-frames 3 --screenshot FILE --quit`, once with the CPU engine (`--cpu`) and
 //! once with `--backend gpu` (the GPU engine on the window's device, its surface drawn straight
 //! from its buffers), and check that it exits 0 with the engine asked for and that the
-//! screenshot shows a surface (many colours, the centre differs from the corner). Without Xvfb
+//! screenshot shows a surface (many colours, the centre differs from the corner); a third run
+//! destroys the window's device mid-run and checks that the viewer recovers. Without Xvfb
 //! or a wgpu adapter the test returns early with a note, unless `REQUIRE_GPU=1`, where it fails.
 
 use std::path::Path;
@@ -21,9 +22,9 @@ fn skip_or_fail(reason: &str) {
     eprintln!("note: skipping the window smoke test: {reason}");
 }
 
-/// Runs the scripted window with `engine_args` and checks its log and screenshot; returns the
-/// log (stderr).
-fn scripted_run(engine_args: &[&str], engine: &str) -> Option<String> {
+/// Runs the scripted window with `engine_args` (and `env` set) and checks its log and
+/// screenshot; returns the log (stderr).
+fn scripted_run(engine_args: &[&str], engine: &str, env: &[(&str, &str)]) -> Option<String> {
     if Command::new("xvfb-run").arg("--help").output().is_err() {
         skip_or_fail("xvfb-run is not installed (apt install xvfb)");
         return None;
@@ -45,6 +46,7 @@ fn scripted_run(engine_args: &[&str], engine: &str) -> Option<String> {
         .arg("--quit")
         .args(engine_args)
         .env("XDG_RUNTIME_DIR", dir.path())
+        .envs(env.iter().copied())
         .output()
         .expect("run xvfb-run");
     let log = String::from_utf8_lossy(&out.stderr).into_owned();
@@ -74,16 +76,31 @@ fn scripted_run(engine_args: &[&str], engine: &str) -> Option<String> {
 
 #[test]
 fn scripted_run_plays_frames_and_saves_a_non_uniform_screenshot() {
-    scripted_run(&["--cpu"], "cpu");
+    scripted_run(&["--cpu"], "cpu", &[]);
 }
 
 #[test]
 fn scripted_run_with_the_gpu_engine_draws_from_its_buffers() {
-    let Some(log) = scripted_run(&["--backend", "gpu"], "gpu") else {
+    let Some(log) = scripted_run(&["--backend", "gpu"], "gpu", &[]) else {
         return;
     };
     assert!(
         log.contains("surface engine: gpu on"),
         "the GPU engine did not start on the window's device: {log}"
+    );
+}
+
+/// Issue 4 section 6: a lost GPU device is recreated. The window's device is destroyed after the
+/// first frame (the fault injection of `mdsurf::app::device_loss`); the viewer must reopen on a
+/// new device with the same files and finish the scripted run (the checks of `scripted_run`).
+#[test]
+fn a_lost_gpu_device_reopens_the_window_and_the_run_completes() {
+    let lose = [(mdsurf::app::device_loss::LOSE_DEVICE_ENV, "1")];
+    let Some(log) = scripted_run(&["--cpu"], "cpu", &lose) else {
+        return;
+    };
+    assert!(
+        log.contains("the GPU device was lost") && log.contains("reopening the window"),
+        "the device loss was not noticed and recovered: {log}"
     );
 }

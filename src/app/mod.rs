@@ -130,7 +130,7 @@ pub fn create_viewer(
     script_result: viewer::ScriptResult,
     top: PathBuf,
     traj: Option<PathBuf>,
-    reopen: device_loss::ReopenSlot,
+    device: (device_loss::DeviceWatch, device_loss::ReopenSlot),
 ) -> Viewer {
     let state = cc.wgpu_render_state.as_ref();
     let ctx = cc.egui_ctx.clone();
@@ -145,8 +145,8 @@ pub fn create_viewer(
     let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
     if let Some(s) = state {
         let ctx = cc.egui_ctx.clone();
-        let watch = device_loss::DeviceWatch::attach(&s.device, move || ctx.request_repaint());
-        viewer.watch_device(watch, reopen);
+        device.0.attach(&s.device, move || ctx.request_repaint());
+        viewer.watch_device(device.0, device.1);
     }
     viewer.open(&cc.egui_ctx, top, traj);
     viewer
@@ -155,7 +155,7 @@ pub fn create_viewer(
 /// Opens the viewer window and runs it until it is closed. When the GPU device is lost, the
 /// window closes and a new one opens on a new device with the same files and settings (at most
 /// [`device_loss::MAX_REOPENS`] times).
-pub fn run(mut options: ViewOptions) -> Result<(), ViewError> {
+pub fn run(options: ViewOptions) -> Result<(), ViewError> {
     if cfg!(target_os = "linux")
         && std::env::var_os("DISPLAY").is_none()
         && std::env::var_os("WAYLAND_DISPLAY").is_none()
@@ -165,30 +165,60 @@ pub fn run(mut options: ViewOptions) -> Result<(), ViewError> {
         ));
     }
     let result: viewer::ScriptResult = Arc::new(Mutex::new(None));
-    for reopens in 0.. {
-        let reopen: device_loss::ReopenSlot = Arc::new(Mutex::new(None));
-        run_window(&options, result.clone(), reopen.clone())?;
-        let Some(lost) = reopen.lock().ok().and_then(|mut r| r.take()) else {
-            break;
-        };
-        if reopens >= device_loss::MAX_REOPENS {
-            return Err(ViewError::DeviceLost(format!(
-                "{} times, last: {}",
-                reopens + 1,
-                lost.reason
-            )));
-        }
-        eprintln!(
-            "the GPU device was lost ({}); reopening the window on a new device",
-            lost.reason
-        );
-        options.files = lost.files;
-        options.params = lost.params;
-        options.particles = lost.particles;
+    let watch = device_loss::DeviceWatch::default();
+    let session: device_loss::ReopenSlot = Arc::new(Mutex::new(None));
+    let outcome = device_loss::run_guarded(&watch, || {
+        run_window(&options, result.clone(), (watch.clone(), session.clone()))
+    });
+    if let Some(reason) = watch.lost() {
+        return reopen_after_device_loss(&options, &session, &reason);
     }
+    // `None` only comes with a lost device, so here the window ended normally.
+    outcome.unwrap_or(Ok(()))?;
     match result.lock().ok().and_then(|r| r.clone()) {
         Some(e) => Err(ViewError::Script(e)),
         None => Ok(()),
+    }
+}
+
+/// Starts mdsurf again on the session the lost window left, and waits for it: a new process
+/// has a new event loop and a new device. Gives up after [`device_loss::MAX_REOPENS`].
+fn reopen_after_device_loss(
+    options: &ViewOptions,
+    session: &device_loss::ReopenSlot,
+    reason: &str,
+) -> Result<(), ViewError> {
+    let reopens: usize = std::env::var(device_loss::REOPENS_ENV)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    if reopens >= device_loss::MAX_REOPENS {
+        return Err(ViewError::DeviceLost(format!(
+            "{} times, last: {reason}",
+            reopens + 1
+        )));
+    }
+    let Some(last) = session.lock().ok().and_then(|mut s| s.take()) else {
+        return Err(ViewError::DeviceLost(format!(
+            "{reason}, before anything was shown"
+        )));
+    };
+    let backend = match options.backend {
+        Backend::Cpu => "cpu",
+        Backend::Gpu => "gpu",
+        Backend::Auto => "auto",
+    };
+    eprintln!("the GPU device was lost ({reason}); reopening the window on a new device");
+    let exe = std::env::current_exe().map_err(|e| ViewError::DeviceLost(e.to_string()))?;
+    let status = std::process::Command::new(exe)
+        .args(device_loss::reopen_args(&last, backend, &options.script))
+        .env(device_loss::REOPENS_ENV, (reopens + 1).to_string())
+        .status()
+        .map_err(|e| ViewError::DeviceLost(format!("{reason}; cannot restart mdsurf: {e}")))?;
+    if status.success() {
+        Ok(())
+    } else {
+        std::process::exit(status.code().unwrap_or(2))
     }
 }
 
@@ -197,7 +227,7 @@ pub fn run(mut options: ViewOptions) -> Result<(), ViewError> {
 fn run_window(
     options: &ViewOptions,
     script_result: viewer::ScriptResult,
-    reopen: device_loss::ReopenSlot,
+    device: (device_loss::DeviceWatch, device_loss::ReopenSlot),
 ) -> Result<(), ViewError> {
     let (top, traj) = options
         .files
@@ -222,7 +252,7 @@ fn run_window(
                 script_result,
                 top,
                 traj,
-                reopen,
+                device,
             )))
         }),
     )

@@ -391,29 +391,28 @@ impl eframe::App for Viewer {
 }
 
 impl Viewer {
-    /// Watches eframe's device: once it is lost, the window leaves its files and settings in
-    /// `reopen` and closes, and [`crate::app::run`] opens a new window on a new device.
-    pub fn watch_device(&mut self, watch: DeviceWatch, reopen: ReopenSlot) {
-        self.device = Some((watch, reopen));
+    /// Watches eframe's device: the window keeps its files and settings in `session` every
+    /// frame, and once the device is lost it closes; [`crate::app::run`] then opens a new
+    /// window on a new device.
+    pub fn watch_device(&mut self, watch: DeviceWatch, session: ReopenSlot) {
+        self.device = Some((watch, session));
     }
 
-    /// When the device was lost: saves what a new window restores and asks this one to close.
+    /// Records the session and, when the device was lost, asks the window to close (and
+    /// returns true: nothing may be drawn on a lost device).
     fn leave_if_device_lost(&mut self, ctx: &egui::Context) -> bool {
-        let Some((watch, slot)) = &self.device else {
+        let Some((watch, session)) = &self.device else {
             return false;
         };
-        let Some(reason) = watch.lost() else {
-            return false;
-        };
-        if let Ok(mut slot) = slot.lock()
-            && slot.is_none()
-        {
+        if let Ok(mut slot) = session.lock() {
             *slot = Some(Reopen {
                 files: self.files.clone(),
                 params: self.core.params,
                 particles: self.core.options.clone(),
-                reason,
             });
+        }
+        if watch.lost().is_none() {
+            return false;
         }
         ctx.send_viewport_cmd(egui::ViewportCommand::Close);
         true

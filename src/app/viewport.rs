@@ -26,6 +26,12 @@ pub struct GpuView {
 }
 
 impl GpuView {
+    /// Destroys the window's wgpu device, as a driver reset would: the fault injected by
+    /// [`crate::app::device_loss::LOSE_DEVICE_ENV`] to test the recovery path.
+    pub fn destroy_device(&self) {
+        self.device.destroy();
+    }
+
     /// Uses eframe's wgpu device.
     pub fn new(state: &egui_wgpu::RenderState) -> GpuView {
         GpuView {

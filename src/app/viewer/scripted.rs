@@ -3,6 +3,7 @@
 //! the scripted run (`--play-frames N --screenshot FILE --quit`).
 
 use super::{Script, Viewer};
+use crate::app::device_loss;
 use crate::app::state::Command;
 use crate::app::timeline::TimelineCmd;
 use crate::render::write_png;
@@ -73,6 +74,11 @@ impl Viewer {
             return;
         }
         if self.script_played + 1 < want {
+            if self.script_played == 1 && device_loss::inject_loss_now() {
+                if let Some(gpu) = &self.gpu {
+                    gpu.destroy_device();
+                }
+            }
             self.script_played += 1;
             self.core.apply(Command::Timeline(TimelineCmd::Step(1)));
             return;
