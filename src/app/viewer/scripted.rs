@@ -74,10 +74,11 @@ impl Viewer {
             return;
         }
         if self.script_played + 1 < want {
-            if self.script_played == 1 && device_loss::inject_loss_now() {
-                if let Some(gpu) = &self.gpu {
-                    gpu.destroy_device();
-                }
+            if self.script_played == 1
+                && device_loss::inject_loss_now()
+                && let Some(gpu) = &self.gpu
+            {
+                gpu.destroy_device();
             }
             self.script_played += 1;
             self.core.apply(Command::Timeline(TimelineCmd::Step(1)));
