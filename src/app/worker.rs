@@ -15,7 +15,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::source::FrameSource;
-use crate::gpu::{Changes, GpuEngine, GpuSurface};
+use crate::gpu::{Changes, GpuEngine, GpuSurface, Work};
 use crate::model::{ParticleOptions, Particles};
 use crate::render::guess_bonds;
 use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams};
@@ -71,6 +71,9 @@ pub struct Computed {
     pub beads: bool,
     /// Time to read the frame in ms.
     pub read_ms: f64,
+    /// Which stages the GPU engine ran for this reply (its last submit; `None` for host
+    /// engines). An isovalue change alone gives [`Work::Mc`].
+    pub gpu_work: Option<Work>,
 }
 
 /// What the worker sends back.
@@ -124,11 +127,11 @@ impl Engine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
         changes: Changes,
-    ) -> Result<(SurfaceOutput, Option<GpuSurface>), String> {
+    ) -> Result<(SurfaceOutput, Option<GpuSurface>, Option<Work>), String> {
         match self {
             Engine::Host(e) => e
                 .compute(atoms, params)
-                .map(|o| (o, None))
+                .map(|o| (o, None, None))
                 .map_err(|e| e.to_string()),
             Engine::Gpu(e) => {
                 let stats = e
@@ -143,7 +146,7 @@ impl Engine {
                     volume: stats.volume,
                     timings: stats.timings,
                 };
-                Ok((output, Some(surface)))
+                Ok((output, Some(surface), e.last_frame().map(|f| f.work)))
             }
         }
     }
@@ -232,6 +235,27 @@ struct Cache {
     order: Vec<usize>,
     particles: Option<(ParticleOptions, Arc<Particles>, ParticleData)>,
     atom_bonds: Option<Arc<Vec<[u32; 2]>>>,
+    /// What the engine's last frame was computed from, to send it only what changed since.
+    sent: Option<Sent>,
+}
+
+/// Inputs of the engine's last successful frame.
+struct Sent {
+    positions: Vec<Vec3>,
+    radii: Arc<Vec<f32>>,
+    colours: Arc<Vec<[f32; 3]>>,
+}
+
+impl Sent {
+    /// What differs between this and the next frame's inputs (parameters other than these are
+    /// compared by the engine itself).
+    fn changes(&self, positions: &[Vec3], data: &ParticleData) -> Changes {
+        Changes {
+            positions: self.positions != positions,
+            radii: !Arc::ptr_eq(&self.radii, &data.radii) && self.radii != data.radii,
+            colours: !Arc::ptr_eq(&self.colours, &data.colours) && self.colours != data.colours,
+        }
+    }
 }
 
 fn run(
@@ -248,6 +272,7 @@ fn run(
         order: Vec::new(),
         particles: None,
         atom_bonds: None,
+        sent: None,
     };
     loop {
         let request = {
@@ -295,6 +320,7 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
         cache.frames.clear();
         cache.order.clear();
         cache.particles = None;
+        cache.sent = None;
         cache.atom_bonds = None;
     }
     if let Some(f) = cache.frames.get(&req.frame) {
@@ -351,15 +377,20 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
     particles
         .positions_into(&frame, &mut positions)
         .map_err(|e| format!("frame {}: {e}", req.frame))?;
-    // Radii and colours change only with the particles; positions with every frame.
-    let changes = Changes {
-        radii: rebuild,
-        colours: rebuild,
-        ..Changes::ALL
+    // Send the engine only what changed since its last frame: an isovalue change alone
+    // re-runs Marching Cubes, a colour scheme the colour pass (parameters it compares itself).
+    let changes = match cache.sent.take() {
+        Some(sent) => sent.changes(&positions, data),
+        None => Changes::ALL,
     };
-    let (output, gpu_surface) = engine
+    let (output, gpu_surface, gpu_work) = engine
         .compute(&particles.atom_set(&positions), &req.params, changes)
         .map_err(|e| format!("frame {}: {e}", req.frame))?;
+    cache.sent = Some(Sent {
+        positions: positions.clone(),
+        radii: data.radii.clone(),
+        colours: data.colours.clone(),
+    });
     Ok(Computed {
         generation: req.generation,
         frame: req.frame,
@@ -372,5 +403,6 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
         },
         beads: particles.is_beads(),
         read_ms,
+        gpu_work,
     })
 }
