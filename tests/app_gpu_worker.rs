@@ -161,7 +161,7 @@ fn gpu_worker_reruns_only_the_stages_a_change_needs() {
         (2, 0.4, ri, Work::Mc, "isovalue on the new frame"),
     ];
     for (frame, iso, colours, want, what) in steps {
-        let a = compute_with(&worker, &source, frame, iso, colours.clone());
+        let a = compute_with(&worker, &source, frame, iso, colours);
         assert_eq!(a.gpu_work, Some(want), "{what}: stages that ran");
         let Some(e) = engine() else { return };
         let fresh = Worker::spawn_engine(e, Box::new(|| {}));
