@@ -4,7 +4,10 @@
 //! the frames in between are dropped instead of queueing up. With the GPU engine on the
 //! window's device ([`Engine::Gpu`]) the mesh stays on the GPU: the reply carries the engine's
 //! [`GpuSurface`] buffers for the renderer and the counters (triangles, area, volume) that came
-//! back with the frame; a frame that overflowed its buffers is submitted again.
+//! back with the frame; a frame that overflowed its buffers is submitted again. The worker tells
+//! the GPU engine only what changed since its last frame (frame, radii, colours; the engine
+//! compares the parameters), so an isovalue change re-runs only Marching Cubes and a colour
+//! scheme only the colour pass.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -239,19 +242,22 @@ struct Cache {
     sent: Option<Sent>,
 }
 
-/// Inputs of the engine's last successful frame.
+/// Inputs of the engine's last successful frame (of the cached source).
 struct Sent {
-    positions: Vec<Vec3>,
+    /// Frame index: positions follow from it and the particle kind.
+    frame: usize,
+    /// Residue beads or atoms.
+    beads: bool,
     radii: Arc<Vec<f32>>,
     colours: Arc<Vec<[f32; 3]>>,
 }
 
 impl Sent {
-    /// What differs between this and the next frame's inputs (parameters other than these are
+    /// What differs between this and the next frame's inputs (the surface parameters are
     /// compared by the engine itself).
-    fn changes(&self, positions: &[Vec3], data: &ParticleData) -> Changes {
+    fn changes(&self, frame: usize, beads: bool, data: &ParticleData) -> Changes {
         Changes {
-            positions: self.positions != positions,
+            positions: self.frame != frame || self.beads != beads,
             radii: !Arc::ptr_eq(&self.radii, &data.radii) && self.radii != data.radii,
             colours: !Arc::ptr_eq(&self.colours, &data.colours) && self.colours != data.colours,
         }
@@ -380,14 +386,15 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
     // Send the engine only what changed since its last frame: an isovalue change alone
     // re-runs Marching Cubes, a colour scheme the colour pass (parameters it compares itself).
     let changes = match cache.sent.take() {
-        Some(sent) => sent.changes(&positions, data),
+        Some(sent) => sent.changes(req.frame, particles.is_beads(), data),
         None => Changes::ALL,
     };
     let (output, gpu_surface, gpu_work) = engine
         .compute(&particles.atom_set(&positions), &req.params, changes)
         .map_err(|e| format!("frame {}: {e}", req.frame))?;
     cache.sent = Some(Sent {
-        positions: positions.clone(),
+        frame: req.frame,
+        beads: particles.is_beads(),
         radii: data.radii.clone(),
         colours: data.colours.clone(),
     });
