@@ -10,8 +10,8 @@ use std::time::Duration;
 
 use mdsurf::app::source::{FrameSource, helix_source};
 use mdsurf::app::worker::{Computed, Engine, Reply, Request, Worker};
-use mdsurf::gpu::{GpuEngine, tolerance as tol};
-use mdsurf::model::ParticleOptions;
+use mdsurf::gpu::{GpuEngine, Work, tolerance as tol};
+use mdsurf::model::{ColorScheme, ParticleOptions};
 use mdsurf::render::HeadlessGpu;
 use mdsurf::surface::{CpuEngine, SurfaceParams};
 
@@ -98,5 +98,87 @@ fn compare_frames(engine: GpuEngine) {
             );
         }
         assert_eq!(a.output.grid, b.output.grid, "frame {frame}: grid");
+    }
+}
+
+/// Submits `frame` with `isovalue` and `colours` and waits for the reply.
+fn compute_with(
+    worker: &Worker,
+    source: &Arc<dyn FrameSource>,
+    frame: usize,
+    isovalue: f32,
+    colours: ColorScheme,
+) -> Computed {
+    worker.submit(Request {
+        generation: 1,
+        frame,
+        source: source.clone(),
+        params: SurfaceParams {
+            spacing: 0.5,
+            isovalue,
+            ..SurfaceParams::default()
+        },
+        options: ParticleOptions {
+            colours,
+            ..ParticleOptions::default()
+        },
+    });
+    match worker.recv_timeout(Duration::from_secs(60)) {
+        Some(Reply::Done(c)) => *c,
+        Some(Reply::Failed { message, .. }) => panic!("frame {frame}: {message}"),
+        None => panic!("frame {frame}: no reply in 60 s"),
+    }
+}
+
+/// The worker sends the engine only what changed: an isovalue change alone re-runs Marching
+/// Cubes, a colour scheme the colour pass, a new frame everything; each surface equals the one
+/// a fresh engine computes from scratch.
+#[test]
+fn gpu_worker_reruns_only_the_stages_a_change_needs() {
+    let g = match HeadlessGpu::new() {
+        Ok(g) => g,
+        Err(e) if require_gpu() => panic!("REQUIRE_GPU=1 but no adapter: {e}"),
+        Err(e) => return eprintln!("note: skipping: {e}"),
+    };
+    let engine = || match GpuEngine::try_from_device(g.device.clone(), g.queue.clone()) {
+        Ok(e) => Some(Engine::Gpu(Box::new(e))),
+        Err(e) if require_gpu() => panic!("REQUIRE_GPU=1 but the GPU engine cannot start: {e}"),
+        Err(e) => {
+            eprintln!("note: skipping: {e}");
+            None
+        }
+    };
+    let Some(e) = engine() else { return };
+    let worker = Worker::spawn_engine(e, Box::new(|| {}));
+    let source: Arc<dyn FrameSource> = Arc::new(helix_source(20, 4));
+    let (el, ri) = (ColorScheme::Element, ColorScheme::ResidueIndex);
+    let steps = [
+        (0, 0.5, el, Work::Full, "first frame"),
+        (0, 0.3, el, Work::Mc, "isovalue"),
+        (0, 0.3, ri, Work::Colour, "colour scheme"),
+        (0, 0.7, ri, Work::Mc, "isovalue again"),
+        (2, 0.7, ri, Work::Full, "new frame"),
+        (2, 0.4, ri, Work::Mc, "isovalue on the new frame"),
+    ];
+    for (frame, iso, colours, want, what) in steps {
+        let a = compute_with(&worker, &source, frame, iso, colours);
+        assert_eq!(a.gpu_work, Some(want), "{what}: stages that ran");
+        let Some(e) = engine() else { return };
+        let fresh = Worker::spawn_engine(e, Box::new(|| {}));
+        let b = compute_with(&fresh, &source, frame, iso, colours);
+        assert_eq!(b.gpu_work, Some(Work::Full), "{what}: fresh engine");
+        let (ta, tb) = (a.triangle_count(), b.triangle_count());
+        assert!(tb > 100, "{what}: fresh surface has {tb} triangles");
+        assert_eq!(ta, tb, "{what}: triangles, incremental vs from scratch");
+        for (name, x, y) in [
+            ("area", a.output.area, b.output.area),
+            ("volume", a.output.volume, b.output.volume),
+        ] {
+            assert!(
+                tol::rel_close(x, y, 1e-4),
+                "{what}: {name} {x} incremental vs {y} from scratch"
+            );
+        }
+        assert_eq!(a.output.grid, b.output.grid, "{what}: grid");
     }
 }

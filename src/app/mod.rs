@@ -1,5 +1,5 @@
 //! The desktop viewer (eframe): the top of the data flow. It reads frames through a
-//! [`source::FrameSource`], computes surfaces on a [`worker::Worker`] thread with a surface
+//! [`source::FrameSource`] (files through the io module's prefetching reader), computes surfaces on a [`worker::Worker`] thread with a surface
 //! engine, and draws them with [`crate::render`]. UI functions end in `_ui` and return
 //! [`state::Command`]s, applied in one place ([`state::AppCore::apply`] and the window layer in
 //! [`viewer::Viewer`]). Nothing below this module imports it.

@@ -1,10 +1,17 @@
 //! Where the viewer's frames come from: a [`FrameSource`] is a topology plus random access to
 //! frames. Files opened with [`crate::io::open`] are one; [`MemorySource`] (frames held in memory)
-//! serves tests and generated systems. The compute worker reads frames through this trait only.
+//! serves tests and generated systems. Files are read through a [`StreamedSource`]: a
+//! [`FrameStreamer`] reader thread keeps a bounded cache filled around the playhead, so playback
+//! reads from memory. The compute worker reads frames through this trait only.
 
 use std::sync::Arc;
+use std::time::Duration;
 
+use crate::io::{FrameStreamer, StreamerOptions, Trajectory};
 use crate::model::{Frame, Topology};
+
+/// How long the worker waits for the reader thread to deliver one frame.
+const READ_TIMEOUT: Duration = Duration::from_secs(120);
 
 /// A trajectory the viewer can play.
 pub trait FrameSource: Send + Sync {
@@ -73,13 +80,61 @@ impl FrameSource for crate::io::Trajectory {
     }
 }
 
-/// Opens `top` (and `traj`) from disk as a shared source.
+/// A trajectory read ahead by a [`FrameStreamer`]: each read moves the streamer's playhead
+/// there, so the frames after it are prefetched while this one is computed; a frame already
+/// in the cache is returned without touching the file. A frame that failed to read fails
+/// again at once with the same message (the viewer shows it and playback goes on).
+pub struct StreamedSource {
+    streamer: FrameStreamer,
+}
+
+impl StreamedSource {
+    /// Starts the reader thread for `trajectory` with cache and prefetch sizes `options`.
+    pub fn new(trajectory: Trajectory, options: StreamerOptions) -> StreamedSource {
+        StreamedSource {
+            streamer: FrameStreamer::new(trajectory, options),
+        }
+    }
+
+    /// The streamer (cache contents, failed frames, read count).
+    pub fn streamer(&self) -> &FrameStreamer {
+        &self.streamer
+    }
+}
+
+impl FrameSource for StreamedSource {
+    fn topology(&self) -> &Topology {
+        self.streamer.trajectory().topology()
+    }
+    fn len(&self) -> usize {
+        self.streamer.len()
+    }
+    fn read_frame(&self, index: usize) -> Result<Frame, String> {
+        self.streamer.set_playhead(index);
+        match self.streamer.wait(index, READ_TIMEOUT) {
+            Some(Ok(frame)) => Ok(Frame::clone(&frame)),
+            Some(Err(e)) => Err(format!("{e} (frame {index} skipped)")),
+            None => Err(format!(
+                "{}: frame {index} not read within {} s",
+                self.name(),
+                READ_TIMEOUT.as_secs()
+            )),
+        }
+    }
+    fn name(&self) -> String {
+        FrameSource::name(self.streamer.trajectory())
+    }
+}
+
+/// Opens `top` (and `traj`) from disk as a shared source read ahead by a [`StreamedSource`].
 pub fn open_files(
     top: &std::path::Path,
     traj: Option<&std::path::Path>,
 ) -> Result<Arc<dyn FrameSource>, String> {
     crate::io::open(top, traj)
-        .map(|t| Arc::new(t) as Arc<dyn FrameSource>)
+        .map(|t| {
+            Arc::new(StreamedSource::new(t, StreamerOptions::default())) as Arc<dyn FrameSource>
+        })
         .map_err(|e| e.to_string())
 }
 

@@ -4,7 +4,10 @@
 //! the frames in between are dropped instead of queueing up. With the GPU engine on the
 //! window's device ([`Engine::Gpu`]) the mesh stays on the GPU: the reply carries the engine's
 //! [`GpuSurface`] buffers for the renderer and the counters (triangles, area, volume) that came
-//! back with the frame; a frame that overflowed its buffers is submitted again.
+//! back with the frame; a frame that overflowed its buffers is submitted again. The worker tells
+//! the GPU engine only what changed since its last frame (frame, radii, colours; the engine
+//! compares the parameters), so an isovalue change re-runs only Marching Cubes and a colour
+//! scheme only the colour pass.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -15,7 +18,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::source::FrameSource;
-use crate::gpu::{Changes, GpuEngine, GpuSurface};
+use crate::gpu::{Changes, GpuEngine, GpuSurface, Work};
 use crate::model::{ParticleOptions, Particles};
 use crate::render::guess_bonds;
 use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams};
@@ -71,6 +74,9 @@ pub struct Computed {
     pub beads: bool,
     /// Time to read the frame in ms.
     pub read_ms: f64,
+    /// Which stages the GPU engine ran for this reply (its last submit; `None` for host
+    /// engines). An isovalue change alone gives [`Work::Mc`].
+    pub gpu_work: Option<Work>,
 }
 
 /// What the worker sends back.
@@ -124,11 +130,11 @@ impl Engine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
         changes: Changes,
-    ) -> Result<(SurfaceOutput, Option<GpuSurface>), String> {
+    ) -> Result<(SurfaceOutput, Option<GpuSurface>, Option<Work>), String> {
         match self {
             Engine::Host(e) => e
                 .compute(atoms, params)
-                .map(|o| (o, None))
+                .map(|o| (o, None, None))
                 .map_err(|e| e.to_string()),
             Engine::Gpu(e) => {
                 let stats = e
@@ -143,7 +149,7 @@ impl Engine {
                     volume: stats.volume,
                     timings: stats.timings,
                 };
-                Ok((output, Some(surface)))
+                Ok((output, Some(surface), e.last_frame().map(|f| f.work)))
             }
         }
     }
@@ -232,6 +238,30 @@ struct Cache {
     order: Vec<usize>,
     particles: Option<(ParticleOptions, Arc<Particles>, ParticleData)>,
     atom_bonds: Option<Arc<Vec<[u32; 2]>>>,
+    /// What the engine's last frame was computed from, to send it only what changed since.
+    sent: Option<Sent>,
+}
+
+/// Inputs of the engine's last successful frame (of the cached source).
+struct Sent {
+    /// Frame index: positions follow from it and the particle kind.
+    frame: usize,
+    /// Residue beads or atoms.
+    beads: bool,
+    radii: Arc<Vec<f32>>,
+    colours: Arc<Vec<[f32; 3]>>,
+}
+
+impl Sent {
+    /// What differs between this and the next frame's inputs (the surface parameters are
+    /// compared by the engine itself).
+    fn changes(&self, frame: usize, beads: bool, data: &ParticleData) -> Changes {
+        Changes {
+            positions: self.frame != frame || self.beads != beads,
+            radii: !Arc::ptr_eq(&self.radii, &data.radii) && self.radii != data.radii,
+            colours: !Arc::ptr_eq(&self.colours, &data.colours) && self.colours != data.colours,
+        }
+    }
 }
 
 fn run(
@@ -248,6 +278,7 @@ fn run(
         order: Vec::new(),
         particles: None,
         atom_bonds: None,
+        sent: None,
     };
     loop {
         let request = {
@@ -295,6 +326,7 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
         cache.frames.clear();
         cache.order.clear();
         cache.particles = None;
+        cache.sent = None;
         cache.atom_bonds = None;
     }
     if let Some(f) = cache.frames.get(&req.frame) {
@@ -351,15 +383,21 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
     particles
         .positions_into(&frame, &mut positions)
         .map_err(|e| format!("frame {}: {e}", req.frame))?;
-    // Radii and colours change only with the particles; positions with every frame.
-    let changes = Changes {
-        radii: rebuild,
-        colours: rebuild,
-        ..Changes::ALL
+    // Send the engine only what changed since its last frame: an isovalue change alone
+    // re-runs Marching Cubes, a colour scheme the colour pass (parameters it compares itself).
+    let changes = match cache.sent.take() {
+        Some(sent) => sent.changes(req.frame, particles.is_beads(), data),
+        None => Changes::ALL,
     };
-    let (output, gpu_surface) = engine
+    let (output, gpu_surface, gpu_work) = engine
         .compute(&particles.atom_set(&positions), &req.params, changes)
         .map_err(|e| format!("frame {}: {e}", req.frame))?;
+    cache.sent = Some(Sent {
+        frame: req.frame,
+        beads: particles.is_beads(),
+        radii: data.radii.clone(),
+        colours: data.colours.clone(),
+    });
     Ok(Computed {
         generation: req.generation,
         frame: req.frame,
@@ -372,5 +410,6 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
         },
         beads: particles.is_beads(),
         read_ms,
+        gpu_work,
     })
 }
