@@ -4,7 +4,11 @@
 //! to read comes back from the compute worker as a one-line failure naming it, while the frames
 //! around it still compute (playback goes on).
 
-use std::path::{Path, PathBuf};
+mod data_support;
+
+use data_support::data;
+
+use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -13,18 +17,6 @@ use mdsurf::app::worker::{Reply, Request, Worker};
 use mdsurf::io::{self, StreamerOptions, Trajectory};
 use mdsurf::model::ParticleOptions;
 use mdsurf::surface::{CpuEngine, SurfaceParams};
-
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/");
-
-fn data(name: &str) -> PathBuf {
-    let path = Path::new(DATA).join(name);
-    assert!(
-        path.is_file(),
-        "test data {} is missing (see ../shared/data/README.md)",
-        path.display()
-    );
-    path
-}
 
 fn rhodopsin() -> Trajectory {
     io::open(&data("md_1u19.gro"), Some(&data("md_1u19.xtc"))).expect("open rhodopsin")

@@ -2,21 +2,13 @@
 //! panic: missing files, unknown formats, garbage, truncated XTC/DCD (good frames kept), atom
 //! count mismatches, NaN coordinates.
 
+mod data_support;
+
+use data_support::data;
+
 use std::path::{Path, PathBuf};
 
 use mdsurf::io::{self, IoError, Trajectory};
-
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/");
-
-fn data(name: &str) -> PathBuf {
-    let path = Path::new(DATA).join(name);
-    assert!(
-        path.is_file(),
-        "test data {} is missing (see ../shared/data/README.md)",
-        path.display()
-    );
-    path
-}
 
 /// Opening must fail; returns the error after checking it is one line naming `names`.
 fn open_err(top: &Path, traj: Option<&Path>, names: &[&str]) -> IoError {

@@ -1,21 +1,11 @@
 //! Every real file in `../shared/data` opens with the atom and frame counts its README lists,
 //! and its topology comes out complete (elements, radii, residues).
 
-use std::path::{Path, PathBuf};
+mod data_support;
+
+use data_support::data;
 
 use mdsurf::io::{self, Trajectory};
-
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/");
-
-fn data(name: &str) -> PathBuf {
-    let path = Path::new(DATA).join(name);
-    assert!(
-        path.is_file(),
-        "test data {} is missing (see ../shared/data/README.md)",
-        path.display()
-    );
-    path
-}
 
 fn open(top: &str, traj: Option<&str>) -> Trajectory {
     let top = data(top);

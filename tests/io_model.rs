@@ -1,22 +1,12 @@
 //! The model layer on real files: element guessing and radii (DESIGN section 2), residue beads,
 //! colour schemes and user radius overrides, as the surface engines receive them.
 
-use std::path::{Path, PathBuf};
+mod data_support;
+
+use data_support::data;
 
 use mdsurf::io::{self, Trajectory};
 use mdsurf::model::{ColorScheme, ParticleOptions, Particles, RadiusOverrides};
-
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/");
-
-fn data(name: &str) -> PathBuf {
-    let path = Path::new(DATA).join(name);
-    assert!(
-        path.is_file(),
-        "test data {} is missing (see ../shared/data/README.md)",
-        path.display()
-    );
-    path
-}
 
 fn open(top: &str) -> Trajectory {
     io::open(&data(top), None).unwrap_or_else(|e| panic!("{e}"))

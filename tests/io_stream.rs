@@ -2,25 +2,18 @@
 //! playhead without requests, the cache stays bounded and evicts least-recently-used frames,
 //! per-frame errors are kept (and not retried), and dropping the streamer ends its thread.
 
-use std::path::{Path, PathBuf};
+mod data_support;
+
+use data_support::data;
+
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use mdsurf::io::{self, FrameStatus, FrameStreamer, IoError, StreamerOptions, Trajectory};
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/");
 const LONG: Duration = Duration::from_secs(30);
-
-fn data(name: &str) -> PathBuf {
-    let path = Path::new(DATA).join(name);
-    assert!(
-        path.is_file(),
-        "test data {} is missing (see ../shared/data/README.md)",
-        path.display()
-    );
-    path
-}
 
 fn rhodopsin() -> Arc<Trajectory> {
     Arc::new(io::open(&data("md_1u19.gro"), Some(&data("md_1u19.xtc"))).expect("open"))
