@@ -3,21 +3,8 @@
 // on a disc of about AO_RADIUS Å around it; neighbours in front of it (creases, pockets, atoms
 // nestled in the surface) darken it. The output multiplies the image (blend: dst * src).
 
-// Twin of `ViewUniform` in src/render/renderer.rs (240 bytes); see render_scene.wgsl for fields.
-struct View {
-    view: mat4x4<f32>,
-    proj: mat4x4<f32>,
-    light_dir: vec4<f32>,
-    background: vec4<f32>,
-    // w: 1 = orthographic.
-    fog: vec4<f32>,
-    surface: vec4<f32>,
-    surface_colour: vec4<f32>,
-    // y: near clip (Å), z: far clip (Å).
-    misc: vec4<f32>,
-    // x: strength 0..1, y: reach (Å), z: viewport height (px).
-    ao: vec4<f32>,
-};
+// View (twin of `ViewUniform` in src/render/renderer.rs) comes from render_view.wgsl,
+// prepended by src/render/pipelines.rs.
 
 @group(0) @binding(0) var<uniform> u: View;
 @group(1) @binding(0) var depth_tex: texture_depth_2d;

@@ -2,25 +2,8 @@
 // weighted blended OIT targets when semi-transparent), atoms as ray-cast sphere impostors and
 // bonds as instanced cylinders. All shading happens in view space, in linear colour.
 
-// Twin of `ViewUniform` in src/render/renderer.rs (240 bytes); mirrored in render_post.wgsl.
-struct View {
-    view: mat4x4<f32>,
-    proj: mat4x4<f32>,
-    // xyz: direction towards the key light in view space.
-    light_dir: vec4<f32>,
-    // rgb: linear background colour (the depth cue fades towards it).
-    background: vec4<f32>,
-    // x: depth-cue start (Å from the eye), y: end (Å), z: strength 0..1, w: 1 = orthographic.
-    fog: vec4<f32>,
-    // x: surface opacity 0..1, y: 1 = use `surface_colour` instead of vertex colours.
-    surface: vec4<f32>,
-    // rgb: single surface colour (linear).
-    surface_colour: vec4<f32>,
-    // x: specular strength, y: near clip (Å), z: far clip (Å), w: unused.
-    misc: vec4<f32>,
-    // x: ambient occlusion strength, y: its reach (Å), z: viewport height (px), w: unused.
-    ao: vec4<f32>,
-};
+// View (twin of `ViewUniform` in src/render/renderer.rs) comes from render_view.wgsl,
+// prepended by src/render/pipelines.rs.
 
 @group(0) @binding(0) var<uniform> u: View;
 

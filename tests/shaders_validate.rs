@@ -30,16 +30,21 @@ fn validate(name: &str, source: &str) -> Result<(), String> {
         .map_err(|e| format!("{name}: {}", e.emit_to_string(source)))
 }
 
-/// Every file under `shaders/` is validated: compute stages as the GPU engine assembles them
-/// (`mdsurf::gpu::shaders::ALL`, with the shared slab uniform prepended), every other file as
-/// it is on disk. A new compute shader that the engine does not list fails here.
+/// Every file under `shaders/` is validated: each stage as the engine or the renderer
+/// assembles it (`mdsurf::gpu::shaders::ALL`, `mdsurf::render::SHADERS`, with their shared
+/// uniform files prepended), the shared files alone. A new shader that neither lists fails here.
 #[test]
 fn every_shader_parses_and_validates() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let mut files = Vec::new();
     wgsl_files(&dir, &mut files);
     files.sort();
-    let compute = mdsurf::gpu::shaders::ALL;
+    let assembled: Vec<(&str, &str)> = mdsurf::gpu::shaders::ALL
+        .iter()
+        .chain(mdsurf::render::SHADERS)
+        .copied()
+        .collect();
+    let shared = ["slab_uniform.wgsl", "render_view.wgsl"];
     let mut failures = Vec::new();
     for file in &files {
         let name = file
@@ -47,24 +52,22 @@ fn every_shader_parses_and_validates() {
             .and_then(|n| n.to_str())
             .unwrap_or_default();
         let on_disk = std::fs::read_to_string(file).expect("readable shader");
-        let result = match compute.iter().find(|(n, _)| *n == name) {
-            Some((_, assembled)) => {
+        let result = match assembled.iter().find(|(n, _)| *n == name) {
+            Some((_, source)) => {
                 assert!(
-                    assembled.ends_with(&on_disk),
-                    "{name}: the engine's source is not this file"
+                    source.ends_with(&on_disk),
+                    "{name}: the compiled source is not this file"
                 );
-                validate(name, assembled)
+                validate(name, source)
             }
-            None if name.starts_with("render_") || name == "slab_uniform.wgsl" => {
-                validate(name, &on_disk)
-            }
+            None if shared.contains(&name) => validate(name, &on_disk),
             None => Err(format!(
-                "{name}: neither a render shader nor listed in mdsurf::gpu::shaders::ALL"
+                "{name}: neither a shared file nor listed in gpu::shaders::ALL or render::SHADERS"
             )),
         };
         failures.extend(result.err());
     }
-    for (name, _) in compute {
+    for (name, _) in &assembled {
         assert!(
             files.iter().any(|f| f.ends_with(name)),
             "{name} is listed but missing from {}",

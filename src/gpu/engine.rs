@@ -438,50 +438,27 @@ impl GpuEngine {
 
     /// Test hook: the density volume of the last slab (whole grid when there was one slab).
     pub fn read_density(&self) -> Result<Vec<f32>, GpuError> {
-        let n = self
-            .state
-            .plan
-            .as_ref()
-            .map(|p| p.slab_voxels())
-            .unwrap_or(0);
-        read_pod(
-            &self.ctx.device,
-            &self.ctx.queue,
-            &self.buffers.density.buffer,
-            n,
-        )
+        self.read_planned(&self.buffers.density.buffer, FramePlan::slab_voxels)
     }
 
     /// Test hook: class words of the last slab (see `shaders/classify.wgsl`).
     pub fn read_classes(&self) -> Result<Vec<u32>, GpuError> {
-        let n = self
-            .state
-            .plan
-            .as_ref()
-            .map(|p| p.class_points())
-            .unwrap_or(0);
-        read_pod(
-            &self.ctx.device,
-            &self.ctx.queue,
-            &self.buffers.classes.buffer,
-            n,
-        )
+        self.read_planned(&self.buffers.classes.buffer, FramePlan::class_points)
     }
 
     /// Test hook: first slot of every bin cell after the scan.
     pub fn read_cell_starts(&self) -> Result<Vec<u32>, GpuError> {
-        let n = self
-            .state
-            .plan
-            .as_ref()
-            .map(|p| p.cell_count())
-            .unwrap_or(0);
-        read_pod(
-            &self.ctx.device,
-            &self.ctx.queue,
-            &self.buffers.cell_start.buffer,
-            n,
-        )
+        self.read_planned(&self.buffers.cell_start.buffer, FramePlan::cell_count)
+    }
+
+    /// Reads the first `len(plan)` elements of `buffer` (none before the first frame).
+    fn read_planned<T: bytemuck::Pod>(
+        &self,
+        buffer: &wgpu::Buffer,
+        len: fn(&FramePlan) -> u64,
+    ) -> Result<Vec<T>, GpuError> {
+        let n = self.state.plan.as_ref().map(len).unwrap_or(0);
+        read_pod(&self.ctx.device, &self.ctx.queue, buffer, n)
     }
 }
 

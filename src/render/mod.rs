@@ -18,6 +18,9 @@ pub use atoms::{atom_instances, guess_bonds};
 pub use camera::{Camera, Projection, bounding_sphere};
 pub use headless::HeadlessGpu;
 pub use pipelines::{AO_WGSL, POST_WGSL, SCENE_WGSL};
+
+/// Every render shader as `(file name, full source)` as the device compiles it.
+pub const SHADERS: &[(&str, &str)] = pipelines::ALL;
 pub use readback::{
     MEAN_TOLERANCE, OUTLIER_FRACTION, OUTLIER_LEVEL, RgbaImage, read_texture, render_to_rgba,
     write_png,

@@ -5,12 +5,25 @@
 use super::scene::{CylinderInstance, SphereInstance};
 use super::targets::{ACCUM_FORMAT, COLOUR_FORMAT, DEPTH_FORMAT, REVEAL_FORMAT};
 
-/// WGSL of the scene pass.
-pub const SCENE_WGSL: &str = include_str!("../../shaders/render_scene.wgsl");
+/// WGSL of the scene pass (after the shared view uniform, `shaders/render_view.wgsl`).
+pub const SCENE_WGSL: &str = concat!(
+    include_str!("../../shaders/render_view.wgsl"),
+    include_str!("../../shaders/render_scene.wgsl")
+);
 /// WGSL of the full-screen passes.
 pub const POST_WGSL: &str = include_str!("../../shaders/render_post.wgsl");
-/// WGSL of the ambient occlusion pass.
-pub const AO_WGSL: &str = include_str!("../../shaders/render_ao.wgsl");
+/// WGSL of the ambient occlusion pass (after the shared view uniform).
+pub const AO_WGSL: &str = concat!(
+    include_str!("../../shaders/render_view.wgsl"),
+    include_str!("../../shaders/render_ao.wgsl")
+);
+
+/// Every render shader as `(file name, full source)`, for validation.
+pub const ALL: &[(&str, &str)] = &[
+    ("render_scene.wgsl", SCENE_WGSL),
+    ("render_post.wgsl", POST_WGSL),
+    ("render_ao.wgsl", AO_WGSL),
+];
 
 /// Vertices per cylinder instance (12 segments, two triangles each; see `vs_cylinder`).
 pub const CYLINDER_VERTICES: u32 = 12 * 6;

@@ -10,7 +10,7 @@ use super::scene::GpuScene;
 use super::settings::{RenderSettings, Stereo};
 use super::targets::RenderTargets;
 
-/// Per-view uniforms. Twin of `View` in shaders/render_scene.wgsl.
+/// Per-view uniforms. Twin of `View` in shaders/render_view.wgsl.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct ViewUniform {

@@ -1,0 +1,22 @@
+// Shared by the render passes that read the view (render_scene, render_ao): the per-frame view
+// uniform. src/render/pipelines.rs prepends this file to each of them, so it is written once.
+
+// Twin of `ViewUniform` in src/render/renderer.rs (240 bytes).
+struct View {
+    view: mat4x4<f32>,
+    proj: mat4x4<f32>,
+    // xyz: direction towards the key light in view space.
+    light_dir: vec4<f32>,
+    // rgb: linear background colour (the depth cue fades towards it).
+    background: vec4<f32>,
+    // x: depth-cue start (Å from the eye), y: end (Å), z: strength 0..1, w: 1 = orthographic.
+    fog: vec4<f32>,
+    // x: surface opacity 0..1, y: 1 = use `surface_colour` instead of vertex colours.
+    surface: vec4<f32>,
+    // rgb: single surface colour (linear).
+    surface_colour: vec4<f32>,
+    // x: specular strength, y: near clip (Å), z: far clip (Å), w: unused.
+    misc: vec4<f32>,
+    // x: ambient occlusion strength, y: its reach (Å), z: viewport height (px), w: unused.
+    ao: vec4<f32>,
+};
