@@ -6,9 +6,8 @@
 
 mod data_support;
 
-use data_support::data;
+use data_support::{data, nan_trajectory};
 
-use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -73,31 +72,6 @@ fn wait_cached(source: &StreamedSource, frames: std::ops::RangeInclusive<usize>)
         );
         std::thread::sleep(Duration::from_millis(5));
     }
-}
-
-/// A 3-frame PDB + DCD pair whose frame 1 has a NaN coordinate.
-fn nan_trajectory(dir: &Path) -> Trajectory {
-    let make = |k: usize, bad: bool| {
-        let mut f = chemfiles::Frame::new();
-        for i in 0..10 {
-            let y = if bad && k == 1 && i == 4 {
-                f64::NAN
-            } else {
-                i as f64 * 1.2 + k as f64 * 0.1
-            };
-            f.add_atom(&chemfiles::Atom::new("O"), [i as f64, y, 0.0], None);
-        }
-        f
-    };
-    let (top, traj) = (dir.join("t.pdb"), dir.join("t.dcd"));
-    chemfiles::Trajectory::open(&top, 'w')
-        .expect("pdb")
-        .write(&make(0, false))
-        .expect("write");
-    let mut t = chemfiles::Trajectory::open(&traj, 'w').expect("dcd");
-    (0..3).for_each(|k| t.write(&make(k, true)).expect("write"));
-    drop(t);
-    io::open(&top, Some(&traj)).expect("open")
 }
 
 #[test]

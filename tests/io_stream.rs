@@ -4,9 +4,8 @@
 
 mod data_support;
 
-use data_support::data;
+use data_support::{data, nan_trajectory};
 
-use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -106,31 +105,6 @@ fn cache_is_bounded_and_least_recently_used_goes_first() {
         s.wait(k, LONG).expect("in time").expect("readable");
         assert!(s.cached_frames().len() <= 3, "{:?}", s.cached_frames());
     }
-}
-
-/// A 3-frame PDB + DCD pair whose frame 1 has a NaN coordinate.
-fn nan_trajectory(dir: &Path) -> Trajectory {
-    let make = |k: usize, bad: bool| {
-        let mut f = chemfiles::Frame::new();
-        for i in 0..10 {
-            let y = if bad && k == 1 && i == 4 {
-                f64::NAN
-            } else {
-                i as f64 + k as f64
-            };
-            f.add_atom(&chemfiles::Atom::new("O"), [i as f64, y, 0.0], None);
-        }
-        f
-    };
-    let (top, traj) = (dir.join("t.pdb"), dir.join("t.dcd"));
-    chemfiles::Trajectory::open(&top, 'w')
-        .expect("pdb")
-        .write(&make(0, false))
-        .expect("write");
-    let mut t = chemfiles::Trajectory::open(&traj, 'w').expect("dcd");
-    (0..3).for_each(|k| t.write(&make(k, true)).expect("write"));
-    drop(t);
-    io::open(&top, Some(&traj)).expect("open")
 }
 
 #[test]
