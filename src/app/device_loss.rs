@@ -73,13 +73,19 @@ impl DeviceWatch {
         }
     }
 
-    /// The reason, one line, once the device has been lost. Polls the device first, so a loss
-    /// the driver has signalled but wgpu has not yet reported is seen too.
+    /// The reason, one line, once the device has been lost (as wgpu has reported it so far;
+    /// the window's own per-frame polling delivers the report).
     pub fn lost(&self) -> Option<String> {
+        self.reason.lock().ok().and_then(|r| r.clone())
+    }
+
+    /// [`DeviceWatch::lost`] after polling the device once, so that a loss the driver has
+    /// signalled but no one has polled for yet is seen too (after the window has stopped).
+    pub fn lost_after_poll(&self) -> Option<String> {
         if let Some(device) = self.device.lock().ok().and_then(|d| d.clone()) {
             let _ = device.poll(wgpu::PollType::Poll);
         }
-        self.reason.lock().ok().and_then(|r| r.clone())
+        self.lost()
     }
 }
 
@@ -153,7 +159,10 @@ pub fn run_guarded<T>(watch: &DeviceWatch, window: impl FnOnce() -> T) -> Option
     let previous: Arc<PanicHook> = Arc::from(std::panic::take_hook());
     let (hook, quiet) = (previous.clone(), watch.clone());
     std::panic::set_hook(Box::new(move |info| {
-        if quiet.lost().is_none() {
+        // Polling here is what delivers the loss report in time. wgpu itself no longer panics
+        // (its error handler is replaced in `attach`), so the panics that reach this hook come
+        // from egui-wgpu's own checks, outside wgpu's locks.
+        if quiet.lost_after_poll().is_none() {
             hook(info);
         }
     }));
@@ -162,7 +171,7 @@ pub fn run_guarded<T>(watch: &DeviceWatch, window: impl FnOnce() -> T) -> Option
     std::panic::set_hook(Box::new(move |info| previous(info)));
     match outcome {
         Ok(value) => Some(value),
-        Err(_) if watch.lost().is_some() => None,
+        Err(_) if watch.lost_after_poll().is_some() => None,
         Err(panic) => std::panic::resume_unwind(panic),
     }
 }

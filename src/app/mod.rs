@@ -170,7 +170,7 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
     let outcome = device_loss::run_guarded(&watch, || {
         run_window(&options, result.clone(), (watch.clone(), session.clone()))
     });
-    if let Some(reason) = watch.lost() {
+    if let Some(reason) = watch.lost_after_poll() {
         return reopen_after_device_loss(&options, &session, &reason);
     }
     // `None` only comes with a lost device, so here the window ended normally.
