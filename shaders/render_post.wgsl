@@ -1,6 +1,6 @@
 // Full-screen passes of the renderer (src/render/renderer.rs) that run after the scene pass:
 // resolving the weighted blended transparency targets over the opaque image, and composing two
-// eye images into a red/cyan anaglyph.
+// eye images into a red/cyan anaglyph (colour, or grey from each eye's luminance).
 
 struct FullscreenOut {
     @builtin(position) clip: vec4<f32>,
@@ -35,13 +35,28 @@ fn fs_oit_resolve(i: FullscreenOut) -> @location(0) vec4<f32> {
     return vec4<f32>(avg, 1.0 - reveal);
 }
 
-// tex_a: left eye, tex_b: right eye (both linear colour). Half-colour anaglyph: red carries the
-// left eye's luminance, green and blue the right eye's colour.
+// Luminance of a linear colour (Rec. 709 weights, the same in the tests of
+// tests/it/render_stereo.rs).
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// tex_a: left eye, tex_b: right eye (both linear colour). Colour anaglyph: red from the left
+// eye's red channel, green and blue from the right eye's.
 @fragment
 fn fs_anaglyph(i: FullscreenOut) -> @location(0) vec4<f32> {
     let p = vec2<i32>(i.clip.xy);
     let l = textureLoad(tex_a, p, 0).rgb;
     let r = textureLoad(tex_b, p, 0).rgb;
-    let red = dot(l, vec3<f32>(0.299, 0.587, 0.114));
-    return vec4<f32>(red, r.g, r.b, 1.0);
+    return vec4<f32>(l.r, r.g, r.b, 1.0);
+}
+
+// Grey anaglyph: each eye is turned into luminance first (red: the left eye's, green and blue:
+// the right eye's), so coloured surfaces do not rival between the eyes.
+@fragment
+fn fs_anaglyph_grey(i: FullscreenOut) -> @location(0) vec4<f32> {
+    let p = vec2<i32>(i.clip.xy);
+    let l = luminance(textureLoad(tex_a, p, 0).rgb);
+    let r = luminance(textureLoad(tex_b, p, 0).rgb);
+    return vec4<f32>(l, r, r, 1.0);
 }

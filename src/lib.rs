@@ -11,5 +11,6 @@ pub mod gpu;
 pub mod io;
 pub mod model;
 pub mod render;
+pub mod scene;
 pub mod surface;
 pub mod synthetic;

@@ -30,6 +30,8 @@ enum Command {
     Render(cli::render::RenderArgs),
     /// Time each stage of the engines.
     Bench(cli::bench::BenchArgs),
+    /// Count (and list) the atoms a selection matches in one frame.
+    Select(cli::select::SelectArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Some(Command::Surface(args)) => cli::surface::run(args),
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Bench(args)) => cli::bench::run(args),
+        Some(Command::Select(args)) => cli::select::run(args),
         None => cli::view::run(cli.view),
     };
     match result {

@@ -98,14 +98,22 @@ pub struct Reopen {
     pub params: SurfaceParams,
     /// Beads, colours and radius overrides.
     pub particles: ParticleOptions,
+    /// The representations on screen.
+    pub reps: Vec<crate::scene::representation::Representation>,
 }
 
 /// Environment variable counting the reopens of one viewer session (see [`MAX_REOPENS`]).
 pub const REOPENS_ENV: &str = "MDSURF_REOPENS";
 
 /// Command-line arguments that reopen the viewer on `session`, with the same engine choice
-/// (`backend`: `cpu`, `gpu` or `auto`) and scripted-run flags (`script`).
-pub fn reopen_args(session: &Reopen, backend: &str, script: &super::Script) -> Vec<OsString> {
+/// (`backend`: `cpu`, `gpu` or `auto`) and scripted-run flags (`script`); `state` is a state
+/// file holding the session's representations.
+pub fn reopen_args(
+    session: &Reopen,
+    backend: &str,
+    script: &super::Script,
+    state: Option<&std::path::Path>,
+) -> Vec<OsString> {
     let mut args: Vec<OsString> = Vec::new();
     if let Some((top, traj)) = &session.files {
         args.push(top.into());
@@ -129,6 +137,10 @@ pub fn reopen_args(session: &Reopen, backend: &str, script: &super::Script) -> V
     }
     if session.particles.beads {
         args.push("--beads".into());
+    }
+    if let Some(state) = state {
+        args.push("--state".into());
+        args.push(state.into());
     }
     if let Some(n) = script.play_frames {
         args.push("--play-frames".into());
@@ -197,13 +209,14 @@ mod tests {
                     .expect("valid override"),
                 colours: "chain".parse().expect("scheme"),
             },
+            reps: Vec::new(),
         };
         let script = crate::app::Script {
             play_frames: Some(3),
             screenshot: Some("s.png".into()),
             quit: true,
         };
-        let args: Vec<String> = reopen_args(&session, "gpu", &script)
+        let args: Vec<String> = reopen_args(&session, "gpu", &script, Some(std::path::Path::new("s.toml")))
             .into_iter()
             .map(|a| a.into_string().expect("utf-8"))
             .collect();
@@ -221,6 +234,7 @@ mod tests {
             "--play-frames 3",
             "--screenshot s.png",
             "--quit",
+            "--state s.toml",
         ] {
             assert!(line.contains(part), "{part} missing from {line}");
         }

@@ -40,6 +40,12 @@ pub struct ViewOptions {
     pub params: crate::surface::SurfaceParams,
     /// Initial particle options (beads, colours, radius overrides).
     pub particles: crate::model::ParticleOptions,
+    /// Initial look (the viewer's command line sets the stereo fields).
+    pub render: crate::render::RenderSettings,
+    /// Representations to start with (`--state`, `--select`); `None`: each file's defaults.
+    pub reps: Option<Vec<crate::scene::representation::Representation>>,
+    /// Camera to start with (`--state`); `None`: fitted to the data.
+    pub camera: Option<crate::scene::state_file::CameraState>,
 }
 
 /// Which surface engine the window uses.
@@ -139,8 +145,21 @@ pub fn create_viewer(
         Box::new(move || ctx.request_repaint()),
     );
     let mut core = AppCore::new(worker);
-    core.params = options.params;
-    core.options = options.particles.clone();
+    core.base.set_params(&options.params);
+    core.base.colour = options.particles.colours;
+    if options.particles.beads {
+        core.base.style = crate::scene::representation::RepStyle::Beads;
+    }
+    core.radius_overrides = options.particles.radius_overrides.clone();
+    core.render = options.render;
+    if let Some(reps) = &options.reps {
+        core.set_reps(reps.clone());
+        core.keep_reps_on_load = true;
+    }
+    if let Some(cam) = &options.camera {
+        cam.apply(&mut core.camera);
+        core.fit_pending = cam.fit;
+    }
     let gpu = state.map(viewport::GpuView::new);
     let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
     if let Some(s) = state {
@@ -209,9 +228,21 @@ fn reopen_after_device_loss(
         Backend::Auto => "auto",
     };
     eprintln!("the GPU device was lost ({reason}); reopening the window on a new device");
+    // The representations travel in a state file the new process reads.
+    let state_path = std::env::temp_dir().join(format!(
+        "mdsurf-reopen-{}-{reopens}.toml",
+        std::process::id()
+    ));
+    let state = crate::scene::state_file::StateFile::new(last.reps.clone());
+    let state_arg = state.save(&state_path).ok().map(|()| state_path.as_path());
     let exe = std::env::current_exe().map_err(|e| ViewError::DeviceLost(e.to_string()))?;
     let status = std::process::Command::new(exe)
-        .args(device_loss::reopen_args(&last, backend, &options.script))
+        .args(device_loss::reopen_args(
+            &last,
+            backend,
+            &options.script,
+            state_arg,
+        ))
         .env(device_loss::REOPENS_ENV, (reopens + 1).to_string())
         .status()
         .map_err(|e| ViewError::DeviceLost(format!("{reason}; cannot restart mdsurf: {e}")))?;

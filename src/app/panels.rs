@@ -4,14 +4,49 @@
 
 use super::state::{AppCore, Command};
 use crate::model::ColorScheme;
-use crate::render::{AtomStyle, Background, Projection, Stereo};
+use crate::render::{Background, Projection, Stereo};
+use crate::scene::representation::RepStyle;
+use crate::scene::selection::Selection;
 use crate::surface::{Quality, SurfaceParams};
 
-/// Parameters being edited (they become the app's parameters only when the grid fits).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The selected representation's edits in progress: surface parameters become the
+/// representation's only when the grid fits, and a selection only when it parses.
+#[derive(Debug, Clone, PartialEq)]
 pub struct SurfaceDraft {
     /// The edited parameters.
     pub params: SurfaceParams,
+    /// Which representation the draft belongs to (its id; the draft restarts when another is
+    /// selected).
+    pub rep_id: Option<u64>,
+    /// The selection text being typed.
+    pub selection: String,
+    /// The parse error of `selection`, shown live (one line with the column).
+    pub selection_error: Option<String>,
+}
+
+impl SurfaceDraft {
+    /// A draft of `params` for no representation yet.
+    pub fn new(params: SurfaceParams) -> Self {
+        SurfaceDraft {
+            params,
+            rep_id: None,
+            selection: String::new(),
+            selection_error: None,
+        }
+    }
+
+    /// Restarts the draft from representation `i` of `core` when it is not the one drafted.
+    fn follow(&mut self, core: &AppCore) {
+        let id = core.rep_ids.get(core.selected).copied();
+        if id != self.rep_id {
+            self.rep_id = id;
+            if let Some(rep) = core.selected_rep() {
+                self.params = rep.params();
+                self.selection = rep.selection.clone();
+                self.selection_error = None;
+            }
+        }
+    }
 }
 
 fn megabytes(bytes: u64) -> String {
@@ -22,12 +57,109 @@ fn megabytes(bytes: u64) -> String {
     }
 }
 
-/// Sliders for H, R, I, quality, the bead toggle and colour scheme; the grid the edited values
-/// would need (dims, voxels, memory) is shown before it is applied, and a grid above the limit
-/// is refused (the previous surface stays).
+/// The representations: the list (show/hide, select, add, duplicate, delete) and the selected
+/// one's editor: name, selection (its error shown live; only a selection that parses is
+/// applied), style, colours, opacity and, for surfaces, H, R, I, quality and the bead toggle.
+/// The grid the edited values would need (dims, voxels, memory, and the total of every visible
+/// surface) is shown before it is applied, and a grid above the limit is refused (the previous
+/// surface stays).
 pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -> Vec<Command> {
     let mut out = Vec::new();
-    ui.heading("Surface");
+    ui.heading("Representations");
+    for (i, rep) in core.reps.iter().enumerate() {
+        ui.horizontal(|ui| {
+            let label = format!("{} · {}", rep.name, rep.style);
+            let name = ui.selectable_label(i == core.selected, label);
+            if name.clicked() {
+                out.push(Command::SelectRep(i));
+            }
+            let mut visible = rep.visible;
+            if ui
+                .checkbox(&mut visible, "shown")
+                .on_hover_text("show or hide this representation")
+                .changed()
+            {
+                let mut r = rep.clone();
+                r.visible = visible;
+                out.push(Command::UpdateRep(i, Box::new(r)));
+            }
+        });
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Add").clicked() {
+            out.push(Command::AddRep);
+        }
+        let any = !core.reps.is_empty();
+        if ui.add_enabled(any, egui::Button::new("Duplicate")).clicked() {
+            out.push(Command::DuplicateRep(core.selected));
+        }
+        if ui.add_enabled(any, egui::Button::new("Delete")).clicked() {
+            out.push(Command::DeleteRep(core.selected));
+        }
+    });
+    draft.follow(core);
+    let Some(rep) = core.selected_rep() else {
+        ui.label("no representation: Add one");
+        return out;
+    };
+    let i = core.selected;
+    ui.separator();
+    let mut edited = rep.clone();
+    ui.horizontal(|ui| {
+        let label = ui.label("name");
+        ui.text_edit_singleline(&mut edited.name)
+            .labelled_by(label.id);
+    });
+    ui.horizontal(|ui| {
+        let label = ui.label("selection");
+        let field = ui
+            .text_edit_singleline(&mut draft.selection)
+            .labelled_by(label.id);
+        if field.changed() {
+            draft.selection_error = Selection::parse(&draft.selection)
+                .err()
+                .map(|e| e.to_string());
+        }
+    });
+    match &draft.selection_error {
+        Some(e) => {
+            ui.colored_label(ui.visuals().error_fg_color, e);
+        }
+        None => edited.selection = draft.selection.clone(),
+    }
+    if let Some(c) = core.shown.as_ref().and_then(|s| {
+        let id = *core.rep_ids.get(i)?;
+        s.computed.layer(id)
+    }) {
+        let kind = if c.beads { "beads" } else { "atoms" };
+        ui.label(format!("{} {kind}", c.particles.positions.len()));
+    }
+    egui::ComboBox::from_label("style")
+        .selected_text(edited.style.name())
+        .show_ui(ui, |ui| {
+            for st in RepStyle::ALL {
+                ui.selectable_value(&mut edited.style, st, st.name());
+            }
+        });
+    ui.add(egui::Slider::new(&mut edited.opacity, 0.0..=1.0).text("opacity"));
+    colour_ui(ui, &mut edited.colour);
+    if edited != *rep {
+        out.push(Command::UpdateRep(i, Box::new(edited)));
+    }
+    if rep.style.is_surface() {
+        out.extend(params_ui(ui, core, draft, i));
+        let mut beads = rep.style == RepStyle::Beads;
+        if ui.checkbox(&mut beads, "beads: one per residue").changed() {
+            out.push(Command::SetBeads(beads));
+        }
+    }
+    out
+}
+
+/// H, R, I and quality of surface representation `i`, with its grid and the total.
+fn params_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft, i: usize) -> Vec<Command> {
+    let mut out = Vec::new();
+    let current = core.reps[i].params();
     let p = &mut draft.params;
     ui.add(
         egui::Slider::new(&mut p.spacing, 0.25..=4.0)
@@ -51,39 +183,40 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
                 );
             }
         });
-    match core.grid_estimate(p) {
+    match core.grid_estimate(i, p) {
         Some((grid, bytes)) => {
             let [x, y, z] = grid.dims;
+            let total = core.total_grid_bytes(i, p);
             ui.label(format!(
-                "grid {x}×{y}×{z} = {:.2} M voxels, {}",
+                "grid {x}×{y}×{z} = {:.2} M voxels, {}; all surfaces {}",
                 grid.voxel_count() as f64 / 1e6,
-                megabytes(bytes)
+                megabytes(bytes),
+                megabytes(total)
             ));
-            if bytes > core.grid_limit_bytes {
+            if total > core.grid_limit_bytes {
                 ui.colored_label(
                     ui.visuals().error_fg_color,
                     format!(
                         "refused: needs {} > limit {}; raise H",
-                        megabytes(bytes),
+                        megabytes(total),
                         megabytes(core.grid_limit_bytes)
                     ),
                 );
-            } else if *p != core.params {
+            } else if *p != current {
                 out.push(Command::SetParams(*p));
             }
         }
-        None if *p != core.params => out.push(Command::SetParams(*p)),
+        None if *p != current => out.push(Command::SetParams(*p)),
         None => {}
     }
     if ui.button("Defaults").clicked() {
         *p = SurfaceParams::default();
     }
-    let mut beads = core.options.beads;
-    if ui.checkbox(&mut beads, "beads: one per residue").changed() {
-        out.push(Command::SetBeads(beads));
-    }
-    let current = core.options.colours;
-    let mut scheme = current;
+    out
+}
+
+/// The colour scheme picker (a colour button for the single colour).
+fn colour_ui(ui: &mut egui::Ui, scheme: &mut ColorScheme) {
     egui::ComboBox::from_label("colour")
         .selected_text(scheme.to_string())
         .show_ui(ui, |ui| {
@@ -100,41 +233,27 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
                 } else {
                     s.to_string()
                 };
-                let selected = std::mem::discriminant(&scheme) == std::mem::discriminant(&s);
+                let selected = std::mem::discriminant(scheme) == std::mem::discriminant(&s);
                 if ui.selectable_label(selected, name).clicked() && !selected {
-                    scheme = s;
+                    *scheme = s;
                 }
             }
         });
-    if let ColorScheme::Single(c) = &mut scheme {
+    if let ColorScheme::Single(c) = scheme {
         ui.horizontal(|ui| {
-            ui.label("surface colour");
+            ui.label("colour");
             ui.color_edit_button_rgb(c);
         });
     }
-    if scheme != current {
-        out.push(Command::SetColours(scheme));
-    }
-    out
 }
 
-/// Opacity, atoms, background, projection, depth cue, stereo, turntable.
+/// Stick radius, background, projection, depth cue, stereo, turntable (opacity and atom styles
+/// are per representation, in [`surface_ui`]).
 pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     let mut out = Vec::new();
     ui.heading("Look");
     let mut s = core.render;
-    ui.checkbox(&mut s.show_surface, "surface");
-    ui.add(egui::Slider::new(&mut s.surface_opacity, 0.0..=1.0).text("opacity"));
-    egui::ComboBox::from_label("atoms")
-        .selected_text(s.atom_style.name())
-        .show_ui(ui, |ui| {
-            for a in AtomStyle::ALL {
-                ui.selectable_value(&mut s.atom_style, a, a.name());
-            }
-        });
-    if s.atom_style != AtomStyle::Hidden {
-        ui.add(egui::Slider::new(&mut s.stick_radius, 0.05..=1.0).text("stick radius (Å)"));
-    }
+    ui.add(egui::Slider::new(&mut s.stick_radius, 0.05..=1.0).text("stick radius (Å)"));
     ui.horizontal(|ui| {
         ui.label("background");
         ui.selectable_value(&mut s.background, Background::Dark, "dark");
@@ -150,7 +269,20 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
             }
         });
     if s.stereo != Stereo::Off {
-        ui.add(egui::Slider::new(&mut s.eye_separation, 0.0..=0.15).text("eye separation"));
+        ui.add(
+            egui::Slider::new(&mut s.eye_separation, 0.0..=0.1)
+                .text("eye separation (× focal distance)"),
+        );
+        ui.horizontal(|ui| {
+            let mut fixed = s.focal_distance.is_some();
+            let mut focal = s.focal_distance.unwrap_or(core.camera.distance);
+            ui.checkbox(&mut fixed, "fixed focal distance (Å)")
+                .on_hover_text("off: the zero-parallax plane follows the camera's target");
+            if fixed {
+                ui.add(egui::DragValue::new(&mut focal).range(1.0..=10000.0));
+            }
+            s.focal_distance = fixed.then_some(focal);
+        });
     }
     if s != core.render {
         out.push(Command::SetRender(s));
@@ -187,7 +319,8 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     out
 }
 
-/// Atoms or beads, triangles, area, volume, stage times and frame rate.
+/// Per representation: atoms or beads, triangles, area, volume, grid and stage times; then the
+/// frame's read time, render time and frame rate.
 pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) {
     ui.heading("Readouts");
     let Some(shown) = &core.shown else {
@@ -199,30 +332,50 @@ pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) 
         return;
     };
     let c = &shown.computed;
-    let t = &c.output.timings;
-    egui::Grid::new("readouts").num_columns(2).show(ui, |ui| {
-        let mut row = |k: &str, v: String| {
-            ui.label(k);
-            ui.monospace(v);
-            ui.end_row();
-        };
-        row(
-            if c.beads { "beads" } else { "atoms" },
-            c.particles.positions.len().to_string(),
-        );
-        row("triangles", c.triangle_count().to_string());
-        row("area", format!("{:.1} Å²", c.output.area));
-        row("volume", format!("{:.1} Å³", c.output.volume));
-        let [x, y, z] = c.output.grid.dims;
-        row("grid", format!("{x}×{y}×{z}"));
-        row("read", format!("{:.2} ms", c.read_ms));
-        row("binning", format!("{:.2} ms", t.bin_ms));
-        row("density", format!("{:.2} ms", t.density_ms));
-        row("marching cubes", format!("{:.2} ms", t.mc_ms));
-        row("render", format!("{render_ms:.2} ms"));
-        row("frames/s", format!("{fps:.1}"));
-        row("engine", core.engine_name().to_string());
-    });
+    for l in &c.layers {
+        ui.strong(format!("{} ({})", l.rep.name, l.rep.style));
+        let t = &l.output.timings;
+        egui::Grid::new(("readouts", l.id))
+            .num_columns(2)
+            .show(ui, |ui| {
+                let mut row = |k: &str, v: String| {
+                    ui.label(k);
+                    ui.monospace(v);
+                    ui.end_row();
+                };
+                row(
+                    if l.beads { "beads" } else { "atoms" },
+                    l.particles.positions.len().to_string(),
+                );
+                if l.is_surface() {
+                    row("triangles", l.triangle_count().to_string());
+                    row("area", format!("{:.1} Å²", l.output.area));
+                    row("volume", format!("{:.1} Å³", l.output.volume));
+                    let [x, y, z] = l.output.grid.dims;
+                    row("grid", format!("{x}×{y}×{z}"));
+                    if !l.reused {
+                        row("binning", format!("{:.2} ms", t.bin_ms));
+                        row("density", format!("{:.2} ms", t.density_ms));
+                        row("marching cubes", format!("{:.2} ms", t.mc_ms));
+                    }
+                }
+            });
+    }
+    ui.separator();
+    egui::Grid::new("readouts-frame")
+        .num_columns(2)
+        .show(ui, |ui| {
+            let mut row = |k: &str, v: String| {
+                ui.label(k);
+                ui.monospace(v);
+                ui.end_row();
+            };
+            row("triangles (all)", c.triangle_count().to_string());
+            row("read", format!("{:.2} ms", c.read_ms));
+            row("render", format!("{render_ms:.2} ms"));
+            row("frames/s", format!("{fps:.1}"));
+            row("engine", core.engine_name().to_string());
+        });
     if core.computing() {
         ui.weak("computing…");
     }

@@ -1,5 +1,6 @@
-//! Area and volume against frame for the frames computed so far with the current parameters:
-//! the [`History`], a small line plot drawn with egui's painter ([`plot_ui`]), and CSV export.
+//! Area and volume against frame for the frames computed so far with the current parameters,
+//! one line per surface representation: the [`History`], a small line plot drawn with egui's
+//! painter ([`plot_ui`]), and CSV export.
 
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -7,26 +8,39 @@ use std::path::Path;
 
 use super::state::Command;
 
-/// Area (Å²) and volume (Å³) per frame index.
+/// Area (Å²) and volume (Å³) per frame index and surface representation.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct History {
-    values: BTreeMap<usize, (f64, f64)>,
+    /// Representation names in the order they were first recorded.
+    reps: Vec<String>,
+    /// (frame, representation index in `reps`) -> (area, volume).
+    values: BTreeMap<(usize, usize), (f64, f64)>,
 }
 
 impl History {
     /// Forgets everything (parameters changed).
     pub fn clear(&mut self) {
         self.values.clear();
+        self.reps.clear();
     }
 
-    /// Records frame `frame`'s area (Å²) and volume (Å³).
-    pub fn record(&mut self, frame: usize, area: f64, volume: f64) {
-        self.values.insert(frame, (area, volume));
+    /// Records frame `frame`'s area (Å²) and volume (Å³) of representation `rep`.
+    pub fn record(&mut self, frame: usize, rep: &str, area: f64, volume: f64) {
+        let r = match self.reps.iter().position(|n| n == rep) {
+            Some(r) => r,
+            None => {
+                self.reps.push(rep.to_string());
+                self.reps.len() - 1
+            }
+        };
+        self.values.insert((frame, r), (area, volume));
     }
 
-    /// Number of frames recorded.
+    /// Number of frames recorded (for any representation).
     pub fn len(&self) -> usize {
-        self.values.len()
+        let mut frames: Vec<usize> = self.values.keys().map(|k| k.0).collect();
+        frames.dedup();
+        frames.len()
     }
 
     /// True when nothing is recorded.
@@ -34,16 +48,35 @@ impl History {
         self.values.is_empty()
     }
 
-    /// (frame, area Å², volume Å³), in frame order.
-    pub fn rows(&self) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
-        self.values.iter().map(|(&f, &(a, v))| (f, a, v))
+    /// The representations recorded, in first-recorded order.
+    pub fn reps(&self) -> &[String] {
+        &self.reps
     }
 
-    /// The history as CSV text: a header line, then `frame,area_A2,volume_A3` rows.
+    /// (frame, representation, area Å², volume Å³), in frame order, then representation order.
+    pub fn rows(&self) -> impl Iterator<Item = (usize, &str, f64, f64)> + '_ {
+        self.values
+            .iter()
+            .map(|(&(f, r), &(a, v))| (f, self.reps[r].as_str(), a, v))
+    }
+
+    /// (frame, area, volume) of representation `rep`, in frame order.
+    pub fn series<'a>(&'a self, rep: &'a str) -> impl Iterator<Item = (usize, f64, f64)> + 'a {
+        self.rows()
+            .filter(move |(_, r, _, _)| *r == rep)
+            .map(|(f, _, a, v)| (f, a, v))
+    }
+
+    /// The history as CSV text: a header line, then `frame,rep,area_A2,volume_A3` rows.
     pub fn to_csv(&self) -> String {
-        let mut s = String::from("frame,area_A2,volume_A3\n");
-        for (f, a, v) in self.rows() {
-            s.push_str(&format!("{f},{a:.4},{v:.4}\n"));
+        let mut s = String::from("frame,rep,area_A2,volume_A3\n");
+        for (f, r, a, v) in self.rows() {
+            let r = if r.contains([',', '"']) {
+                format!("\"{}\"", r.replace('"', "\"\""))
+            } else {
+                r.to_string()
+            };
+            s.push_str(&format!("{f},{r},{a:.4},{v:.4}\n"));
         }
         s
     }
@@ -93,9 +126,13 @@ pub fn plot_ui(
         [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
         (1.0, egui::Color32::GRAY),
     );
-    for (series, colour) in [(0, AREA), (1, VOLUME)] {
+    let lines = history.reps().iter().enumerate().flat_map(|(k, rep)| {
+        let fade = |c: egui::Color32| c.gamma_multiply(1.0 / (1.0 + k as f32 * 0.6));
+        [(0, fade(AREA), rep), (1, fade(VOLUME), rep)]
+    });
+    for (line, (series, colour, rep)) in lines.enumerate() {
         let vals: Vec<(usize, f64)> = history
-            .rows()
+            .series(rep)
             .map(|(f, a, v)| (f, if series == 0 { a } else { v }))
             .collect();
         let (lo, hi) = vals.iter().fold((f64::MAX, f64::MIN), |(lo, hi), (_, v)| {
@@ -115,11 +152,12 @@ pub fn plot_ui(
             painter.add(egui::Shape::line(pts, (1.5, colour)));
         }
         if !vals.is_empty() {
-            let text = format!("{lo:.0} … {hi:.0}");
+            let text = format!("{rep}: {lo:.0} … {hi:.0}");
+            let row = (line / 2) as f32 * 12.0;
             let at = if series == 0 {
-                rect.left_top()
+                rect.left_top() + egui::vec2(0.0, row)
             } else {
-                rect.left_bottom() - egui::vec2(0.0, 14.0)
+                rect.left_bottom() - egui::vec2(0.0, 14.0 + row)
             };
             painter.text(
                 at + egui::vec2(4.0, 2.0),
@@ -143,12 +181,15 @@ mod tests {
     #[test]
     fn csv_has_header_and_rows_in_frame_order() {
         let mut h = History::default();
-        h.record(3, 10.0, 20.5);
-        h.record(1, 1.0, 2.0);
+        h.record(3, "protein", 10.0, 20.5);
+        h.record(1, "protein", 1.0, 2.0);
+        h.record(1, "lipids", 5.0, 6.0);
         assert_eq!(
             h.to_csv(),
-            "frame,area_A2,volume_A3\n1,1.0000,2.0000\n3,10.0000,20.5000\n"
+            "frame,rep,area_A2,volume_A3\n1,protein,1.0000,2.0000\n1,lipids,5.0000,6.0000\n3,protein,10.0000,20.5000\n"
         );
+        assert_eq!(h.len(), 2);
+        assert_eq!(h.series("lipids").count(), 1);
         let dir = tempfile::tempdir().expect("tempdir");
         let p = dir.path().join("h.csv");
         h.write_csv(&p).expect("write");

@@ -131,7 +131,15 @@ pub fn open_files(
     top: &std::path::Path,
     traj: Option<&std::path::Path>,
 ) -> Result<Arc<dyn FrameSource>, String> {
-    crate::io::open(top, traj)
+    // A reader that panics (it should not: see `io`) must give an error, not a dead thread
+    // the window waits on forever.
+    let opened = std::panic::catch_unwind(|| crate::io::open(top, traj)).unwrap_or_else(|_| {
+        Err(crate::io::IoError::Unreadable {
+            path: top.to_path_buf(),
+            message: "the reader crashed on this file".into(),
+        })
+    });
+    opened
         .map(|t| {
             Arc::new(StreamedSource::new(t, StreamerOptions::default())) as Arc<dyn FrameSource>
         })

@@ -1,5 +1,6 @@
-//! The viewer's state without any window or GPU: the loaded trajectory, surface parameters,
-//! particle options, look settings, timeline, latest surface, history for the plot and messages.
+//! The viewer's state without any window or GPU: the loaded trajectory, the representations
+//! (each a selection with its style, colours, opacity and surface parameters), look settings,
+//! timeline, latest surfaces, history for the plot and messages.
 //! UI functions (`*_ui`) return [`Command`]s; [`AppCore::apply`] is the one place that changes
 //! state. Tests drive this directly (see tests/app_panels.rs).
 
@@ -10,9 +11,11 @@ use std::time::Duration;
 use super::plot::History;
 use super::source::FrameSource;
 use super::timeline::{Timeline, TimelineCmd};
-use super::worker::{Computed, Reply, Request, Worker};
-use crate::model::{ColorScheme, ParticleOptions};
+use super::worker::{Computed, RepRequest, Reply, Request, Worker};
+use crate::model::{ColorScheme, Frame, RadiusOverrides};
 use crate::render::{Camera, Projection, RenderSettings};
+use crate::scene::defaults::default_representations;
+use crate::scene::representation::{RepStyle, Representation};
 use crate::surface::{GridSpec, SurfaceParams};
 
 /// Something the user asked for.
@@ -22,12 +25,30 @@ pub enum Command {
     Open(PathBuf, Option<PathBuf>),
     /// Show the file dialog (in the background).
     OpenDialog,
-    /// New surface parameters (already checked against the grid limit).
+    /// New surface parameters of the selected representation (already checked against the
+    /// grid limit).
     SetParams(SurfaceParams),
-    /// One bead per residue on or off.
+    /// Bead surface (one bead per residue) on or off for the selected representation.
     SetBeads(bool),
-    /// Colour scheme of the surface and atoms.
+    /// Colour scheme of the selected representation.
     SetColours(ColorScheme),
+    /// Select representation `i` for editing.
+    SelectRep(usize),
+    /// Add a representation (a surface of everything) and select it.
+    AddRep,
+    /// Duplicate representation `i` and select the copy.
+    DuplicateRep(usize),
+    /// Delete representation `i`.
+    DeleteRep(usize),
+    /// Replace representation `i` (its selection already parsed by the panel).
+    UpdateRep(usize, Box<Representation>),
+    /// Replace every representation (File → Open view).
+    SetReps(Vec<Representation>),
+    /// Save the view (representations, camera, look, timeline) as a state file (dialog when
+    /// `None`).
+    SaveView(Option<PathBuf>),
+    /// Open a state file and apply it (dialog when `None`).
+    OpenView(Option<PathBuf>),
     /// Look of the picture.
     SetRender(RenderSettings),
     /// Playback.
@@ -78,10 +99,19 @@ pub struct Shown {
 pub struct AppCore {
     /// The trajectory.
     pub source: Option<Arc<dyn FrameSource>>,
-    /// Applied surface parameters.
-    pub params: SurfaceParams,
-    /// Particle options (beads, colours).
-    pub options: ParticleOptions,
+    /// The representations, in drawing order.
+    pub reps: Vec<Representation>,
+    /// Stable id of each representation (parallel to `reps`), for the worker's per-rep slots.
+    pub rep_ids: Vec<u64>,
+    /// The representation the panel edits.
+    pub selected: usize,
+    /// Parameters and colours the default representations start from (command line).
+    pub base: Representation,
+    /// Radius overrides for every representation (command line).
+    pub radius_overrides: RadiusOverrides,
+    /// True while `reps` came from the user (`--state`, `--select`) and the next loaded file
+    /// should keep them instead of getting its default representations.
+    pub keep_reps_on_load: bool,
     /// Look of the picture.
     pub render: RenderSettings,
     /// Camera.
@@ -105,6 +135,7 @@ pub struct AppCore {
     /// Commands for the window layer (dialogs, screenshots, movies).
     pub outbox: Vec<Command>,
     worker: Worker,
+    next_id: u64,
     generation: u64,
     in_flight: Option<(u64, usize)>,
     requested: Option<(u64, usize)>,
@@ -115,8 +146,13 @@ impl AppCore {
     pub fn new(worker: Worker) -> AppCore {
         AppCore {
             source: None,
-            params: SurfaceParams::default(),
-            options: ParticleOptions::default(),
+            reps: Vec::new(),
+            rep_ids: Vec::new(),
+            selected: 0,
+            base: Representation::default(),
+            radius_overrides: RadiusOverrides::default(),
+            keep_reps_on_load: false,
+            next_id: 1,
             render: RenderSettings::default(),
             camera: Camera::default(),
             fit_pending: true,
@@ -149,32 +185,120 @@ impl AppCore {
             source.len()
         );
         self.timeline = Timeline::new(source.len());
+        if !self.keep_reps_on_load || self.reps.is_empty() {
+            // Static selections only: the class counts need no coordinates.
+            let topology = source.topology();
+            let placeholder = Frame {
+                positions: vec![glam::Vec3::ZERO; topology.len()],
+                ..Frame::default()
+            };
+            let reps = default_representations(topology, &placeholder, &self.base);
+            self.set_reps(reps);
+        }
+        self.keep_reps_on_load = false;
         self.source = Some(source);
         self.fit_pending = true;
         self.invalidate();
     }
 
+    /// Replaces every representation (new ids, the first selected).
+    pub fn set_reps(&mut self, reps: Vec<Representation>) {
+        self.rep_ids = reps.iter().map(|_| self.fresh_id()).collect();
+        self.reps = reps;
+        self.selected = 0;
+        self.invalidate();
+    }
+
+    fn fresh_id(&mut self) -> u64 {
+        self.next_id += 1;
+        self.next_id
+    }
+
+    /// The representation the panel edits, if any.
+    pub fn selected_rep(&self) -> Option<&Representation> {
+        self.reps.get(self.selected)
+    }
+
+    /// Replaces representation `i`: recomputes when what it computes changed, else only
+    /// redraws (name, opacity).
+    fn update_rep(&mut self, i: usize, rep: Representation) {
+        let Some(old) = self.reps.get_mut(i) else {
+            return;
+        };
+        if *old == rep {
+            return;
+        }
+        let recompute = old.selection != rep.selection
+            || old.style != rep.style
+            || old.colour != rep.colour
+            || old.params() != rep.params()
+            || old.visible != rep.visible;
+        *old = rep;
+        if recompute {
+            self.invalidate();
+        } else if let Some(s) = &mut self.shown {
+            s.dirty = true;
+        }
+    }
+
+    /// Applies `edit` to a copy of the selected representation and updates it.
+    fn edit_selected(&mut self, edit: impl FnOnce(&mut Representation)) {
+        if let Some(mut rep) = self.selected_rep().cloned() {
+            edit(&mut rep);
+            self.update_rep(self.selected, rep);
+        }
+    }
+
     /// Applies one command. Window-level commands go to [`AppCore::outbox`].
     pub fn apply(&mut self, cmd: Command) {
         match cmd {
-            Command::SetParams(p) => {
-                if p != self.params {
-                    self.params = p;
+            Command::SetParams(p) => self.edit_selected(|r| r.set_params(&p)),
+            Command::SetBeads(b) => self.edit_selected(|r| {
+                if r.style.is_surface() {
+                    r.style = if b { RepStyle::Beads } else { RepStyle::Surface };
+                }
+            }),
+            Command::SetColours(c) => self.edit_selected(|r| r.colour = c),
+            Command::SelectRep(i) => {
+                if i < self.reps.len() {
+                    self.selected = i;
+                }
+            }
+            Command::AddRep => {
+                let n = self.reps.len() + 1;
+                let rep = Representation {
+                    name: format!("rep {n}"),
+                    ..self.base.clone()
+                };
+                self.reps.push(rep);
+                let id = self.fresh_id();
+                self.rep_ids.push(id);
+                self.selected = self.reps.len() - 1;
+                self.invalidate();
+            }
+            Command::DuplicateRep(i) => {
+                if let Some(rep) = self.reps.get(i).cloned() {
+                    let copy = Representation {
+                        name: format!("{} copy", rep.name),
+                        ..rep
+                    };
+                    self.reps.insert(i + 1, copy);
+                    let id = self.fresh_id();
+                    self.rep_ids.insert(i + 1, id);
+                    self.selected = i + 1;
                     self.invalidate();
                 }
             }
-            Command::SetBeads(b) => {
-                if b != self.options.beads {
-                    self.options.beads = b;
+            Command::DeleteRep(i) => {
+                if i < self.reps.len() {
+                    self.reps.remove(i);
+                    self.rep_ids.remove(i);
+                    self.selected = self.selected.min(self.reps.len().saturating_sub(1));
                     self.invalidate();
                 }
             }
-            Command::SetColours(c) => {
-                if c != self.options.colours {
-                    self.options.colours = c;
-                    self.invalidate();
-                }
-            }
+            Command::UpdateRep(i, rep) => self.update_rep(i, *rep),
+            Command::SetReps(reps) => self.set_reps(reps),
             Command::SetRender(r) => {
                 self.render = r;
                 if let Some(s) = &mut self.shown {
@@ -238,12 +362,21 @@ impl AppCore {
         }
         self.requested = Some(want);
         self.in_flight = Some(want);
+        let reps = self
+            .rep_ids
+            .iter()
+            .zip(&self.reps)
+            .map(|(&id, rep)| RepRequest {
+                id,
+                rep: rep.clone(),
+            })
+            .collect();
         self.worker.submit(Request {
             generation: want.0,
             frame: want.1,
             source,
-            params: self.params,
-            options: self.options.clone(),
+            reps,
+            radius_overrides: self.radius_overrides.clone(),
         });
     }
 
@@ -285,7 +418,10 @@ impl AppCore {
         match reply {
             Reply::Done(c) => {
                 if c.generation == self.generation {
-                    self.history.record(c.frame, c.output.area, c.output.volume);
+                    for l in c.surfaces() {
+                        self.history
+                            .record(c.frame, &l.rep.name, l.output.area, l.output.volume);
+                    }
                 }
                 if self.in_flight == Some((c.generation, c.frame)) {
                     self.in_flight = None;
@@ -322,21 +458,41 @@ impl AppCore {
         self.worker.is_busy()
     }
 
-    /// The grid the edited parameters `p` would need for the surface on screen, and its size in
-    /// bytes (density and colour volumes), or `None` before the first surface.
-    pub fn grid_estimate(&self, p: &SurfaceParams) -> Option<(GridSpec, u64)> {
+    /// The grid the parameters `p` would need for representation `i`'s particles on screen,
+    /// and its size in bytes (density and colour volumes), or `None` before its first surface
+    /// (or when it is hidden or not a surface).
+    pub fn grid_estimate(&self, i: usize, p: &SurfaceParams) -> Option<(GridSpec, u64)> {
         let c = &self.shown.as_ref()?.computed;
-        let grid = GridSpec::for_atoms(&c.particles.positions, &c.particles.radii, p).ok()?;
+        let id = *self.rep_ids.get(i)?;
+        let l = c.layer(id).filter(|l| l.is_surface())?;
+        if l.particles.positions.is_empty() {
+            return None;
+        }
+        let grid = GridSpec::for_atoms(&l.particles.positions, &l.particles.radii, p).ok()?;
         let bytes = crate::surface::estimate_grid_bytes(grid.dims.map(u64::from), true);
         Some((grid, bytes))
     }
+
+    /// Grid memory in bytes of every visible surface representation with its current
+    /// parameters, except representation `except`, which is counted with `p` instead.
+    pub fn total_grid_bytes(&self, except: usize, p: &SurfaceParams) -> u64 {
+        (0..self.reps.len())
+            .filter(|&i| self.reps[i].visible && self.reps[i].style.is_surface())
+            .filter_map(|i| {
+                let params = if i == except { *p } else { self.reps[i].params() };
+                self.grid_estimate(i, &params).map(|(_, b)| b)
+            })
+            .sum()
+    }
 }
 
-/// Bounding sphere (centre, radius in Å) of the surface, or of the particles when there is no
-/// surface.
+/// Bounding sphere (centre, radius in Å) of the surfaces, or of the particles when there is
+/// no surface.
 fn scene_bounds(c: &Computed) -> Option<(glam::Vec3, f32)> {
-    crate::render::bounding_sphere(&c.output.mesh.positions)
-        .or_else(|| crate::render::bounding_sphere(&c.particles.positions))
+    let mesh_points = c.layers.iter().flat_map(|l| l.output.mesh.positions.iter());
+    crate::render::bounding_sphere(mesh_points).or_else(|| {
+        crate::render::bounding_sphere(c.layers.iter().flat_map(|l| l.particles.positions.iter()))
+    })
 }
 
 /// Half of the memory available now (or 8 GB when unknown), at most 16 GB.

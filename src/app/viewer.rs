@@ -18,6 +18,7 @@ use super::state::{AppCore, Command};
 use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
 use crate::render::write_png;
+use crate::scene::state_file::{CameraState, LookState, StateFile, TrajectoryState};
 
 mod scripted;
 
@@ -67,9 +68,7 @@ impl Viewer {
         script: Script,
         script_result: ScriptResult,
     ) -> Viewer {
-        let draft = SurfaceDraft {
-            params: core.params,
-        };
+        let draft = SurfaceDraft::new(core.base.params());
         Viewer {
             core,
             gpu,
@@ -161,6 +160,28 @@ impl Viewer {
                     Ok(()) => self.core.status = format!("wrote {}", path.display()),
                     Err(e) => self.core.error = Some(e),
                 },
+                Command::SaveView(Some(path)) => match self.state_file().save(&path) {
+                    Ok(()) => self.core.status = format!("saved view {}", path.display()),
+                    Err(e) => self.core.error = Some(e),
+                },
+                Command::SaveView(None) => self.dialog(
+                    ctx,
+                    |p| p.into_iter().next().map(|p| Command::SaveView(Some(p))),
+                    false,
+                ),
+                Command::OpenView(Some(path)) => match StateFile::load(&path) {
+                    Ok(state) => {
+                        self.apply_state(state);
+                        self.core.status = format!("opened view {}", path.display());
+                    }
+                    // The view on screen stays as it was.
+                    Err(e) => self.core.error = Some(e),
+                },
+                Command::OpenView(None) => self.dialog(
+                    ctx,
+                    |p| p.into_iter().next().map(|p| Command::OpenView(Some(p))),
+                    true,
+                ),
                 Command::ExportCsv(None) => self.dialog(
                     ctx,
                     |p| p.into_iter().next().map(|p| Command::ExportCsv(Some(p))),
@@ -184,6 +205,37 @@ impl Viewer {
                 _ => {}
             }
         }
+    }
+
+    /// The view as a state file: representations, camera, look and timeline.
+    pub fn state_file(&self) -> StateFile {
+        let mut state = StateFile::new(self.core.reps.clone());
+        state.camera = Some(CameraState::from_camera(&self.core.camera, false));
+        state.look = LookState::from_settings(&self.core.render);
+        state.trajectory = TrajectoryState {
+            frame: self.core.timeline.current,
+            stride: self.core.timeline.stride,
+            fps: self.core.timeline.fps,
+        };
+        state
+    }
+
+    /// Applies a state file (already checked): representations, camera, look and timeline.
+    pub fn apply_state(&mut self, state: StateFile) {
+        if let Err(e) = state.look.apply(&mut self.core.render) {
+            self.core.error = Some(e);
+            return;
+        }
+        if let Some(cam) = state.camera {
+            cam.apply(&mut self.core.camera);
+            self.core.fit_pending = cam.fit;
+        }
+        self.core.timeline.stride = state.trajectory.stride.max(1);
+        self.core.timeline.fps = state.trajectory.fps;
+        self.core.apply(Command::SetReps(state.representations));
+        self.core.apply(Command::Timeline(super::timeline::TimelineCmd::Seek(
+            state.trajectory.frame,
+        )));
     }
 
     /// Runs a file dialog on a background thread (open: several files; else save) and turns the
@@ -279,6 +331,14 @@ impl Viewer {
                         }
                     }
                 });
+                ui.separator();
+                if ui.button("Open view…").clicked() {
+                    out.push(Command::OpenView(None));
+                }
+                if ui.button("Save view…").clicked() {
+                    out.push(Command::SaveView(None));
+                }
+                ui.separator();
                 if ui.button("Screenshot…").clicked() {
                     out.push(Command::Screenshot {
                         scale: 1,
@@ -407,8 +467,13 @@ impl Viewer {
         if let Ok(mut slot) = session.lock() {
             *slot = Some(Reopen {
                 files: self.files.clone(),
-                params: self.core.params,
-                particles: self.core.options.clone(),
+                params: self.core.base.params(),
+                particles: crate::model::ParticleOptions {
+                    beads: self.core.base.style == crate::scene::representation::RepStyle::Beads,
+                    radius_overrides: self.core.radius_overrides.clone(),
+                    colours: self.core.base.colour,
+                },
+                reps: self.core.reps.clone(),
             });
         }
         if watch.lost().is_none() {

@@ -51,7 +51,9 @@ impl GpuView {
         (&self.device, &self.queue)
     }
 
-    /// Uploads the shown surface and particles when they changed.
+    /// Uploads the shown surfaces and particles when they changed: one surface layer per
+    /// visible surface representation (with its current opacity, so an opacity change redraws
+    /// without recomputing), and the atoms of every atom representation in one instance list.
     pub fn sync(&mut self, core: &mut AppCore) {
         let Some(shown) = core.shown.as_mut() else {
             return;
@@ -61,27 +63,49 @@ impl GpuView {
         }
         shown.dirty = false;
         let c = &shown.computed;
-        match &c.gpu_surface {
-            Some(g) => {
-                let grid = &c.output.grid;
-                let far = glam::UVec3::from(grid.dims).saturating_sub(glam::UVec3::ONE);
-                let hi = grid.origin + far.as_vec3() * grid.spacing;
-                self.scene
-                    .set_gpu_surface(g.clone(), Some((grid.origin, hi)));
+        let mut k = 0;
+        let mut spheres = Vec::new();
+        let mut cylinders = Vec::new();
+        for l in &c.layers {
+            // The representation as it is now (its opacity may have changed since).
+            let now = core
+                .rep_ids
+                .iter()
+                .position(|&id| id == l.id)
+                .and_then(|i| core.reps.get(i));
+            let Some(rep) = now.filter(|r| r.visible) else {
+                continue;
+            };
+            if let Some(style) = rep.style.atom_style() {
+                let look = RenderSettings {
+                    atom_style: style,
+                    ..core.render
+                };
+                let p = &l.particles;
+                let (s, cyl) =
+                    atom_instances(&p.positions, &p.radii, Some(&p.colours), &p.bonds, &look);
+                spheres.extend(s);
+                cylinders.extend(cyl);
+                continue;
             }
-            None => self
-                .scene
-                .set_mesh(&self.device, &self.queue, &c.output.mesh),
+            match &l.gpu_surface {
+                Some(g) => {
+                    let grid = &l.output.grid;
+                    let far = glam::UVec3::from(grid.dims).saturating_sub(glam::UVec3::ONE);
+                    let hi = grid.origin + far.as_vec3() * grid.spacing;
+                    self.scene
+                        .set_layer_gpu_surface(k, g.clone(), Some((grid.origin, hi)));
+                }
+                None => self
+                    .scene
+                    .set_layer_mesh(k, &self.device, &self.queue, &l.output.mesh),
+            }
+            self.scene.layer_mut(k).opacity = Some(rep.opacity);
+            k += 1;
         }
-        let p = &c.particles;
-        let (s, cyl) = atom_instances(
-            &p.positions,
-            &p.radii,
-            Some(&p.colours),
-            &p.bonds,
-            &core.render,
-        );
-        self.scene.set_atoms(&self.device, &self.queue, &s, &cyl);
+        self.scene.set_surface_count(k);
+        self.scene
+            .set_atoms(&self.device, &self.queue, &spheres, &cylinders);
     }
 
     /// Renders the scene at `size` pixels into the window texture and returns its egui id.

@@ -1,13 +1,18 @@
-//! The compute worker: one background thread that reads a frame, turns it into particles
-//! (atoms or beads) and runs the surface engine, so the UI thread never waits for I/O or for a
-//! surface. Requests replace each other (latest wins): when computing falls behind playback,
-//! the frames in between are dropped instead of queueing up. With the GPU engine on the
-//! window's device ([`Engine::Gpu`]) the mesh stays on the GPU: the reply carries the engine's
-//! [`GpuSurface`] buffers for the renderer and the counters (triangles, area, volume) that came
-//! back with the frame; a frame that overflowed its buffers is submitted again. The worker tells
-//! the GPU engine only what changed since its last frame (frame, radii, colours; the engine
-//! compares the parameters), so an isovalue change re-runs only Marching Cubes and a colour
-//! scheme only the colour pass.
+//! The compute worker: one background thread that reads a frame, turns it into the particles of
+//! each representation (atoms or beads of its selection) and runs the surface engine for each
+//! visible surface representation, so the UI thread never waits for I/O or for a surface.
+//! Requests replace each other (latest wins): when computing falls behind playback, the frames
+//! in between are dropped instead of queueing up.
+//!
+//! Each representation keeps its own slot between requests: its bound selection, its particles,
+//! its last result and, with the GPU engine, its own [`GpuEngine`] on the window's device (so
+//! every surface keeps its own buffers and all share one device). A representation whose inputs
+//! did not change (same frame, selection, style, colours and parameters) reuses its last result,
+//! so a change to one representation recomputes that one only; and the worker tells its GPU
+//! engine only what changed since its last frame (frame, radii, colours; the engine compares the
+//! parameters), so an isovalue change re-runs only Marching Cubes and a colour scheme only the
+//! colour pass. With the GPU engine the mesh stays on the GPU: the reply carries the engine's
+//! [`GpuSurface`] buffers for the renderer and the counters (triangles, area, volume).
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -19,29 +24,68 @@ use glam::Vec3;
 
 use super::source::FrameSource;
 use crate::gpu::{Changes, GpuEngine, GpuSurface, Work};
-use crate::model::{ParticleOptions, Particles};
-use crate::render::guess_bonds;
+use crate::model::{ParticleOptions, RadiusOverrides};
+use crate::scene::layer::{Layer, LayerFrame};
+use crate::scene::representation::{RepStyle, Representation};
 use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams};
 
 /// Frames kept in the worker's cache (around the playhead; oldest evicted first).
 const FRAME_CACHE: usize = 16;
 
-/// One unit of work: the surface of `frame` of `source`.
+/// A representation as the worker gets it: a stable id (slots and GPU engines are kept per id,
+/// so reordering or renaming representations recomputes nothing) and the representation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RepRequest {
+    /// Stable identity of the representation for the life of the window.
+    pub id: u64,
+    /// The representation (hidden ones are not computed).
+    pub rep: Representation,
+}
+
+/// One unit of work: the representations of `frame` of `source`.
 #[derive(Clone)]
 pub struct Request {
-    /// Increases whenever the data, particles or parameters change; replies carry it back.
+    /// Increases whenever the data, representations or parameters change; replies carry it back.
     pub generation: u64,
     /// Frame index.
     pub frame: usize,
     /// The trajectory.
     pub source: Arc<dyn FrameSource>,
-    /// Surface parameters.
-    pub params: SurfaceParams,
-    /// Atoms or beads, radii and colours.
-    pub options: ParticleOptions,
+    /// The representations, in drawing order.
+    pub reps: Vec<RepRequest>,
+    /// Radius overrides (Å per element or type) for every representation.
+    pub radius_overrides: RadiusOverrides,
 }
 
-/// Particles of one computed frame, for drawing atoms or beads.
+impl Request {
+    /// A request for one surface representation of every atom with `params` and `options`
+    /// (beads, colours, radius overrides), as the viewer computed before representations.
+    pub fn single(
+        generation: u64,
+        frame: usize,
+        source: Arc<dyn FrameSource>,
+        params: SurfaceParams,
+        options: ParticleOptions,
+    ) -> Request {
+        let style = if options.beads {
+            RepStyle::Beads
+        } else {
+            RepStyle::Surface
+        };
+        let mut rep = Representation::new("all", "all", style);
+        rep.set_params(&params);
+        rep.colour = options.colours;
+        Request {
+            generation,
+            frame,
+            source,
+            reps: vec![RepRequest { id: 0, rep }],
+            radius_overrides: options.radius_overrides,
+        }
+    }
+}
+
+/// Particles of one computed representation, for drawing atoms or beads.
 #[derive(Debug, Clone)]
 pub struct ParticleData {
     /// Positions in Å.
@@ -50,11 +94,49 @@ pub struct ParticleData {
     pub radii: Arc<Vec<f32>>,
     /// Linear RGB colours.
     pub colours: Arc<Vec<[f32; 3]>>,
-    /// Bonds between particles (file bonds or guessed; empty for beads).
+    /// Bonds between particles (file bonds or guessed; empty for beads and surfaces).
     pub bonds: Arc<Vec<[u32; 2]>>,
 }
 
-/// A finished surface.
+/// One representation of a finished frame.
+#[derive(Debug, Clone)]
+pub struct LayerResult {
+    /// The representation's id ([`RepRequest::id`]).
+    pub id: u64,
+    /// The representation as it was computed.
+    pub rep: Representation,
+    /// Mesh, area, volume, stage times (empty for atom styles). With the GPU engine the mesh is
+    /// empty: the surface is in [`LayerResult::gpu_surface`].
+    pub output: SurfaceOutput,
+    /// The GPU engine's surface buffers (drawn in place), when the GPU engine computed it.
+    pub gpu_surface: Option<GpuSurface>,
+    /// The particles the surface or atoms were built from.
+    pub particles: ParticleData,
+    /// True when the particles are residue beads.
+    pub beads: bool,
+    /// Which stages the GPU engine ran for this representation (its last submit; `None` for
+    /// host engines or a reused result). An isovalue change alone gives [`Work::Mc`].
+    pub gpu_work: Option<Work>,
+    /// True when this result was reused from an earlier request (nothing recomputed).
+    pub reused: bool,
+}
+
+impl LayerResult {
+    /// Triangles of the surface (from the GPU counters when the mesh stayed on the GPU).
+    pub fn triangle_count(&self) -> usize {
+        match &self.gpu_surface {
+            Some(g) => g.stats.map_or(0, |s| s.triangle_count as usize),
+            None => self.output.mesh.triangle_count(),
+        }
+    }
+
+    /// True for surface representations.
+    pub fn is_surface(&self) -> bool {
+        self.rep.style.is_surface()
+    }
+}
+
+/// A finished frame: every visible representation.
 #[derive(Debug, Clone)]
 pub struct Computed {
     /// Generation of the request.
@@ -63,26 +145,33 @@ pub struct Computed {
     pub frame: usize,
     /// Simulation time in ps, when known.
     pub time_ps: Option<f64>,
-    /// Mesh, area, volume, stage times. With the GPU engine the mesh is empty: the surface is
-    /// in [`Computed::gpu_surface`].
-    pub output: SurfaceOutput,
-    /// The GPU engine's surface buffers (drawn in place), when the GPU engine computed it.
-    pub gpu_surface: Option<GpuSurface>,
-    /// The particles the surface was built from.
-    pub particles: ParticleData,
-    /// True when the particles are residue beads.
-    pub beads: bool,
     /// Time to read the frame in ms.
     pub read_ms: f64,
-    /// Which stages the GPU engine ran for this reply (its last submit; `None` for host
-    /// engines). An isovalue change alone gives [`Work::Mc`].
-    pub gpu_work: Option<Work>,
+    /// The visible representations, in drawing order.
+    pub layers: Vec<LayerResult>,
+}
+
+impl Computed {
+    /// The surface representations.
+    pub fn surfaces(&self) -> impl Iterator<Item = &LayerResult> {
+        self.layers.iter().filter(|l| l.is_surface())
+    }
+
+    /// Triangles of every surface together.
+    pub fn triangle_count(&self) -> usize {
+        self.surfaces().map(LayerResult::triangle_count).sum()
+    }
+
+    /// The result of representation `id`, when it is visible.
+    pub fn layer(&self, id: u64) -> Option<&LayerResult> {
+        self.layers.iter().find(|l| l.id == id)
+    }
 }
 
 /// What the worker sends back.
 #[derive(Debug, Clone)]
 pub enum Reply {
-    /// A surface.
+    /// A frame's representations.
     Done(Box<Computed>),
     /// The request failed; the message is one line.
     Failed {
@@ -95,21 +184,13 @@ pub enum Reply {
     },
 }
 
-impl Computed {
-    /// Triangles of the surface (from the GPU counters when the mesh stayed on the GPU).
-    pub fn triangle_count(&self) -> usize {
-        match &self.gpu_surface {
-            Some(g) => g.stats.map_or(0, |s| s.triangle_count as usize),
-            None => self.output.mesh.triangle_count(),
-        }
-    }
-}
-
 /// The engine the worker runs.
 pub enum Engine {
-    /// Any engine through [`SurfaceEngine::compute`] (the mesh comes back to the host).
+    /// Any engine through [`SurfaceEngine::compute`] (the mesh comes back to the host); one
+    /// engine serves every representation.
     Host(Box<dyn SurfaceEngine + Send>),
-    /// The GPU engine on the window's device: the mesh stays in its buffers.
+    /// The GPU engine on the window's device: the mesh stays in its buffers. Each further
+    /// surface representation gets its own engine on the same device.
     Gpu(Box<GpuEngine>),
 }
 
@@ -121,38 +202,53 @@ impl Engine {
             Engine::Gpu(e) => e.name(),
         }
     }
+}
 
-    /// Computes one surface. For [`Engine::Gpu`] it submits the frame, waits for its counters
-    /// (resubmitting after an overflow, see [`GpuEngine::run_blocking`]) and returns an empty
-    /// mesh plus the surface buffers.
-    fn compute(
-        &mut self,
-        atoms: &AtomSet<'_>,
-        params: &SurfaceParams,
-        changes: Changes,
-    ) -> Result<(SurfaceOutput, Option<GpuSurface>, Option<Work>), String> {
-        match self {
-            Engine::Host(e) => e
-                .compute(atoms, params)
-                .map(|o| (o, None, None))
-                .map_err(|e| e.to_string()),
-            Engine::Gpu(e) => {
-                let stats = e
-                    .run_blocking(atoms, params, changes)
-                    .map_err(|e| e.to_string())?;
-                let mut surface = e.surface();
-                surface.stats = Some(stats);
-                let output = SurfaceOutput {
-                    grid: surface.grid,
-                    mesh: Mesh::default(),
-                    area: stats.area,
-                    volume: stats.volume,
-                    timings: stats.timings,
-                };
-                Ok((output, Some(surface), e.last_frame().map(|f| f.work)))
-            }
+/// A new GPU engine on the same device as `engine` (for a further surface representation).
+fn sibling_of(engine: &GpuEngine) -> Box<GpuEngine> {
+    let ctx = engine.context();
+    Box::new(GpuEngine::from_device(
+        ctx.device.clone(),
+        ctx.queue.clone(),
+    ))
+}
+
+/// Computes one surface on `engine`. For a GPU engine it submits the frame, waits for its
+/// counters (resubmitting after an overflow, see [`GpuEngine::run_blocking`]) and returns an
+/// empty mesh plus the surface buffers.
+fn compute_on(
+    engine: EngineRef<'_>,
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+    changes: Changes,
+) -> Result<(SurfaceOutput, Option<GpuSurface>, Option<Work>), String> {
+    match engine {
+        EngineRef::Host(e) => e
+            .compute(atoms, params)
+            .map(|o| (o, None, None))
+            .map_err(|e| e.to_string()),
+        EngineRef::Gpu(e) => {
+            let stats = e
+                .run_blocking(atoms, params, changes)
+                .map_err(|e| e.to_string())?;
+            let mut surface = e.surface();
+            surface.stats = Some(stats);
+            let output = SurfaceOutput {
+                grid: surface.grid,
+                mesh: Mesh::default(),
+                area: stats.area,
+                volume: stats.volume,
+                timings: stats.timings,
+            };
+            Ok((output, Some(surface), e.last_frame().map(|f| f.work)))
         }
     }
+}
+
+/// The engine one representation computes on.
+enum EngineRef<'a> {
+    Host(&'a mut (dyn SurfaceEngine + Send)),
+    Gpu(&'a mut GpuEngine),
 }
 
 type Slot = Arc<(Mutex<Option<Request>>, Condvar)>;
@@ -231,37 +327,69 @@ impl Drop for Worker {
     }
 }
 
+/// What one representation keeps between requests.
+struct RepSlot {
+    /// The bound selection and its particles.
+    layer: Layer,
+    /// Its own GPU engine (GPU backend only; the first representation uses the main engine).
+    gpu: Option<Box<GpuEngine>>,
+    /// The inputs and result of its last successful frame.
+    last: Option<(usize, LayerResult)>,
+    /// What its engine's last frame was computed from, to send only what changed since.
+    sent: Option<Sent>,
+}
+
 /// Per-source state the worker keeps between requests.
 struct Cache {
     source: Option<Arc<dyn FrameSource>>,
     frames: HashMap<usize, crate::model::Frame>,
     order: Vec<usize>,
-    particles: Option<(ParticleOptions, Arc<Particles>, ParticleData)>,
-    atom_bonds: Option<Arc<Vec<[u32; 2]>>>,
-    /// What the engine's last frame was computed from, to send it only what changed since.
-    sent: Option<Sent>,
+    radius_overrides: RadiusOverrides,
+    slots: HashMap<u64, RepSlot>,
+    /// The id of the representation computing on the main GPU engine.
+    main_engine_owner: Option<u64>,
 }
 
-/// Inputs of the engine's last successful frame (of the cached source).
+/// Inputs of an engine's last successful frame.
 struct Sent {
-    /// Frame index: positions follow from it and the particle kind.
+    /// Frame index: positions follow from it and the particles.
     frame: usize,
-    /// Residue beads or atoms.
-    beads: bool,
+    /// Which atoms the particles were (`None`: all) and whether they were beads.
+    atoms: (Option<Vec<u32>>, bool),
     radii: Arc<Vec<f32>>,
     colours: Arc<Vec<[f32; 3]>>,
+}
+
+/// Which atoms `lf`'s particles come from, and whether they are beads.
+fn atoms_key(lf: &LayerFrame) -> (Option<Vec<u32>>, bool) {
+    (
+        lf.particles.subset().map(<[u32]>::to_vec),
+        lf.particles.is_beads(),
+    )
 }
 
 impl Sent {
     /// What differs between this and the next frame's inputs (the surface parameters are
     /// compared by the engine itself).
-    fn changes(&self, frame: usize, beads: bool, data: &ParticleData) -> Changes {
+    fn changes(&self, frame: usize, lf: &LayerFrame, data: &ParticleData) -> Changes {
+        let same_atoms = !lf.rebuilt || self.atoms == atoms_key(lf);
         Changes {
-            positions: self.frame != frame || self.beads != beads,
+            positions: self.frame != frame || !same_atoms,
             radii: !Arc::ptr_eq(&self.radii, &data.radii) && self.radii != data.radii,
             colours: !Arc::ptr_eq(&self.colours, &data.colours) && self.colours != data.colours,
         }
     }
+}
+
+/// The parts of a representation that change what is computed (not its name, opacity or
+/// visibility, which only change how it is drawn).
+fn compute_key(rep: &Representation) -> impl PartialEq + '_ {
+    (
+        &rep.selection,
+        rep.style,
+        rep.colour,
+        rep.style.is_surface().then(|| rep.params()),
+    )
 }
 
 fn run(
@@ -276,9 +404,9 @@ fn run(
         source: None,
         frames: HashMap::new(),
         order: Vec::new(),
-        particles: None,
-        atom_bonds: None,
-        sent: None,
+        radius_overrides: RadiusOverrides::default(),
+        slots: HashMap::new(),
+        main_engine_owner: None,
     };
     loop {
         let request = {
@@ -321,13 +449,29 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
         .source
         .as_ref()
         .is_some_and(|s| Arc::ptr_eq(s, &req.source));
-    if !same {
+    if !same || cache.radius_overrides != req.radius_overrides {
+        if !same {
+            cache.frames.clear();
+            cache.order.clear();
+        }
         cache.source = Some(req.source.clone());
-        cache.frames.clear();
-        cache.order.clear();
-        cache.particles = None;
-        cache.sent = None;
-        cache.atom_bonds = None;
+        cache.radius_overrides = req.radius_overrides.clone();
+        // Keep the GPU engines (they are expensive to build); forget what they computed.
+        for slot in cache.slots.values_mut() {
+            slot.last = None;
+            slot.sent = None;
+        }
+        let topology = req.source.topology();
+        let overrides = req.radius_overrides.clone();
+        cache.slots.retain(|_, s| {
+            match Layer::new(s.layer.rep().clone(), topology, &overrides) {
+                Ok(layer) => {
+                    s.layer = layer;
+                    true
+                }
+                Err(_) => false,
+            }
+        });
     }
     if let Some(f) = cache.frames.get(&req.frame) {
         return Ok((f.clone(), 0.0));
@@ -347,69 +491,125 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
 fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Computed, String> {
     let (frame, read_ms) = frame_of(cache, req)?;
     let topology = req.source.topology();
-    let rebuild = cache
-        .particles
-        .as_ref()
-        .is_none_or(|(o, _, _)| *o != req.options);
-    if rebuild {
-        let particles = Particles::new(topology, &frame, &req.options)
-            .map_err(|e| format!("frame {}: {e}", req.frame))?;
-        let bonds = if particles.is_beads() {
-            Arc::new(Vec::new())
-        } else {
-            cache
-                .atom_bonds
-                .get_or_insert_with(|| {
-                    Arc::new(if topology.bonds.is_empty() {
-                        guess_bonds(&frame.positions, particles.radii())
-                    } else {
-                        topology.bonds.clone()
-                    })
-                })
-                .clone()
-        };
-        let data = ParticleData {
-            positions: Vec::new(),
-            radii: Arc::new(particles.radii().to_vec()),
-            colours: Arc::new(particles.colours().to_vec()),
-            bonds,
-        };
-        cache.particles = Some((req.options.clone(), Arc::new(particles), data));
+    // Forget representations that are gone (their GPU engines are dropped with them).
+    let wanted: Vec<u64> = req.reps.iter().map(|r| r.id).collect();
+    cache.slots.retain(|id, _| wanted.contains(id));
+    if cache
+        .main_engine_owner
+        .is_some_and(|id| !cache.slots.contains_key(&id))
+    {
+        cache.main_engine_owner = None;
     }
-    let Some((_, particles, data)) = cache.particles.as_ref() else {
-        return Err("internal: particles missing".into());
-    };
-    let mut positions = Vec::new();
-    particles
-        .positions_into(&frame, &mut positions)
-        .map_err(|e| format!("frame {}: {e}", req.frame))?;
-    // Send the engine only what changed since its last frame: an isovalue change alone
-    // re-runs Marching Cubes, a colour scheme the colour pass (parameters it compares itself).
-    let changes = match cache.sent.take() {
-        Some(sent) => sent.changes(req.frame, particles.is_beads(), data),
-        None => Changes::ALL,
-    };
-    let (output, gpu_surface, gpu_work) = engine
-        .compute(&particles.atom_set(&positions), &req.params, changes)
-        .map_err(|e| format!("frame {}: {e}", req.frame))?;
-    cache.sent = Some(Sent {
-        frame: req.frame,
-        beads: particles.is_beads(),
-        radii: data.radii.clone(),
-        colours: data.colours.clone(),
-    });
+    let mut layers = Vec::new();
+    for RepRequest { id, rep } in req.reps.iter().filter(|r| r.rep.visible) {
+        let slot = match cache.slots.get_mut(id) {
+            // Same selection: keep the binding, the engine and what it was last sent.
+            Some(s) if s.layer.rep().selection == rep.selection => {
+                s.layer.set_rep(rep.clone());
+                s
+            }
+            _ => {
+                let layer = Layer::new(rep.clone(), topology, &req.radius_overrides)
+                    .map_err(|e| e.to_string())?;
+                let old = cache.slots.remove(id);
+                let gpu = old.and_then(|o| o.gpu);
+                cache.slots.insert(
+                    *id,
+                    RepSlot {
+                        layer,
+                        gpu,
+                        last: None,
+                        sent: None,
+                    },
+                );
+                cache.slots.get_mut(id).ok_or("internal: slot missing")?
+            }
+        };
+        if let Some((f, last)) = &slot.last
+            && *f == req.frame
+            && !slot.layer.is_dynamic()
+            && compute_key(&last.rep) == compute_key(rep)
+        {
+            layers.push(LayerResult {
+                rep: rep.clone(),
+                reused: true,
+                gpu_work: None,
+                ..last.clone()
+            });
+            continue;
+        }
+        let lf = slot
+            .layer
+            .frame(topology, &frame)
+            .map_err(|e| format!("frame {}: {e}", req.frame))?;
+        let data = ParticleData {
+            positions: lf.positions.clone(),
+            radii: Arc::new(lf.particles.radii().to_vec()),
+            colours: Arc::new(lf.particles.colours().to_vec()),
+            bonds: lf.bonds.clone(),
+        };
+        let data = match &slot.sent {
+            // Keep the same Arcs when nothing changed, so the engine sees no change.
+            Some(sent) if !lf.rebuilt => ParticleData {
+                radii: sent.radii.clone(),
+                colours: sent.colours.clone(),
+                ..data
+            },
+            _ => data,
+        };
+        let mut result = LayerResult {
+            id: *id,
+            rep: rep.clone(),
+            output: SurfaceOutput::default(),
+            gpu_surface: None,
+            particles: data,
+            beads: lf.particles.is_beads(),
+            gpu_work: None,
+            reused: false,
+        };
+        if rep.style.is_surface() && !lf.positions.is_empty() {
+            let changes = match slot.sent.take() {
+                Some(sent) => sent.changes(req.frame, &lf, &result.particles),
+                None => Changes::ALL,
+            };
+            let engine_ref = match engine {
+                Engine::Host(e) => EngineRef::Host(e.as_mut()),
+                Engine::Gpu(main) => {
+                    // The main engine serves one representation (one that never had an engine
+                    // of its own, so its change tracking stays valid); each other gets its own.
+                    if cache.main_engine_owner.is_none() && slot.gpu.is_none() {
+                        cache.main_engine_owner = Some(*id);
+                    }
+                    if cache.main_engine_owner == Some(*id) {
+                        EngineRef::Gpu(main.as_mut())
+                    } else {
+                        EngineRef::Gpu(slot.gpu.get_or_insert_with(|| sibling_of(main)).as_mut())
+                    }
+                }
+            };
+            let atoms = lf.atom_set();
+            let (output, gpu_surface, gpu_work) =
+                compute_on(engine_ref, &atoms, &rep.params(), changes).map_err(|e| {
+                    format!("frame {}: representation '{}': {e}", req.frame, rep.name)
+                })?;
+            result.output = output;
+            result.gpu_surface = gpu_surface;
+            result.gpu_work = gpu_work;
+            slot.sent = Some(Sent {
+                frame: req.frame,
+                atoms: atoms_key(&lf),
+                radii: result.particles.radii.clone(),
+                colours: result.particles.colours.clone(),
+            });
+        }
+        slot.last = Some((req.frame, result.clone()));
+        layers.push(result);
+    }
     Ok(Computed {
         generation: req.generation,
         frame: req.frame,
         time_ps: frame.time_ps,
-        output,
-        gpu_surface,
-        particles: ParticleData {
-            positions,
-            ..data.clone()
-        },
-        beads: particles.is_beads(),
         read_ms,
-        gpu_work,
+        layers,
     })
 }

@@ -5,5 +5,7 @@ pub mod bench;
 pub mod bench_table;
 pub mod common;
 pub mod render;
+pub mod select;
+pub mod scene_args;
 pub mod surface;
 pub mod view;

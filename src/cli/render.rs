@@ -7,11 +7,18 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
+use mdsurf::render::settings::{
+    DEFAULT_EYE_SEPARATION, check_eye_separation, check_focal_distance,
+};
 use mdsurf::render::{
     AtomStyle, Background, Camera, GpuScene, HeadlessGpu, Projection, RenderSettings, Renderer,
-    Stereo, atom_instances, bounding_sphere, guess_bonds, render_to_rgba, write_png,
+    Stereo, atom_instances, bounding_sphere, render_to_rgba, write_png,
 };
 
+use mdsurf::scene::representation::{RepStyle, Representation};
+use mdsurf::surface::SurfaceOutput;
+
+use super::scene_args::{SceneArgs, bind_layers};
 use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
 
 /// Arguments of `mdsurf render`.
@@ -21,6 +28,8 @@ pub struct RenderArgs {
     pub input: InputArgs,
     #[command(flatten)]
     pub params: ParamArgs,
+    #[command(flatten)]
+    pub scene: SceneArgs,
     /// Frame to render (from 0) when --frames is not given.
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
@@ -35,14 +44,16 @@ pub struct RenderArgs {
     pub size: [u32; 2],
     /// Turn the camera by this many degrees per image (turntable). Without --frames, renders
     /// one full turn of the chosen frame.
-    #[arg(long, value_name = "DEG_PER_FRAME", allow_negative_numbers = true)]
+    #[arg(long, value_name = "DEG_PER_FRAME", allow_negative_numbers = true,
+          value_parser = parse_turntable)]
     pub turntable: Option<f32>,
-    /// Stereo output: off, sbs (side by side) or anaglyph (red/cyan).
+    /// Stereo output: off, sbs (side by side, wall-eyed: left eye on the left), sbs-cross
+    /// (cross-eyed: swapped), anaglyph (red/cyan, colour) or anaglyph-grey (red/cyan of each
+    /// eye's luminance).
     #[arg(long, value_name = "MODE", default_value = "off")]
     pub stereo: Stereo,
-    /// Eye separation as a fraction of the viewing distance.
-    #[arg(long, value_name = "F", default_value_t = 0.05)]
-    pub eye_separation: f32,
+    #[command(flatten)]
+    pub eyes: StereoArgs,
     /// Background: dark or light.
     #[arg(long, value_name = "BG", default_value = "dark")]
     pub background: Background,
@@ -69,6 +80,33 @@ pub struct RenderArgs {
     pub backend: Backend,
 }
 
+/// Stereo eye flags shared by `mdsurf render` and the viewer.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct StereoArgs {
+    /// Stereo eye separation as a fraction of the focal distance (default 1/30).
+    #[arg(long, value_name = "F", default_value_t = DEFAULT_EYE_SEPARATION,
+          value_parser = parse_eye_separation, allow_negative_numbers = true)]
+    pub eye_separation: f32,
+    /// Stereo focal (zero-parallax) distance in Å from the camera (default: the distance to
+    /// the molecule's centre, following the camera).
+    #[arg(long, value_name = "D", value_parser = parse_focal, allow_negative_numbers = true)]
+    pub focal: Option<f32>,
+}
+
+fn parse_f32(s: &str, what: &str) -> Result<f32, String> {
+    s.trim()
+        .parse()
+        .map_err(|_| format!("bad {what} '{s}': expected a number"))
+}
+
+fn parse_eye_separation(s: &str) -> Result<f32, String> {
+    check_eye_separation(parse_f32(s, "eye separation")?)
+}
+
+fn parse_focal(s: &str) -> Result<f32, String> {
+    check_focal_distance(parse_f32(s, "focal distance")?)
+}
+
 fn parse_size(s: &str) -> Result<[u32; 2], String> {
     let bad = || format!("bad size '{s}': expected WIDTHxHEIGHT, e.g. 1920x1080");
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
@@ -85,10 +123,29 @@ fn parse_size(s: &str) -> Result<[u32; 2], String> {
 fn parse_pair(s: &str) -> Result<[f32; 2], String> {
     let bad = || format!("bad view '{s}': expected YAW,PITCH in degrees");
     let (a, b) = s.split_once(',').ok_or_else(bad)?;
-    Ok([
+    let pair: [f32; 2] = [
         a.trim().parse().map_err(|_| bad())?,
         b.trim().parse().map_err(|_| bad())?,
-    ])
+    ];
+    if !pair.iter().all(|v| v.is_finite()) {
+        return Err(format!(
+            "bad view '{s}': yaw and pitch must be finite numbers"
+        ));
+    }
+    Ok(pair)
+}
+
+fn parse_turntable(s: &str) -> Result<f32, String> {
+    let d: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad turntable step '{s}': expected degrees per image"))?;
+    if !d.is_finite() || d.abs() > 360.0 || (d != 0.0 && d.abs() < 0.01) {
+        return Err(format!(
+            "bad turntable step '{s}': expected 0.01 to 360 degrees per image (or 0, or negative)"
+        ));
+    }
+    Ok(d)
 }
 
 /// `pattern` with `{frame}` replaced by `index` (5 digits).
@@ -103,8 +160,9 @@ fn output_path(pattern: &Path, index: usize) -> PathBuf {
 /// Runs `mdsurf render`.
 pub fn run(args: RenderArgs) -> Result<()> {
     let params = args.params.params()?;
+    let state = args.scene.load_state()?;
     let first = args.frames.map_or(args.frame, |r| r.start);
-    let (mut system, _) = System::open(&args.input, first)?;
+    let (system, _) = System::open(&args.input, first)?;
     let len = system.len();
     let mut frames = match args.frames {
         Some(r) => r.indices(len),
@@ -134,16 +192,65 @@ pub fn run(args: RenderArgs) -> Result<()> {
             frames.len()
         );
     }
-    let settings = RenderSettings {
+    let mut settings = RenderSettings {
         background: args.background,
         surface_opacity: args.opacity.clamp(0.0, 1.0),
         atom_style: args.atoms,
         stereo: args.stereo,
-        eye_separation: args.eye_separation,
+        eye_separation: args.eyes.eye_separation,
+        focal_distance: args.eyes.focal,
         ambient_occlusion: args.ao.clamp(0.0, 1.0),
         depth_cue: args.depth_cue.clamp(0.0, 1.0),
         ..RenderSettings::default()
     };
+    let options = args.input.particles.options()?;
+    let topology = system.trajectory.topology().clone();
+    let first_frame = system.trajectory.read_frame(frames[0])?;
+    let mut choice = args.scene.representations(
+        state,
+        &topology,
+        &first_frame,
+        &params,
+        &options,
+        false,
+    )?;
+    if let Some(state) = &choice.state {
+        // The state file's look replaces the look flags.
+        state
+            .look
+            .apply(&mut settings)
+            .map_err(|e| anyhow!("{e}"))?;
+    } else {
+        // The look flags that are per representation apply to the first one (the selection,
+        // or the default macromolecule surface); --atoms adds atoms of the same selection.
+        if let Some(main) = choice.reps.first_mut() {
+            main.opacity = args.opacity.clamp(0.0, 1.0);
+        }
+        if args.atoms != AtomStyle::Hidden {
+            let selection = args.scene.select.clone().unwrap_or_else(|| "all".into());
+            let style = match args.atoms {
+                AtomStyle::Spheres => RepStyle::Spheres,
+                AtomStyle::Sticks => RepStyle::Sticks,
+                _ => RepStyle::BallAndStick,
+            };
+            choice.reps.push(Representation {
+                colour: options.colours,
+                ..Representation::new("atoms", &selection, style)
+            });
+        }
+    }
+    let files = system.frames_path.display().to_string();
+    let mut layers = bind_layers(
+        &choice.reps,
+        &topology,
+        &first_frame,
+        &options.radius_overrides,
+        &files,
+    )?;
+    layers.retain(|l| l.rep().visible);
+    if layers.is_empty() {
+        bail!("nothing to draw: every representation is hidden");
+    }
     let gpu = HeadlessGpu::new()
         .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
     let renderer = Renderer::new(&gpu.device);
@@ -157,43 +264,66 @@ pub fn run(args: RenderArgs) -> Result<()> {
         },
         ..Camera::default()
     };
-    let bonds = match (settings.atom_style.has_bonds(), system.particles.is_beads()) {
-        (true, false) if system.trajectory.topology().bonds.is_empty() => None,
-        (true, false) => Some(system.trajectory.topology().bonds.clone()),
-        _ => Some(Vec::new()),
-    };
-    let mut bonds = bonds;
-    let mut positions = Vec::new();
+    let surface_count = layers.iter().filter(|l| l.rep().style.is_surface()).count();
+    scene.set_surface_count(surface_count);
     for (i, &f) in frames.iter().enumerate() {
         let t0 = Instant::now();
-        let (_, read_ms) = system.read_positions(f, &mut positions)?;
-        let atoms = system.particles.atom_set(&positions);
-        let out = engine
-            .compute(&atoms, &params)
-            .map_err(|e| anyhow!("{}: frame {f}: {e}", system.frames_path.display()))?;
-        scene.set_mesh(&gpu.device, &gpu.queue, &out.mesh);
-        let radii = system.particles.radii();
-        let b = bonds.get_or_insert_with(|| guess_bonds(&positions, radii));
-        let (s, c) = atom_instances(
-            &positions,
-            radii,
-            Some(system.particles.colours()),
-            b,
-            &settings,
-        );
-        scene.set_atoms(&gpu.device, &gpu.queue, &s, &c);
-        if i == 0 {
-            let shown_atoms =
-                if settings.atom_style == AtomStyle::Hidden && !out.mesh.positions.is_empty() {
-                    &[][..]
-                } else {
-                    &positions[..]
+        let frame = if i == 0 {
+            first_frame.clone()
+        } else {
+            system.trajectory.read_frame(f)?
+        };
+        let read_ms = ms_since(t0);
+        let mut spheres = Vec::new();
+        let mut cylinders = Vec::new();
+        let mut points = Vec::new();
+        let mut summary = Vec::new();
+        let mut k = 0;
+        for layer in layers.iter_mut() {
+            let rep = layer.rep().clone();
+            let lf = layer
+                .frame(&topology, &frame)
+                .map_err(|e| anyhow!("{files}: frame {f}: {e}"))?;
+            if let Some(style) = rep.style.atom_style() {
+                let look = RenderSettings {
+                    atom_style: style,
+                    ..settings
                 };
-            let points = out.mesh.positions.iter().chain(shown_atoms);
-            let (centre, radius) = bounding_sphere(points).ok_or_else(|| {
-                anyhow!("frame {f}: nothing to draw (empty surface and no atoms)")
+                let colours = lf.particles.colours();
+                let (s, c) = atom_instances(&lf.positions, lf.particles.radii(), Some(colours), &lf.bonds, &look);
+                spheres.extend(s);
+                cylinders.extend(c);
+                points.extend_from_slice(&lf.positions);
+                continue;
+            }
+            let out = if lf.positions.is_empty() {
+                SurfaceOutput::default()
+            } else {
+                engine.compute(&lf.atom_set(), &rep.params()).map_err(|e| {
+                    anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name)
+                })?
+            };
+            scene.set_layer_mesh(k, &gpu.device, &gpu.queue, &out.mesh);
+            scene.layer_mut(k).opacity = Some(rep.opacity);
+            points.extend_from_slice(&out.mesh.positions);
+            summary.push(format!(
+                "{}: {} triangles, area {:.1} Å², volume {:.1} Å³",
+                rep.name,
+                out.mesh.triangle_count(),
+                out.area,
+                out.volume
+            ));
+            k += 1;
+        }
+        scene.set_atoms(&gpu.device, &gpu.queue, &spheres, &cylinders);
+        if i == 0 {
+            let (centre, radius) = bounding_sphere(points.iter()).ok_or_else(|| {
+                anyhow!("frame {f}: nothing to draw (empty surfaces and no atoms)")
             })?;
             camera.fit_sphere(centre, radius);
+            if let Some(cam) = choice.state.as_ref().and_then(|s| s.camera) {
+                cam.apply(&mut camera);
+            }
             if let Some([yaw, pitch]) = args.view {
                 camera.yaw = yaw.to_radians();
                 camera.pitch = pitch.to_radians();
@@ -217,10 +347,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         };
         write_png(&path, &image)?;
         eprintln!(
-            "frame {f}: {} triangles, area {:.1} Å², volume {:.1} Å³, read {read_ms:.1} ms, total {:.1} ms -> {}",
-            out.mesh.triangle_count(),
-            out.area,
-            out.volume,
+            "frame {f}: {}; read {read_ms:.1} ms, total {:.1} ms -> {}",
+            if summary.is_empty() { "atoms only".to_string() } else { summary.join("; ") },
             ms_since(t0),
             path.display()
         );
@@ -242,5 +370,20 @@ mod tests {
             Path::new("d/f_00007.png")
         );
         assert_eq!(parse_pair("30,-10"), Ok([30.0, -10.0]));
+    }
+
+    #[test]
+    fn stereo_numbers_reject_nan_inf_and_negatives_in_one_line() {
+        assert_eq!(parse_eye_separation("0.05"), Ok(0.05));
+        assert_eq!(parse_eye_separation("0"), Ok(0.0));
+        assert_eq!(parse_focal("80"), Ok(80.0));
+        for bad in ["nan", "inf", "-0.1", "x"] {
+            let e = parse_eye_separation(bad).expect_err(bad);
+            assert!(!e.contains('\n') && e.contains("eye separation"), "{e}");
+        }
+        for bad in ["NaN", "-inf", "-5", "0"] {
+            let e = parse_focal(bad).expect_err(bad);
+            assert!(!e.contains('\n') && e.contains("focal distance"), "{e}");
+        }
     }
 }

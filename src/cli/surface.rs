@@ -13,7 +13,10 @@ use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
 
+use mdsurf::surface::SurfaceOutput;
+
 use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
+use super::scene_args::{SceneArgs, bind_layers};
 
 /// Above this many frames on a terminal, a progress bar replaces the per-frame lines.
 const PROGRESS_BAR_FRAMES: usize = 20;
@@ -28,11 +31,14 @@ pub struct SurfaceArgs {
     pub frames: Option<FrameRange>,
     #[command(flatten)]
     pub params: ParamArgs,
+    #[command(flatten)]
+    pub scene: SceneArgs,
     /// Engine: cpu, gpu, or auto (the GPU when there is one).
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     pub backend: Backend,
     /// Mesh output (.ply, .obj, .stl, .glb); with several frames a pattern such as
-    /// `out_{frame}.ply` or `out_{frame:04}.ply`.
+    /// `out_{frame}.ply` or `out_{frame:04}.ply` (the frame's index in the trajectory), with
+    /// several surface representations `{rep}` (the representation's name).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Per-frame statistics CSV (area, volume, counts, timings).
@@ -52,8 +58,11 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         check_parent_dir(stats)?;
     }
 
+    let state = args.scene.load_state()?;
+    let mut engine = make_engine(args.backend)?;
+
     let start_frame = args.frames.map(|r| r.start).unwrap_or(0);
-    let (mut system, _first) = System::open(&args.input, start_frame)?;
+    let (system, first) = System::open(&args.input, start_frame)?;
     let range = args.frames.unwrap_or_default();
     let frames = range.indices(system.selectable_len());
     if frames.is_empty() {
@@ -63,63 +72,112 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             system.len()
         );
     }
-    if let Some(out) = &output
-        && frames.len() > 1
-        && !out.has_frame
-    {
-        bail!(
-            "-o {}: {} frames selected, so the output needs a {{frame}} pattern (e.g. surf_{{frame}}.{})",
-            out.raw,
-            frames.len(),
-            out.format
-        );
+    let options = args.input.particles.options()?;
+    let topology = system.trajectory.topology().clone();
+    let choice = args.scene.representations(
+        state,
+        &topology,
+        &first,
+        &params,
+        &options,
+        args.quiet,
+    )?;
+    let files = system.frames_path.display().to_string();
+    let mut layers = bind_layers(
+        &choice.reps,
+        &topology,
+        &first,
+        &options.radius_overrides,
+        &files,
+    )?;
+    // Only visible surface representations are computed.
+    layers.retain(|l| l.rep().visible && l.rep().style.is_surface());
+    if layers.is_empty() {
+        bail!("no visible surface representation to compute (the state file hides them all)");
     }
-    let mut engine = make_engine(args.backend)?;
+    if let Some(out) = &output {
+        if frames.len() > 1 && !out.has_frame {
+            bail!(
+                "-o {}: {} frames selected, so the output needs a {{frame}} pattern (e.g. surf_{{frame}}.{})",
+                out.raw,
+                frames.len(),
+                out.format
+            );
+        }
+        if layers.len() > 1 && !out.has_rep {
+            let names: Vec<&str> = layers.iter().map(|l| l.rep().name.as_str()).collect();
+            bail!(
+                "-o {}: {} surface representations ({}), so the output needs a {{rep}} pattern (e.g. surf_{{rep}}.{}), or pick one with --select",
+                out.raw,
+                layers.len(),
+                names.join(", "),
+                out.format
+            );
+        }
+    }
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
 
     let bar =
         (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
             .then(|| progress_bar(frames.len()));
     let t_all = Instant::now();
-    let mut positions = Vec::new();
     let mut failure = None;
     let mut ok_frames = 0usize;
     for &index in &frames {
-        let row = (|| -> Result<StatsRow> {
+        let rows = (|| -> Result<Vec<StatsRow>> {
             let t0 = Instant::now();
-            let (frame, read_ms) = system.read_positions(index, &mut positions)?;
-            let atoms = system.particles.atom_set(&positions);
-            let surf = engine
-                .compute(&atoms, &params)
-                .map_err(|e| anyhow!("{}: frame {index}: {e}", system.frames_path.display()))?;
-            let total_ms = ms_since(t0);
-            if let Some(out) = &output {
-                export::write_mesh(&out.path_for(index), &surf.mesh)?;
-            }
-            Ok(StatsRow {
-                frame: index,
-                time_ps: frame.time_ps,
-                atoms: positions.len(),
-                dims: surf.grid.dims,
-                vertices: surf.mesh.vertex_count(),
-                triangles: surf.mesh.triangle_count(),
-                area: surf.area,
-                volume: surf.volume,
-                total_ms,
-                read_ms,
-                timings: surf.timings,
-            })
-        })();
-        match row {
-            Ok(row) => {
-                ok_frames += 1;
-                if let Some(stats) = stats.as_mut() {
-                    stats.write_row(&row)?;
+            let frame = system.trajectory.read_frame(index)?;
+            let read_ms = ms_since(t0);
+            let mut rows = Vec::with_capacity(layers.len());
+            for layer in layers.iter_mut() {
+                let t1 = Instant::now();
+                let rep = layer.rep().clone();
+                let lf = layer
+                    .frame(&topology, &frame)
+                    .map_err(|e| anyhow!("{files}: frame {index}: {e}"))?;
+                let surf = if lf.positions.is_empty() {
+                    // A per-frame selection (within ...) that picks nothing in this frame.
+                    SurfaceOutput::default()
+                } else {
+                    engine
+                        .compute(&lf.atom_set(), &rep.params())
+                        .map_err(|e| {
+                            anyhow!("{files}: frame {index}: representation '{}': {e}", rep.name)
+                        })?
+                };
+                if let Some(out) = &output {
+                    export::write_mesh(&out.path_for(index, &rep.name), &surf.mesh)?;
                 }
-                match &bar {
-                    Some(bar) => bar.inc(1),
-                    None if !args.quiet => eprintln!("{}", summary_line(&row)),
-                    None => {}
+                rows.push(StatsRow {
+                    frame: index,
+                    rep: rep.name.clone(),
+                    time_ps: frame.time_ps,
+                    atoms: lf.positions.len(),
+                    dims: surf.grid.dims,
+                    vertices: surf.mesh.vertex_count(),
+                    triangles: surf.mesh.triangle_count(),
+                    area: surf.area,
+                    volume: surf.volume,
+                    total_ms: ms_since(t1) + if rows.is_empty() { read_ms } else { 0.0 },
+                    read_ms: if rows.is_empty() { read_ms } else { 0.0 },
+                    timings: surf.timings,
+                });
+            }
+            Ok(rows)
+        })();
+        match rows {
+            Ok(rows) => {
+                ok_frames += 1;
+                for row in &rows {
+                    if let Some(stats) = stats.as_mut() {
+                        stats.write_row(row)?;
+                    }
+                    if bar.is_none() && !args.quiet {
+                        eprintln!("{}", summary_line(row, layers.len() > 1));
+                    }
+                }
+                if let Some(bar) = &bar {
+                    bar.inc(1);
                 }
             }
             Err(err) => {
@@ -161,14 +219,19 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     Ok(())
 }
 
-/// The one-line summary of a frame.
-fn summary_line(r: &StatsRow) -> String {
+/// The one-line summary of a frame (and representation, when `with_rep`).
+fn summary_line(r: &StatsRow, with_rep: bool) -> String {
     let time = r
         .time_ps
         .map(|t| format!("{t:>9.1} ps"))
         .unwrap_or_else(|| "        - ps".into());
+    let rep = if with_rep {
+        format!(" {:<12}", r.rep)
+    } else {
+        String::new()
+    };
     format!(
-        "frame {:>5} {time} {:>9} atoms  grid {}x{}x{}  {:>9} tris  area {:>11.1} Å²  volume {:>12.1} Å³  {:>8.1} ms",
+        "frame {:>5}{rep} {time} {:>9} atoms  grid {}x{}x{}  {:>9} tris  area {:>11.1} Å²  volume {:>12.1} Å³  {:>8.1} ms",
         r.frame,
         r.atoms,
         r.dims[0],
@@ -214,6 +277,7 @@ pub struct OutputPattern {
     suffix: String,
     width: usize,
     has_frame: bool,
+    has_rep: bool,
     format: MeshFormat,
 }
 
@@ -254,28 +318,35 @@ impl OutputPattern {
         }
         let pattern = OutputPattern {
             format: MeshFormat::from_path(Path::new(&raw))?,
+            has_rep: raw.contains("{rep}"),
             raw,
             prefix,
             suffix,
             width,
             has_frame,
         };
-        check_parent_dir(&pattern.path_for(0))?;
+        check_parent_dir(&pattern.path_for(0, "rep"))?;
         Ok(pattern)
     }
 
-    /// The output path of frame `index`.
-    pub fn path_for(&self, index: usize) -> PathBuf {
-        if self.has_frame {
-            PathBuf::from(format!(
+    /// The output path of frame `index` of representation `rep` (its name, made safe for a
+    /// file name).
+    pub fn path_for(&self, index: usize, rep: &str) -> PathBuf {
+        let path = if self.has_frame {
+            format!(
                 "{}{:0width$}{}",
                 self.prefix,
                 index,
                 self.suffix,
                 width = self.width
-            ))
+            )
         } else {
-            PathBuf::from(&self.prefix)
-        }
+            self.prefix.clone()
+        };
+        let safe: String = rep
+            .chars()
+            .map(|c| if c.is_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+            .collect();
+        PathBuf::from(path.replace("{rep}", &safe))
     }
 }

@@ -6,8 +6,13 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use mdsurf::app::{self, Script, ViewOptions};
+use mdsurf::render::{RenderSettings, Stereo};
+
+use mdsurf::scene::representation::{RepStyle, Representation};
 
 use super::common::{Backend, ParamArgs, ParticleArgs};
+use super::scene_args::SceneArgs;
+use super::render::StereoArgs;
 
 /// Arguments of the viewer.
 #[derive(clap::Args, Debug)]
@@ -22,6 +27,8 @@ pub struct ViewArgs {
     pub params: ParamArgs,
     #[command(flatten)]
     pub particles: ParticleArgs,
+    #[command(flatten)]
+    pub scene: SceneArgs,
     /// Scripted run: play this many frames (each computed and shown) first.
     #[arg(long, value_name = "N")]
     pub play_frames: Option<usize>,
@@ -38,10 +45,44 @@ pub struct ViewArgs {
     /// Same as `--backend cpu`.
     #[arg(long, conflicts_with = "backend")]
     pub cpu: bool,
+    /// Stereo view to start with: off, sbs (wall-eyed), sbs-cross (cross-eyed), anaglyph
+    /// (red/cyan) or anaglyph-grey (also in the window's Look panel).
+    #[arg(long, value_name = "MODE", default_value = "off")]
+    pub stereo: Stereo,
+    #[command(flatten)]
+    pub eyes: StereoArgs,
 }
 
 /// Runs the viewer.
 pub fn run(args: ViewArgs) -> Result<()> {
+    let params = args.params.params()?;
+    let particles = args.particles.options()?;
+    let state = args.scene.load_state()?;
+    let mut render = RenderSettings {
+        stereo: args.stereo,
+        eye_separation: args.eyes.eye_separation,
+        focal_distance: args.eyes.focal,
+        ..RenderSettings::default()
+    };
+    let (reps, camera) = match (state, &args.scene.select) {
+        (Some(state), _) => {
+            state.look.apply(&mut render).map_err(anyhow::Error::msg)?;
+            (Some(state.representations), state.camera)
+        }
+        (None, Some(expr)) => {
+            let style = if particles.beads {
+                RepStyle::Beads
+            } else {
+                RepStyle::Surface
+            };
+            let mut rep = Representation::new("selection", expr, style);
+            rep.set_params(&params);
+            rep.colour = particles.colours;
+            rep.validate().map_err(anyhow::Error::msg)?;
+            (Some(vec![rep]), None)
+        }
+        (None, None) => (None, None),
+    };
     let options = ViewOptions {
         files: args.top.map(|t| (t, args.traj)),
         script: Script {
@@ -54,8 +95,11 @@ pub fn run(args: ViewArgs) -> Result<()> {
         } else {
             args.backend.into()
         },
-        params: args.params.params()?,
-        particles: args.particles.options()?,
+        params,
+        particles,
+        render,
+        reps,
+        camera,
     };
     mdsurf::app::run(options)?;
     Ok(())

@@ -8,8 +8,9 @@ use super::{AtomicFile, ExportError};
 use crate::surface::StageTimings;
 
 /// The CSV header columns, in order.
-pub const STATS_COLUMNS: [&str; 16] = [
+pub const STATS_COLUMNS: [&str; 17] = [
     "frame",
+    "rep",
     "time_ps",
     "atoms",
     "nx",
@@ -28,10 +29,12 @@ pub const STATS_COLUMNS: [&str; 16] = [
 ];
 
 /// Measurements of one frame's surface.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct StatsRow {
     /// Frame index in the trajectory, from 0.
     pub frame: usize,
+    /// Name of the surface representation (one row per frame and surface representation).
+    pub rep: String,
     /// Simulation time in ps (empty in the CSV when the file has none).
     pub time_ps: Option<f64>,
     /// Number of particles the surface was built from (atoms or beads).
@@ -56,10 +59,11 @@ pub struct StatsRow {
 
 impl StatsRow {
     /// The row as CSV fields, in [`STATS_COLUMNS`] order.
-    pub fn fields(&self) -> [String; 16] {
+    pub fn fields(&self) -> [String; 17] {
         let t = &self.timings;
         [
             self.frame.to_string(),
+            csv_text(&self.rep),
             self.time_ps.map(|t| format!("{t}")).unwrap_or_default(),
             self.atoms.to_string(),
             self.dims[0].to_string(),
@@ -76,6 +80,15 @@ impl StatsRow {
             format!("{:.3}", t.density_ms),
             format!("{:.3}", t.mc_ms),
         ]
+    }
+}
+
+/// `text` as one CSV field: quoted (with doubled quotes) when it holds a comma, quote or newline.
+fn csv_text(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
     }
 }
 

@@ -2,19 +2,23 @@
 //! (random access; chemfiles indexes the file once when it opens it), and the conversion of
 //! chemfiles' frames and topologies into our [`Frame`] and [`Topology`].
 
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use chemfiles::{CellShape, Property};
 use glam::Vec3;
 
 use super::format::FileFormat;
-use super::{IoError, warnings};
+use super::prepare::prepare;
+use super::{IoError, dcd, quiet, tng, warnings};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
 
 /// Picoseconds per AKMA time unit (CHARMM and NAMD write DCD time steps in AKMA units).
 const PS_PER_AKMA: f64 = 0.048_888_21;
+
+/// Coordinates beyond this (Å, in any direction) are damage, not a structure: they would make
+/// the density grid empty or astronomically large.
+pub(crate) const MAX_COORDINATE: f32 = 1.0e7;
 
 /// One open file, read through chemfiles.
 pub(crate) struct ChemReader {
@@ -23,6 +27,11 @@ pub(crate) struct ChemReader {
     inner: chemfiles::Trajectory,
     scratch: chemfiles::Frame,
     len: usize,
+    /// The temporary copy chemfiles reads, when the file needed one (see [`prepare`]).
+    copy: Option<(PathBuf, tempfile::TempDir)>,
+    /// Why the (compressed) file ends early, when it does, and whether the cut frame was left
+    /// out of the copy (see [`super::prepare::Prepared::cut_removed`]).
+    truncated: Option<(String, bool)>,
 }
 
 // SAFETY: `chemfiles::Trajectory` and `chemfiles::Frame` are `!Send` only because they hold raw
@@ -38,17 +47,26 @@ impl ChemReader {
     pub(crate) fn open(path: &Path, format: &FileFormat) -> Result<Self, IoError> {
         warnings::install();
         sniff(path, format.base)?;
-        let inner = chemfiles::Trajectory::open_with_format(path, 'r', format.chemfiles.as_str())
-            .map_err(|e| IoError::unreadable(path, &e.message))?;
+        let prepared = prepare(path, format)?;
+        let open_path = prepared.open_path.clone();
+        let opened = quiet::silenced(|| {
+            chemfiles::Trajectory::open_with_format(&open_path, 'r', prepared.chemfiles.as_str())
+        })
+        .map_err(|()| IoError::unreadable(path, "the reader failed on this file"))?;
+        let inner =
+            opened.map_err(|e| IoError::unreadable(path, unmask(&e.message, &open_path, path)))?;
+        let copy = prepared.temp.map(|temp| (prepared.open_path.clone(), temp));
         let mut reader = ChemReader {
             path: path.to_path_buf(),
             base: format.base,
             inner,
             scratch: chemfiles::Frame::new(),
             len: 0,
+            copy,
+            truncated: prepared.truncated.map(|t| (t, prepared.cut_removed)),
         };
         // `nsteps` panics (inside the Rust binding) if the C++ side fails.
-        let steps = catch_unwind(AssertUnwindSafe(|| reader.inner.nsteps()));
+        let steps = quiet::silenced(|| reader.inner.nsteps());
         reader.len = steps.map_err(|_| IoError::unreadable(path, "cannot count the frames"))?;
         if reader.len == 0 {
             return Err(IoError::Empty {
@@ -74,6 +92,14 @@ impl ChemReader {
         self.len
     }
 
+    /// Why the file ends early, when it is a compressed file whose stream is cut, and whether
+    /// the cut frame is already left out (else the last frame read is the incomplete one).
+    pub(crate) fn truncated(&self) -> Option<(&str, bool)> {
+        self.truncated
+            .as_ref()
+            .map(|(t, removed)| (t.as_str(), *removed))
+    }
+
     /// Reads frame `index` into the scratch frame and returns it.
     fn read_raw(&mut self, index: usize) -> Result<&chemfiles::Frame, IoError> {
         if index >= self.len {
@@ -83,9 +109,17 @@ impl ChemReader {
                 len: self.len,
             });
         }
-        self.inner
-            .read_step(index, &mut self.scratch)
-            .map_err(|e| IoError::bad_frame(&self.path, index, &e.message))?;
+        let (inner, scratch) = (&mut self.inner, &mut self.scratch);
+        let read = quiet::silenced(|| inner.read_step(index, scratch)).map_err(|()| {
+            IoError::bad_frame(&self.path, index, "the reader failed on this frame")
+        })?;
+        read.map_err(|e| {
+            let message = match &self.copy {
+                Some((copy, _)) => unmask(&e.message, copy, &self.path),
+                None => e.message.clone(),
+            };
+            IoError::bad_frame(&self.path, index, message)
+        })?;
         Ok(&self.scratch)
     }
 
@@ -95,12 +129,24 @@ impl ChemReader {
         let raw = self.read_raw(index)?;
         let positions = to_vec3(raw.positions());
         let cell = cell_rows(raw);
-        let time_ps = frame_time_ps(raw, base);
+        // A property that is not UTF-8 (a DCD title) panics in the binding: no time then.
+        let time_ps = quiet::silenced(|| frame_time_ps(raw, base)).unwrap_or(None);
         if let Some(atom) = positions.iter().position(|p| !p.is_finite()) {
             return Err(IoError::NonFiniteCoordinate {
                 path: self.path.clone(),
                 frame: index,
                 atom,
+            });
+        }
+        if let Some(atom) = positions
+            .iter()
+            .position(|p| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(IoError::AbsurdCoordinate {
+                path: self.path.clone(),
+                frame: index,
+                atom,
+                value: positions[atom].abs().max_element(),
             });
         }
         Ok(Frame {
@@ -120,15 +166,34 @@ impl ChemReader {
     /// Reads frame `index` and returns the topology it carries (names, residues, chains, bonds;
     /// elements only where the file states them, radii left at 0 for the caller to complete).
     pub(crate) fn read_topology(&mut self, index: usize) -> Result<Topology, IoError> {
+        let path = self.path.clone();
         let raw = self.read_raw(index)?;
-        Ok(convert_topology(&raw.topology()))
+        // Names that are not UTF-8 (from a binary format; text files are cleaned before
+        // chemfiles sees them) panic in the binding.
+        let mut topology = quiet::silenced(|| convert_topology(&raw.topology())).map_err(|()| {
+            IoError::unreadable(&path, "atom or residue names are not readable text")
+        })?;
+        if self.base == "GRO" {
+            // The plain copy when there is one (decompressed, cleaned text), else the file.
+            let text = self.copy.as_ref().map_or(path.as_path(), |(p, _)| p.as_path());
+            if let Some(lines) = read_gro_residues(text) {
+                apply_gro_residues(&mut topology, &lines);
+            }
+        }
+        Ok(topology)
     }
 }
 
-/// Rejects files that plainly are not in `base` format before a C library sees them. The TNG
-/// library prints straight to stderr (past chemfiles' warning callback) and tries huge
-/// allocations on garbage, so a TNG file must start with its GENERAL INFO block.
+/// Rejects files that plainly are not in `base` format, or are damaged in ways the C libraries
+/// do not survive, before a C library sees them. The TNG library prints straight to stderr (past
+/// chemfiles' warning callback), tries huge allocations on garbage and crashes on damaged
+/// blocks, so a TNG file must start with its GENERAL INFO block and pass [`tng::check`]; a DCD
+/// header must announce sizes that fit the file ([`dcd::check_header`]).
 fn sniff(path: &Path, base: &str) -> Result<(), IoError> {
+    if base == "DCD" {
+        // chemfiles allocates what the header says before reading a frame.
+        return dcd::check_header(path).map_err(|reason| IoError::unreadable(path, reason));
+    }
     if base != "TNG" {
         return Ok(());
     }
@@ -136,13 +201,21 @@ fn sniff(path: &Path, base: &str) -> Result<(), IoError> {
     let read = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut head));
     let n = read.map_err(|e| IoError::unreadable(path, e.to_string()))?;
     if head[..n].windows(12).any(|w| w == b"GENERAL INFO") {
-        Ok(())
+        tng::check(path).map_err(|reason| IoError::unreadable(path, reason))
     } else {
         Err(IoError::unreadable(
             path,
             "not a TNG file (it does not start with a GENERAL INFO block)",
         ))
     }
+}
+
+/// `message` with the temporary copy's path `copy` replaced by the user's `path`.
+fn unmask(message: &str, copy: &Path, path: &Path) -> String {
+    message.replace(
+        copy.to_string_lossy().as_ref(),
+        path.to_string_lossy().as_ref(),
+    )
 }
 
 /// Converts chemfiles' positions (f64, Å) to ours (f32, Å).
@@ -181,6 +254,11 @@ fn frame_time_ps(frame: &chemfiles::Frame, base: &str) -> Option<f64> {
 }
 
 /// Converts a chemfiles topology; see [`ChemReader::read_topology`].
+///
+/// Residues are contiguous runs of atoms with the same (residue number, residue name, chain,
+/// segment) in file order, never grouped by number alone: chemfiles puts every atom that shares
+/// a residue number into one residue (a GRO file numbering protein and lipids from 1 each), so a
+/// new run also starts wherever chemfiles' residue changes.
 fn convert_topology(top: &chemfiles::Topology) -> Topology {
     let n = top.size();
     let mut out = Topology {
@@ -191,7 +269,13 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         residue_ids: vec![0; n],
         residue_index: vec![u32::MAX; n],
         chains: vec![String::new(); n],
+        segments: vec![String::new(); n],
         b_factors: vec![0.0; n],
+        occupancies: vec![1.0; n],
+        types: Vec::with_capacity(n),
+        masses: Vec::with_capacity(n),
+        charges: Vec::with_capacity(n),
+        serials: (1..=n as i64).collect(),
         bonds: Vec::new(),
     };
     for i in 0..n {
@@ -208,9 +292,22 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         } else {
             ""
         };
+        // chemfiles looks the mass up from the type; a type that is only the name (`CA` in a GRO
+        // file) would give calcium's mass, so only a mass the file set explicitly is kept then.
+        let mass = atom.mass();
+        let mass = if kind != name || mass != chemfiles::Atom::new(kind.as_str()).mass() {
+            mass as f32
+        } else {
+            0.0
+        };
+        out.masses.push(if mass.is_finite() { mass } else { 0.0 });
+        out.charges.push(atom.charge() as f32);
         out.elements.push(element.to_string());
+        out.types.push(kind);
         out.names.push(name);
     }
+    // chemfiles' residue of each atom, to split runs where it changes.
+    let mut chem_residue = vec![u32::MAX; n];
     let residues = top.residues_count() as usize;
     for r in 0..residues {
         let Some(residue) = top.residue(r) else {
@@ -219,19 +316,16 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         let name = residue.name();
         let id = residue.id().unwrap_or(r as i64 + 1);
         let chain = residue_chain(&residue);
+        let segment = residue_string(&residue, &["segname"]);
         for a in residue.atoms().into_iter().filter(|&a| a < n) {
             out.residue_names[a].clone_from(&name);
             out.residue_ids[a] = id;
-            out.residue_index[a] = r as u32;
             out.chains[a].clone_from(&chain);
+            out.segments[a].clone_from(&segment);
+            chem_residue[a] = r as u32;
         }
     }
-    // Atoms outside every residue each get a residue of their own, after the real ones.
-    let unplaced = out.residue_index.iter_mut().filter(|r| **r == u32::MAX);
-    for (r, next) in unplaced.zip(residues as u32..) {
-        *r = next;
-    }
-    renumber_by_first_atom(&mut out.residue_index);
+    number_residue_runs(&mut out, &chem_residue);
     out.bonds = top
         .bonds()
         .into_iter()
@@ -240,20 +334,82 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
     out
 }
 
-/// Renumbers residue indices so they count up in order of each residue's first atom (chemfiles
-/// may list residues sorted by chain and number rather than as they appear in the file).
-fn renumber_by_first_atom(index: &mut [u32]) {
-    let mut map = std::collections::HashMap::new();
-    for r in index.iter_mut() {
-        let next = map.len() as u32;
-        *r = *map.entry(*r).or_insert(next);
+/// Sets [`Topology::residue_index`]: a new residue starts at every atom whose (residue number,
+/// name, chain, segment) or `group` differs from the previous atom's; atoms whose `group` is
+/// `u32::MAX` (in no residue) are residues of their own.
+fn number_residue_runs(top: &mut Topology, group: &[u32]) {
+    let n = top.len();
+    top.residue_index.resize(n, 0);
+    let mut next = 0u32;
+    for i in 0..n {
+        let same = i > 0
+            && group[i] != u32::MAX
+            && group[i] == group[i - 1]
+            && top.residue_ids[i] == top.residue_ids[i - 1]
+            && top.residue_names[i] == top.residue_names[i - 1]
+            && top.chains[i] == top.chains[i - 1]
+            && top.segments[i] == top.segments[i - 1];
+        if i > 0 && !same {
+            next += 1;
+        }
+        top.residue_index[i] = next;
     }
+}
+
+/// Replaces residue numbers and names with those of GRO columns 1-5 and 6-10 (`lines` are the
+/// atom lines of the first frame) and renumbers the residues as runs; chemfiles' GRO reader
+/// keeps one name per residue number. Does nothing when the line count is not the atom count.
+fn apply_gro_residues(top: &mut Topology, lines: &[(i64, String)]) {
+    if lines.len() != top.len() {
+        return;
+    }
+    let mut group = vec![0u32; lines.len()];
+    for (i, (id, name)) in lines.iter().enumerate() {
+        top.residue_ids[i] = *id;
+        top.residue_names[i].clone_from(name);
+        group[i] = u32::from(i > 0 && (lines[i - 1].0 != *id || lines[i - 1].1 != *name));
+    }
+    // Runs split where number or name change, whatever chemfiles grouped.
+    let mut run = 0u32;
+    for g in group.iter_mut() {
+        run += *g;
+        *g = run;
+    }
+    number_residue_runs(top, &group);
+}
+
+/// The residue number and name columns of the first frame of the GRO file `path` (plain,
+/// `.gz` or `.bz2`), or `None` when it cannot be read.
+fn read_gro_residues(path: &Path) -> Option<Vec<(i64, String)>> {
+    use std::io::{BufRead, BufReader, Read};
+    let file = std::fs::File::open(path).ok()?;
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    let reader: Box<dyn Read> = match ext.to_ascii_lowercase().as_str() {
+        "gz" => Box::new(flate2::read::MultiGzDecoder::new(file)),
+        "bz2" => Box::new(bzip2::read::MultiBzDecoder::new(file)),
+        _ => Box::new(file),
+    };
+    let mut lines = BufReader::new(reader).lines();
+    lines.next()?.ok()?;
+    let count: usize = lines.next()?.ok()?.trim().parse().ok()?;
+    let mut out = Vec::with_capacity(count);
+    for _ in 0..count {
+        let line = lines.next()?.ok()?;
+        let id = line.get(0..5)?.trim().parse().ok()?;
+        out.push((id, line.get(5..10)?.trim().to_string()));
+    }
+    Some(out)
 }
 
 /// The chain id of a residue (`chainid`), else its segment name, else empty.
 fn residue_chain(residue: &chemfiles::Residue) -> String {
+    residue_string(residue, &["chainid", "chainname", "segname"])
+}
+
+/// The first non-empty string property of `residue` among `keys`, trimmed, else empty.
+fn residue_string(residue: &chemfiles::Residue, keys: &[&str]) -> String {
     let properties: Vec<(String, Property)> = residue.properties().collect();
-    for key in ["chainid", "chainname", "segname"] {
+    for key in keys {
         for (name, value) in &properties {
             if let (true, Property::String(s)) = (name == key, value) {
                 let s = s.trim();
@@ -264,4 +420,39 @@ fn residue_chain(residue: &chemfiles::Residue) -> String {
         }
     }
     String::new()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn topology(residues: &[(i64, &str)]) -> Topology {
+        let n = residues.len();
+        Topology {
+            names: vec!["C".into(); n],
+            residue_ids: residues.iter().map(|r| r.0).collect(),
+            residue_names: residues.iter().map(|r| r.1.to_string()).collect(),
+            chains: vec![String::new(); n],
+            segments: vec![String::new(); n],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn residues_are_runs_not_numbers() {
+        // Protein residue 1, lipid residue 1, lipid residue 2, protein-numbered 1 again.
+        let lines: Vec<(i64, String)> = [(1, "ALA"), (1, "ALA"), (1, "POPE"), (2, "POPE")]
+            .iter()
+            .map(|(i, n)| (*i, n.to_string()))
+            .collect();
+        let mut top = topology(&[(1, "ALA"); 4]);
+        apply_gro_residues(&mut top, &lines);
+        assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
+        assert_eq!(top.residue_names[2], "POPE");
+        let mut top = topology(&[(5, "SOL"), (5, "SOL"), (6, "SOL"), (5, "SOL")]);
+        number_residue_runs(&mut top, &[0, 0, 1, 0]);
+        assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
+        number_residue_runs(&mut top, &[u32::MAX; 4]);
+        assert_eq!(top.residue_index, vec![0, 1, 2, 3]);
+    }
 }

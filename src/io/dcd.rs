@@ -95,6 +95,80 @@ pub(crate) fn measure(path: &Path) -> Option<DcdTail> {
     })
 }
 
+/// Checks that the sizes in the header of the DCD file at `path` fit the file, before chemfiles
+/// allocates for them (a 4-byte edit of the atom count made it grow to 8 GB). Headers this check
+/// does not understand pass (chemfiles then decides); sizes that cannot fit give the reason.
+pub(crate) fn check_header(path: &Path) -> Result<(), String> {
+    let Ok(mut file) = std::fs::File::open(path) else {
+        return Ok(());
+    };
+    let total = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut head = [0u8; 92];
+    if file.read_exact(&mut head).is_err() {
+        return Ok(());
+    }
+    let little = match &head[4..8] {
+        b"CORD" if u32::from_le_bytes([head[0], head[1], head[2], head[3]]) == 84 => true,
+        b"CORD" if u32::from_be_bytes([head[0], head[1], head[2], head[3]]) == 84 => false,
+        _ => return Ok(()),
+    };
+    let int = |b: &[u8]| -> i64 {
+        let bytes = [b[0], b[1], b[2], b[3]];
+        i64::from(if little {
+            i32::from_le_bytes(bytes)
+        } else {
+            i32::from_be_bytes(bytes)
+        })
+    };
+    let fixed = int(&head[8 + 4 * 8..]);
+    let mut marker = [0u8; 4];
+    if file.read_exact(&mut marker).is_err() {
+        return Err("the file ends inside its header (truncated)".into());
+    }
+    let title = int(&marker);
+    if title < 0 || title as u64 > total {
+        return Err(format!(
+            "the header's title record says {title} bytes, in a file of {total} bytes (damaged header)"
+        ));
+    }
+    if file.seek(SeekFrom::Current(title + 4)).is_err() {
+        return Err("the file ends inside its header (truncated)".into());
+    }
+    let mut natom_record = [0u8; 12];
+    if file.read_exact(&mut natom_record).is_err() {
+        return Err("the file ends inside its header (truncated)".into());
+    }
+    if int(&natom_record[0..4]) != 4 {
+        return Ok(());
+    }
+    let atoms = int(&natom_record[4..8]);
+    // One frame needs at least 3 × 4 bytes per free atom; the first frame holds all atoms.
+    if atoms <= 0 || (atoms as u64) * 12 > total {
+        return Err(format!(
+            "the header says {atoms} atoms, which a file of {total} bytes cannot hold (damaged header)"
+        ));
+    }
+    if fixed < 0 || fixed > atoms {
+        return Err(format!(
+            "the header says {fixed} fixed atoms out of {atoms} (damaged header)"
+        ));
+    }
+    if fixed > 0 {
+        let free = (atoms - fixed) as usize;
+        let mut record = vec![0u8; 4 * free + 4];
+        if file.read_exact(&mut record).is_err() {
+            return Err("the file ends inside its header (truncated)".into());
+        }
+        let bad = (0..free)
+            .map(|k| int(&record[4 + 4 * k..]))
+            .any(|index| index < 1 || index > atoms);
+        if int(&record[0..4]) != 4 * free as i64 || bad {
+            return Err("the free-atom list in the header is damaged".into());
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -63,6 +63,21 @@ pub enum IoError {
         /// Index of the atom, from 0.
         atom: usize,
     },
+    /// A coordinate is so far out (beyond ±1e7 Å) that it can only be damage.
+    #[error(
+        "{}: frame {frame}: atom {atom} has an absurd coordinate ({value:e} Å; damaged file?)",
+        path.display()
+    )]
+    AbsurdCoordinate {
+        /// The file.
+        path: PathBuf,
+        /// Index of the frame, from 0.
+        frame: usize,
+        /// Index of the atom, from 0.
+        atom: usize,
+        /// The largest absolute coordinate of that atom, in Å.
+        value: f32,
+    },
     /// Topology and trajectory disagree on the number of atoms.
     #[error(
         "atom count mismatch: topology {} has {topology_atoms} atoms but trajectory {} has {trajectory_atoms} (frame {frame})",
@@ -122,7 +137,8 @@ impl IoError {
     }
 }
 
-/// Joins the lines of a parser message with "; " so errors stay on one line.
+/// Joins the lines of a parser message with "; " so errors stay on one line, and replaces
+/// control characters with `?`.
 pub(crate) fn one_line(message: &str) -> String {
     let parts: Vec<&str> = message
         .lines()
@@ -132,6 +148,11 @@ pub(crate) fn one_line(message: &str) -> String {
     if parts.is_empty() {
         "unknown error".to_string()
     } else {
-        parts.join("; ")
+        // Control characters from a file's bytes (quoted by a parser) must not reach a terminal.
+        parts
+            .join("; ")
+            .chars()
+            .map(|c| if c.is_control() { '?' } else { c })
+            .collect()
     }
 }

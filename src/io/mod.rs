@@ -8,16 +8,23 @@
 //! Amber NetCDF, with `.gz`/`.bz2`/`.xz` compression); wwPDB files are additionally read by pdbtbx
 //! for element columns, B-factors and chains. All failures are [`IoError`]s that print as one
 //! line naming the file (and frame, and atom); chemfiles' own warnings are captured (see
-//! [`take_warnings`]) rather than printed.
+//! [`take_warnings`]) rather than printed. No byte of a file reaches the C++ readers unchecked:
+//! text is made valid UTF-8 and `.gz`/`.bz2` decompressed in Rust (`prepare`), XTC/TRR frame
+//! headers (`xdr`), TNG blocks (`tng`) and DCD headers (`dcd`) are walked first, and a damaged
+//! part ends the readable frames as [`Damage`].
 
 mod chem;
 mod dcd;
 pub mod error;
 pub mod format;
+mod prepare;
+mod quiet;
 pub mod stream;
+mod tng;
 mod trajectory;
 mod warnings;
 mod wwpdb;
+mod xdr;
 
 pub use error::IoError;
 pub use format::{FileFormat, WwFormat, detect};

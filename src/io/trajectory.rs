@@ -8,7 +8,7 @@ use std::sync::{Mutex, MutexGuard};
 
 use super::chem::ChemReader;
 use super::format::detect;
-use super::{IoError, dcd, wwpdb};
+use super::{IoError, dcd, wwpdb, xdr};
 use crate::model::{Frame, Topology, sizing};
 
 /// How many frames at the end of a file are probed for damage when it opens (a truncated
@@ -77,11 +77,26 @@ pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     }
     topology.complete_elements_and_radii();
     sizing::fit_untyped_radii(&mut topology, &first);
+    let mut walk = None;
     let reader = match traj {
         None => top_reader,
         Some(path) => {
             let format = detect(path)?;
             drop(top_reader);
+            // XTC and TRR: the frame headers are checked before chemfiles reads a frame.
+            walk = xdr::walk(path, format.base)
+                .map_err(|reason| IoError::bad_frame(path, 0, reason))?;
+            if let Some(w) = &walk
+                && w.natoms != topology.len()
+            {
+                return Err(IoError::AtomCountMismatch {
+                    topology: top.to_path_buf(),
+                    topology_atoms: topology.len(),
+                    trajectory: path.to_path_buf(),
+                    trajectory_atoms: w.natoms,
+                    frame: 0,
+                });
+            }
             ChemReader::open(path, &format)?
         }
     };
@@ -93,6 +108,10 @@ pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
         reader: Mutex::new(reader),
         damage: None,
     };
+    if let Some(w) = walk {
+        trajectory.apply_walk(w)?;
+    }
+    trajectory.mark_truncated_stream()?;
     // A count mismatch is reported at once, not at the first frame the user asks for.
     trajectory.read_frame(0)?;
     trajectory.probe_tail();
@@ -187,6 +206,44 @@ impl Trajectory {
             .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    /// Limits the readable frames to those the XTC/TRR header walk found sound.
+    fn apply_walk(&mut self, walk: xdr::Walk) -> Result<(), IoError> {
+        if walk.frames < self.len || walk.damage.is_some() {
+            let frame = walk.frames.min(self.len);
+            let message = walk
+                .damage
+                .unwrap_or_else(|| "the frame headers end here".to_string());
+            let error = IoError::bad_frame(&self.frames_path, frame, message);
+            if frame == 0 {
+                return Err(error);
+            }
+            self.len = frame;
+            self.damage = Some(Damage { frame, error });
+        }
+        Ok(())
+    }
+
+    /// A compressed file whose stream is cut: its last decompressed frame is incomplete, so it
+    /// is the damage (even when its text happens to parse).
+    fn mark_truncated_stream(&mut self) -> Result<(), IoError> {
+        let Some((reason, removed)) = self.lock().truncated().map(|(t, r)| (t.to_string(), r))
+        else {
+            return Ok(());
+        };
+        let frame = if removed {
+            self.len
+        } else {
+            self.len.saturating_sub(1)
+        };
+        let error = IoError::bad_frame(&self.frames_path, frame, reason);
+        if frame == 0 {
+            return Err(error);
+        }
+        self.len = frame;
+        self.damage = Some(Damage { frame, error });
+        Ok(())
+    }
+
     /// A DCD file whose size leaves a partial frame after the last complete one was truncated:
     /// chemfiles drops that frame silently, this records it as [`Damage`].
     fn check_dcd_size(&mut self) {
@@ -217,7 +274,10 @@ impl Trajectory {
         for index in start..self.len {
             let result = self.lock().read_frame(index);
             if let Err(error) = result
-                && !matches!(error, IoError::NonFiniteCoordinate { .. })
+                && !matches!(
+                    error,
+                    IoError::NonFiniteCoordinate { .. } | IoError::AbsurdCoordinate { .. }
+                )
             {
                 first_bad = Some((index, error));
                 break;

@@ -1,6 +1,7 @@
 //! wwPDB enrichment: pdbtbx (mmCIF) or a fixed-column reader (PDB) fills in what chemfiles does
-//! not read, the B-factors (and elements and chains when chemfiles found none). Atoms are matched
-//! by position, so the order and count of atoms stay chemfiles' (the order of the frames).
+//! not read, the B-factors, occupancies and serial numbers (and elements and chains when
+//! chemfiles found none). Atoms are matched by position, so the order and count of atoms stay
+//! chemfiles' (the order of the frames).
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -17,6 +18,8 @@ const STEPS_PER_ANGSTROM: f64 = 1000.0;
 /// What pdbtbx knows about one atom.
 struct WwAtom {
     b_factor: f32,
+    occupancy: f32,
+    serial: Option<i64>,
     chain: String,
     element: Option<&'static str>,
 }
@@ -48,6 +51,12 @@ pub(crate) fn enrich(
     }
     for (i, atom) in matched.into_iter().enumerate() {
         topology.b_factors[i] = atom.b_factor;
+        if let Some(o) = topology.occupancies.get_mut(i) {
+            *o = atom.occupancy;
+        }
+        if let (Some(s), Some(serial)) = (topology.serials.get_mut(i), atom.serial) {
+            *s = serial;
+        }
         if topology.chains[i].is_empty() {
             topology.chains[i].clone_from(&atom.chain);
         }
@@ -78,6 +87,8 @@ fn read_atoms(path: &Path, format: WwFormat) -> Option<HashMap<(i64, i64, i64), 
             let (x, y, z) = atom.pos();
             let value = WwAtom {
                 b_factor: atom.b_factor() as f32,
+                occupancy: atom.occupancy() as f32,
+                serial: i64::try_from(atom.serial_number()).ok(),
                 chain: chain.id().to_string(),
                 element: atom.element().and_then(|e| canonical_symbol(e.symbol())),
             };
@@ -87,43 +98,15 @@ fn read_atoms(path: &Path, format: WwFormat) -> Option<HashMap<(i64, i64, i64), 
     Some(atoms)
 }
 
-/// Runs pdbtbx with its panics caught and not printed: a panic hook (installed once, chaining
-/// the previous hook) stays silent on threads that are inside [`quiet_panics::silenced`].
-mod quiet_panics {
-    use std::cell::Cell;
-    use std::panic::{AssertUnwindSafe, catch_unwind};
-    use std::sync::Once;
-
-    thread_local! {
-        static SILENT: Cell<bool> = const { Cell::new(false) };
-    }
-    static INSTALL: Once = Once::new();
-
-    pub(super) fn install() {
-        INSTALL.call_once(|| {
-            let previous = std::panic::take_hook();
-            std::panic::set_hook(Box::new(move |info| {
-                if !SILENT.with(Cell::get) {
-                    previous(info);
-                }
-            }));
-        });
-    }
-
-    /// Calls `f`, turning a panic into `Err(())` without printing it.
-    pub(super) fn silenced<T>(f: impl FnOnce() -> T) -> Result<T, ()> {
-        SILENT.with(|s| s.set(true));
-        let result = catch_unwind(AssertUnwindSafe(f));
-        SILENT.with(|s| s.set(false));
-        result.map_err(|_| ())
-    }
-}
+use super::quiet as quiet_panics;
 
 /// A plain fixed-column reading of the first model's ATOM/HETATM records, for PDB files pdbtbx
 /// rejects or panics on.
-/// Columns (1-based): chain 22, x/y/z 31-54, B-factor 61-66, element 77-78.
+/// Columns (1-based): serial 7-11, chain 22, x/y/z 31-54, occupancy 55-60, B-factor 61-66,
+/// element 77-78.
 fn read_columns(path: &Path) -> Option<HashMap<(i64, i64, i64), WwAtom>> {
-    let text = std::fs::read_to_string(path).ok()?;
+    let bytes = std::fs::read(path).ok()?;
+    let text = String::from_utf8_lossy(&bytes);
     let mut atoms = HashMap::new();
     for line in text.lines() {
         if line.starts_with("ENDMDL") {
@@ -140,6 +123,8 @@ fn read_columns(path: &Path) -> Option<HashMap<(i64, i64, i64), WwAtom>> {
         };
         let value = WwAtom {
             b_factor: number(60, 66).unwrap_or(0.0) as f32,
+            occupancy: number(54, 60).unwrap_or(1.0) as f32,
+            serial: field(6, 11).parse().ok(),
             chain: field(21, 22).to_string(),
             element: canonical_symbol(field(76, 78)),
         };

@@ -16,6 +16,8 @@ pub const BEAD_PADDING: f32 = 1.0;
 /// as it moves, far less than the 1 Å padding.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BeadModel {
+    /// Atoms in the topology (and in every frame) the model was built for.
+    atom_count: usize,
     /// Bead `b` holds `atoms[offsets[b]..offsets[b + 1]]`.
     offsets: Vec<usize>,
     /// Atom indices grouped by bead, in file order within a bead.
@@ -29,30 +31,52 @@ impl BeadModel {
     /// Atoms without residue information each become their own bead. Fails when the frame's
     /// atom count differs from the topology's.
     pub fn new(topology: &Topology, frame: &Frame) -> Result<Self, ModelError> {
+        Self::new_subset(topology, frame, None)
+    }
+
+    /// Like [`BeadModel::new`] for the atoms `subset` only (sorted 0-based indices; `None`: all
+    /// atoms): one bead per residue that has at least one selected atom, made of those atoms.
+    pub fn new_subset(
+        topology: &Topology,
+        frame: &Frame,
+        subset: Option<&[u32]>,
+    ) -> Result<Self, ModelError> {
         let n = topology.len();
         check_count(frame, n)?;
-        let keys: Vec<usize> = if topology.residue_index.len() == n {
-            topology.residue_index.iter().map(|&r| r as usize).collect()
-        } else {
-            (0..n).collect()
+        let all: Vec<u32>;
+        let members = match subset {
+            Some(s) => s,
+            None => {
+                all = (0..n as u32).collect();
+                &all
+            }
         };
-        let groups = keys.iter().max().map_or(0, |m| m + 1);
+        let key = |i: u32| -> usize {
+            if topology.residue_index.len() == n {
+                topology.residue_index[i as usize] as usize
+            } else {
+                i as usize
+            }
+        };
+        let groups = members.iter().map(|&i| key(i)).max().map_or(0, |m| m + 1);
         let mut offsets = vec![0usize; groups + 1];
-        for &k in &keys {
-            offsets[k + 1] += 1;
+        for &i in members {
+            offsets[key(i) + 1] += 1;
         }
         for g in 0..groups {
             offsets[g + 1] += offsets[g];
         }
         let mut fill = offsets.clone();
-        let mut atoms = vec![0u32; n];
-        for (i, &k) in keys.iter().enumerate() {
-            atoms[fill[k]] = i as u32;
+        let mut atoms = vec![0u32; members.len()];
+        for &i in members {
+            let k = key(i);
+            atoms[fill[k]] = i;
             fill[k] += 1;
         }
         // Drop residue indices that hold no atom.
         offsets.dedup();
         let mut model = BeadModel {
+            atom_count: n,
             offsets,
             atoms,
             radii: Vec::new(),
@@ -85,7 +109,7 @@ impl BeadModel {
     /// periodic box are made whole around their first atom before averaging. Fails when the
     /// frame has a different atom count than the topology the model was built from.
     pub fn centres_into(&self, frame: &Frame, out: &mut Vec<Vec3>) -> Result<(), ModelError> {
-        check_count(frame, self.atoms.len())?;
+        check_count(frame, self.atom_count)?;
         out.clear();
         let image = MinimumImage::new(frame.cell);
         for b in 0..self.len() {

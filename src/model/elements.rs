@@ -119,6 +119,52 @@ pub fn element_radius(element: &str) -> f32 {
     }
 }
 
+/// Standard atomic mass in amu (IUPAC conventional values) of the elements common in
+/// biomolecular simulations; 0 for anything else (including no element).
+pub fn element_mass(element: &str) -> f32 {
+    match element {
+        "H" => 1.008,
+        "He" => 4.0026,
+        "Li" => 6.94,
+        "B" => 10.81,
+        "C" => 12.011,
+        "N" => 14.007,
+        "O" => 15.999,
+        "F" => 18.998,
+        "Ne" => 20.180,
+        "Na" => 22.990,
+        "Mg" => 24.305,
+        "Al" => 26.982,
+        "Si" => 28.085,
+        "P" => 30.974,
+        "S" => 32.06,
+        "Cl" => 35.45,
+        "Ar" => 39.948,
+        "K" => 39.098,
+        "Ca" => 40.078,
+        "Mn" => 54.938,
+        "Fe" => 55.845,
+        "Co" => 58.933,
+        "Ni" => 58.693,
+        "Cu" => 63.546,
+        "Zn" => 65.38,
+        "Se" => 78.971,
+        "Br" => 79.904,
+        "Kr" => 83.798,
+        "Rb" => 85.468,
+        "Sr" => 87.62,
+        "Cd" => 112.41,
+        "I" => 126.90,
+        "Xe" => 131.29,
+        "Cs" => 132.91,
+        "Ba" => 137.33,
+        "Pt" => 195.08,
+        "Au" => 196.97,
+        "Hg" => 200.59,
+        _ => 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,5 +206,7 @@ mod tests {
         assert_eq!(element_radius("O"), 1.3);
         assert_eq!(element_radius("Fe"), DEFAULT_RADIUS);
         assert_eq!(canonical_symbol("FE"), Some("Fe"));
+        assert_eq!(element_mass("C"), 12.011);
+        assert_eq!(element_mass(""), 0.0);
     }
 }

@@ -55,8 +55,22 @@ pub struct Topology {
     pub residue_index: Vec<u32>,
     /// Chain or segment identifier of each atom (empty when the file has none).
     pub chains: Vec<String>,
+    /// Segment name of each atom (PDB columns 73-76, PSF segid; empty when the file has none).
+    pub segments: Vec<String>,
     /// Temperature factor of each atom in Å² (0 when the file has none).
     pub b_factors: Vec<f32>,
+    /// Occupancy of each atom, 0 to 1 (1 when the file has none).
+    pub occupancies: Vec<f32>,
+    /// Atom type as the file gives it (force-field type, LAMMPS numeric type, or the PDB
+    /// element column); equal to the name when the file has no type.
+    pub types: Vec<String>,
+    /// Mass of each atom in amu (from the file, else from the element; 0 when neither is known).
+    pub masses: Vec<f32>,
+    /// Partial charge of each atom in units of the elementary charge e (0 when the file has none).
+    pub charges: Vec<f32>,
+    /// Serial number of each atom as written in the file (1-based; index + 1 when the file has
+    /// none).
+    pub serials: Vec<i64>,
     /// Bonds as pairs of atom indices, when the file lists them.
     pub bonds: Vec<[u32; 2]>,
 }
@@ -74,11 +88,13 @@ impl Topology {
 
     /// Fills what the file left open, per DESIGN section 2: in a coarse-grained system every
     /// particle gets no element and the bead radius (2.35 Å); otherwise empty elements are
-    /// guessed from atom and residue names, and radii that are not positive (not given by the
-    /// file) come from the element table.
+    /// guessed from atom and residue names, radii that are not positive (not given by the
+    /// file) come from the element table, and so do masses that are not positive.
+    /// Per-atom vectors shorter than [`Topology::len`] are padded with their defaults (see
+    /// [`Topology::complete_defaults`]).
     pub fn complete_elements_and_radii(&mut self) {
         let n = self.len();
-        self.elements.resize(n, String::new());
+        self.complete_defaults();
         self.radii.resize(n, 0.0);
         if elements::looks_coarse_grained(self.names.iter().map(String::as_str)) {
             self.elements.iter_mut().for_each(String::clear);
@@ -96,7 +112,33 @@ impl Topology {
             if self.radii[i].is_nan() || self.radii[i] <= 0.0 {
                 self.radii[i] = elements::element_radius(&self.elements[i]);
             }
+            if self.masses[i].is_nan() || self.masses[i] <= 0.0 {
+                self.masses[i] = elements::element_mass(&self.elements[i]);
+            }
         }
+    }
+
+    /// Pads every per-atom vector shorter than [`Topology::len`] with its default: empty
+    /// strings, 0 (B-factor, mass, charge), occupancy 1, serial index + 1, and a type equal to
+    /// the atom's name. Residue numbers and indices are left as they are.
+    pub fn complete_defaults(&mut self) {
+        let n = self.len();
+        for v in [
+            &mut self.elements,
+            &mut self.residue_names,
+            &mut self.chains,
+            &mut self.segments,
+        ] {
+            v.resize(n, String::new());
+        }
+        for v in [&mut self.b_factors, &mut self.masses, &mut self.charges] {
+            v.resize(n, 0.0);
+        }
+        self.occupancies.resize(n, 1.0);
+        let first = self.serials.len();
+        self.serials.extend((first..n).map(|i| i as i64 + 1));
+        let first = self.types.len();
+        self.types.extend_from_slice(&self.names[first.min(n)..]);
     }
 
     /// Number of residues (one more than the largest [`Topology::residue_index`]).

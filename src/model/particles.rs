@@ -23,6 +23,8 @@ pub struct ParticleOptions {
 #[derive(Debug, Clone)]
 pub struct Particles {
     atom_count: usize,
+    /// The atoms the particles come from (sorted 0-based indices), when not all of them.
+    subset: Option<Vec<u32>>,
     beads: Option<BeadModel>,
     radii: Vec<f32>,
     colours: Vec<[f32; 3]>,
@@ -36,17 +38,34 @@ impl Particles {
         first: &Frame,
         options: &ParticleOptions,
     ) -> Result<Self, ModelError> {
+        Self::new_subset(topology, first, options, None)
+    }
+
+    /// Like [`Particles::new`] for the atoms `subset` only (sorted 0-based atom indices, as a
+    /// selection gives them; `None`: every atom). Beads are then one per residue with a
+    /// selected atom, made of its selected atoms.
+    pub fn new_subset(
+        topology: &Topology,
+        first: &Frame,
+        options: &ParticleOptions,
+        subset: Option<&[u32]>,
+    ) -> Result<Self, ModelError> {
         check_count(first, topology.len())?;
         let atom_colours = options.colours.atom_colours(topology);
         let (beads, radii, colours) = if options.beads {
-            let model = BeadModel::new(topology, first)?;
+            let model = BeadModel::new_subset(topology, first, subset)?;
             let colours = model.colours(&atom_colours);
             (Some(model.clone()), model.radii().to_vec(), colours)
         } else {
-            (None, options.radius_overrides.apply(topology), atom_colours)
+            let radii = options.radius_overrides.apply(topology);
+            match subset {
+                Some(s) => (None, gather(&radii, s), gather(&atom_colours, s)),
+                None => (None, radii, atom_colours),
+            }
         };
         Ok(Particles {
             atom_count: topology.len(),
+            subset: subset.map(<[u32]>::to_vec),
             beads,
             radii,
             colours,
@@ -83,13 +102,35 @@ impl Particles {
         &self.colours
     }
 
+    /// The atoms the particles come from (sorted 0-based indices), or `None` for all atoms.
+    pub fn subset(&self) -> Option<&[u32]> {
+        self.subset.as_deref()
+    }
+
     /// Recolours the particles with another scheme (radii and positions are unaffected).
     pub fn set_colours(&mut self, topology: &Topology, scheme: ColorScheme) {
         let atom_colours = scheme.atom_colours(topology);
-        self.colours = match &self.beads {
-            Some(model) => model.colours(&atom_colours),
-            None => atom_colours,
+        self.colours = match (&self.beads, &self.subset) {
+            (Some(model), _) => model.colours(&atom_colours),
+            (None, Some(s)) => gather(&atom_colours, s),
+            (None, None) => atom_colours,
         };
+    }
+
+    /// `bonds` (pairs of atom indices) between two atoms that are both particles, renumbered to
+    /// particle indices; nothing for beads.
+    pub fn bonds_within(&self, bonds: &[[u32; 2]]) -> Vec<[u32; 2]> {
+        if self.beads.is_some() {
+            return Vec::new();
+        }
+        let Some(subset) = &self.subset else {
+            return bonds.to_vec();
+        };
+        let local = |a: u32| subset.binary_search(&a).ok().map(|i| i as u32);
+        bonds
+            .iter()
+            .filter_map(|&[a, b]| Some([local(a)?, local(b)?]))
+            .collect()
     }
 
     /// Particle positions in Å for `frame`, written into `out` (cleared first).
@@ -99,7 +140,10 @@ impl Particles {
             Some(model) => model.centres_into(frame, out)?,
             None => {
                 out.clear();
-                out.extend_from_slice(&frame.positions);
+                match &self.subset {
+                    Some(s) => out.extend(s.iter().map(|&i| frame.positions[i as usize])),
+                    None => out.extend_from_slice(&frame.positions),
+                }
             }
         }
         Ok(())
@@ -120,4 +164,9 @@ impl Particles {
             colours: Some(&self.colours),
         }
     }
+}
+
+/// `values` at `indices` (each index must be in range).
+fn gather<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
+    indices.iter().map(|&i| values[i as usize]).collect()
 }

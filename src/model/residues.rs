@@ -62,20 +62,43 @@ const AMINO_ACIDS: [(&str, ResidueClass); 38] = {
 };
 
 /// Nucleotide residue names (DNA and RNA, with common terminal variants).
-const NUCLEOTIDES: [&str; 16] = [
+pub const NUCLEOTIDES: [&str; 16] = [
     "A", "C", "G", "U", "T", "DA", "DC", "DG", "DT", "RA", "RC", "RG", "RU", "ADE", "CYT", "GUA",
 ];
 
 /// Water residue names of the common force fields.
-const WATERS: [&str; 9] = [
-    "SOL", "WAT", "HOH", "H2O", "TIP3", "TIP4", "TIP5", "SPC", "T3P",
+pub const WATERS: [&str; 16] = [
+    "SOL", "WAT", "HOH", "H2O", "TIP3", "TIP4", "TIP5", "SPC", "T3P", "T4P", "T5P", "TIP3P",
+    "TIP4P", "SPCE", "OPC", "WATER",
 ];
 
-/// Lipid residue names whose atoms use the usual C/H/N/O/P naming.
-const LIPIDS: [&str; 14] = [
-    "POPE", "POPC", "POPG", "POPS", "DPPC", "DOPC", "DMPC", "DLPC", "DOPE", "DSPC", "CHL1", "CHOL",
-    "PA", "PC",
+/// Lipid residue names (all-atom CHARMM/GROMACS/Slipids names, AMBER Lipid14 fragments, and
+/// Martini coarse-grained lipids, which share the all-atom names). Their atoms use the usual
+/// C/H/N/O/P naming in all-atom files.
+pub const LIPIDS: [&str; 65] = [
+    // Phosphatidylcholines (PC), -ethanolamines (PE), -glycerols (PG), -serines (PS),
+    // -acids (PA), -inositols (PI).
+    "POPC", "POPE", "POPG", "POPS", "POPA", "POPI", "DPPC", "DPPE", "DPPG", "DPPS", "DOPC", "DOPE",
+    "DOPG", "DOPS", "DMPC", "DMPE", "DMPG", "DMPS", "DSPC", "DSPE", "DSPG", "DLPC", "DLPE", "DLPG",
+    "DAPC", "DUPC", "DIPC", "DIPE", "PAPC", "PAPE", "PAPS", "PUPC", "PUPE", "PIPC", "PIPE", "DPPI",
+    "POPX", "SOPC", "SDPC",
+    // Phosphoinositides, cardiolipin, sphingolipids and ceramides.
+    "PIP2", "POP2", "PIP3", "CDL", "CDL2", "TOCL", "CARD", "DPSM", "PSM", "SSM", "DPCE",
+    // Sterols.
+    "CHOL", "CHL1", "CHL", "ERG",
+    // Glycerides and fatty acids.
+    "TRIO", "DAG", "PALM", "OLEO",
+    // AMBER Lipid14/17 fragments: tails (PA palmitoyl, OL oleoyl, MY myristoyl) and heads.
+    "PA", "PC", "OL", "MY", "PE", "PGR", "PGS",
 ];
+
+/// Water residue names of coarse-grained Martini models (`W` standard, `PW` polarisable, `WF`
+/// antifreeze); all-atom waters are in [`is_water`]'s other list.
+pub const CG_WATERS: [&str; 3] = ["W", "PW", "WF"];
+
+/// Coarse-grained or generic ion residue names that are no element (Martini's `ION` residue
+/// holds `NA+`/`CL-` beads; `ZNM` is the zinc cationic dummy model).
+pub const GENERIC_IONS: [&str; 2] = ["ION", "ZNM"];
 
 /// Strips a terminal prefix (`N`/`C` as in AMBER's `NALA`, `CALA`) when the rest is an amino acid.
 fn strip_terminal(residue: &str) -> &str {
@@ -111,6 +134,32 @@ pub fn is_standard_organic(name: &str) -> bool {
         || NUCLEOTIDES.contains(&upper.as_str())
         || WATERS.contains(&upper.as_str())
         || LIPIDS.contains(&upper.as_str())
+}
+
+/// True for nucleotide residue names (DNA and RNA), case-insensitive.
+pub fn is_nucleotide(name: &str) -> bool {
+    let upper = name.trim().to_ascii_uppercase();
+    NUCLEOTIDES.contains(&upper.as_str())
+}
+
+/// True for water residue names, all-atom (`SOL`, `WAT`, `HOH`, `TIP3`, ...) or Martini (`W`,
+/// `PW`, `WF`), case-insensitive.
+pub fn is_water(name: &str) -> bool {
+    let upper = name.trim().to_ascii_uppercase();
+    WATERS.contains(&upper.as_str()) || CG_WATERS.contains(&upper.as_str())
+}
+
+/// True for lipid residue names ([`LIPIDS`]), case-insensitive.
+pub fn is_lipid(name: &str) -> bool {
+    let upper = name.trim().to_ascii_uppercase();
+    LIPIDS.contains(&upper.as_str())
+}
+
+/// True for ion residue names: a monatomic ion ([`ion_element`]) or a generic ion residue
+/// ([`GENERIC_IONS`]), case-insensitive.
+pub fn is_ion(name: &str) -> bool {
+    let upper = name.trim().to_ascii_uppercase();
+    ion_element(&upper).is_some() || GENERIC_IONS.contains(&upper.as_str())
 }
 
 /// The element of a monatomic ion residue (`NA`, `SOD`, `CL`, `CLA`, `CA`, `CAL`, `ZN`, ...).
@@ -160,5 +209,9 @@ mod tests {
         assert!(!is_standard_organic("HEM"));
         assert_eq!(ion_element("SOD"), Some("Na"));
         assert_eq!(ion_element("ALA"), None);
+        assert!(is_water("PW") && is_water("sol") && !is_water("ALA"));
+        assert!(is_lipid("POPG") && is_lipid("CHOL") && !is_lipid("SOL"));
+        assert!(is_ion("ION") && is_ion("NA+") && !is_ion("POPE"));
+        assert!(is_nucleotide("DA") && !is_nucleotide("ALA"));
     }
 }

@@ -1,9 +1,29 @@
 //! The orbit camera the renderer looks through: it circles a target point, pans in the view
-//! plane, zooms along the view direction, fits a bounding box, and offsets itself for stereo
-//! eyes. The app turns mouse drags into calls here; headless renders set it up directly.
+//! plane, zooms along the view direction, fits a bounding box, and gives the view and projection
+//! of each stereo eye (off-axis frusta whose zero-parallax plane is the focal plane). The app
+//! turns mouse drags into calls here; headless renders set it up directly.
 
 use glam::camera::rh::proj::directx;
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Quat, Vec3};
+
+/// One eye of a stereo pair.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Eye {
+    /// The left eye (displaced towards the image's left).
+    Left,
+    /// The right eye.
+    Right,
+}
+
+impl Eye {
+    /// -1 for the left eye, +1 for the right eye.
+    pub fn side(self) -> f32 {
+        match self {
+            Eye::Left => -1.0,
+            Eye::Right => 1.0,
+        }
+    }
+}
 
 /// How 3D positions are projected onto the image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -152,13 +172,68 @@ impl Camera {
         }
     }
 
-    /// The camera of one stereo eye: moved sideways by `side * separation / 2`, where
-    /// `separation` is a fraction of the viewing distance and `side` is -1 (left) or +1 (right).
-    /// Both eyes look parallel, so the target stays at the same depth.
-    pub fn eye_camera(&self, side: f32, separation: f32) -> Camera {
-        let mut c = *self;
-        c.target += self.right() * side * separation * 0.5 * self.distance;
-        c
+    /// View and projection matrices of the camera itself (no stereo) for an image of `aspect`.
+    pub fn matrices(&self, aspect: f32) -> (Mat4, Mat4) {
+        (self.view_matrix(), self.projection_matrix(aspect))
+    }
+
+    /// Distance from the camera to the stereo focal (zero-parallax) plane in Å: `focal` when it
+    /// is finite and positive, else the distance to the target.
+    pub fn focal_distance(&self, focal: Option<f32>) -> f32 {
+        focal
+            .filter(|f| f.is_finite() && *f > 0.0)
+            .unwrap_or(self.distance)
+    }
+
+    /// View and projection matrices of one stereo eye for an image (or half image) of `aspect`.
+    ///
+    /// `separation` is the distance between the eyes as a fraction of the focal distance
+    /// ([`Camera::focal_distance`] of `focal`). Perspective: the eyes sit `±separation / 2 *
+    /// focal` along [`Camera::right`] with axes parallel to the camera's, and each frustum is
+    /// shifted sideways (off-axis) so both frusta share the camera's window on the focal plane:
+    /// points on that plane land on the same pixel in both eyes, nearer points have crossed
+    /// parallax, farther ones uncrossed. Orthographic (where a sideways shift gives no
+    /// parallax): each eye turns by `±separation / 2` radians about the camera's up axis through
+    /// the focal point (toe-in), which gives the same parallax signs.
+    pub fn eye_matrices(
+        &self,
+        eye: Eye,
+        separation: f32,
+        focal: Option<f32>,
+        aspect: f32,
+    ) -> (Mat4, Mat4) {
+        let sep = if separation.is_finite() {
+            separation.max(0.0)
+        } else {
+            0.0
+        };
+        let aspect = if aspect.is_finite() && aspect > 0.0 {
+            aspect
+        } else {
+            1.0
+        };
+        let f = self.focal_distance(focal);
+        let (back, right, up) = (self.back(), self.right(), self.up());
+        let eye_pos = self.eye();
+        match self.projection {
+            Projection::Perspective => {
+                let d = eye.side() * sep * 0.5 * f;
+                let pos = eye_pos + right * d;
+                let view = glam::camera::rh::view::look_to_mat4(pos, -back, up);
+                // The camera's axis at the focal depth is at x = -d in this eye's view space;
+                // shift the image so it lands in the centre (an off-axis frustum).
+                let half_w = f * (self.fov_y * 0.5).tan() * aspect;
+                let shift = Mat4::from_translation(Vec3::new(d / half_w, 0.0, 0.0));
+                (view, shift * self.projection_matrix(aspect))
+            }
+            Projection::Orthographic => {
+                let pivot = eye_pos - back * f;
+                let turn = Quat::from_axis_angle(up, eye.side() * sep * 0.5);
+                let pos = pivot + turn * (back * f);
+                let view = glam::camera::rh::view::look_to_mat4(pos, -(turn * back), up);
+                (view, self.projection_matrix(aspect))
+            }
+        }
     }
 
     /// Spins the camera about the vertical axis by `degrees` (turntable step).
@@ -245,13 +320,91 @@ mod tests {
         assert!(c.pitch <= MAX_PITCH);
     }
 
+    /// Pixel x of `p` (Å) in an image `width` pixels wide seen through `(view, proj)`.
+    fn pixel_x(m: (Mat4, Mat4), p: Vec3, width: f32) -> f32 {
+        let ndc = (m.1 * m.0).project_point3(p);
+        (ndc.x + 1.0) * 0.5 * width
+    }
+
+    fn cameras() -> Vec<Camera> {
+        let mut c = Camera::default();
+        c.fit_sphere(Vec3::new(3.0, -2.0, 7.0), 25.0);
+        c.orbit(0.8, 0.4);
+        let mut o = c;
+        o.projection = Projection::Orthographic;
+        vec![c, o]
+    }
+
     #[test]
-    fn eyes_are_separated_along_right() {
-        let c = Camera::default();
-        let l = c.eye_camera(-1.0, 0.06);
-        let r = c.eye_camera(1.0, 0.06);
-        let d = r.eye() - l.eye();
-        assert!((d.length() - 0.06 * c.distance).abs() < 1e-3);
+    fn target_lands_on_the_same_pixel_in_both_eyes() {
+        for c in cameras() {
+            for focal in [None, Some(c.distance)] {
+                let l = c.eye_matrices(Eye::Left, 1.0 / 30.0, focal, 4.0 / 3.0);
+                let r = c.eye_matrices(Eye::Right, 1.0 / 30.0, focal, 4.0 / 3.0);
+                let (xl, xr) = (pixel_x(l, c.target, 800.0), pixel_x(r, c.target, 800.0));
+                assert!((xl - xr).abs() < 0.5, "{:?}: {xl} vs {xr}", c.projection);
+                assert!((xl - 400.0).abs() < 0.5, "target in the centre: {xl}");
+                let (pl, pr) = (
+                    (l.1 * l.0).project_point3(c.target),
+                    (r.1 * r.0).project_point3(c.target),
+                );
+                assert!((pl.y - pr.y).abs() < 1e-4, "no vertical parallax");
+            }
+        }
+    }
+
+    #[test]
+    fn nearer_points_have_crossed_parallax_farther_ones_uncrossed() {
+        for c in cameras() {
+            let l = c.eye_matrices(Eye::Left, 1.0 / 30.0, None, 1.5);
+            let r = c.eye_matrices(Eye::Right, 1.0 / 30.0, None, 1.5);
+            let off = c.right() * 4.0 + c.up() * 3.0;
+            let near = c.target + c.back() * c.scene_radius * 0.8 + off;
+            let far = c.target - c.back() * c.scene_radius * 0.8 + off;
+            let parallax = |p| pixel_x(r, p, 900.0) - pixel_x(l, p, 900.0);
+            // Crossed: the left eye's image is right of the right eye's (negative parallax).
+            assert!(
+                parallax(near) < -2.0,
+                "{:?} near: {}",
+                c.projection,
+                parallax(near)
+            );
+            assert!(
+                parallax(far) > 2.0,
+                "{:?} far: {}",
+                c.projection,
+                parallax(far)
+            );
+        }
+    }
+
+    #[test]
+    fn focal_distance_moves_the_zero_parallax_plane() {
+        let c = cameras()[0];
+        let focal = c.distance - 10.0;
+        let l = c.eye_matrices(Eye::Left, 0.05, Some(focal), 1.0);
+        let r = c.eye_matrices(Eye::Right, 0.05, Some(focal), 1.0);
+        let on_plane = c.eye() - c.back() * focal + c.right() * 5.0;
+        assert!((pixel_x(l, on_plane, 600.0) - pixel_x(r, on_plane, 600.0)).abs() < 0.5);
+        // The target is now behind the focal plane: uncrossed.
+        assert!(pixel_x(r, c.target, 600.0) - pixel_x(l, c.target, 600.0) > 1.0);
+        // Invalid focal distances fall back to the target.
+        assert_eq!(c.focal_distance(Some(f32::NAN)), c.distance);
+        assert_eq!(c.focal_distance(Some(-3.0)), c.distance);
+    }
+
+    #[test]
+    fn eyes_are_separated_along_right_by_the_fraction_of_the_focal_distance() {
+        let c = cameras()[0];
+        let pos = |m: (Mat4, Mat4)| m.0.inverse().transform_point3(Vec3::ZERO);
+        let l = pos(c.eye_matrices(Eye::Left, 0.06, None, 1.0));
+        let r = pos(c.eye_matrices(Eye::Right, 0.06, None, 1.0));
+        let d = r - l;
+        assert!((d.length() - 0.06 * c.distance).abs() < 1e-2, "{d}");
         assert!(d.normalize().dot(c.right()) > 0.999);
+        // Zero separation is the mono camera.
+        let (v, p) = c.eye_matrices(Eye::Left, 0.0, None, 1.0);
+        assert!(v.abs_diff_eq(c.view_matrix(), 1e-4));
+        assert!(p.abs_diff_eq(c.projection_matrix(1.0), 1e-6));
     }
 }

@@ -43,6 +43,8 @@ pub(crate) struct Pipelines {
     pub cylinder: wgpu::RenderPipeline,
     pub resolve: wgpu::RenderPipeline,
     pub anaglyph: wgpu::RenderPipeline,
+    /// The luminance (grey) anaglyph composition.
+    pub anaglyph_grey: wgpu::RenderPipeline,
 }
 
 fn vec3_buffer(location: u32) -> [wgpu::VertexAttribute; 1] {
@@ -331,6 +333,10 @@ impl Pipelines {
         };
         let resolve = pipeline(device, post_spec("oit resolve", "fs_oit_resolve", &over));
         let anaglyph = pipeline(device, post_spec("anaglyph", "fs_anaglyph", &opaque_target));
+        let anaglyph_grey = pipeline(
+            device,
+            post_spec("grey anaglyph", "fs_anaglyph_grey", &opaque_target),
+        );
         // Multiplies the image by the occlusion factor (colour = dst * src; alpha kept).
         let multiply = [colour_target(Some(wgpu::BlendState {
             color: wgpu::BlendComponent {
@@ -370,6 +376,7 @@ impl Pipelines {
             cylinder,
             resolve,
             anaglyph,
+            anaglyph_grey,
         }
     }
 }

@@ -4,9 +4,12 @@
 
 use glam::{Mat4, Vec3};
 
-use super::camera::{Camera, Projection};
+use super::camera::{Camera, Eye, Projection};
 use super::pipelines::{CYLINDER_VERTICES, Pipelines};
-use super::scene::GpuScene;
+use super::scene::{GpuScene, SurfaceLayer};
+
+/// Surfaces at least this opaque are drawn in the opaque pass.
+const OPAQUE: f32 = 0.999;
 use super::settings::{RenderSettings, Stereo};
 use super::targets::RenderTargets;
 
@@ -28,8 +31,14 @@ pub(crate) struct ViewUniform {
 const _: () = assert!(std::mem::size_of::<ViewUniform>() == 240);
 
 impl ViewUniform {
-    fn new(camera: &Camera, viewport: [u32; 4], settings: &RenderSettings) -> Self {
-        let aspect = viewport[2] as f32 / viewport[3].max(1) as f32;
+    /// Uniforms for `camera` seen through `view` and `proj` (the camera's own matrices, or one
+    /// stereo eye's) into `viewport`.
+    fn new(
+        camera: &Camera,
+        (view, proj): (Mat4, Mat4),
+        viewport: [u32; 4],
+        settings: &RenderSettings,
+    ) -> Self {
         let (near, far) = camera.clip_range();
         let bg = settings.background.linear_rgb();
         // Depth cue from the front to the back of the scene's bounding sphere.
@@ -46,8 +55,8 @@ impl ViewUniform {
             None => (0.0, [1.0; 3]),
         };
         ViewUniform {
-            view: camera.view_matrix().to_cols_array_2d(),
-            proj: camera.projection_matrix(aspect).to_cols_array_2d(),
+            view: view.to_cols_array_2d(),
+            proj: proj.to_cols_array_2d(),
             light_dir: [light.x, light.y, light.z, 0.0],
             background: [bg[0], bg[1], bg[2], 1.0],
             fog: [
@@ -78,11 +87,15 @@ pub struct Renderer {
     /// One uniform buffer per eye, so both eyes can be encoded before one submit.
     view_buffers: [wgpu::Buffer; 2],
     view_groups: [wgpu::BindGroup; 2],
+    /// One uniform buffer per (eye, surface layer): each surface is drawn with its own
+    /// opacity and colour. Grows with the number of layers; never shrinks.
+    layer_views: std::sync::Mutex<Vec<(wgpu::Buffer, wgpu::BindGroup)>>,
 }
 
-/// One eye's pass: its camera, the part of the output it covers, and where it draws.
+/// One eye's pass: its view and projection matrices, the part of the output it covers, and
+/// where it draws.
 struct EyePass<'a> {
-    camera: Camera,
+    matrices: (Mat4, Mat4),
     /// x, y, width, height in pixels.
     viewport: [u32; 4],
     target: &'a wgpu::TextureView,
@@ -117,7 +130,34 @@ impl Renderer {
             pipelines,
             view_buffers,
             view_groups,
+            layer_views: std::sync::Mutex::new(Vec::new()),
         }
+    }
+
+    /// The uniform buffer and bind group of (eye, layer) slot `slot`, made when missing.
+    fn layer_view(&self, device: &wgpu::Device, slot: usize) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let mut views = self
+            .layer_views
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        while views.len() <= slot {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("surface layer view uniform"),
+                size: size_of::<ViewUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("surface layer view"),
+                layout: &self.pipelines.view_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
+            });
+            views.push((buffer, group));
+        }
+        views[slot].clone()
     }
 
     /// Renders `scene` into `targets` (the output texture ends up in
@@ -132,44 +172,55 @@ impl Renderer {
         settings: &RenderSettings,
     ) {
         let [w, h] = targets.size();
-        if settings.stereo == Stereo::Anaglyph {
+        if settings.stereo.is_anaglyph() {
             targets.ensure_eyes(device);
         }
         let sep = settings.eye_separation;
+        let focal = settings.focal_distance;
+        let eye = |e: Eye, width: u32| {
+            let aspect = width as f32 / h.max(1) as f32;
+            camera.eye_matrices(e, sep, focal, aspect)
+        };
         let passes: Vec<EyePass<'_>> = match (settings.stereo, &targets.eyes) {
-            (Stereo::SideBySide, _) => {
+            (Stereo::SideBySide | Stereo::SideBySideCross, _) => {
                 let half = (w / 2).max(1);
+                // Wall-eyed: left eye on the left; cross-eyed: swapped.
+                let (first, second) = if settings.stereo == Stereo::SideBySide {
+                    (Eye::Left, Eye::Right)
+                } else {
+                    (Eye::Right, Eye::Left)
+                };
                 vec![
                     EyePass {
-                        camera: camera.eye_camera(-1.0, sep),
+                        matrices: eye(first, half),
                         viewport: [0, 0, half, h],
                         target: &targets.colour_view,
                         clear: true,
                     },
                     EyePass {
-                        camera: camera.eye_camera(1.0, sep),
+                        matrices: eye(second, w - half),
                         viewport: [half, 0, w - half, h],
                         target: &targets.colour_view,
                         clear: false,
                     },
                 ]
             }
-            (Stereo::Anaglyph, Some([l, r])) => vec![
+            (Stereo::Anaglyph | Stereo::AnaglyphGrey, Some([l, r])) => vec![
                 EyePass {
-                    camera: camera.eye_camera(-1.0, sep),
+                    matrices: eye(Eye::Left, w),
                     viewport: [0, 0, w, h],
                     target: l,
                     clear: true,
                 },
                 EyePass {
-                    camera: camera.eye_camera(1.0, sep),
+                    matrices: eye(Eye::Right, w),
                     viewport: [0, 0, w, h],
                     target: r,
                     clear: true,
                 },
             ],
             _ => vec![EyePass {
-                camera: *camera,
+                matrices: camera.matrices(w as f32 / h.max(1) as f32),
                 viewport: [0, 0, w, h],
                 target: &targets.colour_view,
                 clear: true,
@@ -178,9 +229,27 @@ impl Renderer {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("render"),
         });
+        let layers = scene.surfaces.len();
         for (i, pass) in passes.iter().enumerate() {
-            let u = ViewUniform::new(&pass.camera, pass.viewport, settings);
+            let u = ViewUniform::new(camera, pass.matrices, pass.viewport, settings);
             queue.write_buffer(&self.view_buffers[i], 0, bytemuck::bytes_of(&u));
+            // Each surface layer's look (opacity, colour) in its own uniform.
+            let layer_groups: Vec<wgpu::BindGroup> = scene
+                .surfaces
+                .iter()
+                .enumerate()
+                .map(|(k, layer)| {
+                    let look = RenderSettings {
+                        surface_opacity: layer.effective_opacity(settings),
+                        surface_colour: layer.colour.or(settings.surface_colour),
+                        ..*settings
+                    };
+                    let u = ViewUniform::new(camera, pass.matrices, pass.viewport, &look);
+                    let (buffer, group) = self.layer_view(device, i * layers + k);
+                    queue.write_buffer(&buffer, 0, bytemuck::bytes_of(&u));
+                    group
+                })
+                .collect();
             self.encode_eye(
                 device,
                 &mut encoder,
@@ -188,17 +257,21 @@ impl Renderer {
                 scene,
                 settings,
                 pass,
-                &self.view_groups[i],
+                (&self.view_groups[i], &layer_groups),
             );
         }
-        if let (Stereo::Anaglyph, Some([l, r])) = (settings.stereo, &targets.eyes) {
+        if let (true, Some([l, r])) = (settings.stereo.is_anaglyph(), &targets.eyes) {
             let group = self.post_group(device, l, r);
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("anaglyph"),
                 color_attachments: &[Some(colour_attachment(&targets.colour_view, None))],
                 ..Default::default()
             });
-            rp.set_pipeline(&self.pipelines.anaglyph);
+            rp.set_pipeline(if settings.stereo == Stereo::AnaglyphGrey {
+                &self.pipelines.anaglyph_grey
+            } else {
+                &self.pipelines.anaglyph
+            });
             rp.set_bind_group(0, &group, &[]);
             rp.draw(0..3, 0..1);
         }
@@ -236,7 +309,7 @@ impl Renderer {
         scene: &GpuScene,
         settings: &RenderSettings,
         pass: &EyePass<'_>,
-        view_group: &wgpu::BindGroup,
+        (view_group, layer_groups): (&wgpu::BindGroup, &[wgpu::BindGroup]),
     ) {
         let [x, y, w, h] = pass.viewport.map(|v| v as f32);
         let bg = settings.background.linear_rgb();
@@ -246,9 +319,21 @@ impl Renderer {
             b: bg[2] as f64,
             a: 1.0,
         });
-        let mesh_ready = settings.show_surface && scene.has_surface();
-        let transparent =
-            mesh_ready && settings.surface_is_transparent() && settings.surface_opacity > 0.0;
+        // Surface layers split by their opacity: opaque ones in the opaque pass, see-through
+        // ones in the order-independent transparency pass, invisible ones not at all.
+        let drawn = |opaque: bool| -> Vec<usize> {
+            (0..scene.surfaces.len())
+                .filter(|&k| {
+                    let layer = &scene.surfaces[k];
+                    let a = layer.effective_opacity(settings);
+                    settings.show_surface
+                        && layer.has_surface()
+                        && a > 0.0
+                        && (a >= OPAQUE) == opaque
+                })
+                .collect()
+        };
+        let (opaque_layers, transparent_layers) = (drawn(true), drawn(false));
         {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("opaque"),
@@ -279,8 +364,9 @@ impl Renderer {
                 rp.set_vertex_buffer(0, c.buffer.slice(..));
                 rp.draw(0..CYLINDER_VERTICES, 0..scene.cylinder_count);
             }
-            if mesh_ready && !settings.surface_is_transparent() {
-                self.draw_mesh(&mut rp, scene, false);
+            for &k in &opaque_layers {
+                rp.set_bind_group(0, &layer_groups[k], &[]);
+                self.draw_mesh(&mut rp, &scene.surfaces[k], false);
             }
         }
         if settings.ambient_occlusion > 0.0 {
@@ -303,7 +389,7 @@ impl Renderer {
             rp.set_bind_group(1, &depth_group, &[]);
             rp.draw(0..3, 0..1);
         }
-        if !transparent {
+        if transparent_layers.is_empty() {
             return;
         }
         {
@@ -330,8 +416,10 @@ impl Renderer {
                 ..Default::default()
             });
             rp.set_viewport(x, y, w, h, 0.0, 1.0);
-            rp.set_bind_group(0, view_group, &[]);
-            self.draw_mesh(&mut rp, scene, true);
+            for &k in &transparent_layers {
+                rp.set_bind_group(0, &layer_groups[k], &[]);
+                self.draw_mesh(&mut rp, &scene.surfaces[k], true);
+            }
         }
         let group = self.post_group(device, &targets.accum_view, &targets.reveal_view);
         let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -347,7 +435,7 @@ impl Renderer {
 
     /// Draws the surface: from the GPU engine's buffers with the indirect arguments it wrote,
     /// or from the uploaded mesh.
-    fn draw_mesh(&self, rp: &mut wgpu::RenderPass<'_>, scene: &GpuScene, transparent: bool) {
+    fn draw_mesh(&self, rp: &mut wgpu::RenderPass<'_>, scene: &SurfaceLayer, transparent: bool) {
         if let Some(g) = &scene.gpu_surface {
             rp.set_pipeline(if transparent {
                 &self.pipelines.gpu_mesh_oit

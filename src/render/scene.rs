@@ -1,6 +1,6 @@
-//! What the renderer draws, living in GPU buffers: the surface mesh (positions, normals, colours,
-//! indices) or the GPU engine's own surface buffers (drawn in place, never read back), and the
-//! atom/bond instances. Buffers are reused from frame to frame and grow only
+//! What the renderer draws, living in GPU buffers: the surface meshes, one layer per surface
+//! representation (positions, normals, colours, indices, or the GPU engine's own surface buffers,
+//! drawn in place and never read back), and the atom/bond instances. Buffers are reused from frame to frame and grow only
 //! when a frame needs more room, so playback does not reallocate.
 
 use glam::Vec3;
@@ -108,9 +108,9 @@ fn write_or_create(
     }
 }
 
-/// The renderer's view of one scene, on the GPU.
+/// One surface of the scene: an uploaded mesh or the GPU engine's buffers, with its own look.
 #[derive(Debug, Default)]
-pub struct GpuScene {
+pub struct SurfaceLayer {
     pub(crate) positions: Option<GrowBuffer>,
     pub(crate) normals: Option<GrowBuffer>,
     pub(crate) colours: Option<GrowBuffer>,
@@ -118,22 +118,27 @@ pub struct GpuScene {
     pub(crate) index_count: u32,
     /// The GPU engine's surface, drawn instead of the uploaded mesh when set.
     pub(crate) gpu_surface: Option<crate::gpu::GpuSurface>,
-    pub(crate) spheres: Option<GrowBuffer>,
-    pub(crate) sphere_count: u32,
-    pub(crate) cylinders: Option<GrowBuffer>,
-    pub(crate) cylinder_count: u32,
-    mesh_bounds: Option<(Vec3, Vec3)>,
-    atom_bounds: Option<(Vec3, Vec3)>,
+    bounds: Option<(Vec3, Vec3)>,
+    /// Opacity 0..1 of this surface; `None` takes [`crate::render::RenderSettings`]'s.
+    pub opacity: Option<f32>,
+    /// A single linear RGB colour for this surface; `None` takes the settings' choice.
+    pub colour: Option<[f32; 3]>,
 }
 
-impl GpuScene {
-    /// An empty scene.
-    pub fn new() -> Self {
-        GpuScene::default()
+impl SurfaceLayer {
+    /// True when there is something to draw (uploaded mesh or GPU buffers).
+    pub fn has_surface(&self) -> bool {
+        self.index_count > 0 || self.gpu_surface.is_some()
     }
 
-    /// Uploads a surface mesh, replacing the previous one. A mesh without colours is drawn white.
-    pub fn set_mesh(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, mesh: &Mesh) {
+    /// The opacity this layer is drawn with under `settings`.
+    pub fn effective_opacity(&self, settings: &crate::render::RenderSettings) -> f32 {
+        self.opacity
+            .unwrap_or(settings.surface_opacity)
+            .clamp(0.0, 1.0)
+    }
+
+    fn set_mesh(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, mesh: &Mesh) {
         let vertex = wgpu::BufferUsages::VERTEX;
         write_or_create(
             &mut self.positions,
@@ -175,33 +180,125 @@ impl GpuScene {
             bytemuck::cast_slice(&mesh.indices),
         );
         self.index_count = mesh.indices.len() as u32;
-        self.mesh_bounds = mesh.bounds();
+        self.bounds = mesh.bounds();
         self.gpu_surface = None;
     }
 
-    /// Draws the GPU engine's surface in place of an uploaded mesh: its vertex and index buffers
-    /// with `draw_indexed_indirect` on the arguments the engine wrote (no readback). `bounds`
-    /// (Å) are those of the surface, for fitting the camera (e.g. the grid's box).
+    fn clear(&mut self) {
+        self.index_count = 0;
+        self.bounds = None;
+        self.gpu_surface = None;
+    }
+
+    fn triangle_count(&self) -> u32 {
+        match &self.gpu_surface {
+            Some(g) => g.stats.map_or(0, |s| s.triangle_count),
+            None => self.index_count / 3,
+        }
+    }
+}
+
+/// The renderer's view of one scene, on the GPU: any number of surfaces (one per surface
+/// representation, each with its own opacity) and one set of atom and bond instances (every
+/// atom representation's, concatenated).
+#[derive(Debug, Default)]
+pub struct GpuScene {
+    pub(crate) surfaces: Vec<SurfaceLayer>,
+    pub(crate) spheres: Option<GrowBuffer>,
+    pub(crate) sphere_count: u32,
+    pub(crate) cylinders: Option<GrowBuffer>,
+    pub(crate) cylinder_count: u32,
+    atom_bounds: Option<(Vec3, Vec3)>,
+}
+
+impl GpuScene {
+    /// An empty scene.
+    pub fn new() -> Self {
+        GpuScene::default()
+    }
+
+    /// Keeps `count` surface layers (new ones empty; extra ones dropped).
+    pub fn set_surface_count(&mut self, count: usize) {
+        self.surfaces.resize_with(count, SurfaceLayer::default);
+    }
+
+    /// Number of surface layers.
+    pub fn surface_count(&self) -> usize {
+        self.surfaces.len()
+    }
+
+    /// Surface layer `k` (created, with the layers before it, when missing).
+    pub fn layer_mut(&mut self, k: usize) -> &mut SurfaceLayer {
+        if self.surfaces.len() <= k {
+            self.set_surface_count(k + 1);
+        }
+        &mut self.surfaces[k]
+    }
+
+    /// Uploads the mesh of surface layer `k`. A mesh without colours is drawn white.
+    pub fn set_layer_mesh(
+        &mut self,
+        k: usize,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        mesh: &Mesh,
+    ) {
+        self.layer_mut(k).set_mesh(device, queue, mesh);
+    }
+
+    /// Draws the GPU engine's surface as layer `k`: its vertex and index buffers with
+    /// `draw_indexed_indirect` on the arguments the engine wrote (no readback). `bounds` (Å) are
+    /// those of the surface, for fitting the camera (e.g. the grid's box).
+    pub fn set_layer_gpu_surface(
+        &mut self,
+        k: usize,
+        surface: crate::gpu::GpuSurface,
+        bounds: Option<(Vec3, Vec3)>,
+    ) {
+        let layer = self.layer_mut(k);
+        layer.gpu_surface = Some(surface);
+        layer.index_count = 0;
+        layer.bounds = bounds;
+    }
+
+    /// Removes the surface of layer `k` (keeping its buffers for reuse).
+    pub fn clear_layer(&mut self, k: usize) {
+        if let Some(layer) = self.surfaces.get_mut(k) {
+            layer.clear();
+        }
+    }
+
+    /// Uploads a single surface mesh, replacing every surface. A mesh without colours is
+    /// drawn white; its look follows the render settings.
+    pub fn set_mesh(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, mesh: &Mesh) {
+        self.set_surface_count(1);
+        let layer = &mut self.surfaces[0];
+        layer.opacity = None;
+        layer.colour = None;
+        layer.set_mesh(device, queue, mesh);
+    }
+
+    /// Draws the GPU engine's surface as the only surface (see
+    /// [`GpuScene::set_layer_gpu_surface`]).
     pub fn set_gpu_surface(
         &mut self,
         surface: crate::gpu::GpuSurface,
         bounds: Option<(Vec3, Vec3)>,
     ) {
-        self.gpu_surface = Some(surface);
-        self.index_count = 0;
-        self.mesh_bounds = bounds;
+        self.set_surface_count(1);
+        self.surfaces[0].opacity = None;
+        self.surfaces[0].colour = None;
+        self.set_layer_gpu_surface(0, surface, bounds);
     }
 
-    /// Removes the surface.
+    /// Removes every surface.
     pub fn clear_mesh(&mut self) {
-        self.index_count = 0;
-        self.mesh_bounds = None;
-        self.gpu_surface = None;
+        self.surfaces.iter_mut().for_each(SurfaceLayer::clear);
     }
 
     /// True when there is a surface to draw (uploaded mesh or GPU buffers).
     pub fn has_surface(&self) -> bool {
-        self.index_count > 0 || self.gpu_surface.is_some()
+        self.surfaces.iter().any(SurfaceLayer::has_surface)
     }
 
     /// Uploads the atom spheres and bond cylinders, replacing the previous ones.
@@ -241,12 +338,10 @@ impl GpuScene {
         });
     }
 
-    /// Number of surface triangles uploaded (for GPU buffers: the newest counters, if any).
+    /// Number of surface triangles uploaded, all layers together (for GPU buffers: the newest
+    /// counters, if any).
     pub fn triangle_count(&self) -> u32 {
-        match &self.gpu_surface {
-            Some(g) => g.stats.map_or(0, |s| s.triangle_count),
-            None => self.index_count / 3,
-        }
+        self.surfaces.iter().map(SurfaceLayer::triangle_count).sum()
     }
 
     /// Number of atom spheres uploaded.
@@ -256,9 +351,10 @@ impl GpuScene {
 
     /// Bounds (Å) of everything in the scene, for fitting the camera; `None` when empty.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        match (self.mesh_bounds, self.atom_bounds) {
-            (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
-            (a, b) => a.or(b),
-        }
+        self.surfaces
+            .iter()
+            .filter_map(|l| l.bounds)
+            .chain(self.atom_bounds)
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
     }
 }

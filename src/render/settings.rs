@@ -64,30 +64,81 @@ impl AtomStyle {
     }
 }
 
-/// Stereo output.
+/// Stereo output. Both eyes look through off-axis frusta around the camera (see
+/// [`crate::render::camera::Camera::eye_matrices`]): the focal plane has zero parallax.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Stereo {
     /// One view.
     #[default]
     Off,
-    /// Left eye in the left half of the image, right eye in the right half (each half keeps its
-    /// own aspect ratio, for parallel free viewing and 3D displays).
+    /// Side by side, wall-eyed (parallel) viewing: the left eye's image in the left half, the
+    /// right eye's in the right half (each half keeps its own aspect ratio; also for 3D
+    /// displays).
     SideBySide,
-    /// Red (left eye) / cyan (right eye) anaglyph.
+    /// Side by side, cross-eyed viewing: the right eye's image in the left half.
+    SideBySideCross,
+    /// Red (left eye) / cyan (right eye) anaglyph in colour: red from the left eye's red
+    /// channel, green and blue from the right eye's.
     Anaglyph,
+    /// Red/cyan anaglyph of the eyes' luminance, so surface colours do not rival between eyes.
+    AnaglyphGrey,
 }
 
 impl Stereo {
     /// All modes, in menu order.
-    pub const ALL: [Stereo; 3] = [Stereo::Off, Stereo::SideBySide, Stereo::Anaglyph];
+    pub const ALL: [Stereo; 5] = [
+        Stereo::Off,
+        Stereo::SideBySide,
+        Stereo::SideBySideCross,
+        Stereo::Anaglyph,
+        Stereo::AnaglyphGrey,
+    ];
 
-    /// Name for menus and the command line (`off`, `sbs`, `anaglyph`).
+    /// Name for menus and the command line (`off`, `sbs`, `sbs-cross`, `anaglyph`,
+    /// `anaglyph-grey`).
     pub fn name(self) -> &'static str {
         match self {
             Stereo::Off => "off",
             Stereo::SideBySide => "sbs",
+            Stereo::SideBySideCross => "sbs-cross",
             Stereo::Anaglyph => "anaglyph",
+            Stereo::AnaglyphGrey => "anaglyph-grey",
         }
+    }
+
+    /// True for the two anaglyph modes (each eye is rendered into its own texture first).
+    pub fn is_anaglyph(self) -> bool {
+        matches!(self, Stereo::Anaglyph | Stereo::AnaglyphGrey)
+    }
+
+    /// True for the two side-by-side modes.
+    pub fn is_side_by_side(self) -> bool {
+        matches!(self, Stereo::SideBySide | Stereo::SideBySideCross)
+    }
+}
+
+/// Default eye separation: 1/30 of the focal distance (a common stereo-photography rule).
+pub const DEFAULT_EYE_SEPARATION: f32 = 1.0 / 30.0;
+
+/// Checks an eye separation (fraction of the focal distance): finite and not negative.
+pub fn check_eye_separation(f: f32) -> Result<f32, String> {
+    if f.is_finite() && f >= 0.0 {
+        Ok(f)
+    } else {
+        Err(format!(
+            "bad eye separation {f}: expected a fraction of the focal distance >= 0, e.g. 0.033"
+        ))
+    }
+}
+
+/// Checks a focal distance (Å from the camera): finite and positive.
+pub fn check_focal_distance(d: f32) -> Result<f32, String> {
+    if d.is_finite() && d > 0.0 {
+        Ok(d)
+    } else {
+        Err(format!(
+            "bad focal distance {d}: expected a positive distance in Å from the camera"
+        ))
     }
 }
 
@@ -103,7 +154,12 @@ impl FromStr for Stereo {
         Stereo::ALL
             .into_iter()
             .find(|m| m.name().eq_ignore_ascii_case(s))
-            .ok_or_else(|| format!("unknown stereo mode '{s}' (expected off, sbs or anaglyph)"))
+            .or_else(|| s.eq_ignore_ascii_case("anaglyph-gray").then_some(Stereo::AnaglyphGrey))
+            .ok_or_else(|| {
+                format!(
+                    "unknown stereo mode '{s}' (expected off, sbs, sbs-cross, anaglyph or anaglyph-grey)"
+                )
+            })
     }
 }
 
@@ -130,8 +186,12 @@ pub struct RenderSettings {
     pub ambient_occlusion: f32,
     /// Stereo mode.
     pub stereo: Stereo,
-    /// Distance between the eyes as a fraction of the viewing distance (0.02 to 0.1 is comfortable).
+    /// Distance between the eyes as a fraction of the focal distance (default 1/30; 0.02 to 0.07
+    /// is comfortable).
     pub eye_separation: f32,
+    /// Distance from the camera to the stereo focal (zero-parallax) plane in Å, or `None` to
+    /// follow the camera's target.
+    pub focal_distance: Option<f32>,
 }
 
 impl Default for RenderSettings {
@@ -147,7 +207,8 @@ impl Default for RenderSettings {
             depth_cue: 0.6,
             ambient_occlusion: 0.7,
             stereo: Stereo::Off,
-            eye_separation: 0.05,
+            eye_separation: DEFAULT_EYE_SEPARATION,
+            focal_distance: None,
         }
     }
 }

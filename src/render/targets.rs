@@ -1,6 +1,6 @@
 //! The offscreen textures one image is rendered into: the output colour texture (what the window
 //! shows, screenshots read back and the anaglyph pass writes), depth, the two transparency
-//! accumulation targets, and, for anaglyph stereo, one colour texture per eye.
+//! accumulation targets, and, for the anaglyph stereo modes, one colour texture per eye.
 
 /// Format of the output and eye images: 8-bit sRGB, so shaders work in linear colour and the
 /// bytes read back are ready for PNG.
@@ -46,7 +46,7 @@ pub struct RenderTargets {
     pub(crate) depth_view: wgpu::TextureView,
     pub(crate) accum_view: wgpu::TextureView,
     pub(crate) reveal_view: wgpu::TextureView,
-    /// Left and right eye images, made on first anaglyph use.
+    /// Left and right eye images, made on first use of an anaglyph mode.
     pub(crate) eyes: Option<[wgpu::TextureView; 2]>,
 }
 

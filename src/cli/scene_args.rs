@@ -1,0 +1,122 @@
+//! What `surface` and `render` share about representations: `--select EXPR` (one surface
+//! representation of that selection with the command's H/R/I/quality/colour), `--state FILE`
+//! (the representations of a state file saved by the viewer), or, with neither, the default
+//! representations of the system (printed on stderr).
+
+use std::path::PathBuf;
+
+use anyhow::{Result, anyhow, bail};
+use mdsurf::model::{Frame, ParticleOptions, RadiusOverrides, Topology};
+use mdsurf::scene::defaults::{default_representations, describe};
+use mdsurf::scene::layer::Layer;
+use mdsurf::scene::representation::{RepStyle, Representation};
+use mdsurf::scene::state_file::StateFile;
+use mdsurf::surface::SurfaceParams;
+
+/// Which representations a headless command computes or draws.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SceneArgs {
+    /// One surface of the atoms this selection picks, e.g. 'protein', 'resname POPE POPG',
+    /// 'within 5 of resname LIG' (without --select or --state: the default representations).
+    #[arg(long, value_name = "EXPR")]
+    pub select: Option<String>,
+    /// The representations (and camera and look, for render) of a state file saved by the
+    /// viewer (File → Save view).
+    #[arg(long, value_name = "STATE.toml", conflicts_with = "select")]
+    pub state: Option<PathBuf>,
+}
+
+/// The representations a command uses and where they came from.
+pub struct SceneChoice {
+    /// The representations, in drawing order.
+    pub reps: Vec<Representation>,
+    /// The state file, when `--state` gave one.
+    pub state: Option<StateFile>,
+}
+
+impl SceneArgs {
+    /// Loads the state file, if any (before any data is read, so a bad file fails fast).
+    pub fn load_state(&self) -> Result<Option<StateFile>> {
+        self.state
+            .as_deref()
+            .map(|p| StateFile::load(p).map_err(|e| anyhow!(e)))
+            .transpose()
+    }
+
+    /// The representations for `topology`: from `state`, from `--select`, or the defaults
+    /// (printed on stderr unless `quiet`). `params` and `options` are the command's surface
+    /// parameters, colours and beads, used by `--select` and the defaults.
+    pub fn representations(
+        &self,
+        state: Option<StateFile>,
+        topology: &Topology,
+        first: &Frame,
+        params: &SurfaceParams,
+        options: &ParticleOptions,
+        quiet: bool,
+    ) -> Result<SceneChoice> {
+        let style = if options.beads {
+            RepStyle::Beads
+        } else {
+            RepStyle::Surface
+        };
+        let mut base = Representation::new("selection", "all", style);
+        base.set_params(params);
+        base.colour = options.colours;
+        if let Some(state) = state {
+            return Ok(SceneChoice {
+                reps: state.representations.clone(),
+                state: Some(state),
+            });
+        }
+        if let Some(expr) = &self.select {
+            let rep = Representation {
+                selection: expr.clone(),
+                ..base
+            };
+            rep.validate().map_err(|e| anyhow!(e))?;
+            return Ok(SceneChoice {
+                reps: vec![rep],
+                state: None,
+            });
+        }
+        let mut reps = default_representations(topology, first, &base);
+        for r in reps.iter_mut().filter(|r| r.style.is_surface()) {
+            r.style = if options.beads && r.visible {
+                RepStyle::Beads
+            } else {
+                r.style
+            };
+        }
+        if !quiet {
+            for line in describe(&reps, topology, first) {
+                eprintln!("{line}");
+            }
+        }
+        Ok(SceneChoice { reps, state: None })
+    }
+}
+
+/// Binds `reps` to `topology`; a visible surface representation whose static selection picks
+/// no atom is an error naming it (`--select 'resname XYZ'` on a file without XYZ).
+pub fn bind_layers(
+    reps: &[Representation],
+    topology: &Topology,
+    first: &Frame,
+    radius_overrides: &RadiusOverrides,
+    files: &str,
+) -> Result<Vec<Layer>> {
+    let mut layers = Vec::with_capacity(reps.len());
+    for rep in reps {
+        let layer = Layer::new(rep.clone(), topology, radius_overrides)?;
+        if rep.visible && !layer.is_dynamic() && layer.atoms(first).is_empty() {
+            bail!(
+                "{files}: selection '{}' of representation '{}' matches no atom",
+                rep.selection,
+                rep.name
+            );
+        }
+        layers.push(layer);
+    }
+    Ok(layers)
+}

@@ -1,0 +1,458 @@
+//! What a file is turned into before chemfiles sees it, so that no byte of a user's file can
+//! panic or hang the C++ reader.
+//!
+//! - Text that is not valid UTF-8 (a Latin-1 `é` in a GRO title, a PDB `TITLE`, a residue name)
+//!   makes chemfiles' Rust binding panic. Such a file is read through a temporary copy: in the
+//!   fixed-column formats (PDB, GRO) every non-ASCII byte becomes `?` (so columns stay where they
+//!   are); in the free formats (mmCIF, XYZ, LAMMPS, MOL2) a byte that is not UTF-8 is read as
+//!   Latin-1 and written as UTF-8.
+//! - `.gz` and `.bz2` files are decompressed here, by memory-safe Rust decoders, into a
+//!   temporary plain file (chemfiles' bzip2 reader spins forever on a truncated stream). A stream
+//!   that ends early keeps what decompressed: the frames before the cut stay readable and the
+//!   last, cut frame is reported as damage.
+//! - A path that is not UTF-8 (chemfiles panics on it) is opened through a symbolic link with a
+//!   plain name.
+//!
+//! Files that need none of this are opened as they are, without a copy.
+
+use std::fs::File;
+use std::io::{BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+use super::IoError;
+use super::format::FileFormat;
+
+/// Bytes read at a time while scanning or copying.
+const CHUNK: usize = 1 << 20;
+
+/// The file chemfiles should open in place of the user's.
+pub(crate) struct Prepared {
+    /// The path chemfiles opens (the user's file, or a temporary copy or link).
+    pub open_path: PathBuf,
+    /// The chemfiles format string for `open_path`.
+    pub chemfiles: String,
+    /// Set when the compressed stream ended early or was corrupt: why (the last frame of the
+    /// copy is cut).
+    pub truncated: Option<String>,
+    /// True when the cut frame was removed from the copy (so the frame after the copy's last
+    /// one is the damaged one), false when the copy ends with the cut frame.
+    pub cut_removed: bool,
+    /// Keeps the temporary copy or link alive while the reader uses it.
+    pub temp: Option<tempfile::TempDir>,
+}
+
+/// Decides how chemfiles should see `path` (in `format`); see the module documentation.
+pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoError> {
+    let compression = format
+        .chemfiles
+        .rsplit_once(" / ")
+        .map(|(_, c)| c.to_string());
+    let text = text_kind(format.base);
+    match compression.as_deref() {
+        Some("GZ") | Some("BZ2") => decompress(path, format, compression.as_deref(), text),
+        _ => {
+            if format.base == "PDB" && compression.is_none() {
+                let bytes =
+                    std::fs::read(path).map_err(|e| IoError::unreadable(path, e.to_string()))?;
+                if let Some(cleaned) = clean_pdb(&bytes) {
+                    let (temp, copy) = temp_file(path, format.base)?;
+                    std::fs::write(&copy, cleaned).map_err(|e| write_failed(path, e))?;
+                    return Ok(Prepared {
+                        open_path: copy,
+                        chemfiles: format.chemfiles.clone(),
+                        truncated: None,
+                        cut_removed: false,
+                        temp: Some(temp),
+                    });
+                }
+            }
+            let needs_copy = match text {
+                Some(_) if format.base == "PDB" => false,
+                Some(kind) if compression.is_none() => !scan(path, kind)?,
+                _ => false,
+            };
+            if needs_copy {
+                let kind = text.unwrap_or(TextKind::Free);
+                let (temp, copy) = temp_file(path, format.base)?;
+                let mut input = open(path)?;
+                let mut output = BufWriter::new(create(path, &copy)?);
+                let mut cleaner = Cleaner::new(kind);
+                copy_cleaned(path, &mut input, &mut output, &mut cleaner)?;
+                finish(path, output)?;
+                return Ok(Prepared {
+                    open_path: copy,
+                    chemfiles: format.chemfiles.clone(),
+                    truncated: None,
+                    cut_removed: false,
+                    temp: Some(temp),
+                });
+            }
+            if path.to_str().is_none() {
+                let (temp, link) = temp_file(path, format.base)?;
+                let target = std::path::absolute(path).map_err(|e| failed(path, e))?;
+                std::os::unix::fs::symlink(&target, &link).map_err(|e| failed(path, e))?;
+                return Ok(Prepared {
+                    open_path: link,
+                    chemfiles: format.chemfiles.clone(),
+                    truncated: None,
+                    cut_removed: false,
+                    temp: Some(temp),
+                });
+            }
+            Ok(Prepared {
+                open_path: path.to_path_buf(),
+                chemfiles: format.chemfiles.clone(),
+                truncated: None,
+                cut_removed: false,
+                temp: None,
+            })
+        }
+    }
+}
+
+/// A PDB file made safe for chemfiles, or `None` when it already is: non-ASCII bytes become `?`,
+/// and `CONECT` records before the first atom of a model are dropped (chemfiles indexes an empty
+/// list with them and crashes; a chunk of a file duplicated ahead of its atoms does this).
+fn clean_pdb(bytes: &[u8]) -> Option<Vec<u8>> {
+    let orphan = |bytes: &[u8]| {
+        let mut atoms = false;
+        bytes.split(|&b| b == b'\n').any(|line| {
+            if line.starts_with(b"ATOM") || line.starts_with(b"HETATM") {
+                atoms = true;
+            } else if line.starts_with(b"END") {
+                atoms = false;
+            }
+            line.starts_with(b"CONECT") && !atoms
+        })
+    };
+    if bytes.is_ascii() && !orphan(bytes) {
+        return None;
+    }
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut atoms = false;
+    for line in bytes.split_inclusive(|&b| b == b'\n') {
+        if line.starts_with(b"ATOM") || line.starts_with(b"HETATM") {
+            atoms = true;
+        } else if line.starts_with(b"END") {
+            atoms = false;
+        }
+        if line.starts_with(b"CONECT") && !atoms {
+            continue;
+        }
+        out.extend(line.iter().map(|&b| if b.is_ascii() { b } else { b'?' }));
+    }
+    Some(out)
+}
+
+/// How the text of a format may be cleaned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum TextKind {
+    /// Fixed columns: every non-ASCII byte becomes `?` (one byte for one byte).
+    Columns,
+    /// Whitespace-separated: invalid UTF-8 bytes are read as Latin-1.
+    Free,
+}
+
+fn text_kind(base: &str) -> Option<TextKind> {
+    match base {
+        "PDB" | "GRO" => Some(TextKind::Columns),
+        "mmCIF" | "XYZ" | "LAMMPS" | "MOL2" => Some(TextKind::Free),
+        _ => None,
+    }
+}
+
+/// True when `path` can go to chemfiles as it is: all ASCII for fixed columns, valid UTF-8 for
+/// free text.
+fn scan(path: &Path, kind: TextKind) -> Result<bool, IoError> {
+    let mut input = open(path)?;
+    let mut buffer = vec![0u8; CHUNK];
+    let mut carry = 0usize;
+    loop {
+        let n = read_some(path, &mut input, &mut buffer[carry..])?;
+        if n == 0 {
+            return Ok(carry == 0);
+        }
+        let filled = carry + n;
+        match kind {
+            TextKind::Columns => {
+                if !buffer[..filled].is_ascii() {
+                    return Ok(false);
+                }
+            }
+            TextKind::Free => match std::str::from_utf8(&buffer[..filled]) {
+                Ok(_) => carry = 0,
+                Err(e) if e.error_len().is_none() => {
+                    // A character cut by the chunk boundary: keep its bytes for the next read.
+                    let valid = e.valid_up_to();
+                    buffer.copy_within(valid..filled, 0);
+                    carry = filled - valid;
+                }
+                Err(_) => return Ok(false),
+            },
+        }
+    }
+}
+
+/// Turns bytes into clean text, chunk by chunk (a UTF-8 character may span two chunks).
+struct Cleaner {
+    kind: TextKind,
+    pending: Vec<u8>,
+}
+
+impl Cleaner {
+    fn new(kind: TextKind) -> Self {
+        Cleaner {
+            kind,
+            pending: Vec::new(),
+        }
+    }
+
+    /// Cleans `bytes` (the next part of the file) into `out`; `last` flushes what is pending.
+    fn push(&mut self, bytes: &[u8], last: bool, out: &mut Vec<u8>) {
+        match self.kind {
+            TextKind::Columns => {
+                out.extend(bytes.iter().map(|&b| if b.is_ascii() { b } else { b'?' }));
+            }
+            TextKind::Free => {
+                self.pending.extend_from_slice(bytes);
+                let mut rest: &[u8] = &self.pending;
+                loop {
+                    match std::str::from_utf8(rest) {
+                        Ok(s) => {
+                            out.extend_from_slice(s.as_bytes());
+                            rest = &[];
+                            break;
+                        }
+                        Err(e) => {
+                            let valid = e.valid_up_to();
+                            out.extend_from_slice(&rest[..valid]);
+                            match e.error_len() {
+                                Some(bad) => {
+                                    for &b in &rest[valid..valid + bad] {
+                                        let mut utf8 = [0u8; 4];
+                                        out.extend_from_slice(
+                                            char::from(b).encode_utf8(&mut utf8).as_bytes(),
+                                        );
+                                    }
+                                    rest = &rest[valid + bad..];
+                                }
+                                None if last => {
+                                    for &b in &rest[valid..] {
+                                        let mut utf8 = [0u8; 4];
+                                        out.extend_from_slice(
+                                            char::from(b).encode_utf8(&mut utf8).as_bytes(),
+                                        );
+                                    }
+                                    rest = &[];
+                                    break;
+                                }
+                                None => {
+                                    rest = &rest[valid..];
+                                    break;
+                                }
+                            }
+                        }
+                    }
+                }
+                let keep = rest.to_vec();
+                self.pending = keep;
+            }
+        }
+    }
+}
+
+/// Decompresses a `.gz` or `.bz2` file into a temporary plain file (cleaning its text).
+fn decompress(
+    path: &Path,
+    format: &FileFormat,
+    compression: Option<&str>,
+    text: Option<TextKind>,
+) -> Result<Prepared, IoError> {
+    let file = open(path)?;
+    let mut input: Box<dyn Read> = match compression {
+        Some("GZ") => Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(
+            file,
+        ))),
+        _ => Box::new(bzip2::read::MultiBzDecoder::new(std::io::BufReader::new(
+            file,
+        ))),
+    };
+    let (temp, copy) = temp_file(path, format.base)?;
+    let mut output = BufWriter::new(create(path, &copy)?);
+    let mut cleaner = text.map(Cleaner::new);
+    let mut buffer = vec![0u8; CHUNK];
+    let mut cleaned = Vec::with_capacity(CHUNK + 16);
+    let mut total = 0u64;
+    let mut truncated = None;
+    loop {
+        let n = match input.read(&mut buffer) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => {
+                truncated = Some(format!(
+                    "the compressed data is cut or corrupt after {total} bytes ({e})"
+                ));
+                break;
+            }
+        };
+        total += n as u64;
+        let bytes = match cleaner.as_mut() {
+            Some(c) => {
+                cleaned.clear();
+                c.push(&buffer[..n], false, &mut cleaned);
+                &cleaned[..]
+            }
+            None => &buffer[..n],
+        };
+        output.write_all(bytes).map_err(|e| write_failed(path, e))?;
+    }
+    if let Some(c) = cleaner.as_mut() {
+        cleaned.clear();
+        c.push(&[], true, &mut cleaned);
+        output
+            .write_all(&cleaned)
+            .map_err(|e| write_failed(path, e))?;
+    }
+    finish(path, output)?;
+    let mut cut_removed = false;
+    if truncated.is_some() && format.base == "LAMMPS" {
+        // chemfiles refuses a LAMMPS file whose last frame is incomplete: keep whole frames.
+        let bytes = std::fs::read(&copy).map_err(|e| write_failed(path, e))?;
+        let marker = b"ITEM: TIMESTEP";
+        let last = bytes.windows(marker.len()).rposition(|w| w == marker);
+        let keep = last.unwrap_or(0) as u64;
+        if keep == 0 {
+            let reason = truncated.unwrap_or_default();
+            return Err(IoError::bad_frame(path, 0, reason));
+        }
+        File::options()
+            .write(true)
+            .open(&copy)
+            .and_then(|f| f.set_len(keep))
+            .map_err(|e| write_failed(path, e))?;
+        cut_removed = true;
+    }
+    if total == 0 {
+        let message = truncated.unwrap_or_else(|| "the compressed data is empty".to_string());
+        return Err(IoError::unreadable(path, message));
+    }
+    Ok(Prepared {
+        open_path: copy,
+        chemfiles: format.base.to_string(),
+        truncated,
+        cut_removed,
+        temp: Some(temp),
+    })
+}
+
+/// Copies `input` to `output` through `cleaner`.
+fn copy_cleaned(
+    path: &Path,
+    input: &mut File,
+    output: &mut impl Write,
+    cleaner: &mut Cleaner,
+) -> Result<(), IoError> {
+    let mut buffer = vec![0u8; CHUNK];
+    let mut cleaned = Vec::with_capacity(2 * CHUNK);
+    loop {
+        let n = read_some(path, input, &mut buffer)?;
+        cleaned.clear();
+        cleaner.push(&buffer[..n], n == 0, &mut cleaned);
+        output
+            .write_all(&cleaned)
+            .map_err(|e| write_failed(path, e))?;
+        if n == 0 {
+            return Ok(());
+        }
+    }
+}
+
+/// A new temporary folder and the path of a file in it with a plain name for `base`.
+fn temp_file(path: &Path, base: &str) -> Result<(tempfile::TempDir, PathBuf), IoError> {
+    let dir = tempfile::Builder::new()
+        .prefix("mdsurf-read-")
+        .tempdir()
+        .map_err(|e| write_failed(path, e))?;
+    let ext = match base {
+        "PDB" => "pdb",
+        "GRO" => "gro",
+        "mmCIF" => "cif",
+        "XYZ" => "xyz",
+        "LAMMPS" => "lammpstrj",
+        "MOL2" => "mol2",
+        "XTC" => "xtc",
+        "TRR" => "trr",
+        "DCD" => "dcd",
+        "TNG" => "tng",
+        _ => "dat",
+    };
+    let file = dir.path().join(format!("input.{ext}"));
+    Ok((dir, file))
+}
+
+fn open(path: &Path) -> Result<File, IoError> {
+    File::open(path).map_err(|e| IoError::NotFound {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })
+}
+
+fn create(path: &Path, copy: &Path) -> Result<File, IoError> {
+    File::create(copy).map_err(|e| write_failed(path, e))
+}
+
+fn finish(path: &Path, output: BufWriter<File>) -> Result<(), IoError> {
+    output
+        .into_inner()
+        .map_err(|e| write_failed(path, e.into_error()))?;
+    Ok(())
+}
+
+fn read_some(path: &Path, input: &mut File, buffer: &mut [u8]) -> Result<usize, IoError> {
+    loop {
+        match input.read(buffer) {
+            Ok(n) => return Ok(n),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(IoError::unreadable(path, e.to_string())),
+        }
+    }
+}
+
+fn failed(path: &Path, e: std::io::Error) -> IoError {
+    IoError::unreadable(path, format!("cannot prepare the file for reading: {e}"))
+}
+
+fn write_failed(path: &Path, e: std::io::Error) -> IoError {
+    IoError::unreadable(
+        path,
+        format!("cannot write a temporary copy for reading: {e}"),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn clean(kind: TextKind, parts: &[&[u8]]) -> Vec<u8> {
+        let mut c = Cleaner::new(kind);
+        let mut out = Vec::new();
+        for p in parts {
+            c.push(p, false, &mut out);
+        }
+        c.push(&[], true, &mut out);
+        out
+    }
+
+    #[test]
+    fn latin1_becomes_utf8_and_utf8_stays() {
+        let out = clean(TextKind::Free, &[b"Prot\xe9ine caf\xc3", b"\xa9 x\xff"]);
+        assert_eq!(String::from_utf8(out).unwrap(), "Protéine café xÿ");
+    }
+
+    #[test]
+    fn columns_keep_their_width() {
+        let out = clean(TextKind::Columns, &[b"AB\xe9C\xc3\xa9"]);
+        assert_eq!(out, b"AB?C??");
+    }
+}

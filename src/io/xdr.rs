@@ -1,0 +1,305 @@
+//! A structural check of GROMACS XTC and TRR files, done once when one opens and before
+//! chemfiles reads any frame. chemfiles follows the frames' byte counts without checking the
+//! headers it lands on, and its XTC decoder corrupts the heap on data that is not a frame (a
+//! chunk of the file duplicated or deleted). This walks the frame headers (XDR, big-endian) and
+//! ends the readable range at the first inconsistent one, so chemfiles never decodes a damaged
+//! frame, and checks the atom count before anything is allocated for it.
+//!
+//! XTC frame: magic 1995, natoms, step, time, box (9 f32), natoms again; then 3 f32 per atom
+//! for 9 atoms or less, else precision, minint\[3\], maxint\[3\], smallidx, a byte count and
+//! that many bytes padded to 4.
+//!
+//! TRR frame: magic 1993, the version string (`GMX_trn_file`), 13 sizes and counts (ir, e, box,
+//! vir, pres, top, sym, x, v, f, natoms, step, nre), time and lambda (f32 or f64), then the
+//! blocks the sizes announce.
+
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
+
+const XTC_MAGIC: i32 = 1995;
+const TRR_MAGIC: i32 = 1993;
+/// Bounds of the XTC `smallidx` (the xdrfile `FIRSTIDX` and the size of its `MAGICINTS`).
+const XTC_FIRST_IDX: u32 = 9;
+const XTC_LAST_IDX: u32 = 73;
+/// Box lengths beyond this (nm) are not a box but damage.
+const MAX_BOX_NM: f32 = 1.0e6;
+
+/// What the frame headers say.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Walk {
+    /// Atoms per frame (from the first frame's header).
+    pub natoms: usize,
+    /// Frames that can be read safely (all of them when `damage` is `None`).
+    pub frames: usize,
+    /// Why frame `frames` cannot be read, when the walk stopped before the end of the file.
+    pub damage: Option<String>,
+}
+
+/// Walks the frames of the XTC or TRR file `path` (`base` is `"XTC"` or `"TRR"`). `Ok(None)` for
+/// other formats; `Err` (a one-line reason) when not even the first frame is sound.
+pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
+    let step: fn(&mut Reader, u64) -> Result<FrameInfo, String> = match base {
+        "XTC" => xtc_frame,
+        "TRR" => trr_frame,
+        _ => return Ok(None),
+    };
+    let file = File::open(path).map_err(|e| e.to_string())?;
+    let size = file.metadata().map_err(|e| e.to_string())?.len();
+    let mut reader = Reader { file, size };
+    let mut offset = 0u64;
+    let mut frames = 0usize;
+    let mut natoms = None;
+    let mut damage = None;
+    while offset < size {
+        let result = step(&mut reader, offset).and_then(|info| {
+            match natoms {
+                None => natoms = Some(info.natoms),
+                Some(n) if n != info.natoms => {
+                    return Err(format!(
+                        "the frame header at byte {offset} says {} atoms, the first frame {n} (damaged file)",
+                        info.natoms
+                    ));
+                }
+                Some(_) => {}
+            }
+            if offset + info.bytes > size {
+                return Err(format!(
+                    "the file ends inside this frame (truncated: {} of {} bytes)",
+                    size - offset,
+                    info.bytes
+                ));
+            }
+            Ok(info)
+        });
+        match result {
+            Ok(info) => {
+                offset += info.bytes;
+                frames += 1;
+            }
+            Err(reason) => {
+                damage = Some(reason);
+                break;
+            }
+        }
+    }
+    let Some(natoms) = natoms else {
+        let reason = damage.unwrap_or_else(|| "no frame".into());
+        return Err(reason);
+    };
+    let damage = damage.map(|reason| {
+        if reason.starts_with("the file ends") {
+            reason
+        } else if frames > 0 {
+            // The frame before a damaged header may hold part of the damage (a chunk inserted
+            // or deleted inside its data): it is not read either.
+            frames -= 1;
+            format!("the data after this frame's header is damaged ({reason})")
+        } else {
+            reason
+        }
+    });
+    Ok(Some(Walk {
+        natoms,
+        frames,
+        damage,
+    }))
+}
+
+/// One frame's atom count and size in bytes.
+struct FrameInfo {
+    natoms: usize,
+    bytes: u64,
+}
+
+struct Reader {
+    file: File,
+    size: u64,
+}
+
+impl Reader {
+    /// Up to `n` bytes at `offset` (fewer at the end of the file).
+    fn bytes(&mut self, offset: u64, n: usize) -> Result<Vec<u8>, String> {
+        let n = n.min(self.size.saturating_sub(offset) as usize);
+        let mut buffer = vec![0u8; n];
+        self.file
+            .seek(SeekFrom::Start(offset))
+            .and_then(|_| self.file.read_exact(&mut buffer))
+            .map_err(|e| e.to_string())?;
+        Ok(buffer)
+    }
+}
+
+fn int(b: &[u8], at: usize) -> i32 {
+    i32::from_be_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+
+fn float(b: &[u8], at: usize) -> f32 {
+    f32::from_be_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+
+fn truncated_header(offset: u64) -> String {
+    format!("the file ends inside the frame header at byte {offset} (truncated)")
+}
+
+fn xtc_frame(reader: &mut Reader, offset: u64) -> Result<FrameInfo, String> {
+    let b = reader.bytes(offset, 92)?;
+    if b.len() < 56 {
+        return Err(truncated_header(offset));
+    }
+    if int(&b, 0) != XTC_MAGIC {
+        return Err(format!("no XTC frame header at byte {offset}"));
+    }
+    let natoms = int(&b, 4);
+    if natoms < 0 || int(&b, 52) != natoms {
+        return Err(format!(
+            "inconsistent atom counts in the frame header at byte {offset}"
+        ));
+    }
+    if !(0..9).all(|k| float(&b, 16 + 4 * k).abs() <= MAX_BOX_NM) {
+        return Err(format!("absurd box in the frame header at byte {offset}"));
+    }
+    let natoms = natoms as u64;
+    if natoms <= 9 {
+        return Ok(FrameInfo {
+            natoms: natoms as usize,
+            bytes: 56 + 12 * natoms,
+        });
+    }
+    if b.len() < 92 {
+        return Err(truncated_header(offset));
+    }
+    let precision = float(&b, 56);
+    if !(precision.is_finite() && precision > 0.0) {
+        return Err(format!(
+            "invalid precision in the frame header at byte {offset}"
+        ));
+    }
+    if !(0..3).all(|k| int(&b, 60 + 4 * k) <= int(&b, 72 + 4 * k)) {
+        return Err(format!(
+            "invalid coordinate range in the frame header at byte {offset}"
+        ));
+    }
+    let small = int(&b, 84) as u32;
+    if !(XTC_FIRST_IDX..XTC_LAST_IDX).contains(&small) {
+        return Err(format!(
+            "invalid compression index in the frame header at byte {offset}"
+        ));
+    }
+    let count = int(&b, 88);
+    // Each atom takes at least one bit, and at most about 3 × 32 bits plus run flags.
+    if count < 0 || (count as u64) * 8 + 8 < natoms || count as u64 > natoms * 24 + 1024 {
+        return Err(format!(
+            "the frame header at byte {offset} gives {count} bytes of data for {natoms} atoms"
+        ));
+    }
+    let padded = (count as u64 + 3) & !3;
+    Ok(FrameInfo {
+        natoms: natoms as usize,
+        bytes: 92 + padded,
+    })
+}
+
+fn trr_frame(reader: &mut Reader, offset: u64) -> Result<FrameInfo, String> {
+    let head = reader.bytes(offset, 12)?;
+    if head.len() < 12 {
+        return Err(truncated_header(offset));
+    }
+    if int(&head, 0) != TRR_MAGIC {
+        return Err(format!("no TRR frame header at byte {offset}"));
+    }
+    let len = int(&head, 8);
+    if !(0..=128).contains(&len) {
+        return Err(format!(
+            "invalid version string in the frame header at byte {offset}"
+        ));
+    }
+    let ints_at = 12 + ((len as usize + 3) & !3);
+    let b = reader.bytes(offset, ints_at + 13 * 4)?;
+    if b.len() < ints_at + 13 * 4 {
+        return Err(truncated_header(offset));
+    }
+    let field = |k: usize| int(&b, ints_at + 4 * k);
+    // ir, e, box, vir, pres, top, sym, x, v, f, natoms, step, nre
+    let sizes: Vec<i32> = (0..10).map(field).collect();
+    let natoms = field(10);
+    if natoms < 0 || sizes.iter().any(|&s| s < 0) {
+        return Err(format!(
+            "negative size in the frame header at byte {offset}"
+        ));
+    }
+    let natoms = natoms as u64;
+    let (box_size, x, v, f) = (
+        sizes[2] as u64,
+        sizes[7] as u64,
+        sizes[8] as u64,
+        sizes[9] as u64,
+    );
+    let real = if box_size > 0 {
+        box_size / 9
+    } else if natoms > 0 {
+        [x, v, f].into_iter().find(|&s| s > 0).unwrap_or(0) / (natoms * 3)
+    } else {
+        0
+    };
+    if real != 4 && real != 8 {
+        return Err(format!(
+            "invalid real size in the frame header at byte {offset}"
+        ));
+    }
+    let vector = natoms * 3 * real;
+    let matrix = 9 * real;
+    let matrices_ok = [sizes[2], sizes[3], sizes[4]]
+        .iter()
+        .all(|&s| s == 0 || s as u64 == matrix);
+    let vectors_ok = [x, v, f].iter().all(|&s| s == 0 || s == vector);
+    if !(matrices_ok && vectors_ok) {
+        return Err(format!(
+            "the frame header at byte {offset} gives sizes that do not fit {natoms} atoms"
+        ));
+    }
+    let header = (ints_at + 13 * 4) as u64 + 2 * real;
+    let body: u64 = sizes.iter().map(|&s| s as u64).sum();
+    Ok(FrameInfo {
+        natoms: natoms as usize,
+        bytes: header + body,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A TRR with `frames` frames of `natoms` atoms (f32, box and positions).
+    fn trr(natoms: usize, frames: usize) -> Vec<u8> {
+        let mut out = Vec::new();
+        let put = |out: &mut Vec<u8>, v: i32| out.extend_from_slice(&v.to_be_bytes());
+        for step in 0..frames {
+            put(&mut out, TRR_MAGIC);
+            put(&mut out, 13);
+            put(&mut out, 12);
+            out.extend_from_slice(b"GMX_trn_file");
+            let x = (natoms * 12) as i32;
+            for s in [0, 0, 36, 0, 0, 0, 0, x, 0, 0, natoms as i32, step as i32, 0] {
+                put(&mut out, s);
+            }
+            out.extend_from_slice(&[0u8; 8]);
+            out.extend(std::iter::repeat_n(0u8, 36 + natoms * 12));
+        }
+        out
+    }
+
+    #[test]
+    fn trr_walk_finds_a_cut_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.trr");
+        let whole = trr(5, 3);
+        std::fs::write(&path, &whole).unwrap();
+        let w = walk(&path, "TRR").unwrap().unwrap();
+        assert_eq!((w.natoms, w.frames, w.damage.is_none()), (5, 3, true));
+        std::fs::write(&path, &whole[..whole.len() - 10]).unwrap();
+        let w = walk(&path, "TRR").unwrap().unwrap();
+        assert_eq!(w.frames, 2);
+        assert!(w.damage.unwrap().contains("truncated"));
+    }
+}

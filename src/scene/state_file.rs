@@ -1,0 +1,311 @@
+//! The state file: representations, camera, look and trajectory settings in one human-readable
+//! TOML file with a version field. The viewer writes it (File → Save view) and reads it (File →
+//! Open view, `mdsurf TOP TRAJ --state FILE`); `mdsurf render --state` and `mdsurf surface
+//! --state` read it, so a picture made in the window can be re-made headless or on a cluster.
+//!
+//! ```toml
+//! version = 1
+//!
+//! [[representation]]
+//! name = "protein"
+//! selection = "protein"
+//! style = "surface"
+//! colour = "residue-type"
+//! opacity = 1.0
+//! spacing = 1.0
+//! radius_scale = 1.0
+//! isovalue = 0.5
+//! quality = "medium"
+//! visible = true
+//!
+//! [camera]          # optional: without it the camera fits the scene
+//! yaw_deg = 30.0
+//! pitch_deg = 10.0
+//!
+//! [look]
+//! background = "light"
+//! ```
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::representation::Representation;
+use crate::render::{Background, Camera, Projection, RenderSettings};
+
+/// The state-file format version this build writes and reads.
+pub const STATE_VERSION: u32 = 1;
+
+/// Everything a state file holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StateFile {
+    /// Format version ([`STATE_VERSION`]).
+    pub version: u32,
+    /// The representations, drawn in this order.
+    #[serde(default, rename = "representation")]
+    pub representations: Vec<Representation>,
+    /// The camera; `None` fits the camera to the scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraState>,
+    /// Background, shading and stereo.
+    #[serde(default)]
+    pub look: LookState,
+    /// Which frame is shown and how the timeline plays.
+    #[serde(default)]
+    pub trajectory: TrajectoryState,
+}
+
+/// The orbit camera, in degrees and Å.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CameraState {
+    /// Point the camera orbits (Å).
+    pub target: [f32; 3],
+    /// Eye-to-target distance (Å).
+    pub distance: f32,
+    /// Rotation about the vertical axis (degrees).
+    pub yaw_deg: f32,
+    /// Elevation (degrees).
+    pub pitch_deg: f32,
+    /// Vertical field of view (degrees).
+    pub fov_deg: f32,
+    /// True for an orthographic projection.
+    pub orthographic: bool,
+    /// Radius of the scene around the target (Å; clip planes and depth cue).
+    pub scene_radius: f32,
+    /// When true, only the direction (yaw, pitch, projection) is used and the camera is fitted
+    /// to the scene (a state written by hand usually wants this).
+    pub fit: bool,
+}
+
+impl Default for CameraState {
+    fn default() -> Self {
+        CameraState::from_camera(&Camera::default(), true)
+    }
+}
+
+impl CameraState {
+    /// The state of `camera`; `fit` asks readers to refit the distance and target.
+    pub fn from_camera(camera: &Camera, fit: bool) -> Self {
+        CameraState {
+            target: camera.target.to_array(),
+            distance: camera.distance,
+            yaw_deg: camera.yaw.to_degrees(),
+            pitch_deg: camera.pitch.to_degrees(),
+            fov_deg: camera.fov_y.to_degrees(),
+            orthographic: camera.projection == Projection::Orthographic,
+            scene_radius: camera.scene_radius,
+            fit,
+        }
+    }
+
+    /// Applies this state to `camera` (all of it, or only the direction when [`Self::fit`]).
+    pub fn apply(&self, camera: &mut Camera) {
+        camera.yaw = self.yaw_deg.to_radians();
+        camera.pitch = self.pitch_deg.to_radians();
+        camera.projection = if self.orthographic {
+            Projection::Orthographic
+        } else {
+            Projection::Perspective
+        };
+        if self.fov_deg.is_finite() && self.fov_deg > 1.0 && self.fov_deg < 170.0 {
+            camera.fov_y = self.fov_deg.to_radians();
+        }
+        if !self.fit {
+            camera.target = self.target.into();
+            camera.distance = self.distance;
+            camera.scene_radius = self.scene_radius;
+        }
+    }
+}
+
+/// Look settings that are not per representation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LookState {
+    /// `dark` or `light`.
+    pub background: String,
+    /// Ambient occlusion strength 0..1.
+    pub ambient_occlusion: f32,
+    /// Depth cue strength 0..1.
+    pub depth_cue: f32,
+    /// Stereo mode name (`off`, `sbs`, `anaglyph`, ...).
+    pub stereo: String,
+    /// Eye separation as a fraction of the focal distance.
+    pub eye_separation: f32,
+}
+
+impl Default for LookState {
+    fn default() -> Self {
+        LookState::from_settings(&RenderSettings::default())
+    }
+}
+
+impl LookState {
+    /// The look part of `settings`.
+    pub fn from_settings(settings: &RenderSettings) -> Self {
+        LookState {
+            background: match settings.background {
+                Background::Dark => "dark".into(),
+                Background::Light => "light".into(),
+            },
+            ambient_occlusion: settings.ambient_occlusion,
+            depth_cue: settings.depth_cue,
+            stereo: settings.stereo.to_string(),
+            eye_separation: settings.eye_separation,
+        }
+    }
+
+    /// Applies this look to `settings`; fails naming the first bad value.
+    pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), String> {
+        settings.background = self.background.parse()?;
+        settings.stereo = self.stereo.parse()?;
+        for (name, v) in [
+            ("ambient_occlusion", self.ambient_occlusion),
+            ("depth_cue", self.depth_cue),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(format!("look.{name} = {v} is outside 0..1"));
+            }
+        }
+        if !(self.eye_separation.is_finite() && self.eye_separation >= 0.0) {
+            return Err(format!(
+                "look.eye_separation = {} must be a finite number >= 0",
+                self.eye_separation
+            ));
+        }
+        settings.ambient_occlusion = self.ambient_occlusion;
+        settings.depth_cue = self.depth_cue;
+        settings.eye_separation = self.eye_separation;
+        Ok(())
+    }
+}
+
+/// Timeline settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrajectoryState {
+    /// Frame shown (from 0).
+    pub frame: usize,
+    /// Frames advanced per step when playing.
+    pub stride: usize,
+    /// Playback speed in frames per second.
+    pub fps: f32,
+}
+
+impl Default for TrajectoryState {
+    fn default() -> Self {
+        TrajectoryState {
+            frame: 0,
+            stride: 1,
+            fps: 24.0,
+        }
+    }
+}
+
+impl StateFile {
+    /// A state holding `representations` and default everything else.
+    pub fn new(representations: Vec<Representation>) -> Self {
+        StateFile {
+            version: STATE_VERSION,
+            representations,
+            camera: None,
+            look: LookState::default(),
+            trajectory: TrajectoryState::default(),
+        }
+    }
+
+    /// Parses state-file text; `origin` names the file in errors. Every representation is
+    /// validated (selection, parameters), and the error is one line.
+    pub fn parse(text: &str, origin: &str) -> Result<Self, String> {
+        let state: StateFile = toml::from_str(text).map_err(|e| {
+            let msg = e.message().replace('\n', " ");
+            match e.span().map(|s| line_col(text, s.start)) {
+                Some((line, col)) => format!("{origin}:{line}:{col}: {}", msg.trim()),
+                None => format!("{origin}: {}", msg.trim()),
+            }
+        })?;
+        if state.version != STATE_VERSION {
+            return Err(format!(
+                "{origin}: state file version {} is not supported (this mdsurf reads version {STATE_VERSION})",
+                state.version
+            ));
+        }
+        for r in &state.representations {
+            r.validate().map_err(|e| format!("{origin}: {e}"))?;
+        }
+        let mut probe = RenderSettings::default();
+        state
+            .look
+            .apply(&mut probe)
+            .map_err(|e| format!("{origin}: {e}"))?;
+        Ok(state)
+    }
+
+    /// Reads and checks the state file at `path` (one-line errors naming the file).
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read state file {}: {e}", path.display()))?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// The TOML text of this state.
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot write state: {e}\n"))
+    }
+
+    /// Writes the state to `path` atomically (a failed write leaves any old file as it was).
+    pub fn save(&self, path: &Path) -> Result<(), String> {
+        let text = self.to_toml();
+        crate::export::write_atomic(path, |w| w.write_all(text.as_bytes()))
+            .map_err(|e| e.to_string())
+    }
+}
+
+/// 1-based line and column of byte `offset` in `text`.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::representation::RepStyle;
+
+    #[test]
+    fn round_trips_through_toml() {
+        let mut state = StateFile::new(vec![
+            Representation::new("protein", "protein", RepStyle::Surface),
+            Representation {
+                opacity: 0.4,
+                spacing: 2.0,
+                visible: false,
+                ..Representation::new("lipids", "lipid", RepStyle::Beads)
+            },
+        ]);
+        state.camera = Some(CameraState::from_camera(&Camera::default(), false));
+        let text = state.to_toml();
+        assert!(text.contains("version = 1"), "{text}");
+        let back = StateFile::parse(&text, "s.toml").expect("parse");
+        assert_eq!(back, state);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_representation() {
+        let e = StateFile::parse("version = 1\nbogus = 3\n", "s.toml").unwrap_err();
+        assert!(e.starts_with("s.toml:2:"), "{e}");
+        let e = StateFile::parse("version = 7\n", "s.toml").unwrap_err();
+        assert!(e.contains("version 7"), "{e}");
+        let text = "version = 1\n[[representation]]\nname = \"p\"\nselection = \"resname (\"\n";
+        let e = StateFile::parse(text, "s.toml").unwrap_err();
+        assert!(e.contains("representation 'p'") && e.contains("column"), "{e}");
+        let text = "version = 1\n[[representation]]\nstyle = \"ribbon\"\n";
+        let e = StateFile::parse(text, "s.toml").unwrap_err();
+        assert!(e.contains("ribbon"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+}

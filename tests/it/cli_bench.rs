@@ -1,0 +1,116 @@
+//! `mdsurf bench` end to end on the CPU engine: the demo, a file given on the command line and a
+//! synthetic tiled system each give one table row per engine with the right atom count, stage
+//! medians that add up, and a CSV that matches the printed table. (Speed itself is reported by
+//! the benchmark, never asserted here.)
+
+
+use crate::cli_common::{Csv, data, mdsurf};
+
+/// The data rows of the aligned text table: `(case, fields after it)`; the case is matched by
+/// its known prefix since it may contain spaces.
+fn table_rows<'a>(stdout: &'a str, case_prefix: &str) -> Vec<Vec<&'a str>> {
+    stdout
+        .lines()
+        .filter(|l| l.starts_with(case_prefix))
+        .map(|l| l.split_whitespace().collect())
+        .collect()
+}
+
+#[test]
+fn bench_on_the_demo_reports_stage_medians() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "bench",
+        "--backend",
+        "cpu",
+        "--repeats",
+        "3",
+        "--warmup",
+        "0",
+        "--csv",
+        "b.csv",
+    ];
+    let run = mdsurf(dir.path(), &args);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let header = run
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("case"))
+        .expect("no table header");
+    for col in ["read_ms", "bin_ms", "density_ms", "mc_ms", "frames_per_s"] {
+        assert!(header.contains(col), "{header}");
+    }
+    let rows = table_rows(&run.stdout, "md_1u19.xtc");
+    assert_eq!(rows.len(), 1, "{}", run.stdout);
+    assert_eq!(rows[0][1], "cpu");
+    assert_eq!(rows[0][2], "5547");
+
+    let csv = Csv::read(&dir.path().join("b.csv"));
+    assert_eq!(csv.rows.len(), 1);
+    let (bin, dens, mc) = (
+        csv.col("bin_ms")[0],
+        csv.col("density_ms")[0],
+        csv.col("mc_ms")[0],
+    );
+    let compute = csv.col("compute_ms")[0];
+    assert!(bin >= 0.0 && dens > 0.0 && mc > 0.0, "{:?}", csv.rows[0]);
+    // Medians of the parts cannot exceed much more than the median of the whole.
+    assert!(bin + dens + mc <= 1.5 * compute + 1.0, "{:?}", csv.rows[0]);
+    assert!(csv.col("frames_per_s")[0] > 0.0);
+    assert!(csv.col("triangles")[0] > 10_000.0);
+}
+
+#[test]
+fn bench_on_a_given_file_and_a_synthetic_system() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pdb, dcd) = (data("adk_open.pdb"), data("adk_dims.dcd"));
+    let args = [
+        "bench",
+        &pdb,
+        &dcd,
+        "--synthetic",
+        "12k",
+        "--backend",
+        "cpu",
+        "--repeats",
+        "2",
+        "--spacing",
+        "2",
+        "--csv",
+        "b.csv",
+    ];
+    let run = mdsurf(dir.path(), &args);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let csv = Csv::read(&dir.path().join("b.csv"));
+    assert_eq!(csv.rows.len(), 2, "{:?}", csv.rows);
+    assert_eq!(csv.rows[0][0], "adk_dims.dcd");
+    assert!(csv.rows[1][0].starts_with("synthetic 12000"));
+    assert_eq!(csv.col("atoms"), [3341.0, 12000.0]);
+    assert_eq!(csv.col("H_A"), [2.0, 2.0]);
+    // About 3.6 tiled copies of the protein: several times the surface of one.
+    let tris = csv.col("triangles");
+    assert!(tris[1] > 2.5 * tris[0], "{tris:?}");
+}
+
+#[test]
+fn bench_rejects_bad_counts_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for bad in ["0", "lots", "-5"] {
+        let run = mdsurf(
+            dir.path(),
+            &["bench", "--backend", "cpu", "--synthetic", bad],
+        );
+        assert_eq!(run.code, 2, "{bad}: {}", run.stderr);
+        assert_eq!(run.stderr.lines().count(), 1, "{}", run.stderr);
+        assert!(run.stderr.contains(bad), "{}", run.stderr);
+    }
+}
+
+#[test]
+fn table1_needs_the_gpu_engine() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = mdsurf(dir.path(), &["bench", "--table1", "--backend", "cpu"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_eq!(run.stderr.lines().count(), 1, "{}", run.stderr);
+    assert!(run.stderr.contains("--table1"), "{}", run.stderr);
+}

@@ -1,0 +1,146 @@
+//! Every real file in `tests/data` opens with the atom and frame counts its README lists,
+//! and its topology comes out complete (elements, radii, residues).
+
+
+use crate::data_support::data;
+
+use mdsurf::io::{self, Trajectory};
+
+fn open(top: &str, traj: Option<&str>) -> Trajectory {
+    let top = data(top);
+    let traj = traj.map(data);
+    match io::open(&top, traj.as_deref()) {
+        Ok(t) => t,
+        Err(e) => panic!("cannot open {top:?} {traj:?}: {e}"),
+    }
+}
+
+/// Opens, checks counts, and reads the first, a middle and the last frame.
+fn check(top: &str, traj: Option<&str>, atoms: usize, frames: usize) -> Trajectory {
+    let t = open(top, traj);
+    assert_eq!(t.topology().len(), atoms, "{top}: atoms");
+    assert_eq!(t.len(), frames, "{top} {traj:?}: frames");
+    assert!(t.damage().is_none(), "{top}: {:?}", t.damage());
+    for i in [0, frames / 2, frames - 1] {
+        let f = t.read_frame(i).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(f.index, i);
+        assert_eq!(f.positions.len(), atoms);
+        assert!(f.positions.iter().all(|p| p.is_finite()));
+    }
+    let top = t.topology();
+    assert_eq!(top.radii.len(), atoms);
+    assert!(
+        top.radii.iter().all(|&r| r > 0.0 && r < 5.0),
+        "radii out of range"
+    );
+    assert!(
+        t.read_frame(frames).is_err(),
+        "frame past the end must fail"
+    );
+    t
+}
+
+#[test]
+fn rhodopsin_gro_xtc() {
+    let t = check("md_1u19.gro", Some("md_1u19.xtc"), 5547, 51);
+    let f = t.read_frame(1).expect("frame 1");
+    assert!(f.time_ps.is_some(), "XTC frames carry a time");
+    assert!(f.cell.is_some(), "XTC frames carry a box");
+    let top = t.topology();
+    assert!(
+        top.elements.iter().all(|e| !e.is_empty()),
+        "every protein atom gets an element"
+    );
+    assert!(top.elements.iter().any(|e| e == "H"));
+}
+
+#[test]
+fn adk_pdb_dcd() {
+    let t = check("adk_open.pdb", Some("adk_dims.dcd"), 3341, 98);
+    let top = t.topology();
+    assert_eq!(top.residue_count(), 214, "adk has 214 residues");
+    // MD-style PDB without element column: CD (in ILE/LYS/...) must be carbon.
+    let cd: Vec<usize> = (0..top.len()).filter(|&i| top.names[i] == "CD").collect();
+    assert!(!cd.is_empty());
+    for i in cd {
+        assert_eq!(
+            top.elements[i], "C",
+            "CD in {} must be carbon",
+            top.residue_names[i]
+        );
+        assert_eq!(top.radii[i], 1.5);
+    }
+}
+
+#[test]
+fn adk_pdb_alone() {
+    check("adk_open.pdb", None, 3341, 1);
+}
+
+#[test]
+fn adk_water_box_gro_xtc() {
+    let t = check("adk_oplsaa.gro", Some("adk_oplsaa.xtc"), 47681, 10);
+    let top = t.topology();
+    let ow = top
+        .names
+        .iter()
+        .position(|n| n == "OW")
+        .expect("water oxygen");
+    assert_eq!(top.elements[ow], "O");
+    assert_eq!(top.radii[ow], 1.3);
+}
+
+#[test]
+fn yiip_gzipped_gro_xtc() {
+    check("YiiP_lipids.gro.gz", Some("YiiP_lipids.xtc"), 43480, 5);
+    check("YiiP_lipids.gro.gz", None, 43480, 1);
+}
+
+#[test]
+fn hiv_protease_wwpdb() {
+    let t = check("1hpv.pdb", None, 1631, 1);
+    let top = t.topology();
+    let chains: std::collections::BTreeSet<&str> = top.chains.iter().map(String::as_str).collect();
+    assert!(
+        chains.contains("A") && chains.contains("B"),
+        "chains {chains:?}"
+    );
+    let b_lo = top.b_factors.iter().copied().fold(f32::INFINITY, f32::min);
+    let b_hi = top
+        .b_factors
+        .iter()
+        .copied()
+        .fold(f32::NEG_INFINITY, f32::max);
+    assert!(
+        b_hi > b_lo && b_lo >= 0.0,
+        "B-factors read from the file: {b_lo}..{b_hi}"
+    );
+    assert!(top.elements.iter().all(|e| !e.is_empty()));
+}
+
+#[test]
+fn martini_beads_get_bead_radius() {
+    let t = check("martini_dppc_chol_bilayer.gro", None, 5040, 1);
+    let top = t.topology();
+    assert!(
+        top.radii.iter().all(|&r| (r - 2.35).abs() < 1e-6),
+        "Martini beads are 2.35 Å"
+    );
+    assert!(
+        top.elements.iter().all(String::is_empty),
+        "beads have no element"
+    );
+}
+
+#[test]
+fn lammps_bz2() {
+    let t = check("spce_all_coords.lammpstrj.bz2", None, 4500, 11);
+    let top = t.topology();
+    let types: std::collections::BTreeSet<&str> = top.names.iter().map(String::as_str).collect();
+    assert!(types.len() >= 2, "SPC/E has two particle types: {types:?}");
+}
+
+#[test]
+fn argon_tng() {
+    check("argon_npt_compressed.tng", None, 1000, 101);
+}
