@@ -36,7 +36,8 @@ pub struct RenderArgs {
     /// Frames to render, START:STOP:STEP (STOP exclusive); needs `{frame}` in the output name.
     #[arg(long, value_name = "A:B[:S]")]
     pub frames: Option<FrameRange>,
-    /// Output PNG; `{frame}` is replaced by the image number (5 digits) for sequences.
+    /// Output PNG. For several images a pattern: `{frame}` (or `{frame:05}`, zero-padded) is the
+    /// trajectory frame index, as in `mdsurf surface`; `{image}` the image number (5 digits).
     #[arg(short = 'o', long = "output", value_name = "PNG")]
     pub output: PathBuf,
     /// Image size in pixels.
@@ -148,13 +149,57 @@ fn parse_turntable(s: &str) -> Result<f32, String> {
     Ok(d)
 }
 
-/// `pattern` with `{frame}` replaced by `index` (5 digits).
-fn output_path(pattern: &Path, index: usize) -> PathBuf {
-    PathBuf::from(
-        pattern
-            .to_string_lossy()
-            .replace("{frame}", &format!("{index:05}")),
-    )
+/// `pattern` for trajectory frame `frame` and image number `image`: `{frame}` is the frame
+/// index, `{frame:0N}` the frame index zero-padded to N digits, `{image}` the image number with
+/// 5 digits.
+fn output_path(pattern: &Path, frame: usize, image: usize) -> PathBuf {
+    let mut text = pattern.to_string_lossy().replace("{image}", &format!("{image:05}"));
+    while let Some(at) = text.find("{frame") {
+        let Some(close) = text[at..].find('}').map(|c| at + c) else {
+            break;
+        };
+        let width = text[at + "{frame".len()..close]
+            .strip_prefix(":0")
+            .and_then(|w| w.parse::<usize>().ok())
+            .unwrap_or(0);
+        text.replace_range(at..=close, &format!("{frame:0width$}"));
+    }
+    PathBuf::from(text)
+}
+
+/// The output path of every image; fails when the name is not a PNG or two images would share
+/// a file.
+fn output_paths(pattern: &Path, frames: &[usize]) -> Result<Vec<PathBuf>> {
+    let is_png = pattern
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !is_png {
+        bail!(
+            "-o {}: render writes PNG images; give the output a .png name",
+            pattern.display()
+        );
+    }
+    let paths: Vec<PathBuf> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, &f)| output_path(pattern, f, i))
+        .collect();
+    let mut unique = paths.clone();
+    unique.sort();
+    unique.dedup();
+    if unique.len() < paths.len() {
+        let hint = if frames.windows(2).any(|w| w[0] == w[1]) {
+            "{image} (the image number)"
+        } else {
+            "{frame} (the trajectory frame) or {image} (the image number)"
+        };
+        bail!(
+            "{} images to write share the name {}: put {hint} in the output name, e.g. -o out/frame_{{frame:05}}.png",
+            frames.len(),
+            pattern.display()
+        );
+    }
+    Ok(paths)
 }
 
 /// Runs `mdsurf render`.
@@ -185,13 +230,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             .max(1.0) as usize;
         frames = vec![frames[0]; images];
     }
-    let sequence = frames.len() > 1;
-    if sequence && !args.output.to_string_lossy().contains("{frame}") {
-        bail!(
-            "{} images to write: put {{frame}} in the output name, e.g. -o out/frame_{{frame}}.png",
-            frames.len()
-        );
-    }
+    let paths = output_paths(&args.output, &frames)?;
     let mut settings = RenderSettings {
         background: args.background,
         surface_opacity: args.opacity.clamp(0.0, 1.0),
@@ -255,6 +294,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
     let renderer = Renderer::new(&gpu.device);
     let mut engine = make_engine(args.backend)?;
+    choice.print_defaults();
     let mut scene = GpuScene::new();
     let mut camera = Camera {
         projection: if args.ortho {
@@ -340,12 +380,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
             &settings,
             args.size,
         )?;
-        let path = if sequence {
-            output_path(&args.output, i)
-        } else {
-            args.output.clone()
-        };
-        write_png(&path, &image)?;
+        let path = &paths[i];
+        write_png(path, &image)?;
         eprintln!(
             "frame {f}: {}; read {read_ms:.1} ms, total {:.1} ms -> {}",
             if summary.is_empty() { "atoms only".to_string() } else { summary.join("; ") },
@@ -366,9 +402,16 @@ mod tests {
         assert!(parse_size("640").is_err());
         assert!(parse_size("0x10").is_err());
         assert_eq!(
-            output_path(Path::new("d/f_{frame}.png"), 7),
-            Path::new("d/f_00007.png")
+            output_path(Path::new("d/f_{frame}.png"), 7, 0),
+            Path::new("d/f_7.png")
         );
+        assert_eq!(
+            output_path(Path::new("d/f_{frame:04}_{image}.png"), 7, 2),
+            Path::new("d/f_0007_00002.png")
+        );
+        assert!(output_paths(Path::new("x.jpg"), &[0]).is_err());
+        assert!(output_paths(Path::new("x_{frame}.png"), &[3, 3]).is_err());
+        assert!(output_paths(Path::new("x_{image}.png"), &[3, 3]).is_ok());
         assert_eq!(parse_pair("30,-10"), Ok([30.0, -10.0]));
     }
 

@@ -32,6 +32,17 @@ pub struct SceneChoice {
     pub reps: Vec<Representation>,
     /// The state file, when `--state` gave one.
     pub state: Option<StateFile>,
+    /// One line per default representation, for stderr (empty unless the defaults are used).
+    pub described: Vec<String>,
+}
+
+impl SceneChoice {
+    /// Prints the default representations on stderr (nothing for `--select` / `--state`).
+    pub fn print_defaults(&self) {
+        for line in &self.described {
+            eprintln!("{line}");
+        }
+    }
 }
 
 impl SceneArgs {
@@ -44,7 +55,7 @@ impl SceneArgs {
     }
 
     /// The representations for `topology`: from `state`, from `--select`, or the defaults
-    /// (printed on stderr unless `quiet`). `params` and `options` are the command's surface
+    /// (described for stderr unless `quiet`; see [`SceneChoice::print_defaults`]). `params` and `options` are the command's surface
     /// parameters, colours and beads, used by `--select` and the defaults.
     pub fn representations(
         &self,
@@ -67,6 +78,7 @@ impl SceneArgs {
             return Ok(SceneChoice {
                 reps: state.representations.clone(),
                 state: Some(state),
+                described: Vec::new(),
             });
         }
         if let Some(expr) = &self.select {
@@ -78,6 +90,7 @@ impl SceneArgs {
             return Ok(SceneChoice {
                 reps: vec![rep],
                 state: None,
+                described: Vec::new(),
             });
         }
         let mut reps = default_representations(topology, first, &base);
@@ -88,12 +101,16 @@ impl SceneArgs {
                 r.style
             };
         }
-        if !quiet {
-            for line in describe(&reps, topology, first) {
-                eprintln!("{line}");
-            }
-        }
-        Ok(SceneChoice { reps, state: None })
+        let described = if quiet {
+            Vec::new()
+        } else {
+            describe(&reps, topology, first)
+        };
+        Ok(SceneChoice {
+            reps,
+            state: None,
+            described,
+        })
     }
 }
 

@@ -59,7 +59,6 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
 
     let state = args.scene.load_state()?;
-    let mut engine = make_engine(args.backend)?;
 
     let start_frame = args.frames.map(|r| r.start).unwrap_or(0);
     let (system, first) = System::open(&args.input, start_frame)?;
@@ -115,6 +114,8 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             );
         }
     }
+    let mut engine = make_engine(args.backend)?;
+    choice.print_defaults();
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
 
     let bar =

@@ -134,6 +134,10 @@ pub struct LookState {
     pub stereo: String,
     /// Eye separation as a fraction of the focal distance.
     pub eye_separation: f32,
+    /// Fixed stereo focal (zero-parallax) distance in Å from the camera; absent: the distance
+    /// to the camera's target.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub focal_distance: Option<f32>,
 }
 
 impl Default for LookState {
@@ -154,6 +158,7 @@ impl LookState {
             depth_cue: settings.depth_cue,
             stereo: settings.stereo.to_string(),
             eye_separation: settings.eye_separation,
+            focal_distance: settings.focal_distance,
         }
     }
 
@@ -175,6 +180,11 @@ impl LookState {
                 self.eye_separation
             ));
         }
+        if let Some(f) = self.focal_distance {
+            crate::render::settings::check_focal_distance(f)
+                .map_err(|e| format!("look.focal_distance: {e}"))?;
+        }
+        settings.focal_distance = self.focal_distance;
         settings.ambient_occlusion = self.ambient_occlusion;
         settings.depth_cue = self.depth_cue;
         settings.eye_separation = self.eye_separation;

@@ -81,7 +81,7 @@ fn turntable_sequence_writes_numbered_turning_images() {
         return;
     }
     let dir = tempfile::tempdir().expect("tempdir");
-    let pattern = dir.path().join("seq/frame_{frame}.png");
+    let pattern = dir.path().join("seq/frame_{frame:05}.png");
     let (gro, xtc) = (demo("md_1u19.gro"), demo("md_1u19.xtc"));
     let p = pattern.to_str().expect("utf-8 path");
     let args = [

@@ -7,11 +7,12 @@
 //! wrapped atom then finds every partner within D among those copies, so the search itself is a
 //! plain Cartesian one: no minimum-image convention is needed.
 //!
-//! The larger of the two sets (sources, targets) is binned into Cartesian cells D/2 wide; each
-//! atom of the smaller set visits the 5 × 5 × 5 cells around its own, skipping those whose
-//! nearest point is farther than D, in parallel. Few sources (`within 5 of protein` in water)
-//! mark the targets around them; few targets look for any source around them, and a target far
-//! from every source is rejected by one look-up in a dilated occupancy map.
+//! The smaller of the two sets (sources, targets) is binned into Cartesian cells D/2 wide; each
+//! atom of the larger set is first checked against a dilated occupancy map (one look-up rejects
+//! atoms far from every binned one), and otherwise visits the 5 × 5 × 5 cells around its own,
+//! skipping those whose nearest point is farther than D; in parallel. With few sources
+//! (`within 5 of protein` in water) each target looks for any source around it; with few
+//! targets (`ion and within 5 of water`) each source marks the targets around it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -20,6 +21,10 @@ use rayon::prelude::*;
 
 /// Atoms per parallel task.
 const CHUNK: usize = 1024;
+pub(crate) static NEAR: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+pub(crate) static ROWS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+pub(crate) static PTS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+pub(crate) static OWN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 /// Cells per cutoff distance along each axis (so the reach is at most this many cells).
 const SPLIT: i32 = 2;
@@ -34,69 +39,55 @@ pub(crate) fn within(
     targets: &[bool],
     distance: f32,
 ) -> Vec<bool> {
-    let space = cell.and_then(Periodic::new);
-    let finite = |i: usize| {
-        let p = positions.get(i).filter(|p| p.is_finite())?;
-        Some((i as u32, space.as_ref().map_or(*p, |s| s.wrap(*p))))
-    };
-    let sources: Vec<(u32, Vec3)> = sources.iter().filter_map(|&s| finite(s as usize)).collect();
-    let wanted: Vec<(u32, Vec3)> = (0..targets.len().min(positions.len()))
-        .filter(|&i| targets[i])
-        .filter_map(finite)
-        .collect();
     let mut out = vec![false; targets.len()];
-    if sources.is_empty() || wanted.is_empty() || !distance.is_finite() || distance < 0.0 {
+    let n = targets.len().min(positions.len());
+    let sources: Vec<u32> = sources.iter().copied().filter(|&s| (s as usize) < n).collect();
+    let target_count = targets[..n].iter().filter(|t| **t).count();
+    if sources.is_empty() || target_count == 0 || !distance.is_finite() || distance < 0.0 {
         return out;
     }
-    let d2 = distance * distance;
-    let max_cells = (4 * (sources.len() + wanted.len())).max(64) as f64;
-    let images = |points: &[(u32, Vec3)]| match &space {
-        Some(s) => s.with_images(points, distance),
-        None => points.to_vec(),
+    let space = cell.and_then(Periodic::new);
+    // Wrapped position of atom `i`, or `None` when it is not finite.
+    let place = |i: usize| {
+        let p = positions[i];
+        p.is_finite()
+            .then(|| space.as_ref().map_or(p, |s| s.wrap(p)))
     };
-    let t0 = std::time::Instant::now();
-    if sources.len() < wanted.len() {
-        let im = images(&wanted);
-        let t1 = t0.elapsed();
-        let grid = Grid::new(&im, distance, max_cells, false);
-        let t2 = t0.elapsed();
-        let mut visits = 0usize; let mut checks = 0usize;
-        for (_, p) in &sources { grid.visit(*p, d2, |pts, _| { visits += 1; checks += pts.len(); false }); }
-        let t3 = t0.elapsed();
-        eprintln!("images {} {:?} grid {:?} dims {:?} side {} count-visit {:?} visits {visits} checks {checks}", im.len(), t1, t2 - t1, grid.dims, grid.side, t3 - t2);
+    let binned = |atoms: &mut dyn Iterator<Item = usize>| {
+        let points: Vec<(u32, Vec3)> =
+            atoms.filter_map(|i| place(i).map(|p| (i as u32, p))).collect();
+        let points = match &space {
+            Some(s) => s.with_images(&points, distance),
+            None => points,
+        };
+        let max_cells = (8 * points.len()).max(4096) as f64;
+        Grid::new(&points, distance, max_cells)
+    };
+    let d2 = distance * distance;
+    if target_count < sources.len() {
+        // Few targets: bin them, and let each source near one mark the targets around it.
+        let grid = binned(&mut (0..n).filter(|&i| targets[i]));
         let marks: Vec<AtomicBool> = (0..targets.len()).map(|_| AtomicBool::new(false)).collect();
         sources.par_chunks(CHUNK).for_each(|chunk| {
-            for (_, p) in chunk {
-                grid.visit(*p, d2, |points, ids| {
-                    for (s, &i) in points.iter().zip(ids) {
-                        if s.distance_squared(*p) <= d2 {
-                            marks[i as usize].store(true, Ordering::Relaxed);
-                        }
-                    }
-                    false
-                });
+            for p in chunk.iter().filter_map(|&s| place(s as usize)) {
+                grid.mark_within(p, d2, &marks);
             }
         });
         out.iter_mut()
             .zip(marks)
             .for_each(|(o, m)| *o = m.into_inner());
     } else {
-        let grid = Grid::new(&images(&sources), distance, max_cells, true);
-        let hits: Vec<Vec<u32>> = wanted
-            .par_chunks(CHUNK)
-            .map(|chunk| {
-                let near = |p: Vec3| {
-                    grid.is_near(p)
-                        && grid.visit(p, d2, |points, _| {
-                            points.iter().any(|s| s.distance_squared(p) <= d2)
-                        })
-                };
-                chunk.iter().filter(|(_, p)| near(*p)).map(|(i, _)| *i).collect()
-            })
-            .collect();
-        for i in hits.into_iter().flatten() {
-            out[i as usize] = true;
-        }
+        // Few sources: bin them, and let each target near one look for one.
+        let grid = binned(&mut sources.iter().map(|&s| s as usize));
+        out[..n]
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(k, chunk)| {
+                for (j, o) in chunk.iter_mut().enumerate() {
+                    let i = k * CHUNK + j;
+                    *o = targets[i] && place(i).is_some_and(|p| grid.any_within(p, d2));
+                }
+            });
     }
     out
 }
@@ -186,14 +177,14 @@ struct Grid {
     points: Vec<Vec3>,
     /// Atom index of each point.
     ids: Vec<u32>,
-    /// True for cells within `reach` of a non-empty cell (empty when not asked for).
+    /// True for cells within `reach` of a non-empty cell.
     near: Vec<bool>,
 }
 
 impl Grid {
     /// Bins `points` in cells about `distance / 2` wide (wider when there would be more than
-    /// `max_cells`); with `near`, also marks the cells near a point.
-    fn new(points: &[(u32, Vec3)], distance: f32, max_cells: f64, near: bool) -> Grid {
+    /// `max_cells`) and marks the cells near a point.
+    fn new(points: &[(u32, Vec3)], distance: f32, max_cells: f64) -> Grid {
         let lo = points.iter().fold(Vec3::INFINITY, |a, &(_, p)| a.min(p));
         let hi = points.iter().fold(Vec3::NEG_INFINITY, |a, &(_, p)| a.max(p));
         let extent = (hi - lo).max(Vec3::splat(1e-3));
@@ -205,7 +196,8 @@ impl Grid {
             side *= (total / max_cells).cbrt() as f32 * 1.01;
         }
         let reach = ((distance / side).ceil() as i32).clamp(1, SPLIT);
-        let dims = cells(side).as_ivec3() + 2 * reach;
+        // One spare cell absorbs rounding at the upper edge.
+        let dims = cells(side).as_ivec3() + 1 + 2 * reach;
         let mut grid = Grid {
             origin: lo - reach as f32 * side,
             side,
@@ -216,7 +208,7 @@ impl Grid {
             ids: Vec::new(),
             near: Vec::new(),
         };
-        grid.fill(points, near);
+        grid.fill(points);
         grid
     }
 
@@ -235,8 +227,8 @@ impl Grid {
         inside.then(|| (c.as_ivec3(), g - c))
     }
 
-    /// Sorts the points into cells (counting sort); marks the cells near them when asked.
-    fn fill(&mut self, points: &[(u32, Vec3)], near: bool) {
+    /// Sorts the points into cells (counting sort) and marks the cells near them.
+    fn fill(&mut self, points: &[(u32, Vec3)]) {
         let cells = (self.dims.x * self.dims.y * self.dims.z) as usize;
         let cell_of: Vec<usize> = points
             .iter()
@@ -257,20 +249,20 @@ impl Grid {
             ids[fill[c] as usize] = i;
             fill[c] += 1;
         }
-        if near {
-            let r = self.reach;
+        {
+            let (r, d) = (self.reach, self.dims);
             let mut marks = vec![false; cells];
-            for z in r..self.dims.z - r {
-                for y in r..self.dims.y - r {
-                    for x in r..self.dims.x - r {
+            for z in 0..d.z {
+                for y in 0..d.y {
+                    for x in 0..d.x {
                         let f = self.flat(IVec3::new(x, y, z));
                         if start[f] == start[f + 1] {
                             continue;
                         }
-                        for dz in -r..=r {
-                            for dy in -r..=r {
-                                for dx in -r..=r {
-                                    marks[self.flat(IVec3::new(x + dx, y + dy, z + dz))] = true;
+                        for nz in (z - r).max(0)..=(z + r).min(d.z - 1) {
+                            for ny in (y - r).max(0)..=(y + r).min(d.y - 1) {
+                                for nx in (x - r).max(0)..=(x + r).min(d.x - 1) {
+                                    marks[self.flat(IVec3::new(nx, ny, nz))] = true;
                                 }
                             }
                         }
@@ -284,22 +276,56 @@ impl Grid {
         self.ids = ids;
     }
 
-    /// True when `p` lies in a cell near some point.
+    /// The points of cells `first..=last` (flat indices) and their atom indices.
     #[inline]
-    fn is_near(&self, p: Vec3) -> bool {
-        self.locate(p).is_some_and(|(c, _)| self.near[self.flat(c)])
+    fn span(&self, first: usize, last: usize) -> (&[Vec3], &[u32]) {
+        let (a, b) = (self.start[first] as usize, self.start[last + 1] as usize);
+        (&self.points[a..b], &self.ids[a..b])
     }
 
-    /// Calls `f(points, ids)` for each cell around `p` whose nearest point is within √`d2` Å
-    /// of `p`, until `f` returns true; returns whether it did.
+    /// True when some binned point lies within √`d2` Å of `p`.
     #[inline]
-    fn visit(&self, p: Vec3, d2: f32, mut f: impl FnMut(&[Vec3], &[u32]) -> bool) -> bool {
-        // Points off the padded grid are farther than the cutoff from every binned point.
+    fn any_within(&self, p: Vec3, d2: f32) -> bool {
         let Some((c, u)) = self.locate(p) else {
             return false;
         };
+        let own = self.flat(c);
+        if !self.near[own] {
+            return false;
+        }
+        NEAR.fetch_add(1, Ordering::Relaxed);
+        let close = |points: &[Vec3]| { PTS.fetch_add(points.len(), Ordering::Relaxed); ROWS.fetch_add(1, Ordering::Relaxed); points.iter().any(|s| s.distance_squared(p) <= d2) };
+        if close(self.span(own, own).0) { OWN.fetch_add(1, Ordering::Relaxed); }
+        // The atom's own cell first: inside a dense selection that settles it.
+        close(self.span(own, own).0) || self.visit(c, u, d2, |points, _| close(points))
+    }
+
+    /// Marks in `marks` (by atom index) every binned point within √`d2` Å of `p`.
+    #[inline]
+    fn mark_within(&self, p: Vec3, d2: f32, marks: &[AtomicBool]) {
+        let Some((c, u)) = self.locate(p) else {
+            return;
+        };
+        if !self.near[self.flat(c)] {
+            return;
+        }
+        self.visit(c, u, d2, |points, ids| {
+            for (s, &i) in points.iter().zip(ids) {
+                if s.distance_squared(p) <= d2 {
+                    marks[i as usize].store(true, Ordering::Relaxed);
+                }
+            }
+            false
+        });
+    }
+
+    /// Calls `f(points, ids)` for the cells around cell `c` (where the atom sits at `u`, 0 to 1
+    /// per axis) whose nearest point is within √`d2` Å of the atom, one run of consecutive
+    /// cells along x at a time, until `f` returns true; returns whether it did.
+    #[inline]
+    fn visit(&self, c: IVec3, u: Vec3, d2: f32, mut f: impl FnMut(&[Vec3], &[u32]) -> bool) -> bool {
         let r = self.reach;
-        // Squared gap in Å² from `p` to the cells at each offset, per axis.
+        // Squared gap in Å² from the atom to the cells at each offset, per axis.
         let mut gaps = [[0.0f32; 2 * SPLIT as usize + 1]; 3];
         for (k, row) in gaps.iter_mut().enumerate() {
             for o in -r..=r {
@@ -311,6 +337,7 @@ impl Grid {
                 row[(o + r) as usize] = gap * gap;
             }
         }
+        let (x0, x1) = ((c.x - r).max(0), (c.x + r).min(self.dims.x - 1));
         for z in (c.z - r).max(0)..=(c.z + r).min(self.dims.z - 1) {
             let gz = gaps[2][(z - c.z + r) as usize];
             if gz > d2 {
@@ -321,16 +348,16 @@ impl Grid {
                 if gy > d2 {
                     continue;
                 }
+                // The cells of this row within range are consecutive, and so are their points.
+                let fits = |x: i32| gy + gaps[0][(x - c.x + r) as usize] <= d2;
+                let Some(first) = (x0..=x1).find(|&x| fits(x)) else {
+                    continue;
+                };
+                let last = (first..=x1).rev().find(|&x| fits(x)).unwrap_or(first);
                 let row = ((z * self.dims.y + y) * self.dims.x) as usize;
-                for x in (c.x - r).max(0)..=(c.x + r).min(self.dims.x - 1) {
-                    if gy + gaps[0][(x - c.x + r) as usize] > d2 {
-                        continue;
-                    }
-                    let cell = row + x as usize;
-                    let (a, b) = (self.start[cell] as usize, self.start[cell + 1] as usize);
-                    if a < b && f(&self.points[a..b], &self.ids[a..b]) {
-                        return true;
-                    }
+                let (points, ids) = self.span(row + first as usize, row + last as usize);
+                if !points.is_empty() && f(points, ids) {
+                    return true;
                 }
             }
         }
