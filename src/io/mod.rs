@@ -14,6 +14,7 @@
 //! part ends the readable frames as [`Damage`].
 
 mod chem;
+mod conect;
 mod dcd;
 pub mod error;
 pub mod format;

@@ -74,6 +74,9 @@ pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     let first = top_reader.read_positions(0)?;
     if let Some(format) = top_format.wwpdb {
         wwpdb::enrich(top, format, &mut topology, &first);
+        if format == super::format::WwFormat::Pdb {
+            super::conect::apply_conect(top, &mut topology);
+        }
     }
     topology.complete_elements_and_radii();
     sizing::fit_untyped_radii(&mut topology, &first);

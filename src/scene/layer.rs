@@ -66,8 +66,11 @@ pub struct Layer {
     selection: BoundSelection,
     radius_overrides: RadiusOverrides,
     /// The particles of the last frame and the atoms they were built from.
-    built: Option<(Vec<u32>, Arc<Particles>, Arc<Vec<[u32; 2]>>)>,
+    built: Option<Built>,
 }
+
+/// Particles built for a set of atoms: (the selected atoms, their particles, their bonds).
+type Built = (Vec<u32>, Arc<Particles>, Arc<Vec<[u32; 2]>>);
 
 impl Layer {
     /// Parses `rep`'s selection and binds it to `topology`.

@@ -191,6 +191,51 @@ fn sticks_draw_only_real_bonds() {
     assert!(lf.positions.len() > 20 && lf.bonds.len() >= lf.positions.len() - 1);
 }
 
+/// Every CONECT record of 1hpv (serials mapped to atoms through the ATOM/HETATM serial column,
+/// past the TER records that take serials of their own) is a bond of the topology, and every
+/// topology bond touching the inhibitor is one of its CONECT bonds.
+#[test]
+fn conect_records_join_the_atoms_they_name() {
+    let text = fs::read_to_string(data("1hpv.pdb")).unwrap();
+    let mut serial_to_index = std::collections::HashMap::new();
+    let mut conect = std::collections::HashSet::new();
+    for line in text.lines() {
+        if line.starts_with("ATOM") || line.starts_with("HETATM") {
+            let serial: i64 = line[6..11].trim().parse().unwrap();
+            let n = serial_to_index.len() as u32;
+            serial_to_index.insert(serial, n);
+        }
+    }
+    for line in text.lines().filter(|l| l.starts_with("CONECT")) {
+        let field = |k: usize| -> Option<u32> {
+            let f = line.get(6 + 5 * k..11 + 5 * k)?.trim();
+            serial_to_index.get(&f.parse::<i64>().ok()?).copied()
+        };
+        let a = field(0).unwrap();
+        for k in 1..5 {
+            if let Some(b) = field(k) {
+                conect.insert([a.min(b), a.max(b)]);
+            }
+        }
+    }
+    assert!(conect.len() > 30);
+    let trajectory = io::open(&data("1hpv.pdb"), None).unwrap();
+    let bonds: std::collections::HashSet<[u32; 2]> = trajectory
+        .topology()
+        .bonds
+        .iter()
+        .map(|&[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    let missing: Vec<_> = conect.iter().filter(|b| !bonds.contains(*b)).collect();
+    assert!(missing.is_empty(), "CONECT bonds missing: {missing:?}");
+    let ligand_start = serial_to_index[&1519];
+    let stray: Vec<_> = bonds
+        .iter()
+        .filter(|b| b[1] >= ligand_start && !conect.contains(*b))
+        .collect();
+    assert!(stray.is_empty(), "bonds to the inhibitor not in its CONECT records: {stray:?}");
+}
+
 #[test]
 fn defaults_fit_the_system() {
     let base = Representation::default();

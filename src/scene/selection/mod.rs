@@ -128,4 +128,3 @@ impl BoundSelection {
 
 #[cfg(test)]
 mod tests;
-#[cfg(test)] mod wt_tmp;

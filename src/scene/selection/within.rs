@@ -21,10 +21,6 @@ use rayon::prelude::*;
 
 /// Atoms per parallel task.
 const CHUNK: usize = 1024;
-pub(crate) static NEAR: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-pub(crate) static ROWS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-pub(crate) static PTS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-pub(crate) static OWN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 /// Cells per cutoff distance along each axis (so the reach is at most this many cells).
 const SPLIT: i32 = 2;
@@ -92,6 +88,14 @@ pub(crate) fn within(
     out
 }
 
+/// `v.floor()` without a libm call per component (the baseline x86-64 target has no SSE4.1
+/// rounding instruction); exact for |x| < 2³¹.
+#[inline]
+fn floor(v: Vec3) -> Vec3 {
+    let t = v.as_ivec3().as_vec3();
+    t - Vec3::select(t.cmpgt(v), Vec3::ONE, Vec3::ZERO)
+}
+
 /// A periodic box: edge vectors, the map to fractional coordinates, and face-to-face widths.
 struct Periodic {
     /// Box edge vectors a, b, c in Å.
@@ -130,7 +134,7 @@ impl Periodic {
     /// `p` moved into the box (fractional coordinates in [0, 1)).
     #[inline]
     fn wrap(&self, p: Vec3) -> Vec3 {
-        p - self.shift((self.to_fraction * p).floor())
+        p - self.shift(floor(self.to_fraction * p))
     }
 
     /// Wrapped `points` with every periodic image that lies within `distance` Å of the box.
@@ -167,6 +171,8 @@ struct Grid {
     origin: Vec3,
     /// Cell edge in Å.
     side: f32,
+    /// 1 / `side`.
+    inv_side: f32,
     /// Cells along each axis.
     dims: IVec3,
     /// Cells searched on each side of a cell (at most [`SPLIT`]).
@@ -201,6 +207,7 @@ impl Grid {
         let mut grid = Grid {
             origin: lo - reach as f32 * side,
             side,
+            inv_side: side.recip(),
             dims,
             reach,
             start: Vec::new(),
@@ -221,10 +228,13 @@ impl Grid {
     /// The cell holding `p`, with `p`'s place inside it (0 to 1 per axis), when on the grid.
     #[inline]
     fn locate(&self, p: Vec3) -> Option<(IVec3, Vec3)> {
-        let g = (p - self.origin) / self.side;
-        let c = g.floor();
-        let inside = c.cmpge(Vec3::ZERO).all() && c.cmplt(self.dims.as_vec3()).all();
-        inside.then(|| (c.as_ivec3(), g - c))
+        let g = (p - self.origin) * self.inv_side;
+        // Truncation is floor for the non-negative coordinates of points on the grid.
+        let inside = g.cmpge(Vec3::ZERO).all() && g.cmplt(self.dims.as_vec3()).all();
+        inside.then(|| {
+            let c = g.as_ivec3();
+            (c, g - c.as_vec3())
+        })
     }
 
     /// Sorts the points into cells (counting sort) and marks the cells near them.
@@ -293,9 +303,7 @@ impl Grid {
         if !self.near[own] {
             return false;
         }
-        NEAR.fetch_add(1, Ordering::Relaxed);
-        let close = |points: &[Vec3]| { PTS.fetch_add(points.len(), Ordering::Relaxed); ROWS.fetch_add(1, Ordering::Relaxed); points.iter().any(|s| s.distance_squared(p) <= d2) };
-        if close(self.span(own, own).0) { OWN.fetch_add(1, Ordering::Relaxed); }
+        let close = |points: &[Vec3]| points.iter().any(|s| s.distance_squared(p) <= d2);
         // The atom's own cell first: inside a dense selection that settles it.
         close(self.span(own, own).0) || self.visit(c, u, d2, |points, _| close(points))
     }
@@ -348,12 +356,16 @@ impl Grid {
                 if gy > d2 {
                     continue;
                 }
-                // The cells of this row within range are consecutive, and so are their points.
+                // The cells of this row within range are consecutive around the atom's own
+                // column (gap 0), and so are their points.
                 let fits = |x: i32| gy + gaps[0][(x - c.x + r) as usize] <= d2;
-                let Some(first) = (x0..=x1).find(|&x| fits(x)) else {
-                    continue;
-                };
-                let last = (first..=x1).rev().find(|&x| fits(x)).unwrap_or(first);
+                let (mut first, mut last) = (c.x, c.x);
+                while first > x0 && fits(first - 1) {
+                    first -= 1;
+                }
+                while last < x1 && fits(last + 1) {
+                    last += 1;
+                }
                 let row = ((z * self.dims.y + y) * self.dims.x) as usize;
                 let (points, ids) = self.span(row + first as usize, row + last as usize);
                 if !points.is_empty() && f(points, ids) {
