@@ -29,17 +29,22 @@ fn selection(c: &mut Criterion) {
         b.iter(|| black_box(water.indices(black_box(&frame))))
     });
 
-    let constant = Selection::parse("protein and not hydrogen").expect("parses").bind(topology);
+    let constant = Selection::parse("protein and not hydrogen")
+        .expect("parses")
+        .bind(topology);
     c.bench_function("constant selection per frame (adk)", |b| {
         b.iter(|| black_box(constant.indices(black_box(&frame))))
     });
 
-    c.bench_function("parse + bind 'backbone or resname SOL and name OW' (adk)", |b| {
-        b.iter(|| {
-            let s = Selection::parse(black_box("backbone or resname SOL and name OW"));
-            black_box(s.expect("parses").bind(topology))
-        })
-    });
+    c.bench_function(
+        "parse + bind 'backbone or resname SOL and name OW' (adk)",
+        |b| {
+            b.iter(|| {
+                let s = Selection::parse(black_box("backbone or resname SOL and name OW"));
+                black_box(s.expect("parses").bind(topology))
+            })
+        },
+    );
 }
 
 criterion_group!(benches, selection);

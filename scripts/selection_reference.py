@@ -31,6 +31,9 @@ what mdsurf's expression means:
   1hpv.pdb (whose element columns hold a line number) it is names starting with H.
 - LAMMPS dumps have no atom names: mdsurf uses the numeric type as the name, MDAnalysis `type`.
   MDAnalysis sorts dump atoms by id, so only order-independent selections are compared there.
+  chemfiles (so mdsurf) reads a dump's unwrapped coordinates (xu yu zu) when it has them, so
+  MDAnalysis is asked for those too (`lammps_coordinate_convention="unwrapped"`); its default,
+  the wrapped x y z, changes `x < 8` (distances with periodic images are the same either way).
 """
 
 import csv
@@ -175,7 +178,11 @@ CASES = [
 
 def universe(spec):
     files = [os.path.join(DATA, f) for f in spec.split()]
-    kwargs = {"format": "LAMMPSDUMP"} if files[0].endswith(".lammpstrj.bz2") else {}
+    kwargs = {}
+    if files[0].endswith(".lammpstrj.bz2"):
+        # mdsurf reads dumps through chemfiles, which takes the unwrapped columns (xu yu zu)
+        # when a dump has them; MDAnalysis defaults to the wrapped ones (x y z).
+        kwargs = {"format": "LAMMPSDUMP", "lammps_coordinate_convention": "unwrapped"}
     u = mda.Universe(*files, **kwargs)
     u.trajectory[0]
     return u

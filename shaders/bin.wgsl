@@ -16,6 +16,9 @@ struct BinUniform {
     _pad1: u32,
 }
 
+// Bindings (group 0) are named once in src/gpu/layout.rs (`layout::bin`): the Rust side
+// builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
+// declarations against it with naga.
 @group(0) @binding(0) var<uniform> u: BinUniform;
 // Positions in Å, packed x, y, z per atom.
 @group(0) @binding(1) var<storage, read> positions: array<f32>;

@@ -7,6 +7,9 @@
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
 
+// Bindings (group 0) are named once in src/gpu/layout.rs (`layout::classify`): the Rust side
+// builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
+// declarations against it with naga.
 @group(0) @binding(0) var<uniform> u: SlabUniform;
 @group(0) @binding(1) var<storage, read> density: array<f32>;
 // Marching Cubes tables as a uniform (uniforms do not count against the device's 8 storage

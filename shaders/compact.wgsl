@@ -11,6 +11,9 @@ const C_SLAB_VERTEX_BASE: u32 = 3u;
 const C_SLAB_TRIANGLE_BASE: u32 = 4u;
 const C_SLAB_OWNED_VERTICES: u32 = 5u;
 
+// Bindings (group 0) are named once in src/gpu/layout.rs (`layout::compact`): the Rust side
+// builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
+// declarations against it with naga.
 @group(0) @binding(0) var<uniform> u: SlabUniform;
 @group(0) @binding(1) var<storage, read> classes: array<u32>;
 @group(0) @binding(2) var<storage, read> block_vertices: array<u32>;

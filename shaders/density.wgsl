@@ -16,6 +16,9 @@ override WRITE_DENSITY: bool = true;
 
 const RUN: u32 = 8u;
 
+// Bindings (group 0) are named once in src/gpu/layout.rs (`layout::density`): the Rust side
+// builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
+// declarations against it with naga.
 @group(0) @binding(0) var<uniform> u: SlabUniform;
 @group(0) @binding(1) var<storage, read> sorted_atoms: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> sorted_colours: array<vec2<u32>>;

@@ -22,6 +22,9 @@ const EDGE_CORNER0: array<u32, 12> = array<u32, 12>(0u, 2u, 4u, 6u, 0u, 1u, 4u, 
 
 override WITH_COLOUR: bool = true;
 
+// Bindings (group 0) are named once in src/gpu/layout.rs (`layout::emit`): the Rust side
+// builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
+// declarations against it with naga.
 @group(0) @binding(0) var<uniform> u: SlabUniform;
 @group(0) @binding(1) var<storage, read> density: array<f32>;
 @group(0) @binding(2) var<storage, read> colour: array<f32>;

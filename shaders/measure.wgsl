@@ -27,6 +27,9 @@ struct MeasureUniform {
 
 const PARTIAL_GROUPS: u32 = 256u;
 
+// Bindings (group 0) are named once in src/gpu/layout.rs (`layout::measure`): the Rust side
+// builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
+// declarations against it with naga.
 @group(0) @binding(0) var<uniform> mu: MeasureUniform;
 @group(0) @binding(1) var<storage, read_write> counters: array<u32>;
 @group(0) @binding(2) var<storage, read> vertices: array<f32>;

@@ -10,6 +10,9 @@ struct ScanUniform {
     _pad1: u32,
 }
 
+// Bindings (group 0) are named once in src/gpu/layout.rs (`layout::scan`): the Rust side
+// builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
+// declarations against it with naga.
 @group(0) @binding(0) var<uniform> su: ScanUniform;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
 // scan_blocks: receives each block's total at sum_index + block; add_sums: scanned block totals.

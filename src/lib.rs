@@ -14,3 +14,4 @@ pub mod render;
 pub mod scene;
 pub mod surface;
 pub mod synthetic;
+pub mod transform;

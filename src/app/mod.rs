@@ -12,6 +12,7 @@ pub mod recent;
 pub mod source;
 pub mod state;
 pub mod timeline;
+pub mod trajectory_panel;
 pub mod viewer;
 pub mod viewport;
 pub mod worker;
@@ -46,6 +47,8 @@ pub struct ViewOptions {
     pub reps: Option<Vec<crate::scene::representation::Representation>>,
     /// Camera to start with (`--state`); `None`: fitted to the data.
     pub camera: Option<crate::scene::state_file::CameraState>,
+    /// Per-frame transformations (whole, centre, fit, smooth) of the frames shown.
+    pub transforms: crate::transform::TransformOptions,
 }
 
 /// Which surface engine the window uses.
@@ -162,6 +165,7 @@ pub fn create_viewer(
     }
     let gpu = state.map(viewport::GpuView::new);
     let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);
+    viewer.set_transforms(options.transforms.clone());
     if let Some(s) = state {
         let ctx = cc.egui_ctx.clone();
         device.0.attach(&s.device, move || ctx.request_repaint());

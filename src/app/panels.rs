@@ -319,6 +319,13 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     out
 }
 
+/// One row of a readouts grid: a label and a monospaced value.
+fn readout_row(ui: &mut egui::Ui, key: &str, value: String) {
+    ui.label(key);
+    ui.monospace(value);
+    ui.end_row();
+}
+
 /// Per representation: atoms or beads, triangles, area, volume, grid and stage times; then the
 /// frame's read time, render time and frame rate.
 pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) {
@@ -338,11 +345,7 @@ pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) 
         egui::Grid::new(("readouts", l.id))
             .num_columns(2)
             .show(ui, |ui| {
-                let mut row = |k: &str, v: String| {
-                    ui.label(k);
-                    ui.monospace(v);
-                    ui.end_row();
-                };
+                let mut row = |k: &str, v: String| readout_row(ui, k, v);
                 row(
                     if l.beads { "beads" } else { "atoms" },
                     l.particles.positions.len().to_string(),
@@ -365,11 +368,7 @@ pub fn readouts_ui(ui: &mut egui::Ui, core: &AppCore, render_ms: f64, fps: f64) 
     egui::Grid::new("readouts-frame")
         .num_columns(2)
         .show(ui, |ui| {
-            let mut row = |k: &str, v: String| {
-                ui.label(k);
-                ui.monospace(v);
-                ui.end_row();
-            };
+            let mut row = |k: &str, v: String| readout_row(ui, k, v);
             row("triangles (all)", c.triangle_count().to_string());
             row("read", format!("{:.2} ms", c.read_ms));
             row("render", format!("{render_ms:.2} ms"));

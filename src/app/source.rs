@@ -7,8 +7,9 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::io::{FrameStreamer, StreamerOptions, Trajectory};
+use crate::io::{FrameHook, FrameStreamer, StreamerOptions, Trajectory};
 use crate::model::{Frame, Topology};
+use crate::transform::{TransformChain, TransformOptions};
 
 /// How long the worker waits for the reader thread to deliver one frame.
 const READ_TIMEOUT: Duration = Duration::from_secs(120);
@@ -86,6 +87,8 @@ impl FrameSource for crate::io::Trajectory {
 /// again at once with the same message (the viewer shows it and playback goes on).
 pub struct StreamedSource {
     streamer: FrameStreamer,
+    /// Half-width of the smoothing window (0: none).
+    smooth: usize,
 }
 
 impl StreamedSource {
@@ -93,6 +96,41 @@ impl StreamedSource {
     pub fn new(trajectory: Trajectory, options: StreamerOptions) -> StreamedSource {
         StreamedSource {
             streamer: FrameStreamer::new(trajectory, options),
+            smooth: 0,
+        }
+    }
+
+    /// Like [`StreamedSource::new`], with every frame made whole, centred and fitted by `chain`
+    /// on the reader thread (so the cache holds transformed frames) and smoothed over the
+    /// chain's window when read. The prefetch window grows to cover the smoothing window.
+    pub fn transformed(
+        trajectory: Trajectory,
+        mut options: StreamerOptions,
+        chain: TransformChain,
+    ) -> StreamedSource {
+        let smooth = chain.smooth();
+        options.behind = options.behind.max(smooth);
+        options.ahead = options.ahead.max(smooth + 1);
+        options.capacity = options.capacity.max(options.behind + options.ahead + 2);
+        let hook: Option<FrameHook> = (!chain.is_identity()).then(|| {
+            Arc::new(move |frame: &mut Frame| chain.apply(frame).map_err(|e| e.reason()))
+                as FrameHook
+        });
+        StreamedSource {
+            streamer: FrameStreamer::with_hook(trajectory, options, hook),
+            smooth,
+        }
+    }
+
+    fn read_one(&self, index: usize) -> Result<Arc<Frame>, String> {
+        match self.streamer.wait(index, READ_TIMEOUT) {
+            Some(Ok(frame)) => Ok(frame),
+            Some(Err(e)) => Err(format!("{e} (frame {index} skipped)")),
+            None => Err(format!(
+                "{}: frame {index} not read within {} s",
+                self.name(),
+                READ_TIMEOUT.as_secs()
+            )),
         }
     }
 
@@ -111,15 +149,12 @@ impl FrameSource for StreamedSource {
     }
     fn read_frame(&self, index: usize) -> Result<Frame, String> {
         self.streamer.set_playhead(index);
-        match self.streamer.wait(index, READ_TIMEOUT) {
-            Some(Ok(frame)) => Ok(Frame::clone(&frame)),
-            Some(Err(e)) => Err(format!("{e} (frame {index} skipped)")),
-            None => Err(format!(
-                "{}: frame {index} not read within {} s",
-                self.name(),
-                READ_TIMEOUT.as_secs()
-            )),
+        if self.smooth == 0 {
+            return self.read_one(index).map(|f| Frame::clone(&f));
         }
+        crate::transform::smooth::smooth_frame(index, self.len(), self.smooth, |j| {
+            self.read_one(j)
+        })
     }
     fn name(&self) -> String {
         FrameSource::name(self.streamer.trajectory())
@@ -131,6 +166,16 @@ pub fn open_files(
     top: &std::path::Path,
     traj: Option<&std::path::Path>,
 ) -> Result<Arc<dyn FrameSource>, String> {
+    open_files_with(top, traj, &TransformOptions::default())
+}
+
+/// Like [`open_files`], with the frames made whole, centred, fitted and smoothed as
+/// `transforms` ask (the errors of a bad option are one line).
+pub fn open_files_with(
+    top: &std::path::Path,
+    traj: Option<&std::path::Path>,
+    transforms: &TransformOptions,
+) -> Result<Arc<dyn FrameSource>, String> {
     // A reader that panics (it should not: see `io`) must give an error, not a dead thread
     // the window waits on forever.
     let opened = std::panic::catch_unwind(|| crate::io::open(top, traj)).unwrap_or_else(|_| {
@@ -139,11 +184,40 @@ pub fn open_files(
             message: "the reader crashed on this file".into(),
         })
     });
-    opened
-        .map(|t| {
-            Arc::new(StreamedSource::new(t, StreamerOptions::default())) as Arc<dyn FrameSource>
-        })
-        .map_err(|e| e.to_string())
+    let trajectory = opened.map_err(|e| e.to_string())?;
+    let chain = transform_chain(&trajectory, top, transforms)?;
+    Ok(Arc::new(StreamedSource::transformed(
+        trajectory,
+        StreamerOptions::default(),
+        chain,
+    )))
+}
+
+/// The transformation chain `transforms` ask for on `trajectory` (its topology file `top`
+/// gives the fit reference when asked).
+fn transform_chain(
+    trajectory: &Trajectory,
+    top: &std::path::Path,
+    transforms: &TransformOptions,
+) -> Result<TransformChain, String> {
+    use crate::transform::FitReference;
+    let first = trajectory.read_frame(0).map_err(|e| e.to_string())?;
+    let reference = if transforms.fit.is_some() && transforms.fit_reference == FitReference::Topology
+    {
+        let opened = crate::io::open(top, None).map_err(|e| format!("fit reference: {e}"))?;
+        Some(opened.read_frame(0).map_err(|e| format!("fit reference: {e}"))?)
+    } else {
+        None
+    };
+    let file = trajectory.path().display().to_string();
+    TransformChain::new(
+        transforms,
+        trajectory.topology(),
+        &first,
+        reference.as_ref(),
+        &file,
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// A small test system: `residues` residues of three atoms each along a helix, moving a little

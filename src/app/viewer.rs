@@ -13,7 +13,7 @@ use super::export::{MovieJob, MoviePlan, export_ui};
 use super::panels::{SurfaceDraft, look_ui, readouts_ui, surface_ui};
 use super::plot::plot_ui;
 use super::recent::{Recent, RecentEntry};
-use super::source::{FrameSource, open_files};
+use super::source::{FrameSource, open_files_with};
 use super::state::{AppCore, Command};
 use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
@@ -58,6 +58,8 @@ pub struct Viewer {
     files: Option<(PathBuf, Option<PathBuf>)>,
     /// Watch on eframe's wgpu device, and where to leave the state when it is lost.
     device: Option<(DeviceWatch, ReopenSlot)>,
+    /// Per-frame transformations of the frames loaded, and the Trajectory section's draft.
+    transforms: super::trajectory_panel::TransformDraft,
 }
 
 impl Viewer {
@@ -86,7 +88,24 @@ impl Viewer {
             fps: 0.0,
             files: None,
             device: None,
+            transforms: Default::default(),
         }
+    }
+
+    /// Reloads the files on screen with the transformations in use (the representations stay).
+    fn reload_transformed(&mut self, ctx: &egui::Context) {
+        if let Some((top, traj)) = self.files.clone() {
+            self.core.keep_reps_on_load = true;
+            self.open(ctx, top, traj);
+        } else if self.loading.is_some() {
+            // A load is under way: reload when it lands.
+            self.transforms.request_reload();
+        }
+    }
+
+    /// Sets the per-frame transformations used by the next load.
+    pub fn set_transforms(&mut self, options: crate::transform::TransformOptions) {
+        self.transforms = super::trajectory_panel::TransformDraft::new(options);
     }
 
     /// Applies a command as if the UI had issued it (tests, scripted use).
@@ -110,8 +129,9 @@ impl Viewer {
         let (tx, rx) = channel();
         let ctx = ctx.clone();
         self.core.status = format!("loading {}…", top.display());
+        let transforms = self.transforms.applied().clone();
         std::thread::spawn(move || {
-            let result = open_files(&top, traj.as_deref());
+            let result = open_files_with(&top, traj.as_deref(), &transforms);
             let _ = tx.send((result, RecentEntry { top, traj }));
             ctx.request_repaint();
         });
@@ -216,7 +236,9 @@ impl Viewer {
             frame: self.core.timeline.current,
             stride: self.core.timeline.stride,
             fps: self.core.timeline.fps,
+            ..TrajectoryState::default()
         };
+        state.trajectory.set_transforms(self.transforms.applied());
         state
     }
 
@@ -232,6 +254,11 @@ impl Viewer {
         }
         self.core.timeline.stride = state.trajectory.stride.max(1);
         self.core.timeline.fps = state.trajectory.fps;
+        let transforms = state.trajectory.transforms();
+        if &transforms != self.transforms.applied() {
+            self.set_transforms(transforms);
+            self.transforms.request_reload();
+        }
         self.core.apply(Command::SetReps(state.representations));
         self.core.apply(Command::Timeline(super::timeline::TimelineCmd::Seek(
             state.trajectory.frame,
@@ -403,6 +430,10 @@ impl eframe::App for Viewer {
                     cmds.extend(surface_ui(ui, &self.core, &mut self.draft));
                     ui.separator();
                     cmds.extend(look_ui(ui, &self.core));
+                    ui.separator();
+                    if super::trajectory_panel::trajectory_ui(ui, &mut self.transforms) {
+                        self.reload_transformed(ui.ctx());
+                    }
                     ui.separator();
                     let frames = self.core.timeline.len;
                     cmds.extend(export_ui(

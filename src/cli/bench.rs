@@ -121,6 +121,12 @@ pub struct BenchResult {
     pub gpu_bytes: Option<u64>,
     /// Peak resident memory of the process so far, bytes.
     pub peak_rss: Option<u64>,
+    /// GPU objects (buffers, bind groups, textures) the engine created per frame after the
+    /// first one (GPU engine only; 0 in steady state).
+    pub gpu_objects_per_frame: Option<f64>,
+    /// Bricks of the grid that atoms reach and the surface crosses (sparse CPU engine only;
+    /// of the last timed frame).
+    pub bricks: Option<mdsurf::surface::BrickStats>,
 }
 
 /// Runs `mdsurf bench`.
@@ -254,6 +260,11 @@ fn time_case(
     // frame computes would double the peak memory that the table reports.
     let (mut last_dims, mut last_triangles) = ([0u32; 3], 0usize);
     let total = args.warmup + args.repeats;
+    let gpu_objects = |e: &BenchEngine| match e {
+        BenchEngine::Gpu(g) => Some(g.objects_created().total()),
+        BenchEngine::Cpu(_) => None,
+    };
+    let mut objects_after_first = None;
     for i in 0..total as usize {
         let t0 = Instant::now();
         let read_ms = read_frame(source, i, &mut positions)?;
@@ -275,6 +286,9 @@ fn time_case(
         let output = engine.engine().compute(&atoms, params)?;
         let compute_ms = ms_since(t1);
         (last_dims, last_triangles) = (output.grid.dims, output.mesh.triangle_count());
+        if i == 0 {
+            objects_after_first = gpu_objects(engine);
+        }
         if i >= args.warmup as usize {
             reads.push(read_ms);
             computes.push(compute_ms);
@@ -302,6 +316,13 @@ fn time_case(
         compute_wall_ms: median(computes),
         fps: 1e3 / wall.max(1e-9),
         peak_rss: peak_rss_bytes(),
+        bricks: match engine {
+            BenchEngine::Cpu(e) => e.brick_stats(),
+            BenchEngine::Gpu(_) => None,
+        },
+        gpu_objects_per_frame: gpu_objects(engine)
+            .zip(objects_after_first)
+            .map(|(now, first)| now.saturating_sub(first) as f64 / (total as f64 - 1.0).max(1.0)),
     })
 }
 

@@ -4,7 +4,7 @@
 use super::bench::BenchResult;
 
 /// Column headers, in order (text and CSV share them).
-pub const COLUMNS: [&str; 15] = [
+pub const COLUMNS: [&str; 18] = [
     "case",
     "backend",
     "atoms",
@@ -20,6 +20,9 @@ pub const COLUMNS: [&str; 15] = [
     "frames_per_s",
     "peak_rss_MB",
     "gpu_MB",
+    "gpu_objects_per_frame",
+    "bricks_occupied_%",
+    "bricks_active_%",
 ];
 
 /// A formatted benchmark table.
@@ -54,6 +57,15 @@ impl Table {
                         .unwrap_or_else(|| "-".into()),
                     r.gpu_bytes
                         .map(|b| format!("{:.0}", b as f64 / 1e6))
+                        .unwrap_or_else(|| "-".into()),
+                    r.gpu_objects_per_frame
+                        .map(|n| format!("{n:.1}"))
+                        .unwrap_or_else(|| "-".into()),
+                    r.bricks
+                        .map(|b| format!("{:.1}", 100.0 * b.occupied_fraction()))
+                        .unwrap_or_else(|| "-".into()),
+                    r.bricks
+                        .map(|b| format!("{:.1}", 100.0 * b.active_fraction()))
                         .unwrap_or_else(|| "-".into()),
                 ]
             })

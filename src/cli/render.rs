@@ -20,6 +20,7 @@ use mdsurf::surface::SurfaceOutput;
 
 use super::scene_args::{SceneArgs, bind_layers};
 use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
+use super::transform_args::{FrameReader, TransformArgs};
 
 /// Arguments of `mdsurf render`.
 #[derive(clap::Args, Debug)]
@@ -30,6 +31,8 @@ pub struct RenderArgs {
     pub params: ParamArgs,
     #[command(flatten)]
     pub scene: SceneArgs,
+    #[command(flatten)]
+    pub transforms: TransformArgs,
     /// Frame to render (from 0) when --frames is not given.
     #[arg(long, default_value_t = 0)]
     pub frame: usize,
@@ -206,6 +209,7 @@ fn output_paths(pattern: &Path, frames: &[usize]) -> Result<Vec<PathBuf>> {
 pub fn run(args: RenderArgs) -> Result<()> {
     let params = args.params.params()?;
     let state = args.scene.load_state()?;
+    let transforms = args.transforms.options(state.as_ref());
     let first = args.frames.map_or(args.frame, |r| r.start);
     let (system, _) = System::open(&args.input, first)?;
     let len = system.len();
@@ -244,7 +248,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let options = args.input.particles.options()?;
     let topology = system.trajectory.topology().clone();
-    let first_frame = system.trajectory.read_frame(frames[0])?;
+    let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
+    let first_frame = reader.read_frame(frames[0])?;
     let mut choice = args.scene.representations(
         state,
         &topology,
@@ -295,6 +300,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let renderer = Renderer::new(&gpu.device);
     let mut engine = make_engine(args.backend)?;
     choice.print_defaults();
+    if args.transforms.any() {
+        reader.print_summary();
+    }
     let mut scene = GpuScene::new();
     let mut camera = Camera {
         projection: if args.ortho {
@@ -311,7 +319,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let frame = if i == 0 {
             first_frame.clone()
         } else {
-            system.trajectory.read_frame(f)?
+            reader.read_frame(f)?
         };
         let read_ms = ms_since(t0);
         let mut spheres = Vec::new();

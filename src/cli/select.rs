@@ -28,7 +28,10 @@ pub struct SelectArgs {
 pub fn run(args: SelectArgs) -> Result<()> {
     let (files, expr) = match args.args.split_last() {
         Some((expr, files)) if (1..=2).contains(&files.len()) => (files, expr),
-        _ => bail!("select takes TOP [TRAJ] EXPR (2 or 3 arguments), got {}", args.args.len()),
+        _ => bail!(
+            "select takes TOP [TRAJ] EXPR (2 or 3 arguments), got {}",
+            args.args.len()
+        ),
     };
     // The selection is checked before any file is read.
     let selection = Selection::parse(expr)

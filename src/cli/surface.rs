@@ -17,6 +17,7 @@ use mdsurf::surface::SurfaceOutput;
 
 use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
 use super::scene_args::{SceneArgs, bind_layers};
+use super::transform_args::{FrameReader, TransformArgs};
 
 /// Above this many frames on a terminal, a progress bar replaces the per-frame lines.
 const PROGRESS_BAR_FRAMES: usize = 20;
@@ -33,6 +34,8 @@ pub struct SurfaceArgs {
     pub params: ParamArgs,
     #[command(flatten)]
     pub scene: SceneArgs,
+    #[command(flatten)]
+    pub transforms: TransformArgs,
     /// Engine: cpu, gpu, or auto (the GPU when there is one).
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     pub backend: Backend,
@@ -59,9 +62,12 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
 
     let state = args.scene.load_state()?;
+    let transforms = args.transforms.options(state.as_ref());
 
     let start_frame = args.frames.map(|r| r.start).unwrap_or(0);
-    let (system, first) = System::open(&args.input, start_frame)?;
+    let (system, _) = System::open(&args.input, start_frame)?;
+    let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
+    let first = reader.read_frame(start_frame.min(system.len() - 1))?;
     let range = args.frames.unwrap_or_default();
     let frames = range.indices(system.selectable_len());
     if frames.is_empty() {
@@ -116,6 +122,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
     let mut engine = make_engine(args.backend)?;
     choice.print_defaults();
+    if args.transforms.any() && !args.quiet {
+        reader.print_summary();
+    }
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
 
     let bar =
@@ -127,7 +136,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     for &index in &frames {
         let rows = (|| -> Result<Vec<StatsRow>> {
             let t0 = Instant::now();
-            let frame = system.trajectory.read_frame(index)?;
+            let frame = reader.read_frame(index)?;
             let read_ms = ms_since(t0);
             let mut rows = Vec::with_capacity(layers.len());
             for layer in layers.iter_mut() {

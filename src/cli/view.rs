@@ -12,6 +12,7 @@ use mdsurf::scene::representation::{RepStyle, Representation};
 
 use super::common::{Backend, ParamArgs, ParticleArgs};
 use super::scene_args::SceneArgs;
+use super::transform_args::TransformArgs;
 use super::render::StereoArgs;
 
 /// Arguments of the viewer.
@@ -29,6 +30,8 @@ pub struct ViewArgs {
     pub particles: ParticleArgs,
     #[command(flatten)]
     pub scene: SceneArgs,
+    #[command(flatten)]
+    pub transforms: TransformArgs,
     /// Scripted run: play this many frames (each computed and shown) first.
     #[arg(long, value_name = "N")]
     pub play_frames: Option<usize>,
@@ -58,6 +61,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
     let params = args.params.params()?;
     let particles = args.particles.options()?;
     let state = args.scene.load_state()?;
+    let transforms = args.transforms.options(state.as_ref());
     let mut render = RenderSettings {
         stereo: args.stereo,
         eye_separation: args.eyes.eye_separation,
@@ -100,6 +104,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         render,
         reps,
         camera,
+        transforms,
     };
     mdsurf::app::run(options)?;
     Ok(())

@@ -5,13 +5,15 @@
 //! so every density sum, independent of the run and of the input order (cells of more than 1024
 //! atoms keep the scatter order).
 
-use super::kernel::{Kernel, groups_1d, module, uniform};
+use super::context::GpuContext;
+use super::kernel::{Bound, Kernel, Uniform, groups_1d, module};
+use super::layout::bin as b;
 use super::plan::FramePlan;
 use super::resources::Buffers;
 use super::scan::{ScanPlan, Scanner};
 use super::types::BinUniform;
 
-/// The binning kernels.
+/// The binning kernels and their persistent uniform, scan scratch and bind groups.
 #[derive(Debug)]
 pub struct Binner {
     count: Kernel,
@@ -19,47 +21,44 @@ pub struct Binner {
     scatter: Kernel,
     sort_cells: Kernel,
     max_groups: u32,
-}
-
-/// Bind groups of one frame's binning.
-#[derive(Debug)]
-pub struct BinFrame {
-    count: wgpu::BindGroup,
-    copy_starts: wgpu::BindGroup,
-    scatter: wgpu::BindGroup,
-    sort_cells: wgpu::BindGroup,
+    uniform: Uniform<BinUniform>,
+    binds: [Bound; 4],
     scan: ScanPlan,
     atoms: u64,
     cells: u64,
-    _uniform: wgpu::Buffer,
 }
 
 impl Binner {
     /// Compiles the kernels.
-    pub fn new(device: &wgpu::Device, max_groups: u32) -> Binner {
-        let m = module(device, "bin.wgsl", super::shaders::BIN);
+    pub fn new(ctx: &GpuContext, max_groups: u32) -> Binner {
+        let m = module(&ctx.device, "bin.wgsl", super::shaders::BIN);
         Binner {
-            count: Kernel::new(device, &m, "count", &[]),
-            copy_starts: Kernel::new(device, &m, "copy_starts", &[]),
-            scatter: Kernel::new(device, &m, "scatter", &[]),
-            sort_cells: Kernel::new(device, &m, "sort_cells", &[]),
+            count: Kernel::with_slots(ctx, &m, "count", b::COUNT),
+            copy_starts: Kernel::with_slots(ctx, &m, "copy_starts", b::COPY_STARTS),
+            scatter: Kernel::with_slots(ctx, &m, "scatter", b::SCATTER),
+            sort_cells: Kernel::with_slots(ctx, &m, "sort_cells", b::SORT_CELLS),
             max_groups,
+            uniform: Uniform::new(ctx, "bin uniform"),
+            binds: Default::default(),
+            scan: ScanPlan::default(),
+            atoms: 0,
+            cells: 0,
         }
     }
 
-    /// Prepares the bind groups for `atoms` atoms under `plan`; `scratch` receives the scan total.
-    pub fn frame(
-        &self,
-        device: &wgpu::Device,
+    /// Prepares the frame for `atoms` atoms under `plan`: writes the uniform, refreshes the bind
+    /// groups whose buffers were replaced, prepares the scan of the cell counts.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
         scanner: &Scanner,
-        b: &Buffers,
+        bufs: &Buffers,
         plan: &FramePlan,
         atoms: u64,
         radius_scale: f32,
-    ) -> BinFrame {
-        let u = uniform(
-            device,
-            "bin uniform",
+    ) {
+        self.uniform.write(
+            &ctx.queue,
             &BinUniform {
                 cell_origin: plan.grid.origin.to_array(),
                 cell_size: plan.cell_size,
@@ -70,89 +69,85 @@ impl Binner {
                 _pad: [0; 2],
             },
         );
-        let ub = || u.as_entire_binding();
-        let count = self.count.bind(
-            device,
+        let u = &self.uniform.buffer;
+        let [count, copy_starts, scatter, sort_cells] = &mut self.binds;
+        self.count.bind(
+            ctx,
+            count,
             &[
-                (0, ub()),
-                (1, b.positions.buffer.as_entire_binding()),
-                (4, b.cell_start.buffer.as_entire_binding()),
+                (b::U, u),
+                (b::POSITIONS, &bufs.positions.buffer),
+                (b::CELL_COUNT, &bufs.cell_start.buffer),
             ],
         );
-        let copy_starts = self.copy_starts.bind(
-            device,
+        self.copy_starts.bind(
+            ctx,
+            copy_starts,
             &[
-                (0, ub()),
-                (5, b.cell_start.buffer.as_entire_binding()),
-                (6, b.cell_end.buffer.as_entire_binding()),
+                (b::U, u),
+                (b::CELL_START, &bufs.cell_start.buffer),
+                (b::CELL_END, &bufs.cell_end.buffer),
             ],
         );
-        let scatter = self.scatter.bind(
-            device,
+        self.scatter.bind(
+            ctx,
+            scatter,
             &[
-                (0, ub()),
-                (1, b.positions.buffer.as_entire_binding()),
-                (2, b.radii.buffer.as_entire_binding()),
-                (3, b.colours.buffer.as_entire_binding()),
-                (6, b.cell_end.buffer.as_entire_binding()),
-                (7, b.sorted_atoms.buffer.as_entire_binding()),
-                (8, b.sorted_colours.buffer.as_entire_binding()),
+                (b::U, u),
+                (b::POSITIONS, &bufs.positions.buffer),
+                (b::RADII, &bufs.radii.buffer),
+                (b::COLOURS, &bufs.colours.buffer),
+                (b::CELL_END, &bufs.cell_end.buffer),
+                (b::SORTED_ATOMS, &bufs.sorted_atoms.buffer),
+                (b::SORTED_COLOURS, &bufs.sorted_colours.buffer),
             ],
         );
-        let sort_cells = self.sort_cells.bind(
-            device,
+        self.sort_cells.bind(
+            ctx,
+            sort_cells,
             &[
-                (0, ub()),
-                (5, b.cell_start.buffer.as_entire_binding()),
-                (6, b.cell_end.buffer.as_entire_binding()),
-                (7, b.sorted_atoms.buffer.as_entire_binding()),
-                (8, b.sorted_colours.buffer.as_entire_binding()),
+                (b::U, u),
+                (b::CELL_START, &bufs.cell_start.buffer),
+                (b::CELL_END, &bufs.cell_end.buffer),
+                (b::SORTED_ATOMS, &bufs.sorted_atoms.buffer),
+                (b::SORTED_COLOURS, &bufs.sorted_colours.buffer),
             ],
         );
         // The scan total (atom count) goes to a spare word of the partials buffer.
-        let scan = scanner.plan(
-            device,
-            &b.cell_start.buffer,
+        scanner.prepare(
+            ctx,
+            &mut self.scan,
+            &bufs.cell_start.buffer,
             plan.cell_count(),
-            (&b.partials, 0),
+            (&bufs.partials, 0),
         );
-        BinFrame {
-            count,
-            copy_starts,
-            scatter,
-            sort_cells,
-            scan,
-            atoms,
-            cells: plan.cell_count(),
-            _uniform: u,
-        }
+        self.atoms = atoms;
+        self.cells = plan.cell_count();
     }
 
-    /// Records the binning: clears the cell counts, then count, scan, copy, scatter.
+    /// Records the prepared binning: clears the cell counts, then count, scan, copy, scatter,
+    /// sort.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         scanner: &Scanner,
-        b: &Buffers,
-        f: &BinFrame,
+        bufs: &Buffers,
         ts: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
-        encoder.clear_buffer(&b.cell_start.buffer, 0, Some(f.cells * 4));
+        encoder.clear_buffer(&bufs.cell_start.buffer, 0, Some(self.cells * 4));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("bin"),
             timestamp_writes: ts,
         });
-        let atom_groups = groups_1d(f.atoms.div_ceil(256), self.max_groups);
-        self.count.dispatch(&mut pass, &f.count, atom_groups);
-        scanner.record(&mut pass, &f.scan);
-        self.copy_starts.dispatch(
-            &mut pass,
-            &f.copy_starts,
-            groups_1d(f.cells.div_ceil(256), self.max_groups),
-        );
-        self.scatter.dispatch(&mut pass, &f.scatter, atom_groups);
-        let cell_groups = groups_1d(f.cells.div_ceil(256), self.max_groups);
+        let [count, copy_starts, scatter, sort_cells] = &self.binds;
+        let atom_groups = groups_1d(self.atoms.div_ceil(256), self.max_groups);
+        let cell_groups = groups_1d(self.cells.div_ceil(256), self.max_groups);
+        self.count.dispatch(&mut pass, count, &[], atom_groups);
+        scanner.record(&mut pass, &self.scan);
+        self.copy_starts
+            .dispatch(&mut pass, copy_starts, &[], cell_groups);
+        self.scatter.dispatch(&mut pass, scatter, &[], atom_groups);
         self.sort_cells
-            .dispatch(&mut pass, &f.sort_cells, cell_groups);
+            .dispatch(&mut pass, sort_cells, &[], cell_groups);
     }
 }

@@ -2,6 +2,9 @@
 //! tests, benchmarks) or shared with the viewer's eframe device, with the adapter's real limits
 //! and timestamp queries where the adapter has them.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use super::GpuError;
 
 /// A wgpu device plus what the engine needs to know about it.
@@ -20,6 +23,51 @@ pub struct GpuContext {
     /// True when the adapter is a software rasterizer on the CPU (Mesa lavapipe, WARP):
     /// correct but slower than the CPU engine, so `--backend auto` passes it over.
     pub software_adapter: bool,
+    /// GPU objects created through this context (shared by its clones); see
+    /// [`GpuContext::objects`].
+    counter: Arc<ObjectCounter>,
+}
+
+/// How many GPU objects of each kind were created through one [`GpuContext`] (and its clones):
+/// the engine creates every buffer, bind group, texture and query set through the context, so
+/// the difference of two snapshots is what the frames in between allocated.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct GpuObjects {
+    /// Buffers.
+    pub buffers: u64,
+    /// Bind groups.
+    pub bind_groups: u64,
+    /// Textures.
+    pub textures: u64,
+    /// Query sets (timestamps).
+    pub query_sets: u64,
+}
+
+impl GpuObjects {
+    /// All objects together.
+    pub fn total(&self) -> u64 {
+        self.buffers + self.bind_groups + self.textures + self.query_sets
+    }
+}
+
+impl std::ops::Sub for GpuObjects {
+    type Output = GpuObjects;
+    fn sub(self, o: GpuObjects) -> GpuObjects {
+        GpuObjects {
+            buffers: self.buffers.saturating_sub(o.buffers),
+            bind_groups: self.bind_groups.saturating_sub(o.bind_groups),
+            textures: self.textures.saturating_sub(o.textures),
+            query_sets: self.query_sets.saturating_sub(o.query_sets),
+        }
+    }
+}
+
+#[derive(Debug, Default)]
+struct ObjectCounter {
+    buffers: AtomicU64,
+    bind_groups: AtomicU64,
+    textures: AtomicU64,
+    query_sets: AtomicU64,
 }
 
 impl GpuContext {
@@ -87,7 +135,54 @@ impl GpuContext {
             timestamps,
             adapter_name: name,
             software_adapter: false,
+            counter: Arc::default(),
         }
+    }
+
+    /// Objects created through this context so far.
+    pub fn objects(&self) -> GpuObjects {
+        let c = &self.counter;
+        GpuObjects {
+            buffers: c.buffers.load(Ordering::Relaxed),
+            bind_groups: c.bind_groups.load(Ordering::Relaxed),
+            textures: c.textures.load(Ordering::Relaxed),
+            query_sets: c.query_sets.load(Ordering::Relaxed),
+        }
+    }
+
+    fn count(n: &AtomicU64) {
+        n.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Creates a buffer (counted).
+    pub fn create_buffer(&self, desc: &wgpu::BufferDescriptor<'_>) -> wgpu::Buffer {
+        Self::count(&self.counter.buffers);
+        self.device.create_buffer(desc)
+    }
+
+    /// Creates a buffer holding `contents` (counted).
+    pub fn create_buffer_init(&self, desc: &wgpu::util::BufferInitDescriptor<'_>) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        Self::count(&self.counter.buffers);
+        self.device.create_buffer_init(desc)
+    }
+
+    /// Creates a bind group (counted).
+    pub fn create_bind_group(&self, desc: &wgpu::BindGroupDescriptor<'_>) -> wgpu::BindGroup {
+        Self::count(&self.counter.bind_groups);
+        self.device.create_bind_group(desc)
+    }
+
+    /// Creates a texture (counted).
+    pub fn create_texture(&self, desc: &wgpu::TextureDescriptor<'_>) -> wgpu::Texture {
+        Self::count(&self.counter.textures);
+        self.device.create_texture(desc)
+    }
+
+    /// Creates a query set (counted).
+    pub fn create_query_set(&self, desc: &wgpu::QuerySetDescriptor<'_>) -> wgpu::QuerySet {
+        Self::count(&self.counter.query_sets);
+        self.device.create_query_set(desc)
     }
 
     /// For tests and `--backend auto`: a headless context, or `Ok(None)` with a note on stderr

@@ -3,7 +3,9 @@
 //! thread. Density and colour are fused in one pass; pipeline variants skip the colour volume
 //! (no colours) or the density write (a colour-only change keeps the density as it is).
 
-use super::kernel::{Kernel, module};
+use super::context::GpuContext;
+use super::kernel::{Bound, Kernel, Layout, module};
+use super::layout::density as b;
 use super::resources::Buffers;
 
 /// Voxels per thread along x (`RUN` in the shader).
@@ -20,27 +22,31 @@ pub enum DensityMode {
     ColourOnly,
 }
 
-/// The density kernels.
+/// The density kernels (three variants on one layout) and their cached bind group.
 #[derive(Debug)]
 pub struct DensityStage {
     with_colour: Kernel,
     plain: Kernel,
     colour_only: Kernel,
+    bind: Bound,
 }
 
 impl DensityStage {
-    /// Compiles both variants.
-    pub fn new(device: &wgpu::Device) -> DensityStage {
-        let m = module(device, "density.wgsl", super::shaders::DENSITY);
+    /// Compiles the variants.
+    pub fn new(ctx: &GpuContext) -> DensityStage {
+        let m = module(&ctx.device, "density.wgsl", super::shaders::DENSITY);
+        let layout = Layout::new(ctx, "density", b::ALL);
         DensityStage {
-            with_colour: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 1.0)]),
-            plain: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 0.0)]),
+            with_colour: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 1.0)], &layout),
+            plain: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 0.0)], &layout),
             colour_only: Kernel::new(
-                device,
+                ctx,
                 &m,
                 "main",
                 &[("WITH_COLOUR", 1.0), ("WRITE_DENSITY", 0.0)],
+                &layout,
             ),
+            bind: Bound::default(),
         }
     }
 
@@ -52,33 +58,30 @@ impl DensityStage {
         }
     }
 
-    /// Bind group for one slab uniform.
-    pub fn bind(
-        &self,
-        device: &wgpu::Device,
-        b: &Buffers,
-        slab_uniform: wgpu::BindingResource<'_>,
-        mode: DensityMode,
-    ) -> wgpu::BindGroup {
-        self.kernel(mode).bind(
-            device,
+    /// Refreshes the bind group (every variant and slab shares it; the slab uniform is bound
+    /// at a dynamic offset).
+    pub fn prepare(&mut self, ctx: &GpuContext, bufs: &Buffers) {
+        self.plain.bind(
+            ctx,
+            &mut self.bind,
             &[
-                (0, slab_uniform),
-                (1, b.sorted_atoms.buffer.as_entire_binding()),
-                (2, b.sorted_colours.buffer.as_entire_binding()),
-                (3, b.cell_start.buffer.as_entire_binding()),
-                (4, b.cell_end.buffer.as_entire_binding()),
-                (5, b.density.buffer.as_entire_binding()),
-                (6, b.colour.buffer.as_entire_binding()),
+                (b::U, &bufs.slab_uniforms.buffer),
+                (b::SORTED_ATOMS, &bufs.sorted_atoms.buffer),
+                (b::SORTED_COLOURS, &bufs.sorted_colours.buffer),
+                (b::CELL_START, &bufs.cell_start.buffer),
+                (b::CELL_END, &bufs.cell_end.buffer),
+                (b::DENSITY, &bufs.density.buffer),
+                (b::COLOUR, &bufs.colour.buffer),
             ],
-        )
+        );
     }
 
-    /// Records the gather over `dims[0] x dims[1] x layers` voxels.
+    /// Records the gather over `dims[0] x dims[1] x layers` voxels of the slab whose uniform is
+    /// at `offset`.
     pub fn record(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
-        bind: &wgpu::BindGroup,
+        offset: u32,
         dims: [u32; 3],
         layers: u32,
         mode: DensityMode,
@@ -86,7 +89,8 @@ impl DensityStage {
         let runs = dims[0].div_ceil(RUN);
         self.kernel(mode).dispatch(
             pass,
-            bind,
+            &self.bind,
+            &[offset],
             [runs.div_ceil(4), dims[1].div_ceil(4), layers.div_ceil(4)],
         );
     }

@@ -10,9 +10,10 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::context::GpuContext;
+use super::context::GpuObjects;
 use super::frame::{Recorder, Stages, Work};
 pub use super::options::{Changes, EngineOptions, FrameInfo};
-use super::output::{FrameStats, GpuSurface, Readbacks, read_mesh, read_pod};
+use super::output::{FrameStats, GpuSurface, Readbacks, Staging};
 use super::plan::{FramePlan, plan_frame};
 use super::resources::Buffers;
 use super::timing::Timer;
@@ -46,6 +47,7 @@ pub struct GpuEngine {
     frame: u64,
     latest: Option<FrameStats>,
     init_error: Option<String>,
+    staging: std::sync::Mutex<Staging>,
 }
 
 impl std::fmt::Debug for GpuEngine {
@@ -101,12 +103,8 @@ impl GpuEngine {
 
     fn build(ctx: GpuContext) -> (GpuEngine, Option<GpuError>) {
         let max_groups = ctx.limits.max_compute_workgroups_per_dimension;
-        let ((stages, (buffers, table_error)), scope_error) = ctx.capture(|| {
-            (
-                Stages::new(&ctx.device, max_groups),
-                Buffers::new(&ctx.device),
-            )
-        });
+        let ((stages, (buffers, table_error)), scope_error) =
+            ctx.capture(|| (Stages::new(&ctx, max_groups), Buffers::new(&ctx)));
         let engine = GpuEngine {
             stages,
             buffers,
@@ -117,6 +115,7 @@ impl GpuEngine {
             frame: 0,
             latest: None,
             init_error: None,
+            staging: Default::default(),
             ctx,
         };
         (engine, scope_error.or(table_error))
@@ -146,6 +145,13 @@ impl GpuEngine {
     /// What the last submit did (which stages ran, grid, slabs).
     pub fn last_frame(&self) -> Option<&FrameInfo> {
         self.state.last.as_ref()
+    }
+
+    /// GPU objects (buffers, bind groups, textures, query sets) the engine has created so far,
+    /// through its context. In steady state (same atom count, a grid that fits the buffers) a
+    /// frame creates none: compare two snapshots.
+    pub fn objects_created(&self) -> GpuObjects {
+        self.ctx.objects()
     }
 
     /// Bytes of GPU memory the engine's buffers hold.
@@ -259,7 +265,7 @@ impl GpuEngine {
         };
 
         // Buffers: replaced per-atom buffers lose their contents, so re-upload everything then.
-        let d = &self.ctx.device;
+        let d = &self.ctx;
         // The sorted atoms (16 bytes each) are the largest per-atom binding.
         if n * 16 > self.ctx.max_binding() {
             return Err(GpuError::TooLarge {
@@ -320,6 +326,8 @@ impl GpuEngine {
         self.frame += 1;
         let frame = self.frame;
         self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);
+        self.stages
+            .prepare(&self.ctx, &mut self.buffers, &plan, params, n, work);
         let mut rec = Recorder::new(&self.ctx, wall_clock && !self.timer.enabled());
         self.stages
             .record(
@@ -327,8 +335,6 @@ impl GpuEngine {
                 &mut self.timer,
                 &self.buffers,
                 &plan,
-                params,
-                n,
                 work,
                 colour,
             )
@@ -427,13 +433,18 @@ impl GpuEngine {
 
     /// Reads the mesh of the last finished frame back to the host.
     pub fn read_mesh(&self, stats: &FrameStats) -> Result<crate::surface::Mesh, GpuError> {
-        read_mesh(
-            &self.ctx.device,
-            &self.ctx.queue,
+        self.staging()?.read_mesh(
+            &self.ctx,
             &self.surface(),
             stats.vertex_count,
             stats.triangle_count,
         )
+    }
+
+    fn staging(&self) -> Result<std::sync::MutexGuard<'_, Staging>, GpuError> {
+        self.staging
+            .lock()
+            .map_err(|_| GpuError::Readback("a readback panicked".into()))
     }
 
     /// Test hook: the density volume of the last slab (whole grid when there was one slab).
@@ -458,7 +469,7 @@ impl GpuEngine {
         len: fn(&FramePlan) -> u64,
     ) -> Result<Vec<T>, GpuError> {
         let n = self.state.plan.as_ref().map(len).unwrap_or(0);
-        read_pod(&self.ctx.device, &self.ctx.queue, buffer, n)
+        self.staging()?.read_pod(&self.ctx, buffer, n)
     }
 }
 

@@ -9,12 +9,11 @@ use super::GpuError;
 use super::bin::Binner;
 use super::context::GpuContext;
 use super::density::{DensityMode, DensityStage};
-use super::kernel::uniform;
 use super::mc::{Classify, Compact, Emit};
 use super::measure::Measure;
 use super::plan::{FramePlan, Slab};
 use super::resources::Buffers;
-use super::scan::Scanner;
+use super::scan::{ScanPlan, Scanner};
 use super::timing::{Stage, Timer};
 use super::types::{C_SCAN_ACTIVE, C_SCAN_TRIANGLES, C_SCAN_VERTICES, MeasureUniform, SlabUniform};
 use crate::surface::{StageTimings, SurfaceParams};
@@ -30,7 +29,8 @@ pub enum Work {
     Mc,
 }
 
-/// The compiled stages of one device.
+/// The compiled stages of one device with their persistent uniforms, scan scratch and cached
+/// bind groups ([`Stages::prepare`] refreshes them, [`Stages::record`] only records).
 #[derive(Debug)]
 pub struct Stages {
     scanner: Scanner,
@@ -40,6 +40,9 @@ pub struct Stages {
     compact: Compact,
     emit: Emit,
     measure: Measure,
+    /// Scans of the block sums of vertices, triangles, active cells.
+    block_scans: [ScanPlan; 3],
+    slab_values: Vec<SlabUniform>,
     max_groups: u32,
 }
 
@@ -131,39 +134,86 @@ fn grid_centre(plan: &FramePlan) -> glam::Vec3 {
 
 impl Stages {
     /// Compiles every stage.
-    pub fn new(device: &wgpu::Device, max_groups: u32) -> Stages {
+    pub fn new(ctx: &GpuContext, max_groups: u32) -> Stages {
         Stages {
-            scanner: Scanner::new(device, max_groups),
-            binner: Binner::new(device, max_groups),
-            density: DensityStage::new(device),
-            classify: Classify::new(device),
-            compact: Compact::new(device),
-            emit: Emit::new(device),
-            measure: Measure::new(device),
+            scanner: Scanner::new(ctx, max_groups),
+            binner: Binner::new(ctx, max_groups),
+            density: DensityStage::new(ctx),
+            classify: Classify::new(ctx),
+            compact: Compact::new(ctx),
+            emit: Emit::new(ctx),
+            measure: Measure::new(ctx),
+            block_scans: Default::default(),
+            slab_values: Vec::new(),
             max_groups,
         }
     }
 
-    /// Records the frame's stages into `rec` (after the caller reset the counters).
-    #[allow(clippy::too_many_arguments)]
+    /// Prepares a frame after the buffers were sized: writes every uniform in place (the slab
+    /// uniforms into one buffer at dynamic offsets) and rebuilds only the bind groups whose
+    /// buffers were replaced. Creates no GPU object in steady state.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        b: &mut Buffers,
+        plan: &FramePlan,
+        params: &SurfaceParams,
+        atoms: u64,
+        work: Work,
+    ) {
+        self.slab_values.clear();
+        self.slab_values.extend(
+            plan.slabs
+                .iter()
+                .map(|s| slab_uniform(plan, params, s, atoms)),
+        );
+        b.slab_uniforms.write(ctx, &self.slab_values);
+        let b = &*b;
+        if work != Work::Mc {
+            self.binner
+                .prepare(ctx, &self.scanner, b, plan, atoms, params.radius_scale);
+        }
+        let blocks = plan.class_blocks();
+        for (i, slot) in [C_SCAN_VERTICES, C_SCAN_TRIANGLES, C_SCAN_ACTIVE]
+            .into_iter()
+            .enumerate()
+        {
+            self.scanner.prepare(
+                ctx,
+                &mut self.block_scans[i],
+                &b.block_sums[i].buffer,
+                blocks,
+                (&b.counters, slot),
+            );
+        }
+        self.measure.prepare(
+            ctx,
+            b,
+            &MeasureUniform {
+                centre: grid_centre(plan).to_array(),
+                max_groups_x: self.max_groups,
+            },
+        );
+        self.density.prepare(ctx, b);
+        self.classify.prepare(ctx, b);
+        self.compact.prepare(ctx, b);
+        self.emit.prepare(ctx, b);
+    }
+
+    /// Records the frame prepared by [`Stages::prepare`] into `rec` (after the caller reset the
+    /// counters).
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
         timer: &mut Timer,
         b: &Buffers,
         plan: &FramePlan,
-        params: &SurfaceParams,
-        atoms: u64,
         work: Work,
         colour: bool,
     ) -> Result<(), GpuError> {
-        let device = &rec.ctx.device.clone();
         if work != Work::Mc {
-            let f = self
-                .binner
-                .frame(device, &self.scanner, b, plan, atoms, params.radius_scale);
             let ts = timer.pass(Stage::Bin);
-            self.binner.record(rec.encoder(), &self.scanner, b, &f, ts);
+            self.binner.record(rec.encoder(), &self.scanner, b, ts);
             rec.end_stage(Stage::Bin)?;
         }
         let mode = match (work, colour) {
@@ -173,33 +223,9 @@ impl Stages {
             (Work::Full, false) => Some(DensityMode::Plain),
         };
         let blocks = plan.class_blocks();
-        // Block sums of vertices, triangles, active cells; totals into their counter words.
-        let scans = [
-            (0, C_SCAN_VERTICES),
-            (1, C_SCAN_TRIANGLES),
-            (2, C_SCAN_ACTIVE),
-        ]
-        .map(|(i, slot)| {
-            self.scanner
-                .plan(device, &b.block_sums[i].buffer, blocks, (&b.counters, slot))
-        });
-        let mu = uniform(
-            device,
-            "measure uniform",
-            &MeasureUniform {
-                centre: grid_centre(plan).to_array(),
-                max_groups_x: self.max_groups,
-            },
-        );
-        let mf = self.measure.frame(device, b, &mu);
-        for slab in &plan.slabs {
-            let u = uniform(
-                device,
-                "slab uniform",
-                &slab_uniform(plan, params, slab, atoms),
-            );
+        for (i, slab) in plan.slabs.iter().enumerate() {
+            let offset = b.slab_uniforms.offset(i);
             if let Some(mode) = mode {
-                let bind = self.density.bind(device, b, u.as_entire_binding(), mode);
                 let ts = timer.pass(Stage::Density);
                 let mut pass = rec
                     .encoder()
@@ -208,13 +234,10 @@ impl Stages {
                         timestamp_writes: ts,
                     });
                 self.density
-                    .record(&mut pass, &bind, plan.grid.dims, slab.dens_layers, mode);
+                    .record(&mut pass, offset, plan.grid.dims, slab.dens_layers, mode);
                 drop(pass);
                 rec.end_stage(Stage::Density)?;
             }
-            let classify = self.classify.bind(device, b, u.as_entire_binding());
-            let compact = self.compact.bind(device, b, u.as_entire_binding());
-            let emit = self.emit.bind(device, b, u.as_entire_binding(), colour);
             let ts = timer.pass(Stage::Mc);
             let mut pass = rec
                 .encoder()
@@ -223,15 +246,15 @@ impl Stages {
                     timestamp_writes: ts,
                 });
             self.classify
-                .record(&mut pass, &classify, blocks, self.max_groups);
-            for s in &scans {
+                .record(&mut pass, offset, blocks, self.max_groups);
+            for s in &self.block_scans {
                 self.scanner.record(&mut pass, s);
             }
-            self.measure.slab_begin(&mut pass, &mf);
+            self.measure.slab_begin(&mut pass);
             self.compact
-                .record(&mut pass, &compact, blocks, self.max_groups);
-            self.emit.record(&mut pass, &emit, b, colour);
-            self.measure.slab_end(&mut pass, &mf);
+                .record(&mut pass, offset, blocks, self.max_groups);
+            self.emit.record(&mut pass, offset, b, colour);
+            self.measure.slab_end(&mut pass);
             drop(pass);
             rec.end_stage(Stage::Mc)?;
         }
@@ -242,7 +265,7 @@ impl Stages {
                 label: Some("measure"),
                 timestamp_writes: ts,
             });
-        self.measure.frame_end(&mut pass, &mf);
+        self.measure.frame_end(&mut pass);
         drop(pass);
         rec.end_stage(Stage::Mc)
     }

@@ -4,112 +4,117 @@
 //! base per point and the list of active cells) and [`Emit`] (`shaders/emit.wgsl`: shared
 //! vertices per crossed edge and indexed triangles, dispatched indirectly over the active cells).
 
-use super::kernel::{Kernel, groups_1d, module};
+use super::context::GpuContext;
+use super::kernel::{Bound, Kernel, Layout, groups_1d, module};
+use super::layout::{classify as cl, compact as co, emit as em};
 use super::resources::Buffers;
 
-/// Classification kernel.
+/// Classification kernel and its cached bind group.
 #[derive(Debug)]
-pub struct Classify(Kernel);
+pub struct Classify(Kernel, Bound);
 
-/// Compaction kernel.
+/// Compaction kernel and its cached bind group.
 #[derive(Debug)]
-pub struct Compact(Kernel);
+pub struct Compact(Kernel, Bound);
 
-/// Emission kernels (with and without the colour volume).
+/// Emission kernels (with and without the colour volume, one layout) and their bind group.
 #[derive(Debug)]
 pub struct Emit {
     with_colour: Kernel,
     plain: Kernel,
+    bind: Bound,
 }
 
 impl Classify {
     /// Compiles the kernel.
-    pub fn new(device: &wgpu::Device) -> Classify {
-        let m = module(device, "classify.wgsl", super::shaders::CLASSIFY);
-        Classify(Kernel::new(device, &m, "main", &[]))
-    }
-
-    /// Bind group for one slab uniform.
-    pub fn bind(
-        &self,
-        device: &wgpu::Device,
-        b: &Buffers,
-        slab_uniform: wgpu::BindingResource<'_>,
-    ) -> wgpu::BindGroup {
-        self.0.bind(
-            device,
-            &[
-                (0, slab_uniform),
-                (1, b.density.buffer.as_entire_binding()),
-                (2, b.mc_tables.as_entire_binding()),
-                (3, b.classes.buffer.as_entire_binding()),
-                (4, b.block_sums[0].buffer.as_entire_binding()),
-                (5, b.block_sums[1].buffer.as_entire_binding()),
-                (6, b.block_sums[2].buffer.as_entire_binding()),
-            ],
+    pub fn new(ctx: &GpuContext) -> Classify {
+        let m = module(&ctx.device, "classify.wgsl", super::shaders::CLASSIFY);
+        Classify(
+            Kernel::with_slots(ctx, &m, "main", cl::ALL),
+            Bound::default(),
         )
     }
 
-    /// Records classification of `blocks` blocks of 256 points.
+    /// Refreshes the bind group (shared by every slab; dynamic slab uniform offset).
+    pub fn prepare(&mut self, ctx: &GpuContext, b: &Buffers) {
+        self.0.bind(
+            ctx,
+            &mut self.1,
+            &[
+                (cl::U, &b.slab_uniforms.buffer),
+                (cl::DENSITY, &b.density.buffer),
+                (cl::MC, &b.mc_tables),
+                (cl::CLASSES, &b.classes.buffer),
+                (cl::BLOCK_VERTICES, &b.block_sums[0].buffer),
+                (cl::BLOCK_TRIANGLES, &b.block_sums[1].buffer),
+                (cl::BLOCK_ACTIVE, &b.block_sums[2].buffer),
+            ],
+        );
+    }
+
+    /// Records classification of `blocks` blocks of 256 points of the slab at `offset`.
     pub fn record(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
-        bind: &wgpu::BindGroup,
+        offset: u32,
         blocks: u64,
         max_groups: u32,
     ) {
-        self.0.dispatch(pass, bind, groups_1d(blocks, max_groups));
+        self.0
+            .dispatch(pass, &self.1, &[offset], groups_1d(blocks, max_groups));
     }
 }
 
 impl Compact {
     /// Compiles the kernel.
-    pub fn new(device: &wgpu::Device) -> Compact {
-        let m = module(device, "compact.wgsl", super::shaders::COMPACT);
-        Compact(Kernel::new(device, &m, "main", &[]))
-    }
-
-    /// Bind group for one slab uniform.
-    pub fn bind(
-        &self,
-        device: &wgpu::Device,
-        b: &Buffers,
-        slab_uniform: wgpu::BindingResource<'_>,
-    ) -> wgpu::BindGroup {
-        self.0.bind(
-            device,
-            &[
-                (0, slab_uniform),
-                (1, b.classes.buffer.as_entire_binding()),
-                (2, b.block_sums[0].buffer.as_entire_binding()),
-                (3, b.block_sums[1].buffer.as_entire_binding()),
-                (4, b.block_sums[2].buffer.as_entire_binding()),
-                (5, b.counters.as_entire_binding()),
-                (6, b.vertex_base.buffer.as_entire_binding()),
-                (7, b.active.buffer.as_entire_binding()),
-            ],
+    pub fn new(ctx: &GpuContext) -> Compact {
+        let m = module(&ctx.device, "compact.wgsl", super::shaders::COMPACT);
+        Compact(
+            Kernel::with_slots(ctx, &m, "main", co::ALL),
+            Bound::default(),
         )
     }
 
-    /// Records compaction of `blocks` blocks of 256 points.
+    /// Refreshes the bind group (shared by every slab; dynamic slab uniform offset).
+    pub fn prepare(&mut self, ctx: &GpuContext, b: &Buffers) {
+        self.0.bind(
+            ctx,
+            &mut self.1,
+            &[
+                (co::U, &b.slab_uniforms.buffer),
+                (co::CLASSES, &b.classes.buffer),
+                (co::BLOCK_VERTICES, &b.block_sums[0].buffer),
+                (co::BLOCK_TRIANGLES, &b.block_sums[1].buffer),
+                (co::BLOCK_ACTIVE, &b.block_sums[2].buffer),
+                (co::COUNTERS, &b.counters),
+                (co::VERTEX_BASE, &b.vertex_base.buffer),
+                (co::ACTIVE, &b.active.buffer),
+            ],
+        );
+    }
+
+    /// Records compaction of `blocks` blocks of 256 points of the slab at `offset`.
     pub fn record(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
-        bind: &wgpu::BindGroup,
+        offset: u32,
         blocks: u64,
         max_groups: u32,
     ) {
-        self.0.dispatch(pass, bind, groups_1d(blocks, max_groups));
+        self.0
+            .dispatch(pass, &self.1, &[offset], groups_1d(blocks, max_groups));
     }
 }
 
 impl Emit {
     /// Compiles both variants.
-    pub fn new(device: &wgpu::Device) -> Emit {
-        let m = module(device, "emit.wgsl", super::shaders::EMIT);
+    pub fn new(ctx: &GpuContext) -> Emit {
+        let m = module(&ctx.device, "emit.wgsl", super::shaders::EMIT);
+        let layout = Layout::new(ctx, "emit", em::ALL);
         Emit {
-            with_colour: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 1.0)]),
-            plain: Kernel::new(device, &m, "main", &[("WITH_COLOUR", 0.0)]),
+            with_colour: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 1.0)], &layout),
+            plain: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 0.0)], &layout),
+            bind: Bound::default(),
         }
     }
 
@@ -121,40 +126,30 @@ impl Emit {
         }
     }
 
-    /// Bind group for one slab uniform.
-    pub fn bind(
-        &self,
-        device: &wgpu::Device,
-        b: &Buffers,
-        slab_uniform: wgpu::BindingResource<'_>,
-        colour: bool,
-    ) -> wgpu::BindGroup {
-        self.kernel(colour).bind(
-            device,
+    /// Refreshes the bind group (shared by both variants and every slab).
+    pub fn prepare(&mut self, ctx: &GpuContext, b: &Buffers) {
+        self.plain.bind(
+            ctx,
+            &mut self.bind,
             &[
-                (0, slab_uniform),
-                (1, b.density.buffer.as_entire_binding()),
-                (2, b.colour.buffer.as_entire_binding()),
-                (3, b.classes.buffer.as_entire_binding()),
-                (4, b.vertex_base.buffer.as_entire_binding()),
-                (5, b.active.buffer.as_entire_binding()),
-                (6, b.mc_tables.as_entire_binding()),
-                (8, b.counters.as_entire_binding()),
-                (9, b.vertices.buffer.as_entire_binding()),
-                (10, b.indices.buffer.as_entire_binding()),
+                (em::U, &b.slab_uniforms.buffer),
+                (em::DENSITY, &b.density.buffer),
+                (em::COLOUR, &b.colour.buffer),
+                (em::CLASSES, &b.classes.buffer),
+                (em::VERTEX_BASE, &b.vertex_base.buffer),
+                (em::ACTIVE, &b.active.buffer),
+                (em::MC, &b.mc_tables),
+                (em::COUNTERS, &b.counters),
+                (em::VERTICES, &b.vertices.buffer),
+                (em::INDICES, &b.indices.buffer),
             ],
-        )
+        );
     }
 
-    /// Records emission over the active cells (indirect: arguments written by `slab_begin`).
-    pub fn record(
-        &self,
-        pass: &mut wgpu::ComputePass<'_>,
-        bind: &wgpu::BindGroup,
-        b: &Buffers,
-        colour: bool,
-    ) {
+    /// Records emission over the active cells of the slab at `offset` (indirect: arguments
+    /// written by `slab_begin`).
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, offset: u32, b: &Buffers, colour: bool) {
         self.kernel(colour)
-            .dispatch_indirect(pass, bind, &b.dispatch_args);
+            .dispatch_indirect(pass, &self.bind, &[offset], &b.dispatch_args);
     }
 }

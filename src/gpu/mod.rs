@@ -4,6 +4,9 @@
 //! surface extracted by Marching Cubes ([`mc`]: classify, compact, emit) and measured
 //! ([`measure`]). [`frame`] records a frame's passes, [`plan`] sizes it (cells, z-slabs),
 //! [`timing`] reads timestamp queries, [`output`] brings counters back asynchronously.
+//! [`layout`] names every binding once (explicit bind-group layouts, checked against the WGSL);
+//! [`kernel`] caches bind groups across frames, so a steady-state frame creates no GPU object
+//! ([`GpuEngine::objects_created`] counts them through [`GpuContext`]).
 //! [`GpuEngine`] runs a frame: blocking through [`crate::surface::SurfaceEngine`] (CLI, tests)
 //! or non-blocking into a [`GpuSurface`] the renderer draws from (viewer). [`tolerance`] holds
 //! the CPU-parity tolerances, [`table1`] reproduces the paper's Table 1. The shaders live in
@@ -16,6 +19,7 @@ pub mod engine;
 pub mod frame;
 pub mod inputs;
 pub mod kernel;
+pub mod layout;
 pub mod mc;
 pub mod measure;
 pub mod options;
@@ -29,7 +33,7 @@ pub mod timing;
 pub mod tolerance;
 pub mod types;
 
-pub use context::{GpuContext, gpu_required};
+pub use context::{GpuContext, GpuObjects, gpu_required};
 pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
 pub use frame::Work;
 pub use output::{FrameStats, GpuSurface};

@@ -1,13 +1,15 @@
 //! What comes out of the GPU engine: the GPU-resident surface the renderer draws from
 //! ([`GpuSurface`]: vertex and index buffers plus indirect draw arguments), the per-frame
 //! counters that come back asynchronously ([`FrameStats`], through a small pool of mappable
-//! [`Readbacks`] slots), and blocking readback of buffers for `mdsurf surface` and the tests.
+//! [`Readbacks`] slots, reused frame after frame), and blocking readback of buffers for
+//! `mdsurf surface` and the tests (the engine's through one persistent [`Staging`] buffer).
 
 use std::sync::{Arc, Mutex};
 
 use glam::Vec3;
 
 use super::GpuError;
+use super::context::GpuContext;
 use super::timing::{Stage, Timer};
 use super::types::{GpuCounters, GpuVertex};
 use crate::surface::{GridSpec, Mesh, StageTimings};
@@ -93,7 +95,7 @@ impl Readbacks {
     /// slot index to pass to [`Readbacks::map`] after submitting, or None when all are busy.
     pub fn record(
         &mut self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         counters: &wgpu::Buffer,
         timer: &Timer,
@@ -103,7 +105,7 @@ impl Readbacks {
             Some(i) => i,
             None if self.slots.len() < Self::MAX_SLOTS => {
                 self.slots.push(Slot {
-                    buffer: device.create_buffer(&wgpu::BufferDescriptor {
+                    buffer: ctx.create_buffer(&wgpu::BufferDescriptor {
                         label: Some("counter readback"),
                         size: Self::BYTES,
                         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
@@ -183,6 +185,140 @@ impl Readbacks {
     }
 }
 
+/// A mappable buffer the engine's blocking readbacks (the mesh, test hooks) go through: kept
+/// across frames and replaced, with a quarter to spare, only when a readback needs more.
+#[derive(Debug, Default)]
+pub struct Staging {
+    buffer: Option<wgpu::Buffer>,
+}
+
+impl Staging {
+    /// Copies the first `bytes` of each `(buffer, bytes)` (buffers need `COPY_SRC`) back to
+    /// the host, in one submit and one map; returns one byte vector per part.
+    pub fn read(
+        &mut self,
+        ctx: &GpuContext,
+        parts: &[(&wgpu::Buffer, u64)],
+    ) -> Result<Vec<Vec<u8>>, GpuError> {
+        let sizes: Vec<u64> = parts.iter().map(|p| p.1.next_multiple_of(4)).collect();
+        let total: u64 = sizes.iter().sum();
+        if total == 0 {
+            return Ok(vec![Vec::new(); parts.len()]);
+        }
+        if self.buffer.as_ref().is_none_or(|b| b.size() < total) {
+            self.buffer = Some(ctx.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback staging"),
+                size: (total + total / 4).next_multiple_of(256),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }));
+        }
+        let Some(staging) = &self.buffer else {
+            unreachable!("staging buffer created above")
+        };
+        let device = &ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut at = 0;
+        for ((src, _), &size) in parts.iter().zip(&sizes) {
+            if size > 0 {
+                encoder.copy_buffer_to_buffer(src, 0, staging, at, Some(size));
+            }
+            at += size;
+        }
+        ctx.queue.submit([encoder.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            let msg = e
+                .to_string()
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ");
+            return Err(GpuError::Readback(msg));
+        }
+        let result: MapResult = Arc::default();
+        let r2 = Arc::clone(&result);
+        staging.map_async(wgpu::MapMode::Read, 0..total, move |r| {
+            if let Ok(mut g) = r2.lock() {
+                *g = Some(r.map_err(|e| e.to_string()));
+            }
+        });
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Device(e.to_string()))?;
+        let done = result.lock().ok().and_then(|mut r| r.take());
+        match done {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(GpuError::Readback(e)),
+            None => return Err(GpuError::Readback("map did not complete".into())),
+        }
+        let out = {
+            let view = staging
+                .get_mapped_range(0..total)
+                .map_err(|e| GpuError::Readback(e.to_string()))?;
+            let mut at = 0usize;
+            parts
+                .iter()
+                .zip(&sizes)
+                .map(|((_, bytes), &size)| {
+                    let v = view[at..at + *bytes as usize].to_vec();
+                    at += size as usize;
+                    v
+                })
+                .collect()
+        };
+        staging.unmap();
+        Ok(out)
+    }
+
+    /// Reads `n` plain values of type `T` from the start of `src`.
+    pub fn read_pod<T: bytemuck::Pod>(
+        &mut self,
+        ctx: &GpuContext,
+        src: &wgpu::Buffer,
+        n: u64,
+    ) -> Result<Vec<T>, GpuError> {
+        let bytes = self.read(ctx, &[(src, n * size_of::<T>() as u64)])?;
+        Ok(pod_vec(&bytes[0], n))
+    }
+
+    /// Reads the first `vertices` vertices and `triangles` triangles of `surface` into a
+    /// [`Mesh`] (one copy, one map).
+    pub fn read_mesh(
+        &mut self,
+        ctx: &GpuContext,
+        surface: &GpuSurface,
+        vertices: u32,
+        triangles: u32,
+    ) -> Result<Mesh, GpuError> {
+        let v_bytes = vertices as u64 * size_of::<GpuVertex>() as u64;
+        let i_bytes = 3 * triangles as u64 * 4;
+        let parts = self.read(
+            ctx,
+            &[(&surface.vertices, v_bytes), (&surface.indices, i_bytes)],
+        )?;
+        let verts: Vec<GpuVertex> = pod_vec(&parts[0], vertices as u64);
+        let indices: Vec<u32> = pod_vec(&parts[1], 3 * triangles as u64);
+        Ok(mesh_of(&verts, indices))
+    }
+}
+
+fn pod_vec<T: bytemuck::Pod>(bytes: &[u8], n: u64) -> Vec<T> {
+    bytes
+        .chunks_exact(size_of::<T>())
+        .take(n as usize)
+        .map(bytemuck::pod_read_unaligned)
+        .collect()
+}
+
+fn mesh_of(verts: &[GpuVertex], indices: Vec<u32>) -> Mesh {
+    Mesh {
+        positions: verts.iter().map(|v| Vec3::from(v.position)).collect(),
+        normals: verts.iter().map(|v| Vec3::from(v.normal)).collect(),
+        colours: verts.iter().map(|v| v.colour).collect(),
+        indices,
+    }
+}
+
 /// Blocking copy of `size` bytes at `offset` of `src` (needs `COPY_SRC`) back to the host.
 pub fn read_bytes(
     device: &wgpu::Device,
@@ -245,11 +381,7 @@ pub fn read_pod<T: bytemuck::Pod>(
     n: u64,
 ) -> Result<Vec<T>, GpuError> {
     let bytes = read_bytes(device, queue, src, 0, n * size_of::<T>() as u64)?;
-    Ok(bytes
-        .chunks_exact(size_of::<T>())
-        .take(n as usize)
-        .map(bytemuck::pod_read_unaligned)
-        .collect())
+    Ok(pod_vec(&bytes, n))
 }
 
 /// Reads the first `vertices` vertices and `triangles` triangles of a surface into a [`Mesh`].
@@ -262,10 +394,5 @@ pub fn read_mesh(
 ) -> Result<Mesh, GpuError> {
     let verts: Vec<GpuVertex> = read_pod(device, queue, &surface.vertices, vertices as u64)?;
     let indices: Vec<u32> = read_pod(device, queue, &surface.indices, 3 * triangles as u64)?;
-    Ok(Mesh {
-        positions: verts.iter().map(|v| Vec3::from(v.position)).collect(),
-        normals: verts.iter().map(|v| Vec3::from(v.normal)).collect(),
-        colours: verts.iter().map(|v| v.colour).collect(),
-        indices,
-    })
+    Ok(mesh_of(&verts, indices))
 }

@@ -1,11 +1,15 @@
 //! The engine's GPU buffers: per-atom inputs and sorted copies, bin cells, per-slab volumes,
-//! Marching Cubes scratch, counters and the output mesh. Each grows (never shrinks) to what a
-//! frame needs; see [`super::plan`] for the byte counts per voxel and per atom.
+//! Marching Cubes scratch, counters, the per-slab uniforms and the output mesh. Each grows
+//! (never shrinks) to what a frame needs, the grid-sized ones with an eighth to spare so that a
+//! trajectory whose box breathes a little does not replace them every frame; see
+//! [`super::plan`] for the byte counts per voxel and per atom. A replaced buffer invalidates
+//! the cached bind groups that bound it ([`super::kernel::Bound`]).
 
 use super::GpuError;
+use super::context::GpuContext;
 use super::kernel::{storage, uniform};
 use super::plan::FramePlan;
-use super::types::{DrawIndexedArgs, GpuCounters, GpuVertex, McTablesUniform};
+use super::types::{DrawIndexedArgs, GpuCounters, GpuVertex, McTablesUniform, SlabUniform};
 use crate::surface::McTables;
 
 /// A buffer that is replaced by a bigger one when a frame needs more.
@@ -18,20 +22,32 @@ pub struct Grow {
 }
 
 impl Grow {
-    fn new(device: &wgpu::Device, label: &'static str, usage: wgpu::BufferUsages) -> Grow {
+    /// A 16-byte buffer that grows on demand.
+    pub fn new(ctx: &GpuContext, label: &'static str, usage: wgpu::BufferUsages) -> Grow {
         Grow {
-            buffer: storage(device, label, 16, usage),
+            buffer: storage(ctx, label, 16, usage),
             label,
             usage,
         }
     }
 
     /// Ensures at least `bytes`; returns true when the buffer was replaced (contents lost).
-    pub fn ensure(&mut self, device: &wgpu::Device, bytes: u64) -> bool {
+    pub fn ensure(&mut self, ctx: &GpuContext, bytes: u64) -> bool {
+        self.grow(ctx, bytes, bytes)
+    }
+
+    /// Like [`Grow::ensure`], but a replacement gets an eighth more than `bytes` (within the
+    /// device's largest binding), so sizes that vary a little from frame to frame settle.
+    pub fn ensure_slack(&mut self, ctx: &GpuContext, bytes: u64) -> bool {
+        let slack = (bytes + bytes / 8).min(ctx.max_binding()).max(bytes);
+        self.grow(ctx, bytes, slack)
+    }
+
+    fn grow(&mut self, ctx: &GpuContext, bytes: u64, new_size: u64) -> bool {
         if self.buffer.size() >= bytes {
             return false;
         }
-        self.buffer = storage(device, self.label, bytes, self.usage);
+        self.buffer = storage(ctx, self.label, new_size, self.usage);
         true
     }
 
@@ -84,12 +100,58 @@ pub struct Buffers {
     pub partials: wgpu::Buffer,
     /// MC tables ([`super::types::McTablesUniform`], a uniform buffer).
     pub mc_tables: wgpu::Buffer,
+    /// One [`SlabUniform`] per slab, bound at dynamic offsets.
+    pub slab_uniforms: SlabUniforms,
+}
+
+/// The [`SlabUniform`]s of a frame in one uniform buffer, one per `stride` bytes (the device's
+/// uniform offset alignment); the slab stages bind it once at a dynamic offset per slab.
+#[derive(Debug)]
+pub struct SlabUniforms {
+    /// The buffer.
+    pub buffer: wgpu::Buffer,
+    stride: u64,
+    bytes: Vec<u8>,
+}
+
+impl SlabUniforms {
+    fn new(ctx: &GpuContext) -> SlabUniforms {
+        let align = ctx.limits.min_uniform_buffer_offset_alignment.max(16) as u64;
+        let stride = (size_of::<SlabUniform>() as u64).next_multiple_of(align);
+        SlabUniforms {
+            buffer: super::kernel::uniform_buffer(ctx, "slab uniforms", stride),
+            stride,
+            bytes: Vec::new(),
+        }
+    }
+
+    /// Queues `slabs` for the next submit, growing the buffer (a quarter to spare) when needed.
+    pub fn write(&mut self, ctx: &GpuContext, slabs: &[SlabUniform]) {
+        let need = self.stride * slabs.len().max(1) as u64;
+        if self.buffer.size() < need {
+            let size = need + (slabs.len() as u64 / 4) * self.stride;
+            self.buffer = super::kernel::uniform_buffer(ctx, "slab uniforms", size);
+        }
+        self.bytes.clear();
+        self.bytes.resize(need as usize, 0);
+        for (i, s) in slabs.iter().enumerate() {
+            let at = i * self.stride as usize;
+            self.bytes[at..at + size_of::<SlabUniform>()].copy_from_slice(bytemuck::bytes_of(s));
+        }
+        ctx.queue.write_buffer(&self.buffer, 0, &self.bytes);
+    }
+
+    /// The dynamic offset of slab `i`.
+    pub fn offset(&self, i: usize) -> u32 {
+        (i as u64 * self.stride) as u32
+    }
 }
 
 impl Buffers {
     /// Empty buffers plus the Marching Cubes tables; the error says the tables did not fit
     /// their uniform (never for the shared tables; `types` tests it), the buffers exist anyway.
-    pub fn new(device: &wgpu::Device) -> (Buffers, Option<GpuError>) {
+    pub fn new(ctx: &GpuContext) -> (Buffers, Option<GpuError>) {
+        let device = ctx;
         use wgpu::BufferUsages as U;
         let (mc_tables, error) = match McTablesUniform::new(McTables::get()) {
             Some(t) => (t, None),
@@ -133,12 +195,13 @@ impl Buffers {
             ),
             partials: storage(device, "area/volume partials", 256 * 8, U::empty()),
             mc_tables: uniform(device, "mc tables", &*mc_tables),
+            slab_uniforms: SlabUniforms::new(ctx),
         };
         (buffers, error)
     }
 
     /// Grows the per-atom buffers for `atoms`; true when any was replaced.
-    pub fn ensure_atoms(&mut self, device: &wgpu::Device, atoms: u64) -> bool {
+    pub fn ensure_atoms(&mut self, device: &GpuContext, atoms: u64) -> bool {
         let mut replaced = false;
         replaced |= self.positions.ensure(device, atoms * 12);
         replaced |= self.radii.ensure(device, atoms * 4);
@@ -149,26 +212,26 @@ impl Buffers {
     }
 
     /// Grows the cell and slab buffers for `plan` (colour volume only when `with_colour`).
-    pub fn ensure_plan(&mut self, device: &wgpu::Device, plan: &FramePlan, with_colour: bool) {
+    pub fn ensure_plan(&mut self, device: &GpuContext, plan: &FramePlan, with_colour: bool) {
         let cells = plan.cell_count();
-        self.cell_start.ensure(device, cells * 4);
-        self.cell_end.ensure(device, cells * 4);
+        self.cell_start.ensure_slack(device, cells * 4);
+        self.cell_end.ensure_slack(device, cells * 4);
         let voxels = plan.slab_voxels();
-        self.density.ensure(device, voxels * 4);
+        self.density.ensure_slack(device, voxels * 4);
         if with_colour {
-            self.colour.ensure(device, voxels * 12);
+            self.colour.ensure_slack(device, voxels * 12);
         }
         let points = plan.class_points();
-        self.classes.ensure(device, points * 4);
-        self.vertex_base.ensure(device, points * 4);
-        self.active.ensure(device, points * 8);
+        self.classes.ensure_slack(device, points * 4);
+        self.vertex_base.ensure_slack(device, points * 4);
+        self.active.ensure_slack(device, points * 8);
         for b in &mut self.block_sums {
-            b.ensure(device, plan.class_blocks() * 4);
+            b.ensure_slack(device, plan.class_blocks() * 4);
         }
     }
 
     /// Grows the mesh buffers to hold `vertices` and `triangles`.
-    pub fn ensure_mesh(&mut self, device: &wgpu::Device, vertices: u64, triangles: u64) {
+    pub fn ensure_mesh(&mut self, device: &GpuContext, vertices: u64, triangles: u64) {
         self.vertices
             .ensure(device, vertices * size_of::<GpuVertex>() as u64);
         self.indices.ensure(device, triangles * 12);
@@ -205,6 +268,7 @@ impl Buffers {
             &self.draw_args,
             &self.partials,
             &self.mc_tables,
+            &self.slab_uniforms.buffer,
         ];
         grows.iter().map(|g| g.size()).sum::<u64>()
             + self.block_sums.iter().map(|g| g.size()).sum::<u64>()

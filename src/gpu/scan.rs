@@ -1,8 +1,14 @@
 //! Reusable exclusive prefix sum of u32 arrays on the GPU (`shaders/scan.wgsl`): blocks of 1024
 //! elements per workgroup, recursing over the block totals, adding the scanned totals back. The
 //! grand total lands in a caller-chosen u32 slot (a counter the next stages read on the GPU).
+//! Each scanned array has a persistent [`ScanPlan`] owned by the engine: its level uniforms are
+//! rewritten in place, its block-total scratch grows, its bind groups are rebuilt only when a
+//! buffer they bind was replaced.
 
-use super::kernel::{Kernel, groups_1d, module, storage, uniform};
+use super::context::GpuContext;
+use super::kernel::{Bound, Kernel, Layout, Uniform, groups_1d, module};
+use super::layout::scan as b;
+use super::resources::Grow;
 use super::types::ScanUniform;
 
 /// Elements per scan workgroup.
@@ -16,89 +22,112 @@ pub struct Scanner {
     max_groups: u32,
 }
 
-/// Buffers and bind groups that scan one data buffer of a fixed element count.
+/// One level of a scan: its uniform, its block totals (unless it is the top level) and bind
+/// groups.
 #[derive(Debug)]
+struct Level {
+    uniform: Uniform<ScanUniform>,
+    sums: Grow,
+    scan: Bound,
+    add: Bound,
+    groups: [u32; 3],
+    top: bool,
+}
+
+/// The persistent scratch and bind groups that scan one data buffer (see the module docs).
+#[derive(Debug, Default)]
 pub struct ScanPlan {
-    /// (groups, scan bind group, add bind group or None at the top level), lowest level first.
-    levels: Vec<([u32; 3], wgpu::BindGroup, Option<wgpu::BindGroup>)>,
-    _buffers: Vec<wgpu::Buffer>,
-    /// Number of elements scanned.
+    levels: Vec<Level>,
+    used: usize,
+    /// Number of elements scanned by the last [`Scanner::prepare`].
     pub count: u64,
 }
 
 impl Scanner {
     /// Compiles the scan kernels.
-    pub fn new(device: &wgpu::Device, max_groups: u32) -> Scanner {
-        let m = module(device, "scan.wgsl", super::shaders::SCAN);
+    pub fn new(ctx: &GpuContext, max_groups: u32) -> Scanner {
+        let m = module(&ctx.device, "scan.wgsl", super::shaders::SCAN);
+        let layout = Layout::new(ctx, "scan", b::ALL);
         Scanner {
-            scan_blocks: Kernel::new(device, &m, "scan_blocks", &[]),
-            add_sums: Kernel::new(device, &m, "add_sums", &[]),
+            scan_blocks: Kernel::new(ctx, &m, "scan_blocks", &[], &layout),
+            add_sums: Kernel::new(ctx, &m, "add_sums", &[], &layout),
             max_groups,
         }
     }
 
-    /// Plans an exclusive scan of the first `count` u32 of `data`, writing the total to
-    /// `total.0[total.1]` (a u32 index).
-    pub fn plan(
+    /// Prepares `plan` for an exclusive scan of the first `count` u32 of `data`, writing the
+    /// total to `total.0[total.1]` (a u32 index): writes the level uniforms, grows the scratch.
+    pub fn prepare(
         &self,
-        device: &wgpu::Device,
+        ctx: &GpuContext,
+        plan: &mut ScanPlan,
         data: &wgpu::Buffer,
         count: u64,
         total: (&wgpu::Buffer, u32),
-    ) -> ScanPlan {
-        let mut levels = Vec::new();
-        let mut buffers = Vec::new();
-        let mut level_data = data.clone();
+    ) {
         let mut n = count.max(1);
+        let mut i = 0;
         loop {
             let blocks = n.div_ceil(SCAN_BLOCK);
             let top = blocks == 1;
-            let sums = if top {
-                total.0.clone()
-            } else {
-                storage(device, "scan sums", blocks * 4, wgpu::BufferUsages::empty())
-            };
-            let u = uniform(
-                device,
-                "scan uniform",
+            if plan.levels.len() == i {
+                plan.levels.push(Level {
+                    uniform: Uniform::new(ctx, "scan uniform"),
+                    sums: Grow::new(ctx, "scan sums", wgpu::BufferUsages::empty()),
+                    scan: Bound::default(),
+                    add: Bound::default(),
+                    groups: [0; 3],
+                    top,
+                });
+            }
+            let (lower, upper) = plan.levels.split_at_mut(i);
+            let level = &mut upper[0];
+            if !top {
+                level.sums.ensure_slack(ctx, blocks * 4);
+            }
+            level.uniform.write(
+                &ctx.queue,
                 &ScanUniform {
                     count: n as u32,
                     sum_index: if top { total.1 } else { 0 },
                     _pad: [0; 2],
                 },
             );
+            level.groups = groups_1d(blocks, self.max_groups);
+            level.top = top;
+            let level_data = match lower.last() {
+                Some(below) => &below.sums.buffer,
+                None => data,
+            };
+            let sums = if top { total.0 } else { &level.sums.buffer };
             let entries = [
-                (0, u.as_entire_binding()),
-                (1, level_data.as_entire_binding()),
-                (2, sums.as_entire_binding()),
+                (b::U, &level.uniform.buffer),
+                (b::DATA, level_data),
+                (b::SUMS, sums),
             ];
-            let scan_bind = self.scan_blocks.bind(device, &entries);
-            let add_bind = (!top).then(|| self.add_sums.bind(device, &entries));
-            levels.push((groups_1d(blocks, self.max_groups), scan_bind, add_bind));
-            buffers.push(u);
+            self.scan_blocks.bind(ctx, &mut level.scan, &entries);
+            if !top {
+                self.add_sums.bind(ctx, &mut level.add, &entries);
+            }
+            i += 1;
             if top {
                 break;
             }
-            buffers.push(sums.clone());
-            level_data = sums;
             n = blocks;
         }
-        ScanPlan {
-            levels,
-            _buffers: buffers,
-            count,
-        }
+        plan.used = i;
+        plan.count = count;
     }
 
-    /// Records the scan into `pass` (dispatches separated by wgpu's automatic barriers).
+    /// Records the scan last prepared in `plan` into `pass` (dispatches separated by wgpu's
+    /// automatic barriers).
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, plan: &ScanPlan) {
-        for (groups, scan, _) in &plan.levels {
-            self.scan_blocks.dispatch(pass, scan, *groups);
+        let levels = &plan.levels[..plan.used];
+        for l in levels {
+            self.scan_blocks.dispatch(pass, &l.scan, &[], l.groups);
         }
-        for (groups, _, add) in plan.levels.iter().rev() {
-            if let Some(add) = add {
-                self.add_sums.dispatch(pass, add, *groups);
-            }
+        for l in levels.iter().rev().filter(|l| !l.top) {
+            self.add_sums.dispatch(pass, &l.add, &[], l.groups);
         }
     }
 }

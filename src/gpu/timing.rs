@@ -45,18 +45,18 @@ impl Timer {
     }
 
     /// Starts a frame of at most `max_passes` passes.
-    pub fn begin_frame(&mut self, device: &wgpu::Device, max_passes: u32) {
+    pub fn begin_frame(&mut self, ctx: &super::GpuContext, max_passes: u32) {
         self.passes.clear();
         if !self.enabled() || self.capacity >= max_passes {
             return;
         }
         let cap = max_passes.next_power_of_two().min(2048);
-        self.set = Some(device.create_query_set(&wgpu::QuerySetDescriptor {
+        self.set = Some(ctx.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("stage timestamps"),
             ty: wgpu::QueryType::Timestamp,
             count: 2 * cap,
         }));
-        self.resolve = Some(device.create_buffer(&wgpu::BufferDescriptor {
+        self.resolve = Some(ctx.create_buffer(&wgpu::BufferDescriptor {
             label: Some("timestamp resolve"),
             size: 16 * cap as u64,
             usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,

@@ -175,7 +175,10 @@ impl ChemReader {
         })?;
         if self.base == "GRO" {
             // The plain copy when there is one (decompressed, cleaned text), else the file.
-            let text = self.copy.as_ref().map_or(path.as_path(), |(p, _)| p.as_path());
+            let text = self
+                .copy
+                .as_ref()
+                .map_or(path.as_path(), |(p, _)| p.as_path());
             if let Some(lines) = read_gro_residues(text) {
                 apply_gro_residues(&mut topology, &lines);
             }

@@ -29,6 +29,8 @@ mod xdr;
 
 pub use error::IoError;
 pub use format::{FileFormat, WwFormat, detect};
-pub use stream::{FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions};
+pub use stream::{
+    FrameHook, FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions,
+};
 pub use trajectory::{Damage, Trajectory, open};
 pub use warnings::take_warnings;

@@ -20,6 +20,11 @@ pub type FrameResult = Result<Arc<Frame>, IoError>;
 /// streamer's blocking methods.
 pub type ReadyCallback = Box<dyn Fn(usize) + Send + 'static>;
 
+/// Runs on the reader thread on each frame right after it is read, before it is cached (the
+/// viewer's per-frame transformations, see [`crate::transform`]); an error (one line, without
+/// the file and frame) makes the frame fail.
+pub type FrameHook = Arc<dyn Fn(&mut Frame) -> Result<(), String> + Send + Sync>;
+
 /// Cache and prefetch sizes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct StreamerOptions {
@@ -89,6 +94,16 @@ impl FrameStreamer {
     /// less than the cache capacity, so prefetching never evicts its own frames and a requested
     /// frame outside the window always fits.
     pub fn new(trajectory: impl Into<Arc<Trajectory>>, options: StreamerOptions) -> Self {
+        Self::with_hook(trajectory, options, None)
+    }
+
+    /// Like [`FrameStreamer::new`], with `hook` run on every frame before it is cached, so the
+    /// cache holds transformed frames.
+    pub fn with_hook(
+        trajectory: impl Into<Arc<Trajectory>>,
+        options: StreamerOptions,
+        hook: Option<FrameHook>,
+    ) -> Self {
         let trajectory = trajectory.into();
         let frame_bytes = (trajectory.topology().len() * 12).max(1);
         let capacity = options.capacity.min(options.max_bytes / frame_bytes).max(1);
@@ -113,6 +128,7 @@ impl FrameStreamer {
         let reader = Reader {
             shared: shared.clone(),
             trajectory: trajectory.clone(),
+            hook,
             capacity,
             ahead,
             behind,
@@ -294,6 +310,7 @@ fn push_request(state: &mut State, index: usize) {
 struct Reader {
     shared: Arc<Shared>,
     trajectory: Arc<Trajectory>,
+    hook: Option<FrameHook>,
     capacity: usize,
     ahead: usize,
     behind: usize,
@@ -318,7 +335,12 @@ impl Reader {
                 }
             };
             let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                self.trajectory.read_frame(index)
+                let mut frame = self.trajectory.read_frame(index)?;
+                if let Some(hook) = &self.hook {
+                    hook(&mut frame)
+                        .map_err(|e| IoError::bad_frame(self.trajectory.path(), index, e))?;
+                }
+                Ok(frame)
             }))
             .unwrap_or_else(|_| {
                 Err(IoError::bad_frame(

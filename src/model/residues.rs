@@ -85,8 +85,7 @@ pub const LIPIDS: [&str; 65] = [
     // Phosphoinositides, cardiolipin, sphingolipids and ceramides.
     "PIP2", "POP2", "PIP3", "CDL", "CDL2", "TOCL", "CARD", "DPSM", "PSM", "SSM", "DPCE",
     // Sterols.
-    "CHOL", "CHL1", "CHL", "ERG",
-    // Glycerides and fatty acids.
+    "CHOL", "CHL1", "CHL", "ERG", // Glycerides and fatty acids.
     "TRIO", "DAG", "PALM", "OLEO",
     // AMBER Lipid14/17 fragments: tails (PA palmitoyl, OL oleoyl, MY myristoyl) and heads.
     "PA", "PC", "OL", "MY", "PE", "PGR", "PGS",

@@ -192,8 +192,8 @@ impl LookState {
     }
 }
 
-/// Timeline settings.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// Timeline settings and the per-frame transformations (see [`crate::transform`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TrajectoryState {
     /// Frame shown (from 0).
@@ -202,6 +202,21 @@ pub struct TrajectoryState {
     pub stride: usize,
     /// Playback speed in frames per second.
     pub fps: f32,
+    /// Make molecules whole (absent: on when the file has a box and connectivity).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub whole: Option<bool>,
+    /// Selection centred in the box.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<String>,
+    /// Selection fitted onto the reference frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<String>,
+    /// The fit's reference frame (`first` or `topology`).
+    #[serde(default)]
+    pub fit_reference: crate::transform::FitReference,
+    /// Half-width of the smoothing window in frames.
+    #[serde(default)]
+    pub smooth: usize,
 }
 
 impl Default for TrajectoryState {
@@ -210,7 +225,34 @@ impl Default for TrajectoryState {
             frame: 0,
             stride: 1,
             fps: 24.0,
+            whole: None,
+            center: None,
+            fit: None,
+            fit_reference: crate::transform::FitReference::First,
+            smooth: 0,
         }
+    }
+}
+
+impl TrajectoryState {
+    /// The transformations this state records.
+    pub fn transforms(&self) -> crate::transform::TransformOptions {
+        crate::transform::TransformOptions {
+            whole: self.whole,
+            center: self.center.clone(),
+            fit: self.fit.clone(),
+            fit_reference: self.fit_reference,
+            smooth: self.smooth,
+        }
+    }
+
+    /// Records `options`.
+    pub fn set_transforms(&mut self, options: &crate::transform::TransformOptions) {
+        self.whole = options.whole;
+        self.center = options.center.clone();
+        self.fit = options.fit.clone();
+        self.fit_reference = options.fit_reference;
+        self.smooth = options.smooth;
     }
 }
 

@@ -82,6 +82,19 @@ pub fn bin_atoms(
     grid: &GridSpec,
     slab_planes: u32,
 ) -> AtomBins {
+    bin_atoms_overlapping(atoms, params, grid, slab_planes, 0)
+}
+
+/// [`bin_atoms`] where slab `s` also lists the atoms that reach the `overlap` planes above it
+/// (planes `s * slab_planes + slab_planes ..` `+ overlap`), for stages that need a slab plus
+/// the first planes of the next one (the sparse engine's bricks, [`super::bricks`]).
+pub fn bin_atoms_overlapping(
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+    grid: &GridSpec,
+    slab_planes: u32,
+    overlap: u32,
+) -> AtomBins {
     let slab_planes = slab_planes.max(1);
     let [nx, ny, nz] = grid.dims;
     let (o, h) = (grid.origin, grid.spacing);
@@ -136,7 +149,7 @@ pub fn bin_atoms(
         .par_iter()
         .map(|a| {
             sample_range(a.pos[2], a.cut, o.z, h, nz)
-                .map(|(k0, k1)| (k0 / slab_planes, k1 / slab_planes))
+                .map(|(k0, k1)| (k0.saturating_sub(overlap) / slab_planes, k1 / slab_planes))
         })
         .collect();
     let mut slab_start = vec![0usize; slab_count + 1];

@@ -5,21 +5,36 @@
 
 use std::time::Instant;
 
-use super::bin::bin_atoms;
+use super::bin::{bin_atoms, bin_atoms_overlapping};
+use super::brick_mc::extract_bricks;
+use super::bricks::{BRICK, BrickScratch, BrickStats, BrickVolume};
 use super::marching_cubes::{McScratch, extract_with};
 use super::{
     AtomSet, DensityVolume, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
     SurfaceParams, available_memory_bytes, density,
 };
 
-/// The multi-threaded CPU surface engine (uses rayon's global thread pool). It keeps the last
-/// density volume and the Marching Cubes buffers between calls (about 4 bytes per grid sample,
-/// 16 with colours), so a sequence of frames allocates them once.
+/// The multi-threaded CPU surface engine (uses rayon's global thread pool).
+///
+/// By default it is sparse: the density lives in the 8³-sample bricks that some atom reaches
+/// ([`super::bricks`]), Marching Cubes visits only the bricks the surface crosses
+/// ([`super::brick_mc`]) and colours are computed per vertex, not per sample; the mesh, area
+/// and volume are bitwise those of the dense path ([`CpuEngine::dense`]), which samples a full
+/// density (and colour) volume. Either way the engine keeps its volumes and Marching Cubes
+/// buffers between calls, so a sequence of frames allocates them once.
 #[derive(Default)]
 pub struct CpuEngine {
     memory_limit: Option<u64>,
-    /// Density volume kept between calls (reused when the grid keeps its size).
+    /// Sample the whole grid (the dense reference path) instead of bricks.
+    dense: bool,
+    /// Dense density volume kept between calls (reused when the grid keeps its size).
     volume: DensityVolume,
+    /// Sparse density kept between calls.
+    bricks: BrickVolume,
+    /// Per-thread working memory of the sparse density stage.
+    brick_scratch: BrickScratch,
+    /// Brick counts of the last sparse computation.
+    last_bricks: Option<BrickStats>,
     /// Marching Cubes working memory kept between calls.
     mc: McScratch,
 }
@@ -28,7 +43,9 @@ impl std::fmt::Debug for CpuEngine {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("CpuEngine")
             .field("memory_limit", &self.memory_limit)
+            .field("dense", &self.dense)
             .field("kept_samples", &self.volume.values.len())
+            .field("kept_brick_bytes", &self.bricks.stored_bytes())
             .finish()
     }
 }
@@ -48,6 +65,32 @@ impl CpuEngine {
         }
     }
 
+    /// An engine on the dense reference path: full density and colour volumes, every cell
+    /// marched. Gives the same mesh as the default sparse engine; kept for tests and comparison.
+    pub fn dense() -> CpuEngine {
+        CpuEngine {
+            dense: true,
+            ..CpuEngine::default()
+        }
+    }
+
+    /// This engine switched to the dense path (`true`) or the sparse bricks (`false`).
+    pub fn with_dense(mut self, dense: bool) -> CpuEngine {
+        self.dense = dense;
+        self
+    }
+
+    /// True on the dense path.
+    pub fn is_dense(&self) -> bool {
+        self.dense
+    }
+
+    /// Brick counts (total, occupied, active) of the last surface the sparse path computed;
+    /// `None` before the first one or on the dense path.
+    pub fn brick_stats(&self) -> Option<BrickStats> {
+        self.last_bricks
+    }
+
     /// The grid `atoms` need under `params`, after checking the atoms, the parameters and that
     /// the grid fits in memory.
     pub fn plan(
@@ -58,7 +101,8 @@ impl CpuEngine {
         params.validate()?;
         atoms.validate()?;
         let grid = GridSpec::for_atoms(atoms.positions, atoms.radii, params)?;
-        let needed = grid.estimated_bytes(atoms.colours.is_some());
+        // The sparse path stores at most the density of every sample (colours go per vertex).
+        let needed = grid.estimated_bytes(self.dense && atoms.colours.is_some());
         let available = self.memory_limit.unwrap_or_else(available_memory_bytes);
         if needed > available {
             return Err(SurfaceError::GridTooLarge {
@@ -84,18 +128,35 @@ impl SurfaceEngine for CpuEngine {
         let grid = self.plan(atoms, params)?;
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
 
-        let t = Instant::now();
-        let bins = bin_atoms(atoms, params, &grid, density::slab_planes(&grid));
-        let bin_ms = ms(t);
-
-        let t = Instant::now();
         let with_colour = atoms.colours.is_some();
-        density::compute_binned_into(&bins, params, &grid, with_colour, &mut self.volume);
-        drop(bins);
-        let density_ms = ms(t);
-
-        let t = Instant::now();
-        let mesh = extract_with(&grid, &self.volume, params.isovalue, &mut self.mc);
+        let (mesh, bin_ms, density_ms, t) = if self.dense {
+            let t = Instant::now();
+            let bins = bin_atoms(atoms, params, &grid, density::slab_planes(&grid));
+            let bin_ms = ms(t);
+            let t = Instant::now();
+            density::compute_binned_into(&bins, params, &grid, with_colour, &mut self.volume);
+            drop(bins);
+            let density_ms = ms(t);
+            let t = Instant::now();
+            let mesh = extract_with(&grid, &self.volume, params.isovalue, &mut self.mc);
+            self.last_bricks = None;
+            (mesh, bin_ms, density_ms, t)
+        } else {
+            // Free a dense volume a previous dense call may have left.
+            self.volume = DensityVolume::default();
+            let t = Instant::now();
+            let bins = bin_atoms_overlapping(atoms, params, &grid, BRICK as u32, 1);
+            let bin_ms = ms(t);
+            let t = Instant::now();
+            self.bricks
+                .compute(&bins, params, &grid, with_colour, &mut self.brick_scratch);
+            drop(bins);
+            let density_ms = ms(t);
+            let t = Instant::now();
+            let mesh = extract_bricks(&self.bricks, &mut self.mc);
+            self.last_bricks = Some(self.bricks.stats());
+            (mesh, bin_ms, density_ms, t)
+        };
         let (area, enclosed) = mesh.area_and_volume();
         let mc_ms = ms(t);
 

@@ -177,20 +177,37 @@ fn fill_slab(
     grid: &GridSpec,
     s: usize,
     vals: &mut [f32],
+    cols: Option<&mut [[f32; 3]]>,
+) {
+    let z0 = s as u32 * bins.slab_planes;
+    let z1 = (z0 + bins.slab_planes).min(grid.dims[2]) - 1;
+    fill_planes(&bins.atoms, bins.slab(s), grid, z0, z1, vals, cols);
+}
+
+/// Adds the atoms `list` (indices into `atoms`, ascending) to the samples of grid planes
+/// `z0..=z1`: `vals` (and `cols` when colouring) hold those planes, plane `z0` first, x fastest.
+/// Every sample's terms are added in list order, so any list holding the atoms that reach a
+/// sample, in canonical order, gives that sample the same bits. Only samples inside an atom's
+/// [`sample_range`] box get a non-zero term (others may get `+0.0` added, which changes nothing).
+pub(crate) fn fill_planes(
+    atoms: &[super::bin::PreparedAtom],
+    list: &[u32],
+    grid: &GridSpec,
+    z0: u32,
+    z1: u32,
+    vals: &mut [f32],
     mut cols: Option<&mut [[f32; 3]]>,
 ) {
     let [nx, ny, nz] = grid.dims;
     let (o, h) = (grid.origin, grid.spacing);
     let plane = nx as usize * ny as usize;
-    let z0 = s as u32 * bins.slab_planes;
-    let z1 = (z0 + bins.slab_planes).min(nz) - 1;
     let (mut tx, mut ty, mut tz) = (
         AxisTerms::default(),
         AxisTerms::default(),
         AxisTerms::default(),
     );
-    for &a in bins.slab(s) {
-        let atom = &bins.atoms[a as usize];
+    for &a in list {
+        let atom = &atoms[a as usize];
         let [px, py, pz] = atom.pos;
         let (Some(rx), Some(ry), Some(rz)) = (
             sample_range(px, atom.cut, o.x, h, nx),

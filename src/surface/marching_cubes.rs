@@ -23,7 +23,7 @@ use super::tables::{EDGE_CORNERS, McTables, corner_offset, edge_axis};
 use super::{DensityVolume, GridSpec, Mesh};
 
 /// Marks a slab-local vertex index that belongs to the next slab's first plane.
-const FOREIGN: u32 = 1 << 31;
+pub(super) const FOREIGN: u32 = 1 << 31;
 
 /// Case byte of every cell (`(nx-1) * (ny-1) * (nz-1)` entries, x fastest): bit `c` is set when
 /// corner `c` (see [`super::tables`]) has `rho >= iso`. `values` is the density on `grid`.
@@ -66,7 +66,7 @@ pub fn extract(grid: &GridSpec, density: &DensityVolume, iso: f32) -> Mesh {
 /// so that repeated extractions (one per frame) do not allocate them again.
 #[derive(Default)]
 pub struct McScratch {
-    slabs: Vec<SlabMesh>,
+    pub(super) slabs: Vec<SlabMesh>,
 }
 
 /// [`extract`] reusing the buffers in `scratch`; gives the same mesh.
@@ -115,26 +115,26 @@ struct Ctx<'a> {
 /// One slab's share of the mesh, vertex indices local (or [`FOREIGN`]-flagged), plus its
 /// per-plane working buffers.
 #[derive(Default)]
-struct SlabMesh {
-    positions: Vec<Vec3>,
-    normals: Vec<Vec3>,
-    colours: Vec<[f32; 3]>,
-    indices: Vec<u32>,
+pub(super) struct SlabMesh {
+    pub(super) positions: Vec<Vec3>,
+    pub(super) normals: Vec<Vec3>,
+    pub(super) colours: Vec<[f32; 3]>,
+    pub(super) indices: Vec<u32>,
     /// Inside flags of three consecutive planes.
-    flags: [Vec<u8>; 3],
+    pub(super) flags: [Vec<u8>; 3],
     /// Edge maps of two consecutive planes.
-    maps: [Vec<u32>; 2],
+    pub(super) maps: [Vec<u32>; 2],
 }
 
 /// Eight inside flags (bytes 0 or 1) starting at `q`, as one word.
-fn word(flags: &[u8], q: usize) -> u64 {
+pub(super) fn word(flags: &[u8], q: usize) -> u64 {
     let mut b = [0u8; 8];
     b.copy_from_slice(&flags[q..q + 8]);
     u64::from_le_bytes(b)
 }
 
 /// Eight flags that are all 1.
-const ALL_ONE: u64 = 0x0101_0101_0101_0101;
+pub(super) const ALL_ONE: u64 = 0x0101_0101_0101_0101;
 
 impl Ctx<'_> {
     /// Inside flags (1 when `rho >= iso`) of plane `k`.
@@ -297,7 +297,7 @@ impl Ctx<'_> {
 /// Joins the slabs in order, turning local indices into global ones. Each slab's vertex and
 /// index buffers are freed as soon as they are copied, and the output only reserves its
 /// capacity up front, so memory holds about one copy of the mesh rather than two.
-fn merge(parts: &mut [SlabMesh]) -> Mesh {
+pub(super) fn merge(parts: &mut [SlabMesh]) -> Mesh {
     let total: usize = parts.iter().map(|p| p.positions.len()).sum();
     let tri_total: usize = parts.iter().map(|p| p.indices.len()).sum();
     let mut mesh = Mesh {

@@ -32,35 +32,14 @@ pub fn edge_vertex(
     a: [usize; 3],
     axis: usize,
 ) -> EdgeVertex {
-    let mut b = a;
-    b[axis] += 1;
     let v = &density.values;
-    let ia = index(grid, a);
-    let ib = index(grid, b);
-    let (va, vb) = (v[ia], v[ib]);
-    let denom = vb - va;
-    let t = if denom != 0.0 {
-        ((iso - va) / denom).clamp(0.0, 1.0)
-    } else {
-        0.5
-    };
-    let pa = point(grid, a);
-    let pb = point(grid, b);
-    let position = pa + t * (pb - pa);
-    let ga = gradient(grid, v, a);
-    let gb = gradient(grid, v, b);
-    let g = -(ga + t * (gb - ga));
-    let normal = if g.length_squared() > 0.0 && g.is_finite() {
-        g.normalize()
-    } else {
-        let mut d = Vec3::ZERO;
-        d[axis] = if va >= iso { 1.0 } else { -1.0 };
-        d
-    };
+    let (position, normal, t) = edge_geometry(grid, |p| v[index(grid, p)], iso, a, axis);
     let colour = match &density.colours {
         Some(c) => {
-            let (ca, cb) = (c[ia], c[ib]);
-            [0, 1, 2].map(|n| ca[n] + t * (cb[n] - ca[n]))
+            let mut b = a;
+            b[axis] += 1;
+            let (ca, cb) = (c[index(grid, a)], c[index(grid, b)]);
+            lerp_colour(ca, cb, t)
         }
         None => [1.0; 3],
     };
@@ -69,6 +48,54 @@ pub fn edge_vertex(
         normal,
         colour,
     }
+}
+
+/// The colour of a vertex at parameter `t` on the edge from a sample of colour `ca` to one of
+/// colour `cb` (the formula [`edge_vertex`] uses).
+pub fn lerp_colour(ca: [f32; 3], cb: [f32; 3], t: f32) -> [f32; 3] {
+    [0, 1, 2].map(|n| ca[n] + t * (cb[n] - ca[n]))
+}
+
+/// Interpolation parameter `t` in 0..=1 of the crossing of `iso` between sample values `va`
+/// and `vb` (0.5 when they are equal).
+pub fn edge_t(va: f32, vb: f32, iso: f32) -> f32 {
+    let denom = vb - va;
+    if denom != 0.0 {
+        ((iso - va) / denom).clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
+}
+
+/// Position (Å), unit normal and interpolation parameter `t` of the vertex on the edge from
+/// sample `a` to `a + e_axis`, reading densities through `value(sample)`. [`edge_vertex`] on
+/// a dense volume and the sparse engine ([`super::brick_mc`]) share it, so both give the same
+/// bits from the same sample values.
+pub fn edge_geometry(
+    grid: &GridSpec,
+    value: impl Fn([usize; 3]) -> f32,
+    iso: f32,
+    a: [usize; 3],
+    axis: usize,
+) -> (Vec3, Vec3, f32) {
+    let mut b = a;
+    b[axis] += 1;
+    let (va, vb) = (value(a), value(b));
+    let t = edge_t(va, vb, iso);
+    let pa = point(grid, a);
+    let pb = point(grid, b);
+    let position = pa + t * (pb - pa);
+    let ga = gradient_with(grid, &value, a);
+    let gb = gradient_with(grid, &value, b);
+    let g = -(ga + t * (gb - ga));
+    let normal = if g.length_squared() > 0.0 && g.is_finite() {
+        g.normalize()
+    } else {
+        let mut d = Vec3::ZERO;
+        d[axis] = if va >= iso { 1.0 } else { -1.0 };
+        d
+    };
+    (position, normal, t)
 }
 
 fn index(grid: &GridSpec, p: [usize; 3]) -> usize {
@@ -82,13 +109,21 @@ fn point(grid: &GridSpec, p: [usize; 3]) -> Vec3 {
 
 /// Central-difference gradient of `values` at sample `p` in Å⁻¹ (one-sided on the boundary).
 pub fn gradient(grid: &GridSpec, values: &[f32], p: [usize; 3]) -> Vec3 {
+    gradient_with(grid, |q| values[index(grid, q)], p)
+}
+
+/// [`gradient`] reading the density through `value(sample)`.
+pub fn gradient_with(grid: &GridSpec, value: impl Fn([usize; 3]) -> f32, p: [usize; 3]) -> Vec3 {
     let dims = grid.dims.map(|d| d as usize);
     if (0..3).all(|a| p[a] >= 1 && p[a] + 1 < dims[a]) {
-        // Interior: plain central differences with strides 1, nx, nx * ny.
-        let i = index(grid, p);
-        let (sy, sz) = (dims[0], dims[0] * dims[1]);
-        let d = |s: usize| (values[i + s] - values[i - s]) / (2.0 * grid.spacing);
-        return Vec3::new(d(1), d(sy), d(sz));
+        // Interior: plain central differences along x, y and z.
+        let d = |axis: usize| {
+            let (mut lo, mut hi) = (p, p);
+            lo[axis] -= 1;
+            hi[axis] += 1;
+            (value(hi) - value(lo)) / (2.0 * grid.spacing)
+        };
+        return Vec3::new(d(0), d(1), d(2));
     }
     let mut g = Vec3::ZERO;
     for axis in 0..3 {
@@ -97,7 +132,7 @@ pub fn gradient(grid: &GridSpec, values: &[f32], p: [usize; 3]) -> Vec3 {
         hi[axis] = (p[axis] + 1).min(dims[axis] - 1);
         let steps = (hi[axis] - lo[axis]) as f32;
         if steps > 0.0 {
-            g[axis] = (values[index(grid, hi)] - values[index(grid, lo)]) / (steps * grid.spacing);
+            g[axis] = (value(hi) - value(lo)) / (steps * grid.spacing);
         }
     }
     g

@@ -3,6 +3,8 @@
 //! is tested against this module.
 
 pub mod bin;
+pub mod brick_mc;
+pub mod bricks;
 pub mod cpu;
 pub mod density;
 pub mod engine;
@@ -13,6 +15,7 @@ pub mod mesh;
 pub mod params;
 pub mod tables;
 
+pub use bricks::BrickStats;
 pub use cpu::CpuEngine;
 pub use density::DensityVolume;
 pub use engine::{AtomSet, StageTimings, SurfaceEngine, SurfaceOutput};

@@ -373,7 +373,13 @@ impl Node {
                         targets[s as usize] = false;
                     }
                 }
-                within(&frame.positions, frame.cell.as_ref(), sources, &targets, *distance)
+                within(
+                    &frame.positions,
+                    frame.cell.as_ref(),
+                    sources,
+                    &targets,
+                    *distance,
+                )
             }
             Node::Same {
                 groups,

@@ -9,7 +9,8 @@ use crate::model::residues::{is_amino_acid, is_ion, is_lipid, is_nucleotide, is_
 /// Backbone atom names of amino-acid residues: the all-atom heavy backbone (`N CA C O`), the
 /// C-terminal oxygens of the common force fields (`OXT OT1 OT2 OC1 OC2`), and the Martini
 /// backbone bead `BB`.
-pub const BACKBONE_NAMES: [&str; 10] = ["N", "CA", "C", "O", "OXT", "OT1", "OT2", "OC1", "OC2", "BB"];
+pub const BACKBONE_NAMES: [&str; 10] =
+    ["N", "CA", "C", "O", "OXT", "OT1", "OT2", "OC1", "OC2", "BB"];
 
 /// Hydrogens bound to backbone atoms (amide `H`/`HN`, N-terminal `H1 H2 H3`/`HT1 HT2 HT3`,
 /// alpha `HA`, glycine `HA1 HA2 HA3`); [`Macro::Sidechain`] leaves them out.

@@ -112,14 +112,15 @@ peg::parser! {
                 notes.add(p, "unterminated quote".to_string());
                 Value { pos: p, text: "", to: None, quoted: true }
             }
-            / p:position!() a:bare() __ kw("to") __ b:bare() {
+            / p:position!() a:bare() __ kw("to") _ b:bare() {
                 Value { pos: p, text: a, to: Some(b), quoted: false }
             }
             / p:position!() a:bare() { Value { pos: p, text: a, to: None, quoted: false } }
         rule bare() -> &'input str
-            = t:$((!(ws() / ['(' | ')' | '"']) [_])+) {?
+            = quiet!{ t:$((!(ws() / ['(' | ')' | '"']) [_])+) {?
                 if RESERVED.contains(&t) { Err("a value") } else { Ok(t) }
-            }
+            } }
+            / expected!("a value")
     }
 }
 
@@ -259,7 +260,10 @@ fn number(notes: &Notes, field: NumField, word: &str, pos: usize, text: &str) ->
     match text.parse::<f64>() {
         Ok(v) if v.is_finite() => Some(if field.is_f32() { v as f32 as f64 } else { v }),
         _ => {
-            notes.add(pos, format!("'{text}' is not a number ('{word}' takes numbers)"));
+            notes.add(
+                pos,
+                format!("'{text}' is not a number ('{word}' takes numbers)"),
+            );
             None
         }
     }

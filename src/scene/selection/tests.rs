@@ -108,7 +108,11 @@ fn globs_and_regexes() {
     assert_eq!(select("name C?"), vec![1, 2, 5, 10]);
     assert_eq!(select("name C[AB]"), vec![1, 2, 5]);
     assert_eq!(select("name \"C[AB]\""), vec![1, 2, 5]);
-    assert_eq!(select("name \"C\""), Vec::<u32>::new(), "regexes match whole names");
+    assert_eq!(
+        select("name \"C\""),
+        Vec::<u32>::new(),
+        "regexes match whole names"
+    );
     assert_eq!(select("resname \"(ALA|SOL)\""), vec![0, 1, 2, 3, 6, 7]);
     assert_eq!(select("name HW?"), vec![7]);
 }
@@ -121,16 +125,25 @@ fn dynamic_parts() {
     assert_eq!(s.bind(&top).indices(&frame), vec![8, 9, 10]);
     assert_eq!(select("exwithin 1.0 of name P"), vec![8, 10]);
     assert_eq!(select("same residue as name CB"), vec![0, 1, 2, 3]);
-    assert_eq!(select("same chain as name NA"), (6..12).collect::<Vec<u32>>());
+    assert_eq!(
+        select("same chain as name NA"),
+        (6..12).collect::<Vec<u32>>()
+    );
     assert_eq!(select("same residue as within 0.5 of name P"), vec![9]);
     assert_eq!(select("water and within 2 of ion"), vec![6, 7]);
     assert_eq!(select("within 1 of ion or lipid"), vec![7, 8, 9, 10]);
     assert_eq!(select("x < 2 or name CL1"), vec![0, 1, 11]);
-    assert!(!Selection::parse("same residue as name CA").unwrap().is_dynamic());
+    assert!(
+        !Selection::parse("same residue as name CA")
+            .unwrap()
+            .is_dynamic()
+    );
     // A periodic box 12 Å along x: atom 11 (x = 11) is 1 Å from atom 0.
     let mut boxed = frame.clone();
     boxed.cell = Some([Vec3::X * 12.0, Vec3::Y * 12.0, Vec3::Z * 12.0]);
-    let s = Selection::parse("exwithin 1.0 of index 0").unwrap().bind(&top);
+    let s = Selection::parse("exwithin 1.0 of index 0")
+        .unwrap()
+        .bind(&top);
     assert_eq!(s.indices(&boxed), vec![1, 11]);
     assert_eq!(s.indices(&frame), vec![1]);
     assert_eq!(s.mask(&frame).len(), 12);
@@ -154,7 +167,11 @@ fn errors_name_their_column() {
     assert_eq!(error("name").column, 1);
     assert_eq!(error("").column, 1);
     assert!(error("protien").message.contains("did you mean protein?"));
-    assert_eq!(error("name CA and qqq ALA or (").column, 13, "the first error wins");
+    assert_eq!(
+        error("name CA and qqq ALA or (").column,
+        13,
+        "the first error wins"
+    );
     for text in ["name CA and", "(protein", "resid ALA", "name \"C["] {
         assert!(!error(text).to_string().contains('\n'), "{text}");
     }

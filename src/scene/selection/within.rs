@@ -7,23 +7,25 @@
 //! wrapped atom then finds every partner within D among those copies, so the search itself is a
 //! plain Cartesian one: no minimum-image convention is needed.
 //!
-//! The smaller of the two sets (sources, targets) is binned into Cartesian cells D/2 wide; each
-//! atom of the larger set is first checked against a dilated occupancy map (one look-up rejects
-//! atoms far from every binned one), and otherwise visits the 5 × 5 × 5 cells around its own,
-//! skipping those whose nearest point is farther than D; in parallel. With few sources
-//! (`within 5 of protein` in water) each target looks for any source around it; with few
-//! targets (`ion and within 5 of water`) each source marks the targets around it.
+//! The smaller of the two sets (sources, targets) is binned into Cartesian cells D wide, and
+//! the cells some part of which lies within D of a binned atom are marked. Each atom of the
+//! larger set (in parallel) is rejected by one look-up when its cell is unmarked, and otherwise
+//! visits the 3 × 3 × 3 cells around its own, row by row, skipping cells whose nearest point
+//! is farther than D. With few sources (`within 5 of protein` in water) each target looks for
+//! any source around it, its own cell first; with few targets (`ion and within 5 of water`)
+//! each source marks the targets around it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use glam::{IVec3, Mat3, Vec3};
+use glam::{IVec3, Mat3, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
 
 /// Atoms per parallel task.
 const CHUNK: usize = 1024;
 
-/// Cells per cutoff distance along each axis (so the reach is at most this many cells).
-const SPLIT: i32 = 2;
+/// Cells per cutoff distance along each axis (so the reach is at most this many cells). Two
+/// (cells D/2 wide) visits fewer points per atom but more rows; one measured faster.
+const SPLIT: i32 = 1;
 
 /// Atoms `i` with `targets[i]` that lie within `distance` Å (inclusive) of some atom in
 /// `sources` in `positions`, counting periodic images when `cell` (box edge vectors a, b, c in
@@ -37,7 +39,11 @@ pub(crate) fn within(
 ) -> Vec<bool> {
     let mut out = vec![false; targets.len()];
     let n = targets.len().min(positions.len());
-    let sources: Vec<u32> = sources.iter().copied().filter(|&s| (s as usize) < n).collect();
+    let sources: Vec<u32> = sources
+        .iter()
+        .copied()
+        .filter(|&s| (s as usize) < n)
+        .collect();
     let target_count = targets[..n].iter().filter(|t| **t).count();
     if sources.is_empty() || target_count == 0 || !distance.is_finite() || distance < 0.0 {
         return out;
@@ -45,13 +51,14 @@ pub(crate) fn within(
     let space = cell.and_then(Periodic::new);
     // Wrapped position of atom `i`, or `None` when it is not finite.
     let place = |i: usize| {
-        let p = positions[i];
+        let p = Vec3A::from(positions[i]);
         p.is_finite()
             .then(|| space.as_ref().map_or(p, |s| s.wrap(p)))
     };
     let binned = |atoms: &mut dyn Iterator<Item = usize>| {
-        let points: Vec<(u32, Vec3)> =
-            atoms.filter_map(|i| place(i).map(|p| (i as u32, p))).collect();
+        let points: Vec<(u32, Vec3A)> = atoms
+            .filter_map(|i| place(i).map(|p| (i as u32, p)))
+            .collect();
         let points = match &space {
             Some(s) => s.with_images(&points, distance),
             None => points,
@@ -88,20 +95,12 @@ pub(crate) fn within(
     out
 }
 
-/// `v.floor()` without a libm call per component (the baseline x86-64 target has no SSE4.1
-/// rounding instruction); exact for |x| < 2³¹.
-#[inline]
-fn floor(v: Vec3) -> Vec3 {
-    let t = v.as_ivec3().as_vec3();
-    t - Vec3::select(t.cmpgt(v), Vec3::ONE, Vec3::ZERO)
-}
-
 /// A periodic box: edge vectors, the map to fractional coordinates, and face-to-face widths.
 struct Periodic {
     /// Box edge vectors a, b, c in Å.
-    edges: [Vec3; 3],
+    edges: [Vec3A; 3],
     /// Cartesian to fractional coordinates.
-    to_fraction: Mat3,
+    to_fraction: Mat3A,
     /// Width of the box between the faces opposite each edge, in Å.
     widths: Vec3,
 }
@@ -119,26 +118,26 @@ impl Periodic {
             volume / e[0].cross(e[1]).length(),
         );
         Some(Periodic {
-            edges: *e,
-            to_fraction: Mat3::from_cols(e[0], e[1], e[2]).inverse(),
+            edges: e.map(Vec3A::from),
+            to_fraction: Mat3A::from(Mat3::from_cols(e[0], e[1], e[2]).inverse()),
             widths,
         })
     }
 
     /// The box translation `t.x a + t.y b + t.z c`.
     #[inline]
-    fn shift(&self, t: Vec3) -> Vec3 {
+    fn shift(&self, t: Vec3A) -> Vec3A {
         t.x * self.edges[0] + t.y * self.edges[1] + t.z * self.edges[2]
     }
 
     /// `p` moved into the box (fractional coordinates in [0, 1)).
     #[inline]
-    fn wrap(&self, p: Vec3) -> Vec3 {
-        p - self.shift(floor(self.to_fraction * p))
+    fn wrap(&self, p: Vec3A) -> Vec3A {
+        p - self.shift((self.to_fraction * p).floor())
     }
 
     /// Wrapped `points` with every periodic image that lies within `distance` Å of the box.
-    fn with_images(&self, points: &[(u32, Vec3)], distance: f32) -> Vec<(u32, Vec3)> {
+    fn with_images(&self, points: &[(u32, Vec3A)], distance: f32) -> Vec<(u32, Vec3A)> {
         let margin = Vec3::splat(distance) / self.widths;
         let reach = margin.ceil().as_ivec3();
         let mut out = Vec::with_capacity(points.len() * 3 / 2);
@@ -155,7 +154,7 @@ impl Periodic {
             for tz in range(2) {
                 for ty in range(1) {
                     for tx in range(0) {
-                        let t = IVec3::new(tx, ty, tz).as_vec3();
+                        let t = Vec3A::new(tx as f32, ty as f32, tz as f32);
                         out.push((i, p + self.shift(t)));
                     }
                 }
@@ -165,35 +164,39 @@ impl Periodic {
     }
 }
 
-/// Binned points: a Cartesian grid over their bounding box, padded by the reach.
+/// Binned points: a Cartesian grid over their bounding box, padded by the reach and one cell.
 struct Grid {
     /// Corner of cell (0, 0, 0) in Å.
-    origin: Vec3,
+    origin: Vec3A,
     /// Cell edge in Å.
     side: f32,
     /// 1 / `side`.
     inv_side: f32,
     /// Cells along each axis.
     dims: IVec3,
+    /// `dims` as floats.
+    dims_f: Vec3A,
     /// Cells searched on each side of a cell (at most [`SPLIT`]).
     reach: i32,
     /// Points of cell `c` are `points[start[c]..start[c + 1]]`.
     start: Vec<u32>,
     /// Positions, sorted by cell.
-    points: Vec<Vec3>,
+    points: Vec<Vec3A>,
     /// Atom index of each point.
     ids: Vec<u32>,
-    /// True for cells within `reach` of a non-empty cell.
+    /// True for cells some part of which lies within the cutoff of a point.
     near: Vec<bool>,
 }
 
 impl Grid {
-    /// Bins `points` in cells about `distance / 2` wide (wider when there would be more than
-    /// `max_cells`) and marks the cells near a point.
-    fn new(points: &[(u32, Vec3)], distance: f32, max_cells: f64) -> Grid {
-        let lo = points.iter().fold(Vec3::INFINITY, |a, &(_, p)| a.min(p));
-        let hi = points.iter().fold(Vec3::NEG_INFINITY, |a, &(_, p)| a.max(p));
-        let extent = (hi - lo).max(Vec3::splat(1e-3));
+    /// Bins `points` in cells about `distance / SPLIT` wide (wider when there would be more
+    /// than `max_cells`) and marks the cells near a point.
+    fn new(points: &[(u32, Vec3A)], distance: f32, max_cells: f64) -> Grid {
+        let lo = points.iter().fold(Vec3A::INFINITY, |a, &(_, p)| a.min(p));
+        let hi = points
+            .iter()
+            .fold(Vec3A::NEG_INFINITY, |a, &(_, p)| a.max(p));
+        let extent = Vec3::from(hi - lo).max(Vec3::splat(1e-3));
         let mut side = (distance / SPLIT as f32).max(1e-3);
         let cells = |side: f32| (extent / side).floor() + 1.0;
         let count = cells(side);
@@ -202,10 +205,12 @@ impl Grid {
             side *= (total / max_cells).cbrt() as f32 * 1.01;
         }
         let reach = ((distance / side).ceil() as i32).clamp(1, SPLIT);
-        // One spare cell absorbs rounding at the upper edge.
-        let dims = cells(side).as_ivec3() + 1 + 2 * reach;
+        // The reach plus one spare cell (absorbing rounding) on every side.
+        let pad = reach + 1;
+        let dims = cells(side).as_ivec3() + 2 * pad;
         let mut grid = Grid {
-            origin: lo - reach as f32 * side,
+            origin: lo - pad as f32 * side,
+            dims_f: Vec3A::from(dims.as_vec3()),
             side,
             inv_side: side.recip(),
             dims,
@@ -215,7 +220,7 @@ impl Grid {
             ids: Vec::new(),
             near: Vec::new(),
         };
-        grid.fill(points);
+        grid.fill(points, distance * distance);
         grid
     }
 
@@ -227,18 +232,17 @@ impl Grid {
 
     /// The cell holding `p`, with `p`'s place inside it (0 to 1 per axis), when on the grid.
     #[inline]
-    fn locate(&self, p: Vec3) -> Option<(IVec3, Vec3)> {
+    fn locate(&self, p: Vec3A) -> Option<(IVec3, Vec3A)> {
         let g = (p - self.origin) * self.inv_side;
-        // Truncation is floor for the non-negative coordinates of points on the grid.
-        let inside = g.cmpge(Vec3::ZERO).all() && g.cmplt(self.dims.as_vec3()).all();
+        let inside = g.cmpge(Vec3A::ZERO).all() && g.cmplt(self.dims_f).all();
         inside.then(|| {
-            let c = g.as_ivec3();
-            (c, g - c.as_vec3())
+            let floor = g.floor();
+            (floor.as_ivec3(), g - floor)
         })
     }
 
-    /// Sorts the points into cells (counting sort) and marks the cells near them.
-    fn fill(&mut self, points: &[(u32, Vec3)]) {
+    /// Sorts the points into cells (counting sort) and marks the cells within √`d2` Å of them.
+    fn fill(&mut self, points: &[(u32, Vec3A)], d2: f32) {
         let cells = (self.dims.x * self.dims.y * self.dims.z) as usize;
         let cell_of: Vec<usize> = points
             .iter()
@@ -252,35 +256,25 @@ impl Grid {
             start[c + 1] += start[c];
         }
         let mut fill = start.clone();
-        let mut sorted = vec![Vec3::ZERO; points.len()];
+        let mut sorted = vec![Vec3A::ZERO; points.len()];
         let mut ids = vec![0u32; points.len()];
         for (&c, &(i, p)) in cell_of.iter().zip(points) {
             sorted[fill[c] as usize] = p;
             ids[fill[c] as usize] = i;
             fill[c] += 1;
         }
-        {
-            let (r, d) = (self.reach, self.dims);
-            let mut marks = vec![false; cells];
-            for z in 0..d.z {
-                for y in 0..d.y {
-                    for x in 0..d.x {
-                        let f = self.flat(IVec3::new(x, y, z));
-                        if start[f] == start[f + 1] {
-                            continue;
-                        }
-                        for nz in (z - r).max(0)..=(z + r).min(d.z - 1) {
-                            for ny in (y - r).max(0)..=(y + r).min(d.y - 1) {
-                                for nx in (x - r).max(0)..=(x + r).min(d.x - 1) {
-                                    marks[self.flat(IVec3::new(nx, ny, nz))] = true;
-                                }
-                            }
-                        }
-                    }
-                }
+        // Cells that some part of lies within the cutoff of some point: a target outside them
+        // is out of range of every point.
+        let mut near = vec![false; cells];
+        for &(_, p) in points {
+            if let Some((c, u)) = self.locate(p) {
+                self.rows(c, u, d2, |row, first, last| {
+                    near[row + first..=row + last].fill(true);
+                    false
+                });
             }
-            self.near = marks;
         }
+        self.near = near;
         self.start = start;
         self.points = sorted;
         self.ids = ids;
@@ -288,14 +282,14 @@ impl Grid {
 
     /// The points of cells `first..=last` (flat indices) and their atom indices.
     #[inline]
-    fn span(&self, first: usize, last: usize) -> (&[Vec3], &[u32]) {
+    fn span(&self, first: usize, last: usize) -> (&[Vec3A], &[u32]) {
         let (a, b) = (self.start[first] as usize, self.start[last + 1] as usize);
         (&self.points[a..b], &self.ids[a..b])
     }
 
     /// True when some binned point lies within √`d2` Å of `p`.
     #[inline]
-    fn any_within(&self, p: Vec3, d2: f32) -> bool {
+    fn any_within(&self, p: Vec3A, d2: f32) -> bool {
         let Some((c, u)) = self.locate(p) else {
             return false;
         };
@@ -303,14 +297,14 @@ impl Grid {
         if !self.near[own] {
             return false;
         }
-        let close = |points: &[Vec3]| points.iter().any(|s| s.distance_squared(p) <= d2);
+        let close = |points: &[Vec3A]| points.iter().any(|s| s.distance_squared(p) <= d2);
         // The atom's own cell first: inside a dense selection that settles it.
         close(self.span(own, own).0) || self.visit(c, u, d2, |points, _| close(points))
     }
 
     /// Marks in `marks` (by atom index) every binned point within √`d2` Å of `p`.
     #[inline]
-    fn mark_within(&self, p: Vec3, d2: f32, marks: &[AtomicBool]) {
+    fn mark_within(&self, p: Vec3A, d2: f32, marks: &[AtomicBool]) {
         let Some((c, u)) = self.locate(p) else {
             return;
         };
@@ -331,7 +325,31 @@ impl Grid {
     /// per axis) whose nearest point is within √`d2` Å of the atom, one run of consecutive
     /// cells along x at a time, until `f` returns true; returns whether it did.
     #[inline]
-    fn visit(&self, c: IVec3, u: Vec3, d2: f32, mut f: impl FnMut(&[Vec3], &[u32]) -> bool) -> bool {
+    fn visit(
+        &self,
+        c: IVec3,
+        u: Vec3A,
+        d2: f32,
+        mut f: impl FnMut(&[Vec3A], &[u32]) -> bool,
+    ) -> bool {
+        self.rows(c, u, d2, |row, first, last| {
+            let (points, ids) = self.span(row + first, row + last);
+            !points.is_empty() && f(points, ids)
+        })
+    }
+
+    /// Calls `f(row, first, last)` for each row of cells around cell `c` (where the atom sits
+    /// at `u`, 0 to 1 per axis): cells `row + first..=row + last` (flat indices) are those of
+    /// the row whose nearest point is within √`d2` Å of the atom, consecutive around the
+    /// atom's column. Stops when `f` returns true and returns whether it did.
+    #[inline]
+    fn rows(
+        &self,
+        c: IVec3,
+        u: Vec3A,
+        d2: f32,
+        mut f: impl FnMut(usize, usize, usize) -> bool,
+    ) -> bool {
         let r = self.reach;
         // Squared gap in Å² from the atom to the cells at each offset, per axis.
         let mut gaps = [[0.0f32; 2 * SPLIT as usize + 1]; 3];
@@ -356,8 +374,8 @@ impl Grid {
                 if gy > d2 {
                     continue;
                 }
-                // The cells of this row within range are consecutive around the atom's own
-                // column (gap 0), and so are their points.
+                // Gaps grow away from the atom's own column (gap 0), so the cells in range
+                // are consecutive.
                 let fits = |x: i32| gy + gaps[0][(x - c.x + r) as usize] <= d2;
                 let (mut first, mut last) = (c.x, c.x);
                 while first > x0 && fits(first - 1) {
@@ -367,8 +385,7 @@ impl Grid {
                     last += 1;
                 }
                 let row = ((z * self.dims.y + y) * self.dims.x) as usize;
-                let (points, ids) = self.span(row + first as usize, row + last as usize);
-                if !points.is_empty() && f(points, ids) {
+                if f(row, first as usize, last as usize) {
                     return true;
                 }
             }

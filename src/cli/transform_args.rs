@@ -1,0 +1,122 @@
+//! The per-frame transformation flags shared by the viewer, `surface` and `render`
+//! (`--whole`/`--no-whole`, `--center`, `--fit`, `--fit-reference`, `--smooth`), and
+//! [`FrameReader`]: a trajectory read through the transformations the flags ask for.
+
+use anyhow::{Result, anyhow};
+use mdsurf::io::{self, Trajectory};
+use mdsurf::model::Frame;
+use mdsurf::scene::state_file::StateFile;
+use mdsurf::transform::{FitReference, TransformChain, TransformOptions, TransformedFrames};
+
+/// Per-frame transformations, applied in this order: whole, center, fit, smooth.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct TransformArgs {
+    /// Join molecules split across the periodic box (default: on when the file has a box and
+    /// bonds or residues).
+    #[arg(long, overrides_with = "no_whole")]
+    pub whole: bool,
+    /// Do not join molecules split across the periodic box.
+    #[arg(long, overrides_with = "whole")]
+    pub no_whole: bool,
+    /// Put this selection's centre (mass-weighted) at the box centre and wrap whole molecules
+    /// into the box around it.
+    #[arg(long, value_name = "SEL")]
+    pub center: Option<String>,
+    /// Superpose every frame on the reference by a least-squares fit of this selection (e.g.
+    /// 'protein and name CA').
+    #[arg(long, value_name = "SEL")]
+    pub fit: Option<String>,
+    /// What --fit superposes on: first (the first frame) or topology (the topology file's
+    /// coordinates).
+    #[arg(long, value_name = "REF", default_value = "first")]
+    pub fit_reference: FitReference,
+    /// Average positions over ±K frames (after the steps above); 0: off.
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    pub smooth: usize,
+}
+
+impl TransformArgs {
+    /// True when any transformation flag was given.
+    pub fn any(&self) -> bool {
+        self.whole || self.no_whole || self.center.is_some() || self.fit.is_some() || self.smooth > 0
+    }
+
+    /// The library's options for these flags; a state file's options fill in what the flags
+    /// leave out when no flag is given.
+    pub fn options(&self, state: Option<&StateFile>) -> TransformOptions {
+        if !self.any()
+            && let Some(state) = state
+        {
+            return state.trajectory.transforms();
+        }
+        TransformOptions {
+            whole: match (self.whole, self.no_whole) {
+                (true, _) => Some(true),
+                (_, true) => Some(false),
+                _ => None,
+            },
+            center: self.center.clone(),
+            fit: self.fit.clone(),
+            fit_reference: self.fit_reference,
+            smooth: self.smooth,
+        }
+    }
+}
+
+/// Builds the transformation chain for `trajectory` (its first frame decides the defaults; the
+/// topology file's coordinates are read when the fit needs them).
+pub fn build_chain(options: &TransformOptions, trajectory: &Trajectory) -> Result<TransformChain> {
+    let file = trajectory.path().display().to_string();
+    let first = trajectory.read_frame(0)?;
+    let reference = if options.fit.is_some() && options.fit_reference == FitReference::Topology {
+        let top = trajectory.topology_path();
+        let opened = io::open(top, None).map_err(|e| anyhow!("--fit-reference topology: {e}"))?;
+        Some(opened.read_frame(0).map_err(|e| anyhow!("--fit-reference topology: {e}"))?)
+    } else {
+        None
+    };
+    Ok(TransformChain::new(
+        options,
+        trajectory.topology(),
+        &first,
+        reference.as_ref(),
+        &file,
+    )?)
+}
+
+/// A trajectory read through a transformation chain.
+pub struct FrameReader<'a> {
+    trajectory: &'a Trajectory,
+    frames: TransformedFrames,
+}
+
+impl<'a> FrameReader<'a> {
+    /// Reads `trajectory` through the transformations `options` ask for.
+    pub fn new(trajectory: &'a Trajectory, options: &TransformOptions) -> Result<FrameReader<'a>> {
+        let chain = build_chain(options, trajectory)?;
+        Ok(FrameReader {
+            frames: TransformedFrames::new(chain, trajectory.len()),
+            trajectory,
+        })
+    }
+
+    /// The chain in use.
+    pub fn chain(&self) -> &TransformChain {
+        self.frames.chain()
+    }
+
+    /// Frame `index`, transformed (and smoothed).
+    pub fn read_frame(&mut self, index: usize) -> Result<Frame> {
+        let trajectory = self.trajectory;
+        self.frames
+            .read(index, |i| trajectory.read_frame(i).map_err(anyhow::Error::from))
+    }
+
+    /// Prints what runs, on stderr (nothing when nothing runs).
+    pub fn print_summary(&self) {
+        let summary = self.chain().summary();
+        if !summary.is_empty() {
+            eprintln!("transforms: {summary}");
+        }
+    }
+}

@@ -1,0 +1,262 @@
+//! Stage 3 of the CPU engine, sparse: Marching Cubes on a [`BrickVolume`], visiting only the
+//! active bricks, with the same vertices and triangles in the same order as the dense
+//! [`super::marching_cubes::extract`] (DESIGN section 2).
+//!
+//! Data flow: [`BrickVolume`] -> [`Mesh`] -> area and volume.
+//!
+//! The dense pass numbers vertices plane by plane, row by row, x fastest, and emits triangles
+//! cell layer by cell layer, row by row, x fastest. Here each row is walked through the active
+//! bricks of its brick row in ascending x, which visits the same crossed edges and non-empty
+//! cells in the same order (an inactive brick has none: its whole 9³ footprint is on one side
+//! of I). Slabs are whole brick layers; the slab logic (vertex ownership, [`FOREIGN`] indices,
+//! merge) is that of [`super::marching_cubes`]. Inside flags are written only over the
+//! footprints of the active bricks, which are all the flags the walk reads. Positions and
+//! normals come from [`edge_geometry`] on the stored samples, colours from the per-layer vertex
+//! colours [`BrickVolume`] prepared in this order.
+
+use rayon::prelude::*;
+
+use super::Mesh;
+use super::bricks::{BRICK, BrickVolume};
+use super::marching_cubes::{ALL_ONE, FOREIGN, McScratch, SlabMesh, merge, word};
+use super::mc_vertex::edge_geometry;
+use super::tables::{EDGE_CORNERS, McTables, corner_offset, edge_axis};
+
+/// The isosurface of `vol` at the isovalue it was prepared for, reusing `scratch`.
+pub fn extract_bricks(vol: &BrickVolume, scratch: &mut McScratch) -> Mesh {
+    let [nx, ny, nz] = vol.grid.dims.map(|d| d as usize);
+    if nx < 2 || ny < 2 || nz < 2 {
+        return Mesh::default();
+    }
+    let layers = nz - 1;
+    let threads = rayon::current_num_threads().max(1);
+    let bricks_per_slab = (vol.bdims[2] / (8 * threads)).clamp(1, 8);
+    let planes = bricks_per_slab * BRICK;
+    let slabs = layers.div_ceil(planes);
+    let ctx = Ctx {
+        vol,
+        iso: vol.iso,
+        tables: McTables::get(),
+    };
+    scratch.slabs.resize_with(slabs, SlabMesh::default);
+    scratch
+        .slabs
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(s, out)| ctx.slab(s * planes, ((s + 1) * planes).min(layers), out));
+    merge(&mut scratch.slabs)
+}
+
+struct Ctx<'a> {
+    vol: &'a BrickVolume,
+    iso: f32,
+    tables: &'static McTables,
+}
+
+/// Position in the per-layer vertex colour lists.
+struct ColourCursor {
+    layer: usize,
+    next: usize,
+}
+
+impl Ctx<'_> {
+    /// Active bricks (x indices) of the brick row holding sample row `j` of plane `k`.
+    fn row(&self, k: usize, j: usize) -> &[u32] {
+        self.vol.active_row(k / BRICK, j / BRICK)
+    }
+
+    /// Inside flags of plane `k` over the footprints of the active bricks that read it.
+    fn flags(&self, k: usize, out: &mut [u8]) {
+        let [nx, ny, _] = self.vol.grid.dims.map(|d| d as usize);
+        let by = self.vol.bdims[1];
+        let bk = k / BRICK;
+        let below = (k % BRICK == 0 && bk > 0).then(|| bk - 1);
+        for layer in std::iter::once(bk).chain(below) {
+            for bj in 0..by {
+                let row = self.vol.active_row(layer, bj);
+                if row.is_empty() {
+                    continue;
+                }
+                for j in bj * BRICK..=(bj * BRICK + BRICK).min(ny - 1) {
+                    for &bi in row {
+                        let i0 = bi as usize * BRICK;
+                        for i in i0..=(i0 + BRICK).min(nx - 1) {
+                            out[j * nx + i] = u8::from(self.vol.get(i, j, k) >= self.iso);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Cells of layers `c0..c1`; as [`super::marching_cubes`]'s slab, walking active bricks.
+    fn slab(&self, c0: usize, c1: usize, out: &mut SlabMesh) {
+        let [nx, ny, nz] = self.vol.grid.dims.map(|d| d as usize);
+        let plane = nx * ny;
+        let last = c1 == nz - 1;
+        out.positions.clear();
+        out.normals.clear();
+        out.colours.clear();
+        out.indices.clear();
+        let mut cursor = ColourCursor {
+            layer: usize::MAX,
+            next: 0,
+        };
+        let [mut fa, mut fb, mut fc] = std::mem::take(&mut out.flags);
+        let [mut cur, mut next] = std::mem::take(&mut out.maps);
+        for f in [&mut fa, &mut fb, &mut fc] {
+            f.resize(plane, 0);
+        }
+        for m in [&mut cur, &mut next] {
+            m.resize(plane * 3, 0);
+        }
+        self.flags(c0, &mut fa);
+        self.flags(c0 + 1, &mut fb);
+        self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut *out), &mut cursor);
+        let edge_ref: [(usize, usize, usize); 12] = std::array::from_fn(|e| {
+            let [dx, dy, dz] = corner_offset(EDGE_CORNERS[e][0]).map(|d| d as usize);
+            (dz, dx + dy * nx, edge_axis(e as u8) as usize)
+        });
+        for k in c0..c1 {
+            let owned = k + 1 < c1 || last;
+            let up = k + 2 < nz;
+            if up {
+                self.flags(k + 2, &mut fc);
+            }
+            let emit = owned.then_some(&mut *out);
+            self.plane(
+                k + 1,
+                &fb,
+                up.then_some(&fc[..]),
+                &mut next,
+                emit,
+                &mut cursor,
+            );
+            let flag = if owned { 0 } else { FOREIGN };
+            let (a, b) = (&fa, &fb);
+            for j in 0..ny - 1 {
+                let r = j * nx;
+                let column = |i: usize| {
+                    let p = r + i;
+                    a[p] | a[p + nx] << 2 | b[p] << 4 | b[p + nx] << 6
+                };
+                for &bi in self.row(k, j) {
+                    let i0 = bi as usize * BRICK;
+                    let i1 = (i0 + BRICK).min(nx - 1);
+                    if i0 + 9 <= nx && i1 == i0 + BRICK {
+                        let ws = [r + i0, r + i0 + 1, r + nx + i0, r + nx + i0 + 1];
+                        let (mut or, mut and) = (0u64, u64::MAX);
+                        for q in ws {
+                            for f in [a, b] {
+                                let w = word(f, q);
+                                or |= w;
+                                and &= w;
+                            }
+                        }
+                        if or == 0 || and == ALL_ONE {
+                            continue;
+                        }
+                    }
+                    let mut left = column(i0);
+                    for i in i0..i1 {
+                        let right = column(i + 1);
+                        let case = left | right << 1;
+                        left = right;
+                        if case == 0 || case == 255 {
+                            continue;
+                        }
+                        let p = r + i;
+                        for tri in self.tables.case_triangles(case) {
+                            for &e in tri {
+                                let (dz, off, axis) = edge_ref[e as usize];
+                                let idx = if dz == 0 {
+                                    cur[(p + off) * 3 + axis]
+                                } else {
+                                    next[(p + off) * 3 + axis] | flag
+                                };
+                                out.indices.push(idx);
+                            }
+                        }
+                    }
+                }
+            }
+            std::mem::swap(&mut cur, &mut next);
+            std::mem::swap(&mut fa, &mut fb);
+            std::mem::swap(&mut fb, &mut fc);
+        }
+        out.flags = [fa, fb, fc];
+        out.maps = [cur, next];
+    }
+
+    /// As [`super::marching_cubes`]'s `plane`, over the points of the active bricks.
+    fn plane(
+        &self,
+        k: usize,
+        a: &[u8],
+        up: Option<&[u8]>,
+        map: &mut [u32],
+        mut emit: Option<&mut SlabMesh>,
+        cursor: &mut ColourCursor,
+    ) {
+        let [nx, ny, _] = self.vol.grid.dims.map(|d| d as usize);
+        let grid = &self.vol.grid;
+        let mut count = emit.as_ref().map_or(0, |m| m.positions.len()) as u32;
+        if emit.is_some() && cursor.layer != k / BRICK {
+            *cursor = ColourCursor {
+                layer: k / BRICK,
+                next: 0,
+            };
+        }
+        let colours = self.vol.layer_colours(k / BRICK);
+        for j in 0..ny {
+            let r = j * nx;
+            for &bi in self.row(k, j) {
+                let i0 = bi as usize * BRICK;
+                let i1 = (i0 + BRICK).min(nx);
+                if i0 + 9 <= nx
+                    && j + 1 < ny
+                    && let Some(u) = up
+                {
+                    let w = word(a, r + i0);
+                    let x = w ^ word(a, r + i0 + 1);
+                    let y = w ^ word(a, r + nx + i0);
+                    let z = w ^ word(u, r + i0);
+                    if x | y | z == 0 {
+                        continue;
+                    }
+                }
+                for i in i0..i1 {
+                    let p = r + i;
+                    let f = a[p];
+                    let crossed = [
+                        i + 1 < nx && a[p + 1] != f,
+                        j + 1 < ny && a[p + nx] != f,
+                        up.is_some_and(|u| u[p] != f),
+                    ];
+                    for (axis, &c) in crossed.iter().enumerate() {
+                        if !c {
+                            continue;
+                        }
+                        map[p * 3 + axis] = count;
+                        count += 1;
+                        if let Some(m) = emit.as_deref_mut() {
+                            let value = |q: [usize; 3]| self.vol.get(q[0], q[1], q[2]);
+                            let (position, normal, _) =
+                                edge_geometry(grid, value, self.iso, [i, j, k], axis);
+                            m.positions.push(position);
+                            m.normals.push(normal);
+                            let colour = if self.vol.with_colour {
+                                let c = colours[cursor.next];
+                                cursor.next += 1;
+                                c
+                            } else {
+                                [1.0; 3]
+                            };
+                            m.colours.push(colour);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

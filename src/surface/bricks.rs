@@ -1,0 +1,446 @@
+//! Stage 2 of the CPU engine, sparse: the density sampled only in the bricks of the grid that
+//! some atom reaches, plus what Marching Cubes needs to skip the rest (DESIGN section 2 defines
+//! the values; this module only decides where they are stored).
+//!
+//! Data flow: [`AtomBins`] (binned by brick layers, one plane of overlap) -> [`BrickVolume`] ->
+//! sparse Marching Cubes ([`super::brick_mc`]).
+//!
+//! Layout: the grid is cut into bricks of [`BRICK`]³ samples (brick `(I, J, K)` holds samples
+//! `8I..8I+8` by `8J..` by `8K..`, clamped to the grid). A brick is *occupied* when the
+//! conservative sample box ([`sample_range`]) of some atom overlaps it; every other brick's
+//! samples are exactly 0 in the dense volume, so they are neither computed nor stored. Occupied
+//! bricks are stored one after another (512 f32 each, x fastest) in brick order (K, then J,
+//! then I); a slot table maps bricks to them. A brick is *active* when its samples plus the
+//! one-sample overlap with its +x, +y, +z neighbours (the 9³ footprint every Marching Cubes cell
+//! and edge starting in it reads) are not all on one side of I; only active bricks are marched.
+//!
+//! Values: each brick layer (8 planes plus the first plane of the next layer) is filled by the
+//! same kernel as the dense volume ([`super::density::fill_planes`]) with the atoms that reach
+//! it in canonical order, so every stored sample has the same bits as in
+//! [`super::density::compute`]. Colours are not stored per sample: while a layer's colour sums
+//! are at hand, the colour of every vertex Marching Cubes will place on that layer's crossed
+//! edges is interpolated (the formula of [`super::mc_vertex::edge_vertex`]) and kept in the
+//! order Marching Cubes numbers the vertices, 12 bytes per vertex instead of 12 per sample.
+//!
+//! Parallelism: rayon over brick layers, each with a per-thread scratch of 9 planes.
+
+use std::sync::Mutex;
+
+use rayon::prelude::*;
+
+use super::bin::{AtomBins, sample_range};
+use super::density::fill_planes;
+use super::mc_vertex::{edge_t, lerp_colour};
+use super::{GridSpec, SurfaceParams};
+
+/// Samples per brick along each axis.
+pub const BRICK: usize = 8;
+/// Samples per brick.
+pub const BRICK_SAMPLES: usize = BRICK * BRICK * BRICK;
+/// Slot of a brick that is not stored.
+const EMPTY: u32 = u32::MAX;
+
+/// How much of the grid the sparse engine touched.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BrickStats {
+    /// Samples per brick edge.
+    pub brick_size: u32,
+    /// Bricks covering the grid.
+    pub bricks: u64,
+    /// Bricks some atom reaches (computed and stored).
+    pub occupied: u64,
+    /// Bricks that the isosurface crosses (marched).
+    pub active: u64,
+}
+
+impl BrickStats {
+    /// Occupied bricks over all bricks (0..1).
+    pub fn occupied_fraction(&self) -> f64 {
+        self.occupied as f64 / self.bricks.max(1) as f64
+    }
+
+    /// Active (marched) bricks over all bricks (0..1).
+    pub fn active_fraction(&self) -> f64 {
+        self.active as f64 / self.bricks.max(1) as f64
+    }
+}
+
+/// The active bricks of one brick layer and the vertex colours of its crossed edges.
+#[derive(Debug, Clone, Default)]
+struct Layer {
+    /// `row_start[J]..row_start[J + 1]` indexes `cols` for brick row J.
+    row_start: Vec<u32>,
+    /// Brick x indices I of the active bricks, ascending within each row.
+    cols: Vec<u32>,
+    /// Colour of each vertex on a crossed edge starting in this layer, in Marching Cubes order.
+    colours: Vec<[f32; 3]>,
+}
+
+/// A density volume stored in occupied bricks only, with the active brick lists.
+#[derive(Debug, Clone, Default)]
+pub struct BrickVolume {
+    /// The grid the samples belong to.
+    pub grid: GridSpec,
+    /// Bricks along x, y, z.
+    pub bdims: [usize; 3],
+    /// Isovalue the active lists and vertex colours were made for.
+    pub iso: f32,
+    /// Whether vertex colours were computed.
+    pub with_colour: bool,
+    slots: Vec<u32>,
+    data: Vec<f32>,
+    layers: Vec<Layer>,
+    stats: BrickStats,
+}
+
+/// Per-thread working memory of [`BrickVolume::compute`] (9 planes of density and colour sums).
+#[derive(Default)]
+pub struct BrickScratch {
+    threads: Vec<Mutex<LayerScratch>>,
+}
+
+#[derive(Default)]
+struct LayerScratch {
+    vals: Vec<f32>,
+    cols: Vec<[f32; 3]>,
+}
+
+impl BrickVolume {
+    /// Occupied and active brick counts of the last computation.
+    pub fn stats(&self) -> BrickStats {
+        self.stats
+    }
+
+    /// Bytes held by the stored bricks and slot table.
+    pub fn stored_bytes(&self) -> u64 {
+        (self.data.len() * 4 + self.slots.len() * 4) as u64
+    }
+
+    /// Density at sample (i, j, k); 0 outside the occupied bricks (exactly the dense value).
+    #[inline]
+    pub fn get(&self, i: usize, j: usize, k: usize) -> f32 {
+        let [bx, by, _] = self.bdims;
+        let b = ((k >> 3) * by + (j >> 3)) * bx + (i >> 3);
+        let s = self.slots[b];
+        if s == EMPTY {
+            0.0
+        } else {
+            self.data[s as usize * BRICK_SAMPLES + (((k & 7) << 6) | ((j & 7) << 3) | (i & 7))]
+        }
+    }
+
+    /// X indices of the active bricks in brick row `bj` of brick layer `bk`, ascending.
+    pub fn active_row(&self, bk: usize, bj: usize) -> &[u32] {
+        let l = &self.layers[bk];
+        &l.cols[l.row_start[bj] as usize..l.row_start[bj + 1] as usize]
+    }
+
+    /// Vertex colours of brick layer `bk` in Marching Cubes order (empty without colours).
+    pub fn layer_colours(&self, bk: usize) -> &[[f32; 3]] {
+        &self.layers[bk].colours
+    }
+
+    /// Samples the density of `bins` (made by [`super::bin::bin_atoms_overlapping`] with
+    /// [`BRICK`] planes per slab and an overlap of 1) on the occupied bricks of `grid`, finds
+    /// the active bricks for isovalue `params.isovalue` and, when `with_colour`, the colours of
+    /// the vertices Marching Cubes will place. Reuses the buffers of `self` and `scratch`.
+    pub fn compute(
+        &mut self,
+        bins: &AtomBins,
+        params: &SurfaceParams,
+        grid: &GridSpec,
+        with_colour: bool,
+        scratch: &mut BrickScratch,
+    ) {
+        debug_assert_eq!(bins.slab_planes as usize, BRICK);
+        let [nx, ny, nz] = grid.dims.map(|d| d as usize);
+        let bdims = [nx, ny, nz].map(|n| n.div_ceil(BRICK));
+        let [bx, by, bz] = bdims;
+        let layer_bricks = bx * by;
+        self.grid = *grid;
+        self.bdims = bdims;
+        self.iso = params.isovalue;
+        self.with_colour = with_colour;
+
+        // Occupancy per brick layer from the conservative sample boxes.
+        let mut occ = vec![0u8; layer_bricks * bz];
+        let (o, h) = (grid.origin, grid.spacing);
+        occ.par_chunks_mut(layer_bricks.max(1))
+            .enumerate()
+            .for_each(|(bk, occ)| {
+                let (z0, z1) = (bk * BRICK, bk * BRICK + BRICK - 1);
+                for &a in bins.slab(bk) {
+                    let at = &bins.atoms[a as usize];
+                    let [px, py, pz] = at.pos;
+                    let (Some(rx), Some(ry), Some(rz)) = (
+                        sample_range(px, at.cut, o.x, h, nx as u32),
+                        sample_range(py, at.cut, o.y, h, ny as u32),
+                        sample_range(pz, at.cut, o.z, h, nz as u32),
+                    ) else {
+                        continue;
+                    };
+                    if (rz.1 as usize) < z0 || rz.0 as usize > z1 {
+                        continue;
+                    }
+                    for bj in ry.0 as usize / BRICK..=ry.1 as usize / BRICK {
+                        let row = &mut occ[bj * bx..(bj + 1) * bx];
+                        row[rx.0 as usize / BRICK..=rx.1 as usize / BRICK].fill(1);
+                    }
+                }
+            });
+
+        // Slots in brick order; each layer's bricks are contiguous.
+        self.slots.clear();
+        self.slots.reserve(occ.len());
+        let mut layer_start = Vec::with_capacity(bz + 1);
+        let mut count = 0u32;
+        for (b, &o) in occ.iter().enumerate() {
+            if b % layer_bricks.max(1) == 0 {
+                layer_start.push(count as usize);
+            }
+            if o != 0 {
+                self.slots.push(count);
+                count += 1;
+            } else {
+                self.slots.push(EMPTY);
+            }
+        }
+        layer_start.push(count as usize);
+        // Every stored sample is overwritten below, so only a grown tail is zeroed.
+        self.data.resize(count as usize * BRICK_SAMPLES, 0.0);
+
+        let mut chunks: Vec<&mut [f32]> = Vec::with_capacity(bz);
+        let mut rest = &mut self.data[..];
+        for bk in 0..bz {
+            let n = (layer_start[bk + 1] - layer_start[bk]) * BRICK_SAMPLES;
+            let (head, tail) = rest.split_at_mut(n);
+            chunks.push(head);
+            rest = tail;
+        }
+        self.layers.resize_with(bz, Layer::default);
+        let threads = rayon::current_num_threads().max(1);
+        if scratch.threads.len() < threads + 1 {
+            scratch
+                .threads
+                .resize_with(threads + 1, || Mutex::new(LayerScratch::default()));
+        }
+        let ctx = LayerCtx {
+            bins,
+            grid,
+            occ: &occ,
+            bdims,
+            iso: params.isovalue,
+            inv_iso: 1.0 / params.isovalue,
+            with_colour,
+        };
+        let scratch = &scratch.threads;
+        self.layers
+            .par_iter_mut()
+            .zip(chunks)
+            .enumerate()
+            .for_each(|(bk, (layer, dst))| {
+                let t = rayon::current_thread_index()
+                    .unwrap_or(threads)
+                    .min(threads);
+                let mut s = scratch[t].lock().unwrap_or_else(|e| e.into_inner());
+                ctx.layer(bk, layer, dst, &mut s);
+            });
+
+        let active = self.layers.iter().map(|l| l.cols.len() as u64).sum();
+        self.stats = BrickStats {
+            brick_size: BRICK as u32,
+            bricks: (bx * by * bz) as u64,
+            occupied: count as u64,
+            active,
+        };
+    }
+}
+
+/// What every layer reads.
+struct LayerCtx<'a> {
+    bins: &'a AtomBins,
+    grid: &'a GridSpec,
+    occ: &'a [u8],
+    bdims: [usize; 3],
+    iso: f32,
+    inv_iso: f32,
+    with_colour: bool,
+}
+
+impl LayerCtx<'_> {
+    /// Computes brick layer `bk`: its samples into the scratch (planes `8bk ..= 8bk + 8`),
+    /// its occupied bricks into `dst`, its active list and vertex colours into `layer`.
+    fn layer(&self, bk: usize, layer: &mut Layer, dst: &mut [f32], s: &mut LayerScratch) {
+        let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
+        let [bx, by, bz] = self.bdims;
+        let plane = nx * ny;
+        let z0 = bk * BRICK;
+        let np = (BRICK + 1).min(nz - z0);
+        let lb = bx * by;
+        let occ_k = &self.occ[bk * lb..(bk + 1) * lb];
+        let occ_up = (bk + 1 < bz).then(|| &self.occ[(bk + 1) * lb..(bk + 2) * lb]);
+        // Occupancy row of the brick layer that holds temp plane `kk`.
+        let occ_of = |kk: usize| if kk < BRICK { Some(occ_k) } else { occ_up };
+
+        if s.vals.len() < plane * (BRICK + 1) {
+            s.vals = vec![0.0; plane * (BRICK + 1)];
+        }
+        if self.with_colour && s.cols.len() < plane * (BRICK + 1) {
+            s.cols = vec![[0.0; 3]; plane * (BRICK + 1)];
+        }
+        let LayerScratch { vals, cols } = s;
+        let vals = &mut vals[..plane * np];
+        let mut cols = self.with_colour.then(|| &mut cols[..plane * np]);
+
+        // Zero the samples of the occupied bricks: the only ones that get terms and are read.
+        for kk in 0..np {
+            let Some(occ) = occ_of(kk) else { continue };
+            for bj in 0..by {
+                for bi in 0..bx {
+                    if occ[bj * bx + bi] == 0 {
+                        continue;
+                    }
+                    let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx));
+                    for j in bj * BRICK..(bj * BRICK + BRICK).min(ny) {
+                        let r = kk * plane + j * nx;
+                        vals[r + i0..r + i1].fill(0.0);
+                        if let Some(c) = cols.as_deref_mut() {
+                            c[r + i0..r + i1].fill([0.0; 3]);
+                        }
+                    }
+                }
+            }
+        }
+        let z1 = (z0 + np - 1) as u32;
+        fill_planes(
+            &self.bins.atoms,
+            self.bins.slab(bk),
+            self.grid,
+            z0 as u32,
+            z1,
+            vals,
+            cols.as_deref_mut(),
+        );
+        let vals = &*vals;
+        let cols = cols.as_deref();
+
+        // Store the occupied bricks of this layer.
+        let mut slot = 0usize;
+        for bj in 0..by {
+            for bi in 0..bx {
+                if occ_k[bj * bx + bi] == 0 {
+                    continue;
+                }
+                let out = &mut dst[slot * BRICK_SAMPLES..(slot + 1) * BRICK_SAMPLES];
+                slot += 1;
+                for kk in 0..BRICK {
+                    for jj in 0..BRICK {
+                        let o = (kk * BRICK + jj) * BRICK;
+                        let (j, k) = (bj * BRICK + jj, kk);
+                        let i0 = bi * BRICK;
+                        if j >= ny || k >= np.min(BRICK) {
+                            out[o..o + BRICK].fill(0.0);
+                            continue;
+                        }
+                        let n = BRICK.min(nx - i0);
+                        let r = k * plane + j * nx + i0;
+                        out[o..o + n].copy_from_slice(&vals[r..r + n]);
+                        out[o + n..o + BRICK].fill(0.0);
+                    }
+                }
+            }
+        }
+
+        // Density of temp sample (i, j, kk), 0 outside the occupied bricks.
+        let tv = |i: usize, j: usize, kk: usize| -> f32 {
+            match occ_of(kk) {
+                Some(occ) if occ[(j / BRICK) * bx + i / BRICK] != 0 => {
+                    vals[kk * plane + j * nx + i]
+                }
+                _ => 0.0,
+            }
+        };
+        let iso = self.iso;
+
+        // Active bricks: the 9^3 footprint holds samples on both sides of I.
+        layer.row_start.clear();
+        layer.cols.clear();
+        layer.row_start.push(0);
+        let kmax = np - 1; // last temp plane of the footprint
+        for bj in 0..by {
+            for bi in 0..bx {
+                let touched = |occ: &[u8]| {
+                    (bj..=(bj + 1).min(by - 1))
+                        .any(|y| (bi..=(bi + 1).min(bx - 1)).any(|x| occ[y * bx + x] != 0))
+                };
+                if !(touched(occ_k) || occ_up.is_some_and(touched)) {
+                    continue; // every footprint sample is 0 < I
+                }
+                let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx - 1));
+                let (j0, j1) = (bj * BRICK, (bj * BRICK + BRICK).min(ny - 1));
+                let (mut any_in, mut any_out) = (false, false);
+                'scan: for kk in 0..=kmax.min(BRICK) {
+                    for j in j0..=j1 {
+                        for i in i0..=i1 {
+                            if tv(i, j, kk) >= iso {
+                                any_in = true;
+                            } else {
+                                any_out = true;
+                            }
+                            if any_in && any_out {
+                                break 'scan;
+                            }
+                        }
+                    }
+                }
+                if any_in && any_out {
+                    layer.cols.push(bi as u32);
+                }
+            }
+            layer.row_start.push(layer.cols.len() as u32);
+        }
+
+        // Vertex colours in the order Marching Cubes visits the crossed edges: plane by plane,
+        // row by row, active bricks by x, points by x, axes x, y, z.
+        layer.colours.clear();
+        let Some(cols) = cols else { return };
+        let tc = |i: usize, j: usize, kk: usize| -> [f32; 3] {
+            match occ_of(kk) {
+                Some(occ) if occ[(j / BRICK) * bx + i / BRICK] != 0 => {
+                    cols[kk * plane + j * nx + i].map(|v| v * self.inv_iso)
+                }
+                _ => [0.0; 3],
+            }
+        };
+        for kk in 0..np.min(BRICK) {
+            let k = z0 + kk;
+            for j in 0..ny {
+                let bj = j / BRICK;
+                let row =
+                    &layer.cols[layer.row_start[bj] as usize..layer.row_start[bj + 1] as usize];
+                for &bi in row {
+                    let bi = bi as usize;
+                    for i in bi * BRICK..(bi * BRICK + BRICK).min(nx) {
+                        let va = tv(i, j, kk);
+                        let f = va >= iso;
+                        let ends = [
+                            (i + 1 < nx).then(|| (i + 1, j, kk)),
+                            (j + 1 < ny).then(|| (i, j + 1, kk)),
+                            (k + 1 < nz).then(|| (i, j, kk + 1)),
+                        ];
+                        for (bi2, bj2, bk2) in ends.into_iter().flatten() {
+                            let vb = tv(bi2, bj2, bk2);
+                            if (vb >= iso) == f {
+                                continue;
+                            }
+                            let t = edge_t(va, vb, iso);
+                            layer
+                                .colours
+                                .push(lerp_colour(tc(i, j, kk), tc(bi2, bj2, bk2), t));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

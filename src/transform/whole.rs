@@ -1,0 +1,358 @@
+//! Making molecules whole: atoms a molecule lost across a box face are moved back next to the
+//! atom they are bonded to (by whole lattice vectors only), as `gmx trjconv -pbc mol` does.
+//!
+//! The molecules ([`Molecules`]) are found once per topology: connected components of the
+//! bonds the file lists and of bonds guessed from distances (periodic images counted), and
+//! atoms of one residue are always kept together (so coarse-grained beads, which no distance
+//! rule bonds, stay in one piece per residue). Each molecule is walked breadth-first once; per
+//! frame every atom follows its parent along that walk to the nearest image.
+
+use std::collections::VecDeque;
+
+use glam::Vec3;
+
+use super::pbc::PbcCell;
+use crate::model::{Frame, Topology};
+use crate::render::atoms::{BOND_RADIUS_FRACTION, MAX_BOND_LENGTH};
+
+/// A residue larger than this many atoms is not used to join atoms (files without residues
+/// may put every atom in one).
+const MAX_RESIDUE_UNIT: usize = 5000;
+
+/// Where the connectivity of [`Molecules`] comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Connectivity {
+    /// The bonds the file lists and bonds guessed from distances (plus residues).
+    FileBonds,
+    /// Bonds guessed from distances in the reference frame (plus residues).
+    GuessedBonds,
+    /// Residues only.
+    Residues,
+    /// Nothing joins any two atoms.
+    None,
+}
+
+/// The molecules of a topology and a breadth-first walk through each.
+#[derive(Debug, Clone)]
+pub struct Molecules {
+    /// `[child, parent]` pairs in walk order: each parent comes before its children.
+    edges: Vec<[u32; 2]>,
+    /// Atoms of every molecule, molecule after molecule.
+    atoms: Vec<u32>,
+    /// Start of each molecule in `atoms`, plus the end.
+    offsets: Vec<u32>,
+    connectivity: Connectivity,
+}
+
+impl Molecules {
+    /// The molecules of `topology`: its bonds and bonds guessed from `frame` (periodic images
+    /// counted when it has a box), with residues joined.
+    pub fn new(topology: &Topology, frame: &Frame) -> Molecules {
+        let n = topology.len();
+        // Files often list only some bonds (chemfiles' PDB templates stop at the residue),
+        // so guessed bonds are always added.
+        let mut bonds =
+            guess_bonds_periodic(&frame.positions, &topology.radii, PbcCell::of(frame));
+        let mut connectivity = Connectivity::GuessedBonds;
+        if !topology.bonds.is_empty() {
+            bonds.extend_from_slice(&topology.bonds);
+            connectivity = Connectivity::FileBonds;
+        }
+        if bonds.is_empty() {
+            connectivity = Connectivity::Residues;
+        }
+        let mut molecules = Molecules::from_bonds(n, &bonds, &topology.residue_index);
+        if molecules.edges.is_empty() {
+            connectivity = Connectivity::None;
+        }
+        molecules.connectivity = connectivity;
+        molecules
+    }
+
+    /// The molecules of `n` atoms joined by `bonds` (pairs of atom indices; out-of-range ones
+    /// are ignored) and by shared residues (`residue_index`, one per atom, may be empty).
+    pub fn from_bonds(n: usize, bonds: &[[u32; 2]], residue_index: &[u32]) -> Molecules {
+        let mut links: Vec<[u32; 2]> = bonds
+            .iter()
+            .copied()
+            .filter(|&[a, b]| a != b && (a as usize) < n && (b as usize) < n)
+            .collect();
+        // Residues join what the bonds left apart: one link per piece, to the residue's first
+        // atom.
+        if residue_index.len() == n && n > 0 {
+            let mut sets = UnionFind::new(n);
+            for &[a, b] in &links {
+                sets.union(a, b);
+            }
+            let residues = residue_index.iter().max().map_or(0, |&m| m as usize + 1);
+            let mut sizes = vec![0usize; residues];
+            for &r in residue_index {
+                sizes[r as usize] += 1;
+            }
+            let mut anchor = vec![u32::MAX; residues];
+            if residues > 1 {
+                for (i, &r) in residue_index.iter().enumerate() {
+                    let r = r as usize;
+                    if sizes[r] > MAX_RESIDUE_UNIT {
+                        continue;
+                    }
+                    if anchor[r] == u32::MAX {
+                        anchor[r] = i as u32;
+                    } else if sets.union(anchor[r], i as u32) {
+                        links.push([anchor[r], i as u32]);
+                    }
+                }
+            }
+        }
+        // Adjacency in compressed rows.
+        let mut start = vec![0u32; n + 1];
+        for &[a, b] in &links {
+            start[a as usize + 1] += 1;
+            start[b as usize + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut next = vec![0u32; start[n] as usize];
+        for &[a, b] in &links {
+            next[fill[a as usize] as usize] = b;
+            fill[a as usize] += 1;
+            next[fill[b as usize] as usize] = a;
+            fill[b as usize] += 1;
+        }
+        // Breadth-first walk from the lowest atom of each molecule.
+        let mut seen = vec![false; n];
+        let mut edges = Vec::new();
+        let mut atoms = Vec::with_capacity(n);
+        let mut offsets = vec![0u32];
+        let mut queue = VecDeque::new();
+        for root in 0..n {
+            if seen[root] {
+                continue;
+            }
+            seen[root] = true;
+            queue.push_back(root as u32);
+            while let Some(a) = queue.pop_front() {
+                atoms.push(a);
+                for &b in &next[start[a as usize] as usize..start[a as usize + 1] as usize] {
+                    if !seen[b as usize] {
+                        seen[b as usize] = true;
+                        edges.push([b, a]);
+                        queue.push_back(b);
+                    }
+                }
+            }
+            offsets.push(atoms.len() as u32);
+        }
+        Molecules {
+            edges,
+            atoms,
+            offsets,
+            connectivity: if links.is_empty() {
+                Connectivity::None
+            } else {
+                Connectivity::FileBonds
+            },
+        }
+    }
+
+    /// Where the connectivity came from.
+    pub fn connectivity(&self) -> Connectivity {
+        self.connectivity
+    }
+
+    /// True when some atoms are joined (otherwise making whole changes nothing).
+    pub fn has_links(&self) -> bool {
+        !self.edges.is_empty()
+    }
+
+    /// Number of molecules (single atoms count as one each).
+    pub fn len(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// True when there are no atoms.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The atoms of molecule `m`.
+    pub fn molecule(&self, m: usize) -> &[u32] {
+        &self.atoms[self.offsets[m] as usize..self.offsets[m + 1] as usize]
+    }
+
+    /// Iterates over the molecules' atom lists.
+    pub fn iter(&self) -> impl Iterator<Item = &[u32]> {
+        self.offsets
+            .windows(2)
+            .map(|w| &self.atoms[w[0] as usize..w[1] as usize])
+    }
+
+    /// Makes every molecule whole in `positions` (Å): each atom is moved by whole lattice
+    /// vectors of `cell` to the image nearest its parent in the walk. Atoms already next to
+    /// their parent are not touched.
+    pub fn make_whole(&self, positions: &mut [Vec3], cell: &PbcCell) {
+        for &[child, parent] in &self.edges {
+            let (c, p) = (child as usize, parent as usize);
+            let n = cell.nearest_lattice(positions[c] - positions[p]);
+            if n != Vec3::ZERO {
+                positions[c] -= cell.cartesian(n);
+            }
+        }
+    }
+}
+
+/// Bonds guessed from distances as [`crate::render::guess_bonds`] does (closer than
+/// `min(0.6 (r_i + r_j), 2 Å)`), counting periodic images when `cell` is given. Pairs come
+/// back sorted, with `i < j`.
+pub fn guess_bonds_periodic(
+    positions: &[Vec3],
+    radii: &[f32],
+    cell: Option<PbcCell>,
+) -> Vec<[u32; 2]> {
+    let Some(cell) = cell else {
+        return crate::render::guess_bonds(positions, radii);
+    };
+    // A grid of cells in fractional space, each at least one bond length wide.
+    let widths = cell.widths();
+    let dims = [widths.x, widths.y, widths.z]
+        .map(|w| ((w / MAX_BOND_LENGTH).floor() as usize).clamp(1, 256));
+    let cells = dims[0] * dims[1] * dims[2];
+    let wrapped: Vec<Vec3> = positions
+        .iter()
+        .map(|&p| {
+            let f = cell.fractional(p);
+            f - f.floor()
+        })
+        .collect();
+    let cell_of = |f: Vec3| -> [usize; 3] {
+        let c = |x: f32, d: usize| ((x * d as f32) as usize).min(d - 1);
+        [c(f.x, dims[0]), c(f.y, dims[1]), c(f.z, dims[2])]
+    };
+    let flat = |c: [usize; 3]| (c[2] * dims[1] + c[1]) * dims[0] + c[0];
+    // Atoms sorted by cell (counting sort).
+    let mut start = vec![0u32; cells + 1];
+    let keys: Vec<usize> = wrapped
+        .iter()
+        .map(|&f| if f.is_finite() { flat(cell_of(f)) } else { usize::MAX })
+        .collect();
+    for &k in keys.iter().filter(|&&k| k != usize::MAX) {
+        start[k + 1] += 1;
+    }
+    for i in 0..cells {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut sorted = vec![0u32; start[cells] as usize];
+    for (i, &k) in keys.iter().enumerate().filter(|(_, k)| **k != usize::MAX) {
+        sorted[fill[k] as usize] = i as u32;
+        fill[k] += 1;
+    }
+    let cart: Vec<Vec3> = wrapped.iter().map(|&f| cell.cartesian(f)).collect();
+    let mut bonds = Vec::new();
+    let mut around = Vec::with_capacity(27);
+    for (i, &k) in keys.iter().enumerate() {
+        if k == usize::MAX {
+            continue;
+        }
+        let c = cell_of(wrapped[i]);
+        around.clear();
+        for dz in [-1i64, 0, 1] {
+            for dy in [-1i64, 0, 1] {
+                for dx in [-1i64, 0, 1] {
+                    let w = |x: usize, d: i64, n: usize| (x as i64 + d).rem_euclid(n as i64) as usize;
+                    around.push(flat([w(c[0], dx, dims[0]), w(c[1], dy, dims[1]), w(c[2], dz, dims[2])]));
+                }
+            }
+        }
+        around.sort_unstable();
+        around.dedup();
+        let ri = radii.get(i).copied().unwrap_or(1.5);
+        for &other in &around {
+            for &j in &sorted[start[other] as usize..start[other + 1] as usize] {
+                let j = j as usize;
+                if j <= i {
+                    continue;
+                }
+                let rj = radii.get(j).copied().unwrap_or(1.5);
+                let limit = (BOND_RADIUS_FRACTION * (ri + rj)).min(MAX_BOND_LENGTH);
+                if cell.min_image(cart[j] - cart[i]).length_squared() < limit * limit {
+                    bonds.push([i as u32, j as u32]);
+                }
+            }
+        }
+    }
+    bonds.sort_unstable();
+    bonds
+}
+
+/// Disjoint sets of atoms.
+struct UnionFind {
+    parent: Vec<u32>,
+}
+
+impl UnionFind {
+    fn new(n: usize) -> Self {
+        UnionFind {
+            parent: (0..n as u32).collect(),
+        }
+    }
+
+    fn find(&mut self, mut a: u32) -> u32 {
+        while self.parent[a as usize] != a {
+            let up = self.parent[self.parent[a as usize] as usize];
+            self.parent[a as usize] = up;
+            a = up;
+        }
+        a
+    }
+
+    /// Joins the sets of `a` and `b`; false when they were one already.
+    fn union(&mut self, a: u32, b: u32) -> bool {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra == rb {
+            return false;
+        }
+        self.parent[ra.max(rb) as usize] = ra.min(rb);
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cubic(l: f32) -> PbcCell {
+        PbcCell::new(&[Vec3::X * l, Vec3::Y * l, Vec3::Z * l]).expect("cell")
+    }
+
+    #[test]
+    fn a_chain_split_across_a_face_is_joined() {
+        let cell = cubic(20.0);
+        let whole: Vec<Vec3> = (0..6).map(|i| Vec3::new(17.0 + 1.5 * i as f32, 5.0, 5.0)).collect();
+        let mut wrapped: Vec<Vec3> = whole
+            .iter()
+            .map(|&p| if p.x >= 20.0 { p - Vec3::X * 20.0 } else { p })
+            .collect();
+        let bonds: Vec<[u32; 2]> = (0..5).map(|i| [i, i + 1]).collect();
+        let mols = Molecules::from_bonds(6, &bonds, &[]);
+        assert_eq!(mols.len(), 1);
+        mols.make_whole(&mut wrapped, &cell);
+        for (a, b) in wrapped.iter().zip(&whole) {
+            assert!((*a - *b).length() < 1e-5, "{a} {b}");
+        }
+    }
+
+    #[test]
+    fn guessed_bonds_cross_the_box_and_residues_join_beads() {
+        let cell = cubic(10.0);
+        let positions = vec![Vec3::new(0.2, 5.0, 5.0), Vec3::new(9.5, 5.0, 5.0), Vec3::new(5.0, 5.0, 5.0)];
+        let bonds = guess_bonds_periodic(&positions, &[1.5, 1.5, 1.5], Some(cell));
+        assert_eq!(bonds, vec![[0, 1]]);
+        // Beads 4.7 Å apart: no bond guessed, the residue keeps them together.
+        let mols = Molecules::from_bonds(3, &[], &[0, 0, 1]);
+        assert_eq!(mols.len(), 2);
+        assert_eq!(mols.molecule(0), &[0, 1]);
+    }
+}
