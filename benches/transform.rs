@@ -14,11 +14,16 @@ use mdsurf::transform::{TransformChain, TransformOptions, smooth::smooth_frame};
 
 fn transform(c: &mut Criterion) {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
-    let trajectory = io::open(&data.join("adk_oplsaa.gro"), Some(&data.join("adk_oplsaa.xtc")))
-        .expect("adk_oplsaa reads");
+    let trajectory = io::open(
+        &data.join("adk_oplsaa.gro"),
+        Some(&data.join("adk_oplsaa.xtc")),
+    )
+    .expect("adk_oplsaa reads");
     let topology = trajectory.topology();
     let first = trajectory.read_frame(0).expect("frame 0 reads");
-    let frame = trajectory.read_frame(trajectory.len() - 1).expect("last frame reads");
+    let frame = trajectory
+        .read_frame(trajectory.len() - 1)
+        .expect("last frame reads");
     let chain_for = |options: TransformOptions| {
         TransformChain::new(&options, topology, &first, None, "adk_oplsaa.xtc").expect("chain")
     };
@@ -74,9 +79,7 @@ fn transform(c: &mut Criterion) {
     let len = frames.len();
     c.bench_function("smooth ±5 of transformed frames (adk)", |b| {
         b.iter(|| {
-            black_box(
-                smooth_frame(len / 2, len, 5, |j| Ok::<_, ()>(&frames[j])).expect("smooths"),
-            )
+            black_box(smooth_frame(len / 2, len, 5, |j| Ok::<_, ()>(&frames[j])).expect("smooths"))
         })
     });
     c.bench_function("build chain: guessed bonds + molecules (adk)", |b| {

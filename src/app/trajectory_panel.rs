@@ -98,8 +98,16 @@ pub fn trajectory_ui(ui: &mut egui::Ui, draft: &mut TransformDraft) -> bool {
             ui.add_enabled_ui(draft.fit_on, |ui| {
                 ui.horizontal(|ui| {
                     ui.label("Fit onto");
-                    ui.selectable_value(&mut draft.fit_reference, FitReference::First, "first frame");
-                    ui.selectable_value(&mut draft.fit_reference, FitReference::Topology, "topology");
+                    ui.selectable_value(
+                        &mut draft.fit_reference,
+                        FitReference::First,
+                        "first frame",
+                    );
+                    ui.selectable_value(
+                        &mut draft.fit_reference,
+                        FitReference::Topology,
+                        "topology",
+                    );
                 });
             });
             ui.add(

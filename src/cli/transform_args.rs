@@ -38,7 +38,11 @@ pub struct TransformArgs {
 impl TransformArgs {
     /// True when any transformation flag was given.
     pub fn any(&self) -> bool {
-        self.whole || self.no_whole || self.center.is_some() || self.fit.is_some() || self.smooth > 0
+        self.whole
+            || self.no_whole
+            || self.center.is_some()
+            || self.fit.is_some()
+            || self.smooth > 0
     }
 
     /// The library's options for these flags; a state file's options fill in what the flags
@@ -71,7 +75,11 @@ pub fn build_chain(options: &TransformOptions, trajectory: &Trajectory) -> Resul
     let reference = if options.fit.is_some() && options.fit_reference == FitReference::Topology {
         let top = trajectory.topology_path();
         let opened = io::open(top, None).map_err(|e| anyhow!("--fit-reference topology: {e}"))?;
-        Some(opened.read_frame(0).map_err(|e| anyhow!("--fit-reference topology: {e}"))?)
+        Some(
+            opened
+                .read_frame(0)
+                .map_err(|e| anyhow!("--fit-reference topology: {e}"))?,
+        )
     } else {
         None
     };
@@ -108,8 +116,9 @@ impl<'a> FrameReader<'a> {
     /// Frame `index`, transformed (and smoothed).
     pub fn read_frame(&mut self, index: usize) -> Result<Frame> {
         let trajectory = self.trajectory;
-        self.frames
-            .read(index, |i| trajectory.read_frame(i).map_err(anyhow::Error::from))
+        self.frames.read(index, |i| {
+            trajectory.read_frame(i).map_err(anyhow::Error::from)
+        })
     }
 
     /// Prints what runs, on stderr (nothing when nothing runs).

@@ -23,12 +23,14 @@ pub struct Scanner {
 }
 
 /// One level of a scan: its uniform, its block totals (unless it is the top level) and bind
-/// groups.
+/// groups (the scan's kept for both roles, so a count that crosses a multiple of 1024 back and
+/// forth rebuilds nothing).
 #[derive(Debug)]
 struct Level {
     uniform: Uniform<ScanUniform>,
     sums: Grow,
     scan: Bound,
+    scan_top: Bound,
     add: Bound,
     groups: [u32; 3],
     top: bool,
@@ -75,6 +77,7 @@ impl Scanner {
                     uniform: Uniform::new(ctx, "scan uniform"),
                     sums: Grow::new(ctx, "scan sums", wgpu::BufferUsages::empty()),
                     scan: Bound::default(),
+                    scan_top: Bound::default(),
                     add: Bound::default(),
                     groups: [0; 3],
                     top,
@@ -105,8 +108,10 @@ impl Scanner {
                 (b::DATA, level_data),
                 (b::SUMS, sums),
             ];
-            self.scan_blocks.bind(ctx, &mut level.scan, &entries);
-            if !top {
+            if top {
+                self.scan_blocks.bind(ctx, &mut level.scan_top, &entries);
+            } else {
+                self.scan_blocks.bind(ctx, &mut level.scan, &entries);
                 self.add_sums.bind(ctx, &mut level.add, &entries);
             }
             i += 1;
@@ -124,7 +129,8 @@ impl Scanner {
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, plan: &ScanPlan) {
         let levels = &plan.levels[..plan.used];
         for l in levels {
-            self.scan_blocks.dispatch(pass, &l.scan, &[], l.groups);
+            let bind = if l.top { &l.scan_top } else { &l.scan };
+            self.scan_blocks.dispatch(pass, bind, &[], l.groups);
         }
         for l in levels.iter().rev().filter(|l| !l.top) {
             self.add_sums.dispatch(pass, &l.add, &[], l.groups);

@@ -80,8 +80,19 @@ impl Ctx<'_> {
                 for j in bj * BRICK..=(bj * BRICK + BRICK).min(ny - 1) {
                     for &bi in row {
                         let i0 = bi as usize * BRICK;
-                        for i in i0..=(i0 + BRICK).min(nx - 1) {
-                            out[j * nx + i] = u8::from(self.vol.get(i, j, k) >= self.iso);
+                        let n = BRICK.min(nx - i0);
+                        let dst = &mut out[j * nx + i0..j * nx + i0 + n];
+                        match self.vol.brick_row(i0, j, k) {
+                            Some(src) => {
+                                for (f, &v) in dst.iter_mut().zip(src) {
+                                    *f = u8::from(v >= self.iso);
+                                }
+                            }
+                            None => dst.fill(0),
+                        }
+                        if i0 + BRICK < nx {
+                            let v = self.vol.get(i0 + BRICK, j, k);
+                            out[j * nx + i0 + BRICK] = u8::from(v >= self.iso);
                         }
                     }
                 }

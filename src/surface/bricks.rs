@@ -129,6 +129,20 @@ impl BrickVolume {
         }
     }
 
+    /// The 8 stored samples `i0..i0 + 8` of row (j, k), `i0` a multiple of [`BRICK`]; `None`
+    /// when their brick is not occupied (all 0). Entries past the grid's end are 0.
+    #[inline]
+    pub fn brick_row(&self, i0: usize, j: usize, k: usize) -> Option<&[f32; BRICK]> {
+        let [bx, by, _] = self.bdims;
+        let b = ((k >> 3) * by + (j >> 3)) * bx + (i0 >> 3);
+        let s = self.slots[b];
+        if s == EMPTY {
+            return None;
+        }
+        let o = s as usize * BRICK_SAMPLES + (((k & 7) << 6) | ((j & 7) << 3));
+        self.data[o..o + BRICK].try_into().ok()
+    }
+
     /// X indices of the active bricks in brick row `bj` of brick layer `bk`, ascending.
     pub fn active_row(&self, bk: usize, bj: usize) -> &[u32] {
         let l = &self.layers[bk];
@@ -279,8 +293,6 @@ impl LayerCtx<'_> {
         let lb = bx * by;
         let occ_k = &self.occ[bk * lb..(bk + 1) * lb];
         let occ_up = (bk + 1 < bz).then(|| &self.occ[(bk + 1) * lb..(bk + 2) * lb]);
-        // Occupancy row of the brick layer that holds temp plane `kk`.
-        let occ_of = |kk: usize| if kk < BRICK { Some(occ_k) } else { occ_up };
 
         if s.vals.len() < plane * (BRICK + 1) {
             s.vals = vec![0.0; plane * (BRICK + 1)];
@@ -292,21 +304,29 @@ impl LayerCtx<'_> {
         let vals = &mut vals[..plane * np];
         let mut cols = self.with_colour.then(|| &mut cols[..plane * np]);
 
-        // Zero the samples of the occupied bricks: the only ones that get terms and are read.
+        // Zero the brick columns within one brick of an occupied brick (of this layer or the
+        // next, whose first plane is temp plane 8): they hold every sample that gets a term
+        // (only occupied bricks do) and every sample the footprints below read, so the temp
+        // is exact wherever it is read. Columns further away are never touched.
+        let near: Vec<bool> = (0..lb)
+            .map(|b| {
+                let (bi, bj) = (b % bx, b / bx);
+                (bj.saturating_sub(1)..=(bj + 1).min(by - 1)).any(|y| {
+                    (bi.saturating_sub(1)..=(bi + 1).min(bx - 1)).any(|x| {
+                        occ_k[y * bx + x] != 0 || occ_up.is_some_and(|o| o[y * bx + x] != 0)
+                    })
+                })
+            })
+            .collect();
         for kk in 0..np {
-            let Some(occ) = occ_of(kk) else { continue };
-            for bj in 0..by {
-                for bi in 0..bx {
-                    if occ[bj * bx + bi] == 0 {
-                        continue;
-                    }
-                    let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx));
-                    for j in bj * BRICK..(bj * BRICK + BRICK).min(ny) {
-                        let r = kk * plane + j * nx;
-                        vals[r + i0..r + i1].fill(0.0);
-                        if let Some(c) = cols.as_deref_mut() {
-                            c[r + i0..r + i1].fill([0.0; 3]);
-                        }
+            for (b, _) in near.iter().enumerate().filter(|(_, n)| **n) {
+                let (bi, bj) = (b % bx, b / bx);
+                let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx));
+                for j in bj * BRICK..(bj * BRICK + BRICK).min(ny) {
+                    let r = kk * plane + j * nx;
+                    vals[r + i0..r + i1].fill(0.0);
+                    if let Some(c) = cols.as_deref_mut() {
+                        c[r + i0..r + i1].fill([0.0; 3]);
                     }
                 }
             }
@@ -351,15 +371,7 @@ impl LayerCtx<'_> {
             }
         }
 
-        // Density of temp sample (i, j, kk), 0 outside the occupied bricks.
-        let tv = |i: usize, j: usize, kk: usize| -> f32 {
-            match occ_of(kk) {
-                Some(occ) if occ[(j / BRICK) * bx + i / BRICK] != 0 => {
-                    vals[kk * plane + j * nx + i]
-                }
-                _ => 0.0,
-            }
-        };
+        let tv = |i: usize, j: usize, kk: usize| vals[kk * plane + j * nx + i];
         let iso = self.iso;
 
         // Active bricks: the 9^3 footprint holds samples on both sides of I.
@@ -378,22 +390,19 @@ impl LayerCtx<'_> {
                 }
                 let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx - 1));
                 let (j0, j1) = (bj * BRICK, (bj * BRICK + BRICK).min(ny - 1));
-                let (mut any_in, mut any_out) = (false, false);
-                'scan: for kk in 0..=kmax.min(BRICK) {
+                let (mut inside, mut total) = (0usize, 0usize);
+                for kk in 0..=kmax.min(BRICK) {
                     for j in j0..=j1 {
-                        for i in i0..=i1 {
-                            if tv(i, j, kk) >= iso {
-                                any_in = true;
-                            } else {
-                                any_out = true;
-                            }
-                            if any_in && any_out {
-                                break 'scan;
-                            }
-                        }
+                        let r = kk * plane + j * nx;
+                        let row = &vals[r + i0..=r + i1];
+                        inside += row.iter().filter(|&&v| v >= iso).count();
+                        total += row.len();
+                    }
+                    if inside != 0 && inside != total {
+                        break;
                     }
                 }
-                if any_in && any_out {
+                if inside != 0 && inside != total {
                     layer.cols.push(bi as u32);
                 }
             }
@@ -405,12 +414,7 @@ impl LayerCtx<'_> {
         layer.colours.clear();
         let Some(cols) = cols else { return };
         let tc = |i: usize, j: usize, kk: usize| -> [f32; 3] {
-            match occ_of(kk) {
-                Some(occ) if occ[(j / BRICK) * bx + i / BRICK] != 0 => {
-                    cols[kk * plane + j * nx + i].map(|v| v * self.inv_iso)
-                }
-                _ => [0.0; 3],
-            }
+            cols[kk * plane + j * nx + i].map(|v| v * self.inv_iso)
         };
         for kk in 0..np.min(BRICK) {
             let k = z0 + kk;

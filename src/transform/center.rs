@@ -14,11 +14,15 @@ pub fn centre_of(positions: &[Vec3], indices: &[u32], masses: &[f32]) -> Option<
     if indices.is_empty() {
         return None;
     }
-    let weighted = masses.len() == positions.len()
-        && indices.iter().all(|&i| masses[i as usize] > 0.0);
+    let weighted =
+        masses.len() == positions.len() && indices.iter().all(|&i| masses[i as usize] > 0.0);
     let (mut sum, mut total) = (DVec3::ZERO, 0.0f64);
     for &i in indices {
-        let w = if weighted { masses[i as usize] as f64 } else { 1.0 };
+        let w = if weighted {
+            masses[i as usize] as f64
+        } else {
+            1.0
+        };
         sum += positions[i as usize].as_dvec3() * w;
         total += w;
     }
@@ -43,7 +47,12 @@ pub fn centre_in_box(
 
 /// Puts each molecule whose centre lies outside the box (fractional coordinates outside
 /// [0, 1)) back in by whole lattice vectors; its atoms move together.
-pub fn wrap_molecules(positions: &mut [Vec3], cell: &PbcCell, molecules: &Molecules, masses: &[f32]) {
+pub fn wrap_molecules(
+    positions: &mut [Vec3],
+    cell: &PbcCell,
+    molecules: &Molecules,
+    masses: &[f32],
+) {
     for atoms in molecules.iter() {
         let centre = if atoms.len() == 1 {
             positions[atoms[0] as usize]
@@ -80,12 +89,20 @@ mod tests {
     #[test]
     fn centred_selection_lands_in_the_middle_and_molecules_in_the_box() {
         let cell = PbcCell::new(&[Vec3::X * 10.0, Vec3::Y * 10.0, Vec3::Z * 10.0]).expect("cell");
-        let mut p = vec![Vec3::new(1.0, 1.0, 1.0), Vec3::new(2.0, 1.0, 1.0), Vec3::new(9.0, 9.0, 9.0)];
+        let mut p = vec![
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(2.0, 1.0, 1.0),
+            Vec3::new(9.0, 9.0, 9.0),
+        ];
         let mols = Molecules::from_bonds(3, &[[0, 1]], &[]);
         let c = centre_of(&p, &[0, 1], &[]).expect("centre");
         centre_in_box(&mut p, c, &cell, &mols, &[]);
         assert!((p[0] - Vec3::new(4.5, 5.0, 5.0)).length() < 1e-5);
         // Atom 2 moved to (12.5, 13, 13), wrapped to (2.5, 3, 3).
-        assert!((p[2] - Vec3::new(2.5, 3.0, 3.0)).length() < 1e-5, "{}", p[2]);
+        assert!(
+            (p[2] - Vec3::new(2.5, 3.0, 3.0)).length() < 1e-5,
+            "{}",
+            p[2]
+        );
     }
 }

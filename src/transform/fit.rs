@@ -30,11 +30,17 @@ impl Fit {
         if indices.is_empty() || indices.iter().any(|&i| i as usize >= reference.len()) {
             return None;
         }
-        let weighted = masses.len() == reference.len()
-            && indices.iter().all(|&i| masses[i as usize] > 0.0);
+        let weighted =
+            masses.len() == reference.len() && indices.iter().all(|&i| masses[i as usize] > 0.0);
         let weights: Vec<f64> = indices
             .iter()
-            .map(|&i| if weighted { masses[i as usize] as f64 } else { 1.0 })
+            .map(|&i| {
+                if weighted {
+                    masses[i as usize] as f64
+                } else {
+                    1.0
+                }
+            })
             .collect();
         let centre = weighted_centre(reference, &indices, &weights);
         let reference = indices
@@ -113,7 +119,12 @@ pub fn rotation_from_correlation(s: &[[f64; 3]; 3]) -> DMat3 {
     let best = (0..4)
         .max_by(|&a, &b| values[a].total_cmp(&values[b]))
         .unwrap_or(0);
-    let q = [vectors[0][best], vectors[1][best], vectors[2][best], vectors[3][best]];
+    let q = [
+        vectors[0][best],
+        vectors[1][best],
+        vectors[2][best],
+        vectors[3][best],
+    ];
     let quat = DQuat::from_xyzw(q[1], q[2], q[3], q[0]);
     if !quat.is_finite() || quat.length_squared() < 1e-24 {
         return DMat3::IDENTITY;
@@ -147,13 +158,13 @@ fn jacobi_eigen4(mut a: [[f64; 4]; 4]) -> ([f64; 4], [[f64; 4]; 4]) {
                 let t = if theta == 0.0 { 1.0 } else { t };
                 let c = 1.0 / (t * t + 1.0).sqrt();
                 let s = t * c;
-                for k in 0..4 {
-                    let (akp, akq) = (a[k][p], a[k][q]);
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
+                for row in a.iter_mut() {
+                    let (akp, akq) = (row[p], row[q]);
+                    row[p] = c * akp - s * akq;
+                    row[q] = s * akp + c * akq;
                 }
-                for k in 0..4 {
-                    let (apk, aqk) = (a[p][k], a[q][k]);
+                let (row_p, row_q) = (a[p], a[q]);
+                for (k, (apk, aqk)) in row_p.into_iter().zip(row_q).enumerate() {
                     a[p][k] = c * apk - s * aqk;
                     a[q][k] = s * apk + c * aqk;
                 }
@@ -181,7 +192,10 @@ mod tests {
             })
             .collect();
         let rot = glam::Quat::from_axis_angle(Vec3::new(1.0, 2.0, -0.5).normalize(), 2.4);
-        let moved: Vec<Vec3> = reference.iter().map(|&p| rot * p + Vec3::new(30.0, -4.0, 12.0)).collect();
+        let moved: Vec<Vec3> = reference
+            .iter()
+            .map(|&p| rot * p + Vec3::new(30.0, -4.0, 12.0))
+            .collect();
         let masses: Vec<f32> = (0..40).map(|i| 1.0 + (i % 3) as f32 * 5.0).collect();
         let fit = Fit::new((0..40).collect(), &reference, &masses).expect("fit");
         let mut p = moved.clone();
@@ -196,7 +210,12 @@ mod tests {
     #[test]
     fn a_half_turn_is_found() {
         // A 180° turn makes the largest eigenvalue's quaternion have q0 = 0.
-        let reference = vec![Vec3::X, Vec3::Y * 2.0, Vec3::Z * 3.0, Vec3::new(1.0, 1.0, 1.0)];
+        let reference = vec![
+            Vec3::X,
+            Vec3::Y * 2.0,
+            Vec3::Z * 3.0,
+            Vec3::new(1.0, 1.0, 1.0),
+        ];
         let rot = glam::Quat::from_rotation_z(std::f32::consts::PI);
         let moved: Vec<Vec3> = reference.iter().map(|&p| rot * p).collect();
         let fit = Fit::new(vec![0, 1, 2, 3], &reference, &[]).expect("fit");

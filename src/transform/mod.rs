@@ -299,13 +299,14 @@ impl TransformChain {
             }
             chain.apply(&mut reference)?;
             let indices = sel.bind(topology).indices(&reference);
-            let fit = fit::Fit::new(indices, &reference.positions, &chain.masses).ok_or_else(
-                || TransformError::EmptySelection {
-                    step: Step::Fit,
-                    text: sel.text().to_string(),
-                    file: chain.file.clone(),
-                },
-            )?;
+            let fit =
+                fit::Fit::new(indices, &reference.positions, &chain.masses).ok_or_else(|| {
+                    TransformError::EmptySelection {
+                        step: Step::Fit,
+                        text: sel.text().to_string(),
+                        file: chain.file.clone(),
+                    }
+                })?;
             chain.fit = Some(Arc::new(fit));
             chain.fit_text = sel.text().to_string();
         }
@@ -359,7 +360,11 @@ impl TransformChain {
         };
         if self.whole || self.centre.is_some() {
             let Some(cell) = PbcCell::of(frame) else {
-                let step = if self.whole { Step::Whole } else { Step::Center };
+                let step = if self.whole {
+                    Step::Whole
+                } else {
+                    Step::Center
+                };
                 return Err(frame_error(format!("no periodic box ({step} needs one)")));
             };
             let molecules = self.molecules.as_deref();
@@ -377,7 +382,9 @@ impl TransformChain {
                     )));
                 };
                 match molecules {
-                    Some(m) => center::centre_in_box(&mut frame.positions, c, &cell, m, &self.masses),
+                    Some(m) => {
+                        center::centre_in_box(&mut frame.positions, c, &cell, m, &self.masses)
+                    }
                     None => {
                         let shift = cell.centre() - c;
                         frame.positions.iter_mut().for_each(|p| *p += shift);
@@ -444,6 +451,9 @@ mod tests {
         let text = toml::to_string(&o).expect("toml");
         let back: TransformOptions = toml::from_str(&text).expect("parse");
         assert_eq!(back, o);
-        assert_eq!("topology".parse::<FitReference>(), Ok(FitReference::Topology));
+        assert_eq!(
+            "topology".parse::<FitReference>(),
+            Ok(FitReference::Topology)
+        );
     }
 }

@@ -28,7 +28,10 @@ impl PbcCell {
         if !det.is_finite() || scale <= 0.0 || det.abs() <= 1e-6 * scale {
             return None;
         }
-        let cell = PbcCell { m, inv: m.inverse() };
+        let cell = PbcCell {
+            m,
+            inv: m.inverse(),
+        };
         (cell.widths().min_element() >= MIN_WIDTH).then_some(cell)
     }
 
@@ -82,7 +85,10 @@ impl PbcCell {
     /// The same cell turned by `rotation`.
     pub fn rotated(&self, rotation: Mat3) -> PbcCell {
         let m = rotation * self.m;
-        PbcCell { m, inv: m.inverse() }
+        PbcCell {
+            m,
+            inv: m.inverse(),
+        }
     }
 }
 

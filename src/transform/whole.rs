@@ -51,8 +51,7 @@ impl Molecules {
         let n = topology.len();
         // Files often list only some bonds (chemfiles' PDB templates stop at the residue),
         // so guessed bonds are always added.
-        let mut bonds =
-            guess_bonds_periodic(&frame.positions, &topology.radii, PbcCell::of(frame));
+        let mut bonds = guess_bonds_periodic(&frame.positions, &topology.radii, PbcCell::of(frame));
         let mut connectivity = Connectivity::GuessedBonds;
         if !topology.bonds.is_empty() {
             bonds.extend_from_slice(&topology.bonds);
@@ -235,7 +234,13 @@ pub fn guess_bonds_periodic(
     let mut start = vec![0u32; cells + 1];
     let keys: Vec<usize> = wrapped
         .iter()
-        .map(|&f| if f.is_finite() { flat(cell_of(f)) } else { usize::MAX })
+        .map(|&f| {
+            if f.is_finite() {
+                flat(cell_of(f))
+            } else {
+                usize::MAX
+            }
+        })
         .collect();
     for &k in keys.iter().filter(|&&k| k != usize::MAX) {
         start[k + 1] += 1;
@@ -261,8 +266,13 @@ pub fn guess_bonds_periodic(
         for dz in [-1i64, 0, 1] {
             for dy in [-1i64, 0, 1] {
                 for dx in [-1i64, 0, 1] {
-                    let w = |x: usize, d: i64, n: usize| (x as i64 + d).rem_euclid(n as i64) as usize;
-                    around.push(flat([w(c[0], dx, dims[0]), w(c[1], dy, dims[1]), w(c[2], dz, dims[2])]));
+                    let w =
+                        |x: usize, d: i64, n: usize| (x as i64 + d).rem_euclid(n as i64) as usize;
+                    around.push(flat([
+                        w(c[0], dx, dims[0]),
+                        w(c[1], dy, dims[1]),
+                        w(c[2], dz, dims[2]),
+                    ]));
                 }
             }
         }
@@ -330,7 +340,9 @@ mod tests {
     #[test]
     fn a_chain_split_across_a_face_is_joined() {
         let cell = cubic(20.0);
-        let whole: Vec<Vec3> = (0..6).map(|i| Vec3::new(17.0 + 1.5 * i as f32, 5.0, 5.0)).collect();
+        let whole: Vec<Vec3> = (0..6)
+            .map(|i| Vec3::new(17.0 + 1.5 * i as f32, 5.0, 5.0))
+            .collect();
         let mut wrapped: Vec<Vec3> = whole
             .iter()
             .map(|&p| if p.x >= 20.0 { p - Vec3::X * 20.0 } else { p })
@@ -347,7 +359,11 @@ mod tests {
     #[test]
     fn guessed_bonds_cross_the_box_and_residues_join_beads() {
         let cell = cubic(10.0);
-        let positions = vec![Vec3::new(0.2, 5.0, 5.0), Vec3::new(9.5, 5.0, 5.0), Vec3::new(5.0, 5.0, 5.0)];
+        let positions = vec![
+            Vec3::new(0.2, 5.0, 5.0),
+            Vec3::new(9.5, 5.0, 5.0),
+            Vec3::new(5.0, 5.0, 5.0),
+        ];
         let bonds = guess_bonds_periodic(&positions, &[1.5, 1.5, 1.5], Some(cell));
         assert_eq!(bonds, vec![[0, 1]]);
         // Beads 4.7 Å apart: no bond guessed, the residue keeps them together.

@@ -38,10 +38,7 @@ fn across_a_face(positions: &[Vec3], l: f32) -> (Vec<Vec3>, Vec<Vec3>) {
     let centre = positions.iter().copied().sum::<Vec3>() / positions.len() as f32;
     let shift = Vec3::new(0.0, l / 2.0, l / 2.0) - centre;
     let unwrapped: Vec<Vec3> = positions.iter().map(|&p| p + shift).collect();
-    let wrapped = unwrapped
-        .iter()
-        .map(|&p| p - (p / l).floor() * l)
-        .collect();
+    let wrapped = unwrapped.iter().map(|&p| p - (p / l).floor() * l).collect();
     (unwrapped, wrapped)
 }
 
@@ -76,8 +73,14 @@ fn whole_joins_a_protein_wrapped_across_a_box_face() {
     let (a2, v2) = area_volume(&wrapped, &topology.radii);
     assert!(rel(a1, a0) < 1e-3, "whole: area {a1} vs {a0}");
     assert!(rel(v1, v0) < 1e-3, "whole: volume {v1} vs {v0}");
-    assert!(rel(a2, a0) > 1e-2, "wrapped: area {a2} should differ from {a0}");
-    assert!(rel(v2, v0) > 1e-3, "wrapped: volume {v2} should differ from {v0}");
+    assert!(
+        rel(a2, a0) > 1e-2,
+        "wrapped: area {a2} should differ from {a0}"
+    );
+    assert!(
+        rel(v2, v0) > 1e-3,
+        "wrapped: volume {v2} should differ from {v0}"
+    );
     // Whole moves atoms by whole box vectors: the molecule is the original up to one shift.
     let d = split.positions[0] - unwrapped[0];
     for (a, b) in split.positions.iter().zip(&unwrapped) {
@@ -99,7 +102,15 @@ fn write_adk(path: &Path, positions: &[Vec3], l: f64) {
 }
 
 fn surface_stats(dir: &Path, file: &str, extra: &[&str]) -> (f64, f64) {
-    let mut args = vec!["surface", file, "--backend", "cpu", "--stats", "s.csv", "-q"];
+    let mut args = vec![
+        "surface",
+        file,
+        "--backend",
+        "cpu",
+        "--stats",
+        "s.csv",
+        "-q",
+    ];
     args.extend_from_slice(extra);
     let run = mdsurf(dir, &args);
     assert_eq!(run.code, 0, "{}", run.stderr);
@@ -121,10 +132,22 @@ fn cli_whole_matches_the_unwrapped_protein_and_no_whole_does_not() {
     let (a1, v1) = surface_stats(dir.path(), "split.pdb", &["--whole"]);
     let (ad, vd) = surface_stats(dir.path(), "split.pdb", &[]);
     let (a2, v2) = surface_stats(dir.path(), "split.pdb", &["--no-whole"]);
-    assert!(rel(a1, a0) < 1e-3 && rel(v1, v0) < 1e-3, "--whole: {a1} {v1} vs {a0} {v0}");
-    assert!(rel(ad, a0) < 1e-3 && rel(vd, v0) < 1e-3, "default: {ad} {vd} vs {a0} {v0}");
-    assert!(rel(a2, a0) > 1e-2, "--no-whole: area {a2} should differ from {a0}");
-    assert!(rel(v2, v0) > 1e-3, "--no-whole: volume {v2} should differ from {v0}");
+    assert!(
+        rel(a1, a0) < 1e-3 && rel(v1, v0) < 1e-3,
+        "--whole: {a1} {v1} vs {a0} {v0}"
+    );
+    assert!(
+        rel(ad, a0) < 1e-3 && rel(vd, v0) < 1e-3,
+        "default: {ad} {vd} vs {a0} {v0}"
+    );
+    assert!(
+        rel(a2, a0) > 1e-2,
+        "--no-whole: area {a2} should differ from {a0}"
+    );
+    assert!(
+        rel(v2, v0) > 1e-3,
+        "--no-whole: volume {v2} should differ from {v0}"
+    );
 }
 
 #[test]
@@ -151,7 +174,9 @@ fn fit_undoes_a_rigid_rotation_and_translation() {
     let mut reader = TransformedFrames::new(chain, frames.len());
     for i in 0..frames.len() {
         let f = reader
-            .read(i, |j| Ok::<_, mdsurf::transform::TransformError>(frames[j].clone()))
+            .read(i, |j| {
+                Ok::<_, mdsurf::transform::TransformError>(frames[j].clone())
+            })
             .expect("fit");
         let worst = f
             .positions
@@ -189,10 +214,13 @@ fn smoothing_averages_the_window_and_uses_the_frames_that_exist_at_the_ends() {
         smooth: k,
         ..TransformOptions::default()
     };
-    let chain = TransformChain::new(&options, &topology, &frames[0], None, "synthetic").expect("chain");
+    let chain =
+        TransformChain::new(&options, &topology, &frames[0], None, "synthetic").expect("chain");
     let read = |reader: &mut TransformedFrames, i: usize| {
         reader
-            .read(i, |j| Ok::<_, mdsurf::transform::TransformError>(frames[j].clone()))
+            .read(i, |j| {
+                Ok::<_, mdsurf::transform::TransformError>(frames[j].clone())
+            })
             .expect("smooth")
     };
     let mut forward = TransformedFrames::new(chain.clone(), n);
@@ -205,7 +233,10 @@ fn smoothing_averages_the_window_and_uses_the_frames_that_exist_at_the_ends() {
         let mean_f2 = (lo..=hi).map(|j| (j * j) as f32).sum::<f32>() / count;
         for (a, p) in f.positions.iter().enumerate() {
             let want = Vec3::new(mean_f2, a as f32 + mean_f, 7.0);
-            assert!((*p - want).length() < 1e-4, "frame {i} atom {a}: {p} vs {want}");
+            assert!(
+                (*p - want).length() < 1e-4,
+                "frame {i} atom {a}: {p} vs {want}"
+            );
         }
         assert_eq!(f.index, i);
         assert_eq!(f.time_ps, Some(i as f64));
@@ -226,8 +257,22 @@ fn cli_smooth_and_center_run_on_a_gromacs_trajectory() {
     let run = mdsurf(
         dir.path(),
         &[
-            "surface", gro, xtc, "--select", "protein", "--backend", "cpu", "--frames", "0:3",
-            "--center", "protein", "--fit", "protein and name CA", "--smooth", "1", "--stats",
+            "surface",
+            gro,
+            xtc,
+            "--select",
+            "protein",
+            "--backend",
+            "cpu",
+            "--frames",
+            "0:3",
+            "--center",
+            "protein",
+            "--fit",
+            "protein and name CA",
+            "--smooth",
+            "1",
+            "--stats",
             "s.csv",
         ],
     );
@@ -247,7 +292,11 @@ fn box_requiring_transforms_on_a_file_without_a_box_fail_in_one_line() {
     let (_, frame) = adk();
     let mut f = chemfiles::Frame::new();
     for p in frame.positions.iter().take(50) {
-        f.add_atom(&chemfiles::Atom::new("C"), [p.x as f64, p.y as f64, p.z as f64], None);
+        f.add_atom(
+            &chemfiles::Atom::new("C"),
+            [p.x as f64, p.y as f64, p.z as f64],
+            None,
+        );
     }
     let path = dir.path().join("nobox.xyz");
     chemfiles::Trajectory::open(&path, 'w')
@@ -267,7 +316,10 @@ fn box_requiring_transforms_on_a_file_without_a_box_fail_in_one_line() {
         );
     }
     // Without a flag the default (whole when there is a box) just stays off.
-    let run = mdsurf(dir.path(), &["surface", "nobox.xyz", "--backend", "cpu", "-q"]);
+    let run = mdsurf(
+        dir.path(),
+        &["surface", "nobox.xyz", "--backend", "cpu", "-q"],
+    );
     assert_eq!(run.code, 0, "{}", run.stderr);
 }
 
@@ -291,10 +343,17 @@ fn fit_or_center_selections_that_match_nothing_fail_in_one_line() {
     }
     let run = mdsurf(
         dir.path(),
-        &["surface", gro, "--backend", "cpu", "--fit", "resnam ALA", "-q"],
+        &[
+            "surface",
+            gro,
+            "--backend",
+            "cpu",
+            "--fit",
+            "resnam ALA",
+            "-q",
+        ],
     );
     assert_eq!(run.code, 2, "{}", run.stderr);
     assert_eq!(run.stderr.lines().count(), 1, "{}", run.stderr);
     assert!(run.stderr.contains("--fit 'resnam ALA'"), "{}", run.stderr);
 }
-
