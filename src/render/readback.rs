@@ -2,7 +2,6 @@
 //! ([`render_to_rgba`], used by screenshots, movies, `mdsurf render` and tests), and write them as
 //! PNG atomically (temporary file in the same folder, then rename).
 
-use std::io::Write;
 use std::path::Path;
 
 use super::RenderError;
@@ -197,24 +196,22 @@ pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), RenderError> {
         _ => Path::new("."),
     };
     std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| err(e.to_string()))?;
-    {
-        let mut enc = png::Encoder::new(
-            std::io::BufWriter::new(tmp.as_file_mut()),
-            image.width,
-            image.height,
-        );
+    // Written to a temporary file and renamed, with the permissions of the file it replaces
+    // (or rw-r--r--), like every other output.
+    crate::export::write_atomic(path, |w| {
+        let mut enc = png::Encoder::new(w, image.width, image.height);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut w = enc.write_header().map_err(|e| err(e.to_string()))?;
+        let mut w = enc.write_header().map_err(std::io::Error::other)?;
         w.write_image_data(&image.pixels)
-            .map_err(|e| err(e.to_string()))?;
-        w.finish().map_err(|e| err(e.to_string()))?;
-    }
-    tmp.as_file_mut().flush().map_err(|e| err(e.to_string()))?;
-    tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
-    Ok(())
+            .map_err(std::io::Error::other)?;
+        w.finish().map_err(std::io::Error::other)
+    })
+    .map_err(|e| match e {
+        crate::export::ExportError::Io { source, .. } => err(source.to_string()),
+        other => err(other.to_string()),
+    })
 }
 
 #[cfg(test)]

@@ -22,7 +22,10 @@
 //! edges is interpolated (the formula of [`super::mc_vertex::edge_vertex`]) and kept in the
 //! order Marching Cubes numbers the vertices, 12 bytes per vertex instead of 12 per sample.
 //!
-//! Parallelism: rayon over brick layers, each with a per-thread scratch of 9 planes.
+//! Parallelism: rayon over groups of brick layers ([`slab_planes`]), each filled in one pass
+//! into a per-thread scratch of its planes plus one; the slots, active lists and colours of a
+//! layer depend only on the samples, so the result is the same for any grouping or thread
+//! count.
 
 use std::sync::Mutex;
 
@@ -39,6 +42,18 @@ pub const BRICK: usize = 8;
 pub const BRICK_SAMPLES: usize = BRICK * BRICK * BRICK;
 /// Slot of a brick that is not stored.
 const EMPTY: u32 = u32::MAX;
+
+/// Grid planes per atom slab for [`BrickVolume::compute`]: a whole number of brick layers,
+/// computed in one pass (fewer passes over each atom and fewer shared planes), as many as keep
+/// a thread's scratch (16 bytes per sample) near 32 MB and leave four groups per thread.
+pub fn slab_planes(grid: &GridSpec) -> u32 {
+    let [nx, ny, nz] = grid.dims.map(|d| d as usize);
+    let layer_bytes = (nx * ny * BRICK * 16).max(1);
+    let threads = rayon::current_num_threads().max(1);
+    let by_memory = (32 << 20) / layer_bytes;
+    let by_balance = nz.div_ceil(BRICK) / (4 * threads);
+    (by_memory.min(by_balance).clamp(1, 4) * BRICK) as u32
+}
 
 /// How much of the grid the sparse engine touched.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -117,7 +132,7 @@ impl BrickVolume {
     }
 
     /// Density at sample (i, j, k); 0 outside the occupied bricks (exactly the dense value).
-    #[inline]
+    #[inline(always)]
     pub fn get(&self, i: usize, j: usize, k: usize) -> f32 {
         let [bx, by, _] = self.bdims;
         let b = ((k >> 3) * by + (j >> 3)) * bx + (i >> 3);
@@ -155,7 +170,7 @@ impl BrickVolume {
     }
 
     /// Samples the density of `bins` (made by [`super::bin::bin_atoms_overlapping`] with
-    /// [`BRICK`] planes per slab and an overlap of 1) on the occupied bricks of `grid`, finds
+    /// [`slab_planes`] planes per slab, a multiple of [`BRICK`], and an overlap of 1) on the occupied bricks of `grid`, finds
     /// the active bricks for isovalue `params.isovalue` and, when `with_colour`, the colours of
     /// the vertices Marching Cubes will place. Reuses the buffers of `self` and `scratch`.
     pub fn compute(
@@ -166,7 +181,8 @@ impl BrickVolume {
         with_colour: bool,
         scratch: &mut BrickScratch,
     ) {
-        debug_assert_eq!(bins.slab_planes as usize, BRICK);
+        let group = (bins.slab_planes as usize / BRICK).max(1);
+        debug_assert_eq!(bins.slab_planes as usize, group * BRICK);
         let [nx, ny, nz] = grid.dims.map(|d| d as usize);
         let bdims = [nx, ny, nz].map(|n| n.div_ceil(BRICK));
         let [bx, by, bz] = bdims;
@@ -183,7 +199,7 @@ impl BrickVolume {
             .enumerate()
             .for_each(|(bk, occ)| {
                 let (z0, z1) = (bk * BRICK, bk * BRICK + BRICK - 1);
-                for &a in bins.slab(bk) {
+                for &a in bins.slab(bk / group) {
                     let at = &bins.atoms[a as usize];
                     let [px, py, pz] = at.pos;
                     let (Some(rx), Some(ry), Some(rz)) = (
@@ -248,16 +264,25 @@ impl BrickVolume {
             with_colour,
         };
         let scratch = &scratch.threads;
+        let mut groups: Vec<Vec<&mut [f32]>> = Vec::with_capacity(bz.div_ceil(group));
+        for (bk, chunk) in chunks.into_iter().enumerate() {
+            if bk % group == 0 {
+                groups.push(Vec::with_capacity(group));
+            }
+            if let Some(g) = groups.last_mut() {
+                g.push(chunk);
+            }
+        }
         self.layers
-            .par_iter_mut()
-            .zip(chunks)
+            .par_chunks_mut(group)
+            .zip(groups)
             .enumerate()
-            .for_each(|(bk, (layer, dst))| {
+            .for_each(|(c, (layers, dsts))| {
                 let t = rayon::current_thread_index()
                     .unwrap_or(threads)
                     .min(threads);
                 let mut s = scratch[t].lock().unwrap_or_else(|e| e.into_inner());
-                ctx.layer(bk, layer, dst, &mut s);
+                ctx.group(c, c * group, layers, dsts, &mut s);
             });
 
         let active = self.layers.iter().map(|l| l.cols.len() as u64).sum();
@@ -282,51 +307,63 @@ struct LayerCtx<'a> {
 }
 
 impl LayerCtx<'_> {
-    /// Computes brick layer `bk`: its samples into the scratch (planes `8bk ..= 8bk + 8`),
-    /// its occupied bricks into `dst`, its active list and vertex colours into `layer`.
-    fn layer(&self, bk: usize, layer: &mut Layer, dst: &mut [f32], s: &mut LayerScratch) {
+    /// Computes the brick layers `bk0 .. bk0 + layers.len()` (atom slab `slab`) in one pass:
+    /// their samples into the scratch (planes `8 bk0 ..=` the first plane of the next layer),
+    /// then each layer's occupied bricks into `dsts`, its active list and vertex colours into
+    /// `layers`.
+    fn group(
+        &self,
+        slab: usize,
+        bk0: usize,
+        layers: &mut [Layer],
+        dsts: Vec<&mut [f32]>,
+        s: &mut LayerScratch,
+    ) {
         let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
         let [bx, by, bz] = self.bdims;
         let plane = nx * ny;
-        let z0 = bk * BRICK;
-        let np = (BRICK + 1).min(nz - z0);
+        let z0 = bk0 * BRICK;
+        let np = (BRICK * layers.len() + 1).min(nz - z0);
         let lb = bx * by;
-        let occ_k = &self.occ[bk * lb..(bk + 1) * lb];
-        let occ_up = (bk + 1 < bz).then(|| &self.occ[(bk + 1) * lb..(bk + 2) * lb]);
-
-        if s.vals.len() < plane * (BRICK + 1) {
-            s.vals = vec![0.0; plane * (BRICK + 1)];
+        let temp = plane * (BRICK * layers.len() + 1);
+        if s.vals.len() < temp {
+            s.vals = vec![0.0; temp];
         }
-        if self.with_colour && s.cols.len() < plane * (BRICK + 1) {
-            s.cols = vec![[0.0; 3]; plane * (BRICK + 1)];
+        if self.with_colour && s.cols.len() < temp {
+            s.cols = vec![[0.0; 3]; temp];
         }
         let LayerScratch { vals, cols } = s;
         let vals = &mut vals[..plane * np];
         let mut cols = self.with_colour.then(|| &mut cols[..plane * np]);
 
-        // Zero the brick columns within one brick of an occupied brick (of this layer or the
-        // next, whose first plane is temp plane 8): they hold every sample that gets a term
-        // (only occupied bricks do) and every sample the footprints below read, so the temp
+        // Zero the brick columns within one brick of an occupied brick (of a layer or the next,
+        // whose first plane closes the layer's footprints): they hold every sample that gets a
+        // term (only occupied bricks do) and every sample the footprints read, so the scratch
         // is exact wherever it is read. Columns further away are never touched.
-        let near: Vec<bool> = (0..lb)
-            .map(|b| {
-                let (bi, bj) = (b % bx, b / bx);
-                (bj.saturating_sub(1)..=(bj + 1).min(by - 1)).any(|y| {
-                    (bi.saturating_sub(1)..=(bi + 1).min(bx - 1)).any(|x| {
-                        occ_k[y * bx + x] != 0 || occ_up.is_some_and(|o| o[y * bx + x] != 0)
+        for g in 0..layers.len() {
+            let bk = bk0 + g;
+            let occ_k = &self.occ[bk * lb..(bk + 1) * lb];
+            let occ_up = (bk + 1 < bz).then(|| &self.occ[(bk + 1) * lb..(bk + 2) * lb]);
+            let near: Vec<bool> = (0..lb)
+                .map(|b| {
+                    let (bi, bj) = (b % bx, b / bx);
+                    (bj.saturating_sub(1)..=(bj + 1).min(by - 1)).any(|y| {
+                        (bi.saturating_sub(1)..=(bi + 1).min(bx - 1)).any(|x| {
+                            occ_k[y * bx + x] != 0 || occ_up.is_some_and(|o| o[y * bx + x] != 0)
+                        })
                     })
                 })
-            })
-            .collect();
-        for kk in 0..np {
-            for (b, _) in near.iter().enumerate().filter(|(_, n)| **n) {
-                let (bi, bj) = (b % bx, b / bx);
-                let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx));
-                for j in bj * BRICK..(bj * BRICK + BRICK).min(ny) {
-                    let r = kk * plane + j * nx;
-                    vals[r + i0..r + i1].fill(0.0);
-                    if let Some(c) = cols.as_deref_mut() {
-                        c[r + i0..r + i1].fill([0.0; 3]);
+                .collect();
+            for kk in g * BRICK..(g * BRICK + BRICK + 1).min(np) {
+                for (b, _) in near.iter().enumerate().filter(|(_, n)| **n) {
+                    let (bi, bj) = (b % bx, b / bx);
+                    let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx));
+                    for j in bj * BRICK..(bj * BRICK + BRICK).min(ny) {
+                        let r = kk * plane + j * nx;
+                        vals[r + i0..r + i1].fill(0.0);
+                        if let Some(c) = cols.as_deref_mut() {
+                            c[r + i0..r + i1].fill([0.0; 3]);
+                        }
                     }
                 }
             }
@@ -334,15 +371,40 @@ impl LayerCtx<'_> {
         let z1 = (z0 + np - 1) as u32;
         fill_planes(
             &self.bins.atoms,
-            self.bins.slab(bk),
+            self.bins.slab(slab),
             self.grid,
             z0 as u32,
             z1,
             vals,
             cols.as_deref_mut(),
         );
-        let vals = &*vals;
-        let cols = cols.as_deref();
+        for ((g, layer), dst) in layers.iter_mut().enumerate().zip(dsts) {
+            let base = g * BRICK * plane;
+            let np = (BRICK + 1).min(np - g * BRICK);
+            let vals = &vals[base..base + np * plane];
+            let cols = cols.as_deref().map(|c| &c[base..base + np * plane]);
+            self.finish(bk0 + g, np, vals, cols, layer, dst);
+        }
+    }
+
+    /// Stores the occupied bricks of layer `bk` from its `np` scratch planes (`vals`, `cols`,
+    /// plane `8 bk` first) into `dst`, and finds its active bricks and vertex colours.
+    fn finish(
+        &self,
+        bk: usize,
+        np: usize,
+        vals: &[f32],
+        cols: Option<&[[f32; 3]]>,
+        layer: &mut Layer,
+        dst: &mut [f32],
+    ) {
+        let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
+        let [bx, by, bz] = self.bdims;
+        let plane = nx * ny;
+        let z0 = bk * BRICK;
+        let lb = bx * by;
+        let occ_k = &self.occ[bk * lb..(bk + 1) * lb];
+        let occ_up = (bk + 1 < bz).then(|| &self.occ[(bk + 1) * lb..(bk + 2) * lb]);
 
         // Store the occupied bricks of this layer.
         let mut slot = 0usize;
@@ -371,7 +433,6 @@ impl LayerCtx<'_> {
             }
         }
 
-        let tv = |i: usize, j: usize, kk: usize| vals[kk * plane + j * nx + i];
         let iso = self.iso;
 
         // Active bricks: the 9^3 footprint holds samples on both sides of I.
@@ -413,8 +474,8 @@ impl LayerCtx<'_> {
         // row by row, active bricks by x, points by x, axes x, y, z.
         layer.colours.clear();
         let Some(cols) = cols else { return };
-        let tc = |i: usize, j: usize, kk: usize| -> [f32; 3] {
-            cols[kk * plane + j * nx + i].map(|v| v * self.inv_iso)
+        let inside = |r: usize, n: usize| -> u32 {
+            (0..n).fold(0u32, |m, t| m | (u32::from(vals[r + t] >= iso) << t))
         };
         for kk in 0..np.min(BRICK) {
             let k = z0 + kk;
@@ -423,24 +484,36 @@ impl LayerCtx<'_> {
                 let row =
                     &layer.cols[layer.row_start[bj] as usize..layer.row_start[bj + 1] as usize];
                 for &bi in row {
-                    let bi = bi as usize;
-                    for i in bi * BRICK..(bi * BRICK + BRICK).min(nx) {
-                        let va = tv(i, j, kk);
-                        let f = va >= iso;
-                        let ends = [
-                            (i + 1 < nx).then(|| (i + 1, j, kk)),
-                            (j + 1 < ny).then(|| (i, j + 1, kk)),
-                            (k + 1 < nz).then(|| (i, j, kk + 1)),
-                        ];
-                        for (bi2, bj2, bk2) in ends.into_iter().flatten() {
-                            let vb = tv(bi2, bj2, bk2);
-                            if (vb >= iso) == f {
+                    let i0 = bi as usize * BRICK;
+                    let n = BRICK.min(nx - i0); // points of this brick in the row
+                    let r = kk * plane + j * nx + i0;
+                    // Bit t: point i0 + t is inside; crossed edges along x, y, z as bit masks.
+                    let fa = inside(r, (n + 1).min(nx - i0));
+                    let own = (1u32 << n) - 1;
+                    let xs = (fa ^ (fa >> 1)) & own & ((1u32 << (nx - 1 - i0).min(BRICK)) - 1);
+                    let ys = if j + 1 < ny {
+                        (fa ^ inside(r + nx, n)) & own
+                    } else {
+                        0
+                    };
+                    let zs = if k + 1 < nz {
+                        (fa ^ inside(r + plane, n)) & own
+                    } else {
+                        0
+                    };
+                    if xs | ys | zs == 0 {
+                        continue;
+                    }
+                    for t in 0..n {
+                        let p = r + t;
+                        for (mask, step) in [(xs, 1), (ys, nx), (zs, plane)] {
+                            if mask >> t & 1 == 0 {
                                 continue;
                             }
-                            let t = edge_t(va, vb, iso);
-                            layer
-                                .colours
-                                .push(lerp_colour(tc(i, j, kk), tc(bi2, bj2, bk2), t));
+                            let t_edge = edge_t(vals[p], vals[p + step], iso);
+                            let ca = cols[p].map(|v| v * self.inv_iso);
+                            let cb = cols[p + step].map(|v| v * self.inv_iso);
+                            layer.colours.push(lerp_colour(ca, cb, t_edge));
                         }
                     }
                 }

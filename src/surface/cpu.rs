@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use super::bin::{bin_atoms, bin_atoms_overlapping};
 use super::brick_mc::extract_bricks;
-use super::bricks::{BRICK, BrickScratch, BrickStats, BrickVolume};
+use super::bricks::{self, BrickScratch, BrickStats, BrickVolume};
 use super::marching_cubes::{McScratch, extract_with};
 use super::{
     AtomSet, DensityVolume, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
@@ -145,7 +145,8 @@ impl SurfaceEngine for CpuEngine {
             // Free a dense volume a previous dense call may have left.
             self.volume = DensityVolume::default();
             let t = Instant::now();
-            let bins = bin_atoms_overlapping(atoms, params, &grid, BRICK as u32, 1);
+            let planes = bricks::slab_planes(&grid);
+            let bins = bin_atoms_overlapping(atoms, params, &grid, planes, 1);
             let bin_ms = ms(t);
             let t = Instant::now();
             self.bricks

@@ -71,6 +71,7 @@ pub fn edge_t(va: f32, vb: f32, iso: f32) -> f32 {
 /// sample `a` to `a + e_axis`, reading densities through `value(sample)`. [`edge_vertex`] on
 /// a dense volume and the sparse engine ([`super::brick_mc`]) share it, so both give the same
 /// bits from the same sample values.
+#[inline]
 pub fn edge_geometry(
     grid: &GridSpec,
     value: impl Fn([usize; 3]) -> f32,
@@ -113,17 +114,28 @@ pub fn gradient(grid: &GridSpec, values: &[f32], p: [usize; 3]) -> Vec3 {
 }
 
 /// [`gradient`] reading the density through `value(sample)`.
+#[inline]
 pub fn gradient_with(grid: &GridSpec, value: impl Fn([usize; 3]) -> f32, p: [usize; 3]) -> Vec3 {
     let dims = grid.dims.map(|d| d as usize);
     if (0..3).all(|a| p[a] >= 1 && p[a] + 1 < dims[a]) {
         // Interior: plain central differences along x, y and z.
-        let d = |axis: usize| {
+        #[inline(always)]
+        fn d(
+            grid: &GridSpec,
+            value: &impl Fn([usize; 3]) -> f32,
+            p: [usize; 3],
+            axis: usize,
+        ) -> f32 {
             let (mut lo, mut hi) = (p, p);
             lo[axis] -= 1;
             hi[axis] += 1;
             (value(hi) - value(lo)) / (2.0 * grid.spacing)
-        };
-        return Vec3::new(d(0), d(1), d(2));
+        }
+        return Vec3::new(
+            d(grid, &value, p, 0),
+            d(grid, &value, p, 1),
+            d(grid, &value, p, 2),
+        );
     }
     let mut g = Vec3::ZERO;
     for axis in 0..3 {

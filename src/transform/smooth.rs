@@ -56,6 +56,8 @@ where
             continue;
         }
         let cell = PbcCell::of(other);
+        // Displacements shorter than half the narrowest box width are their own minimum image.
+        let near = cell.map_or(f32::INFINITY, |c| (0.5 * c.widths().min_element()).powi(2));
         sum.par_chunks_mut(CHUNK)
             .zip(middle.positions.par_chunks(CHUNK))
             .zip(other.positions.par_chunks(CHUNK))
@@ -63,8 +65,8 @@ where
                 for ((s, &m), &o) in s.iter_mut().zip(m).zip(o) {
                     let d = o - m;
                     *s += match &cell {
-                        Some(c) => c.min_image(d),
-                        None => d,
+                        Some(c) if d.length_squared() >= near => c.min_image(d),
+                        _ => d,
                     };
                 }
             });

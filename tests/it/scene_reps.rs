@@ -48,7 +48,12 @@ fn adk_in_water_shows_the_protein_not_the_box() {
     // The protein alone, in its own file, as a surface of everything.
     let trajectory = io::open(&data("adk_oplsaa.gro"), None).unwrap();
     let top = trajectory.topology();
-    let frame = trajectory.read_frame(0).unwrap();
+    let mut frame = trajectory.read_frame(0).unwrap();
+    // The default view makes molecules whole (the protein is split across the box here).
+    mdsurf::transform::TransformChain::new(&Default::default(), top, &frame.clone(), None, "adk")
+        .unwrap()
+        .apply(&mut frame)
+        .unwrap();
     let protein = mdsurf::scene::Selection::parse("protein")
         .unwrap()
         .bind(top)
