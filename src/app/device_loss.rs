@@ -216,10 +216,15 @@ mod tests {
             screenshot: Some("s.png".into()),
             quit: true,
         };
-        let args: Vec<String> = reopen_args(&session, "gpu", &script, Some(std::path::Path::new("s.toml")))
-            .into_iter()
-            .map(|a| a.into_string().expect("utf-8"))
-            .collect();
+        let args: Vec<String> = reopen_args(
+            &session,
+            "gpu",
+            &script,
+            Some(std::path::Path::new("s.toml")),
+        )
+        .into_iter()
+        .map(|a| a.into_string().expect("utf-8"))
+        .collect();
         let line = args.join(" ");
         assert!(line.starts_with("a.gro b.xtc "), "{line}");
         for part in [

@@ -90,7 +90,10 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
             out.push(Command::AddRep);
         }
         let any = !core.reps.is_empty();
-        if ui.add_enabled(any, egui::Button::new("Duplicate")).clicked() {
+        if ui
+            .add_enabled(any, egui::Button::new("Duplicate"))
+            .clicked()
+        {
             out.push(Command::DuplicateRep(core.selected));
         }
         if ui.add_enabled(any, egui::Button::new("Delete")).clicked() {
@@ -157,7 +160,12 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
 }
 
 /// H, R, I and quality of surface representation `i`, with its grid and the total.
-fn params_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft, i: usize) -> Vec<Command> {
+fn params_ui(
+    ui: &mut egui::Ui,
+    core: &AppCore,
+    draft: &mut SurfaceDraft,
+    i: usize,
+) -> Vec<Command> {
     let mut out = Vec::new();
     let current = core.reps[i].params();
     let p = &mut draft.params;

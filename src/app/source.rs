@@ -152,9 +152,7 @@ impl FrameSource for StreamedSource {
         if self.smooth == 0 {
             return self.read_one(index).map(|f| Frame::clone(&f));
         }
-        crate::transform::smooth::smooth_frame(index, self.len(), self.smooth, |j| {
-            self.read_one(j)
-        })
+        crate::transform::smooth::smooth_frame(index, self.len(), self.smooth, |j| self.read_one(j))
     }
     fn name(&self) -> String {
         FrameSource::name(self.streamer.trajectory())
@@ -202,13 +200,17 @@ fn transform_chain(
 ) -> Result<TransformChain, String> {
     use crate::transform::FitReference;
     let first = trajectory.read_frame(0).map_err(|e| e.to_string())?;
-    let reference = if transforms.fit.is_some() && transforms.fit_reference == FitReference::Topology
-    {
-        let opened = crate::io::open(top, None).map_err(|e| format!("fit reference: {e}"))?;
-        Some(opened.read_frame(0).map_err(|e| format!("fit reference: {e}"))?)
-    } else {
-        None
-    };
+    let reference =
+        if transforms.fit.is_some() && transforms.fit_reference == FitReference::Topology {
+            let opened = crate::io::open(top, None).map_err(|e| format!("fit reference: {e}"))?;
+            Some(
+                opened
+                    .read_frame(0)
+                    .map_err(|e| format!("fit reference: {e}"))?,
+            )
+        } else {
+            None
+        };
     let file = trajectory.path().display().to_string();
     TransformChain::new(
         transforms,

@@ -255,7 +255,11 @@ impl AppCore {
             Command::SetParams(p) => self.edit_selected(|r| r.set_params(&p)),
             Command::SetBeads(b) => self.edit_selected(|r| {
                 if r.style.is_surface() {
-                    r.style = if b { RepStyle::Beads } else { RepStyle::Surface };
+                    r.style = if b {
+                        RepStyle::Beads
+                    } else {
+                        RepStyle::Surface
+                    };
                 }
             }),
             Command::SetColours(c) => self.edit_selected(|r| r.colour = c),
@@ -479,7 +483,11 @@ impl AppCore {
         (0..self.reps.len())
             .filter(|&i| self.reps[i].visible && self.reps[i].style.is_surface())
             .filter_map(|i| {
-                let params = if i == except { *p } else { self.reps[i].params() };
+                let params = if i == except {
+                    *p
+                } else {
+                    self.reps[i].params()
+                };
                 self.grid_estimate(i, &params).map(|(_, b)| b)
             })
             .sum()

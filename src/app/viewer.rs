@@ -260,9 +260,10 @@ impl Viewer {
             self.transforms.request_reload();
         }
         self.core.apply(Command::SetReps(state.representations));
-        self.core.apply(Command::Timeline(super::timeline::TimelineCmd::Seek(
-            state.trajectory.frame,
-        )));
+        self.core
+            .apply(Command::Timeline(super::timeline::TimelineCmd::Seek(
+                state.trajectory.frame,
+            )));
     }
 
     /// Runs a file dialog on a background thread (open: several files; else save) and turns the

@@ -463,15 +463,15 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
         }
         let topology = req.source.topology();
         let overrides = req.radius_overrides.clone();
-        cache.slots.retain(|_, s| {
-            match Layer::new(s.layer.rep().clone(), topology, &overrides) {
+        cache.slots.retain(
+            |_, s| match Layer::new(s.layer.rep().clone(), topology, &overrides) {
                 Ok(layer) => {
                     s.layer = layer;
                     true
                 }
                 Err(_) => false,
-            }
-        });
+            },
+        );
     }
     if let Some(f) = cache.frames.get(&req.frame) {
         return Ok((f.clone(), 0.0));

@@ -18,8 +18,8 @@ use mdsurf::render::{
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::surface::SurfaceOutput;
 
-use super::scene_args::{SceneArgs, bind_layers};
 use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
+use super::scene_args::{SceneArgs, bind_layers};
 use super::transform_args::{FrameReader, TransformArgs};
 
 /// Arguments of `mdsurf render`.
@@ -156,7 +156,9 @@ fn parse_turntable(s: &str) -> Result<f32, String> {
 /// index, `{frame:0N}` the frame index zero-padded to N digits, `{image}` the image number with
 /// 5 digits.
 fn output_path(pattern: &Path, frame: usize, image: usize) -> PathBuf {
-    let mut text = pattern.to_string_lossy().replace("{image}", &format!("{image:05}"));
+    let mut text = pattern
+        .to_string_lossy()
+        .replace("{image}", &format!("{image:05}"));
     while let Some(at) = text.find("{frame") {
         let Some(close) = text[at..].find('}').map(|c| at + c) else {
             break;
@@ -250,14 +252,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let topology = system.trajectory.topology().clone();
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
     let first_frame = reader.read_frame(frames[0])?;
-    let mut choice = args.scene.representations(
-        state,
-        &topology,
-        &first_frame,
-        &params,
-        &options,
-        false,
-    )?;
+    let mut choice =
+        args.scene
+            .representations(state, &topology, &first_frame, &params, &options, false)?;
     if let Some(state) = &choice.state {
         // The state file's look replaces the look flags.
         state
@@ -338,7 +335,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     ..settings
                 };
                 let colours = lf.particles.colours();
-                let (s, c) = atom_instances(&lf.positions, lf.particles.radii(), Some(colours), &lf.bonds, &look);
+                let (s, c) = atom_instances(
+                    &lf.positions,
+                    lf.particles.radii(),
+                    Some(colours),
+                    &lf.bonds,
+                    &look,
+                );
                 spheres.extend(s);
                 cylinders.extend(c);
                 points.extend_from_slice(&lf.positions);
@@ -392,7 +395,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         write_png(path, &image)?;
         eprintln!(
             "frame {f}: {}; read {read_ms:.1} ms, total {:.1} ms -> {}",
-            if summary.is_empty() { "atoms only".to_string() } else { summary.join("; ") },
+            if summary.is_empty() {
+                "atoms only".to_string()
+            } else {
+                summary.join("; ")
+            },
             ms_since(t0),
             path.display()
         );

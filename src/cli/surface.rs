@@ -79,14 +79,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
     let options = args.input.particles.options()?;
     let topology = system.trajectory.topology().clone();
-    let choice = args.scene.representations(
-        state,
-        &topology,
-        &first,
-        &params,
-        &options,
-        args.quiet,
-    )?;
+    let choice = args
+        .scene
+        .representations(state, &topology, &first, &params, &options, args.quiet)?;
     let files = system.frames_path.display().to_string();
     let mut layers = bind_layers(
         &choice.reps,
@@ -149,11 +144,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                     // A per-frame selection (within ...) that picks nothing in this frame.
                     SurfaceOutput::default()
                 } else {
-                    engine
-                        .compute(&lf.atom_set(), &rep.params())
-                        .map_err(|e| {
-                            anyhow!("{files}: frame {index}: representation '{}': {e}", rep.name)
-                        })?
+                    engine.compute(&lf.atom_set(), &rep.params()).map_err(|e| {
+                        anyhow!("{files}: frame {index}: representation '{}': {e}", rep.name)
+                    })?
                 };
                 if let Some(out) = &output {
                     export::write_mesh(&out.path_for(index, &rep.name), &surf.mesh)?;
@@ -355,7 +348,13 @@ impl OutputPattern {
         };
         let safe: String = rep
             .chars()
-            .map(|c| if c.is_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+            .map(|c| {
+                if c.is_alphanumeric() || c == '-' || c == '_' {
+                    c
+                } else {
+                    '_'
+                }
+            })
             .collect();
         PathBuf::from(path.replace("{rep}", &safe))
     }

@@ -11,9 +11,9 @@ use mdsurf::render::{RenderSettings, Stereo};
 use mdsurf::scene::representation::{RepStyle, Representation};
 
 use super::common::{Backend, ParamArgs, ParticleArgs};
+use super::render::StereoArgs;
 use super::scene_args::SceneArgs;
 use super::transform_args::TransformArgs;
-use super::render::StereoArgs;
 
 /// Arguments of the viewer.
 #[derive(clap::Args, Debug)]

@@ -140,8 +140,8 @@ impl Layer {
             let all = atoms.len() == topology.len();
             let subset = (!all).then_some(&atoms[..]);
             let options = self.rep.particle_options(&self.radius_overrides);
-            let particles = Particles::new_subset(topology, frame, &options, subset)
-                .map_err(model_err)?;
+            let particles =
+                Particles::new_subset(topology, frame, &options, subset).map_err(model_err)?;
             let bonds = if self.rep.style.atom_style().is_some_and(|s| s.has_bonds()) {
                 let file_bonds = plausible_bonds(&topology.bonds, frame);
                 let mut b = particles.bonds_within(&file_bonds);

@@ -200,10 +200,7 @@ impl Representation {
                 .map_err(|e| format!("{who}: {e}"))?;
         }
         if !(0.0..=1.0).contains(&self.opacity) {
-            return Err(format!(
-                "{who}: opacity {} is outside 0..1",
-                self.opacity
-            ));
+            return Err(format!("{who}: opacity {} is outside 0..1", self.opacity));
         }
         Ok(())
     }
@@ -249,7 +246,10 @@ mod tests {
     fn validation_names_the_problem() {
         let mut r = Representation::new("prot", "protein and", RepStyle::Surface);
         let e = r.validate().unwrap_err();
-        assert!(e.contains("representation 'prot'") && e.contains("column"), "{e}");
+        assert!(
+            e.contains("representation 'prot'") && e.contains("column"),
+            "{e}"
+        );
         r.selection = "protein".into();
         assert_eq!(r.validate(), Ok(()));
         r.spacing = -1.0;

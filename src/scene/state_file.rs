@@ -354,7 +354,10 @@ mod tests {
         assert!(e.contains("version 7"), "{e}");
         let text = "version = 1\n[[representation]]\nname = \"p\"\nselection = \"resname (\"\n";
         let e = StateFile::parse(text, "s.toml").unwrap_err();
-        assert!(e.contains("representation 'p'") && e.contains("column"), "{e}");
+        assert!(
+            e.contains("representation 'p'") && e.contains("column"),
+            "{e}"
+        );
         let text = "version = 1\n[[representation]]\nstyle = \"ribbon\"\n";
         let e = StateFile::parse(text, "s.toml").unwrap_err();
         assert!(e.contains("ribbon"), "{e}");

@@ -70,7 +70,7 @@ impl Ctx<'_> {
         let [nx, ny, _] = self.vol.grid.dims.map(|d| d as usize);
         let by = self.vol.bdims[1];
         let bk = k / BRICK;
-        let below = (k % BRICK == 0 && bk > 0).then(|| bk - 1);
+        let below = (k.is_multiple_of(BRICK) && bk > 0).then(|| bk - 1);
         for layer in std::iter::once(bk).chain(below) {
             for bj in 0..by {
                 let row = self.vol.active_row(layer, bj);

@@ -340,6 +340,7 @@ impl LayerCtx<'_> {
         // whose first plane closes the layer's footprints): they hold every sample that gets a
         // term (only occupied bricks do) and every sample the footprints read, so the scratch
         // is exact wherever it is read. Columns further away are never touched.
+        let mut nears = Vec::with_capacity(layers.len());
         for g in 0..layers.len() {
             let bk = bk0 + g;
             let occ_k = &self.occ[bk * lb..(bk + 1) * lb];
@@ -362,11 +363,12 @@ impl LayerCtx<'_> {
                         let r = kk * plane + j * nx;
                         vals[r + i0..r + i1].fill(0.0);
                         if let Some(c) = cols.as_deref_mut() {
-                            c[r + i0..r + i1].fill([0.0; 3]);
+                            c[r + i0..r + i1].as_flattened_mut().fill(0.0);
                         }
                     }
                 }
             }
+            nears.push(near);
         }
         let z1 = (z0 + np - 1) as u32;
         fill_planes(
@@ -378,23 +380,25 @@ impl LayerCtx<'_> {
             vals,
             cols.as_deref_mut(),
         );
-        for ((g, layer), dst) in layers.iter_mut().enumerate().zip(dsts) {
+        for (((g, layer), dst), near) in layers.iter_mut().enumerate().zip(dsts).zip(&nears) {
             let base = g * BRICK * plane;
             let np = (BRICK + 1).min(np - g * BRICK);
             let vals = &vals[base..base + np * plane];
             let cols = cols.as_deref().map(|c| &c[base..base + np * plane]);
-            self.finish(bk0 + g, np, vals, cols, layer, dst);
+            self.finish(bk0 + g, np, vals, cols, near, layer, dst);
         }
     }
 
     /// Stores the occupied bricks of layer `bk` from its `np` scratch planes (`vals`, `cols`,
     /// plane `8 bk` first) into `dst`, and finds its active bricks and vertex colours.
+    #[allow(clippy::too_many_arguments)]
     fn finish(
         &self,
         bk: usize,
         np: usize,
         vals: &[f32],
         cols: Option<&[[f32; 3]]>,
+        near: &[bool],
         layer: &mut Layer,
         dst: &mut [f32],
     ) {
@@ -435,6 +439,36 @@ impl LayerCtx<'_> {
 
         let iso = self.iso;
 
+        // Inside flags as bit masks: bit t of `masks[(kk * ny + j) * bx + bi]` is set when
+        // sample (8 bi + t, j, 8 bk + kk) has rho >= I. Columns not near an occupied brick hold
+        // only zeros (below I), so their masks stay 0 without reading the scratch there.
+        let mut masks = vec![0u8; np * ny * bx];
+        for kk in 0..np {
+            for bj in 0..by {
+                for bi in 0..bx {
+                    if !near[bj * bx + bi] {
+                        continue;
+                    }
+                    let i0 = bi * BRICK;
+                    let n = BRICK.min(nx - i0);
+                    for j in bj * BRICK..(bj * BRICK + BRICK).min(ny) {
+                        let r = kk * plane + j * nx + i0;
+                        let m = vals[r..r + n]
+                            .iter()
+                            .enumerate()
+                            .fold(0u8, |m, (t, &v)| m | (u8::from(v >= iso) << t));
+                        masks[(kk * ny + j) * bx + bi] = m;
+                    }
+                }
+            }
+        }
+        // The 9 samples 8 bi ..= 8 bi + 8 of row (j, kk).
+        let mask9 = |kk: usize, j: usize, bi: usize| -> u32 {
+            let q = (kk * ny + j) * bx + bi;
+            let next = if bi + 1 < bx { masks[q + 1] & 1 } else { 0 };
+            u32::from(masks[q]) | u32::from(next) << 8
+        };
+
         // Active bricks: the 9^3 footprint holds samples on both sides of I.
         layer.row_start.clear();
         layer.cols.clear();
@@ -451,19 +485,19 @@ impl LayerCtx<'_> {
                 }
                 let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx - 1));
                 let (j0, j1) = (bj * BRICK, (bj * BRICK + BRICK).min(ny - 1));
-                let (mut inside, mut total) = (0usize, 0usize);
+                let full = (1u32 << (i1 - i0 + 1)) - 1;
+                let (mut any, mut all) = (false, true);
                 for kk in 0..=kmax.min(BRICK) {
                     for j in j0..=j1 {
-                        let r = kk * plane + j * nx;
-                        let row = &vals[r + i0..=r + i1];
-                        inside += row.iter().filter(|&&v| v >= iso).count();
-                        total += row.len();
+                        let m = mask9(kk, j, bi) & full;
+                        any |= m != 0;
+                        all &= m == full;
                     }
-                    if inside != 0 && inside != total {
+                    if any && !all {
                         break;
                     }
                 }
-                if inside != 0 && inside != total {
+                if any && !all {
                     layer.cols.push(bi as u32);
                 }
             }
@@ -474,9 +508,6 @@ impl LayerCtx<'_> {
         // row by row, active bricks by x, points by x, axes x, y, z.
         layer.colours.clear();
         let Some(cols) = cols else { return };
-        let inside = |r: usize, n: usize| -> u32 {
-            (0..n).fold(0u32, |m, t| m | (u32::from(vals[r + t] >= iso) << t))
-        };
         for kk in 0..np.min(BRICK) {
             let k = z0 + kk;
             for j in 0..ny {
@@ -484,20 +515,21 @@ impl LayerCtx<'_> {
                 let row =
                     &layer.cols[layer.row_start[bj] as usize..layer.row_start[bj + 1] as usize];
                 for &bi in row {
-                    let i0 = bi as usize * BRICK;
+                    let bi = bi as usize;
+                    let i0 = bi * BRICK;
                     let n = BRICK.min(nx - i0); // points of this brick in the row
                     let r = kk * plane + j * nx + i0;
                     // Bit t: point i0 + t is inside; crossed edges along x, y, z as bit masks.
-                    let fa = inside(r, (n + 1).min(nx - i0));
+                    let fa = mask9(kk, j, bi);
                     let own = (1u32 << n) - 1;
                     let xs = (fa ^ (fa >> 1)) & own & ((1u32 << (nx - 1 - i0).min(BRICK)) - 1);
                     let ys = if j + 1 < ny {
-                        (fa ^ inside(r + nx, n)) & own
+                        (fa ^ mask9(kk, j + 1, bi)) & own
                     } else {
                         0
                     };
                     let zs = if k + 1 < nz {
-                        (fa ^ inside(r + plane, n)) & own
+                        (fa ^ mask9(kk + 1, j, bi)) & own
                     } else {
                         0
                     };

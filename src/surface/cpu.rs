@@ -29,8 +29,8 @@ pub struct CpuEngine {
     dense: bool,
     /// Dense density volume kept between calls (reused when the grid keeps its size).
     volume: DensityVolume,
-    /// Sparse density kept between calls.
-    bricks: BrickVolume,
+    /// Sparse density kept between calls (boxed: the engine stays small to move around).
+    bricks: Box<BrickVolume>,
     /// Per-thread working memory of the sparse density stage.
     brick_scratch: BrickScratch,
     /// Brick counts of the last sparse computation.

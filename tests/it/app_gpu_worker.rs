@@ -71,7 +71,8 @@ fn compare_frames(engine: GpuEngine) {
     for frame in [0, 1, 3, 2] {
         let (a, b) = (compute(&gpu, &source, frame), compute(&cpu, &source, frame));
         assert_eq!(a.frame, frame);
-        let surface = a.layers[0].gpu_surface
+        let surface = a.layers[0]
+            .gpu_surface
             .as_ref()
             .expect("GPU reply carries its surface");
         assert!(
@@ -89,14 +90,21 @@ fn compare_frames(engine: GpuEngine) {
         );
         for (what, x, y) in [
             ("area", a.layers[0].output.area, b.layers[0].output.area),
-            ("volume", a.layers[0].output.volume, b.layers[0].output.volume),
+            (
+                "volume",
+                a.layers[0].output.volume,
+                b.layers[0].output.volume,
+            ),
         ] {
             assert!(
                 tol::rel_close(x, y, tol::AREA_VOLUME_REL),
                 "frame {frame}: {what} {x} GPU vs {y} CPU"
             );
         }
-        assert_eq!(a.layers[0].output.grid, b.layers[0].output.grid, "frame {frame}: grid");
+        assert_eq!(
+            a.layers[0].output.grid, b.layers[0].output.grid,
+            "frame {frame}: grid"
+        );
     }
 }
 
@@ -165,19 +173,30 @@ fn gpu_worker_reruns_only_the_stages_a_change_needs() {
         let Some(e) = engine() else { return };
         let fresh = Worker::spawn_engine(e, Box::new(|| {}));
         let b = compute_with(&fresh, &source, frame, iso, colours);
-        assert_eq!(b.layers[0].gpu_work, Some(Work::Full), "{what}: fresh engine");
+        assert_eq!(
+            b.layers[0].gpu_work,
+            Some(Work::Full),
+            "{what}: fresh engine"
+        );
         let (ta, tb) = (a.triangle_count(), b.triangle_count());
         assert!(tb > 100, "{what}: fresh surface has {tb} triangles");
         assert_eq!(ta, tb, "{what}: triangles, incremental vs from scratch");
         for (name, x, y) in [
             ("area", a.layers[0].output.area, b.layers[0].output.area),
-            ("volume", a.layers[0].output.volume, b.layers[0].output.volume),
+            (
+                "volume",
+                a.layers[0].output.volume,
+                b.layers[0].output.volume,
+            ),
         ] {
             assert!(
                 tol::rel_close(x, y, 1e-4),
                 "{what}: {name} {x} incremental vs {y} from scratch"
             );
         }
-        assert_eq!(a.layers[0].output.grid, b.layers[0].output.grid, "{what}: grid");
+        assert_eq!(
+            a.layers[0].output.grid, b.layers[0].output.grid,
+            "{what}: grid"
+        );
     }
 }

@@ -113,7 +113,8 @@ fn too_large_grid_is_refused_and_the_surface_stays() {
     );
     let s = h.state();
     assert_eq!(
-        s.core.reps[0].params(), params,
+        s.core.reps[0].params(),
+        params,
         "refused parameters must not be applied"
     );
     assert_eq!(s.draft.params.spacing, 0.25);
@@ -133,7 +134,10 @@ fn timeline_buttons_step_frames() {
     h.run();
     assert_eq!(h.state().core.timeline.current, 1);
     assert!(h.state_mut().core.wait_idle(WAIT));
-    assert_eq!(h.state().core.shown.as_ref().expect("shown").computed.frame, 1);
+    assert_eq!(
+        h.state().core.shown.as_ref().expect("shown").computed.frame,
+        1
+    );
     h.get_by_label(">|").click();
     h.run();
     assert_eq!(h.state().core.timeline.current, 4);
@@ -141,6 +145,18 @@ fn timeline_buttons_step_frames() {
     h.run();
     assert_eq!(h.state().core.timeline.current, 3);
     assert!(h.state_mut().core.wait_idle(WAIT));
-    assert_eq!(h.state().core.shown.as_ref().expect("shown").computed.frame, 3);
-    assert_eq!(h.state().core.shown.as_ref().expect("shown").computed.time_ps, Some(3.0));
+    assert_eq!(
+        h.state().core.shown.as_ref().expect("shown").computed.frame,
+        3
+    );
+    assert_eq!(
+        h.state()
+            .core
+            .shown
+            .as_ref()
+            .expect("shown")
+            .computed
+            .time_ps,
+        Some(3.0)
+    );
 }

@@ -4,7 +4,6 @@
 //! to read comes back from the compute worker as a one-line failure naming it, while the frames
 //! around it still compute (playback goes on).
 
-
 use crate::data_support::{data, nan_trajectory};
 
 use std::sync::Arc;

@@ -3,7 +3,6 @@
 //! medians that add up, and a CSV that matches the printed table. (Speed itself is reported by
 //! the benchmark, never asserted here.)
 
-
 use crate::cli_common::{Csv, data, mdsurf};
 
 /// The data rows of the aligned text table: `(case, fields after it)`; the case is matched by

@@ -2,7 +2,6 @@
 //! `error: ...` line naming the file, frame or value, never panics, and leaves outputs that
 //! existed before untouched. A damaged trajectory first processes and reports its good frames.
 
-
 use std::fs;
 use std::path::Path;
 

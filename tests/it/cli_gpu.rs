@@ -4,7 +4,6 @@
 //! test checks that `auto` falls back to the CPU and returns with a note, except under
 //! `REQUIRE_GPU=1`, where a missing adapter fails it.
 
-
 use crate::cli_common::{Csv, data, mdsurf, read_ply_counts};
 
 #[test]

@@ -2,10 +2,11 @@
 //! engine: meshes in every format parse back and agree with the stats CSV, `{frame}` patterns
 //! name one file per selected frame, and areas and volumes are physically sane.
 
-
 use std::fs;
 
-use crate::cli_common::{Csv, asset, data, mdsurf, mdsurf_env, read_ply_counts, read_stl, volume_of};
+use crate::cli_common::{
+    Csv, asset, data, mdsurf, mdsurf_env, read_ply_counts, read_stl, volume_of,
+};
 
 /// The columns issue 2 requires, in order, at the start of the CSV.
 const REQUIRED: [&str; 12] = [

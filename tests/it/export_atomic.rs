@@ -116,11 +116,9 @@ fn stats_file_appears_only_when_finished() {
     w.finish().unwrap();
     let text = fs::read_to_string(&target).unwrap();
     let lines: Vec<&str> = text.lines().collect();
-    assert!(
-        lines[0].starts_with(
-            "frame,rep,time_ps,atoms,nx,ny,nz,vertices,triangles,area_A2,volume_A3,ms_total"
-        )
-    );
+    assert!(lines[0].starts_with(
+        "frame,rep,time_ps,atoms,nx,ny,nz,vertices,triangles,area_A2,volume_A3,ms_total"
+    ));
     assert_eq!(lines.len(), 3);
     let cols = lines[0].split(',').count();
     assert!(lines[1..].iter().all(|l| l.split(',').count() == cols));

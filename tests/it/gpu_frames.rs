@@ -3,9 +3,8 @@
 //! pass), a grid forced through slabs (same mesh as one pass), a mesh forced to overflow (flag,
 //! no draw, grow, rerun), and very uneven bins (a dense cluster plus far-away atoms).
 
-
-use glam::Vec3;
 use crate::gpu_support::*;
+use glam::Vec3;
 use mdsurf::gpu::engine::EngineOptions;
 use mdsurf::gpu::frame::Work;
 use mdsurf::gpu::output::read_pod;

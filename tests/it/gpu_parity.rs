@@ -3,9 +3,8 @@
 //! from `mdsurf::gpu::tolerance`. Without an adapter (and without REQUIRE_GPU=1) each test
 //! prints a note and returns.
 
-
-use glam::Vec3;
 use crate::gpu_support::*;
+use glam::Vec3;
 use mdsurf::surface::{Quality, SurfaceEngine, SurfaceParams};
 
 #[test]

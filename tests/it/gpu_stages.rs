@@ -2,7 +2,6 @@
 //! 1e-6 absolute), the binning scan (exact), and Marching Cubes classification (exact except
 //! cells with a corner within 1e-5 of I). Tolerances from `mdsurf::gpu::tolerance`.
 
-
 use crate::gpu_support::*;
 use mdsurf::gpu::{Changes, tolerance as tol};
 use mdsurf::surface::tables::corner_offset;

@@ -235,9 +235,8 @@ pub fn element_radius(element: &str) -> f32 {
 /// by element so the colour pass has something to do.
 pub fn load_pdb(name: &str) -> Atoms {
     let path = crate::data_support::DATA.to_string() + name;
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
-        panic!("test data {path} is missing ({e}); see tests/data/README.md")
-    });
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("test data {path} is missing ({e}); see tests/data/README.md"));
     let mut atoms = Atoms {
         colours: Some(Vec::new()),
         ..Default::default()

@@ -2,7 +2,6 @@
 //! panic: missing files, unknown formats, garbage, truncated XTC/DCD (good frames kept), atom
 //! count mismatches, NaN coordinates.
 
-
 use crate::data_support::data;
 
 use std::path::{Path, PathBuf};

@@ -1,7 +1,6 @@
 //! Every real file in `tests/data` opens with the atom and frame counts its README lists,
 //! and its topology comes out complete (elements, radii, residues).
 
-
 use crate::data_support::data;
 
 use mdsurf::io::{self, Trajectory};

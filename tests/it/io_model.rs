@@ -1,7 +1,6 @@
 //! The model layer on real files: element guessing and radii (DESIGN section 2), residue beads,
 //! colour schemes and user radius overrides, as the surface engines receive them.
 
-
 use crate::data_support::data;
 
 use mdsurf::io::{self, Trajectory};

@@ -2,7 +2,6 @@
 //! playhead without requests, the cache stays bounded and evicts least-recently-used frames,
 //! per-frame errors are kept (and not retried), and dropping the streamer ends its thread.
 
-
 use crate::data_support::{data, nan_trajectory};
 
 use std::sync::Arc;

@@ -35,13 +35,33 @@ fn adk_in_water_shows_the_protein_not_the_box() {
     let gro = path("adk_oplsaa.gro");
     let r = mdsurf(
         dir.path(),
-        &["surface", &gro, "--stats", "default.csv", "--backend", "cpu"],
+        &[
+            "surface",
+            &gro,
+            "--stats",
+            "default.csv",
+            "--backend",
+            "cpu",
+        ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
-    assert!(r.stderr.contains("rep macromolecule: surface of 'protein or nucleic' (3341 atoms)"), "{}", r.stderr);
-    assert!(r.stderr.contains("rep solvent:") && r.stderr.contains("hidden"), "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("rep macromolecule: surface of 'protein or nucleic' (3341 atoms)"),
+        "{}",
+        r.stderr
+    );
+    assert!(
+        r.stderr.contains("rep solvent:") && r.stderr.contains("hidden"),
+        "{}",
+        r.stderr
+    );
     let csv = Csv::read(&dir.path().join("default.csv"));
-    assert_eq!(csv.text_col("rep"), ["macromolecule"], "only visible surfaces are computed");
+    assert_eq!(
+        csv.text_col("rep"),
+        ["macromolecule"],
+        "only visible surfaces are computed"
+    );
     assert_eq!(csv.col("atoms"), [3341.0]);
     let area = csv.col("area_A2")[0];
 
@@ -66,10 +86,22 @@ fn adk_in_water_shows_the_protein_not_the_box() {
         f.add_atom(&atom, [p.x as f64, p.y as f64, p.z as f64], None);
     }
     let alone = dir.path().join("protein.xyz");
-    chemfiles::Trajectory::open(&alone, 'w').unwrap().write(&f).unwrap();
+    chemfiles::Trajectory::open(&alone, 'w')
+        .unwrap()
+        .write(&f)
+        .unwrap();
     let r = mdsurf(
         dir.path(),
-        &["surface", "protein.xyz", "--select", "all", "--stats", "alone.csv", "--backend", "cpu"],
+        &[
+            "surface",
+            "protein.xyz",
+            "--select",
+            "all",
+            "--stats",
+            "alone.csv",
+            "--backend",
+            "cpu",
+        ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
     let alone = Csv::read(&dir.path().join("alone.csv")).col("area_A2")[0];
@@ -86,8 +118,18 @@ fn select_gives_one_rep_per_frame_row_and_state_gives_its_reps() {
     let r = mdsurf(
         dir.path(),
         &[
-            "surface", &top, &traj, "--frames", "0:2", "--select", "resid 1 to 50",
-            "--stats", "sel.csv", "--spacing", "1.5", "-q",
+            "surface",
+            &top,
+            &traj,
+            "--frames",
+            "0:2",
+            "--select",
+            "resid 1 to 50",
+            "--stats",
+            "sel.csv",
+            "--spacing",
+            "1.5",
+            "-q",
         ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
@@ -115,8 +157,18 @@ fn select_gives_one_rep_per_frame_row_and_state_gives_its_reps() {
     let r = mdsurf(
         dir.path(),
         &[
-            "surface", &top, &traj, "--frames", "0:2", "--state", "view.toml", "--stats",
-            "state.csv", "-o", "m_{rep}_{frame}.ply", "-q",
+            "surface",
+            &top,
+            &traj,
+            "--frames",
+            "0:2",
+            "--state",
+            "view.toml",
+            "--stats",
+            "state.csv",
+            "-o",
+            "m_{rep}_{frame}.ply",
+            "-q",
         ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
@@ -144,12 +196,22 @@ fn bad_selections_and_states_fail_in_one_line_and_change_nothing() {
     fs::write(dir.path().join("keep.csv"), "old").unwrap();
     let r = mdsurf(
         dir.path(),
-        &["surface", &top, "--select", "resid 1 to", "--stats", "keep.csv"],
+        &[
+            "surface",
+            &top,
+            "--select",
+            "resid 1 to",
+            "--stats",
+            "keep.csv",
+        ],
     );
     assert_eq!(r.code, 2);
     assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
     assert!(r.stderr.contains("column"), "{}", r.stderr);
-    assert_eq!(fs::read_to_string(dir.path().join("keep.csv")).unwrap(), "old");
+    assert_eq!(
+        fs::read_to_string(dir.path().join("keep.csv")).unwrap(),
+        "old"
+    );
 
     let r = mdsurf(dir.path(), &["surface", &top, "--select", "resname XYZ"]);
     assert_eq!(r.code, 2);
@@ -160,10 +222,17 @@ fn bad_selections_and_states_fail_in_one_line_and_change_nothing() {
         "version = 1\n[[representation]]\nname = \"p\"\nselection = \"protein and (\"\n",
     )
     .unwrap();
-    let r = mdsurf(dir.path(), &["render", &top, "--state", "bad.toml", "-o", "x.png"]);
+    let r = mdsurf(
+        dir.path(),
+        &["render", &top, "--state", "bad.toml", "-o", "x.png"],
+    );
     assert_eq!(r.code, 2);
     assert_eq!(r.stderr.lines().count(), 1, "{}", r.stderr);
-    assert!(r.stderr.contains("bad.toml") && r.stderr.contains("representation 'p'"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("bad.toml") && r.stderr.contains("representation 'p'"),
+        "{}",
+        r.stderr
+    );
     assert!(!dir.path().join("x.png").exists());
 }
 
@@ -238,7 +307,10 @@ fn conect_records_join_the_atoms_they_name() {
         .iter()
         .filter(|b| b[1] >= ligand_start && !conect.contains(*b))
         .collect();
-    assert!(stray.is_empty(), "bonds to the inhibitor not in its CONECT records: {stray:?}");
+    assert!(
+        stray.is_empty(),
+        "bonds to the inhibitor not in its CONECT records: {stray:?}"
+    );
 }
 
 #[test]
@@ -298,7 +370,10 @@ fn viewer_recomputes_only_the_changed_representation() {
     core.apply(Command::SetColours(ColorScheme::ResidueIndex));
     assert!(core.wait_idle(Duration::from_secs(60)));
     let c = &core.shown.as_ref().unwrap().computed;
-    assert!(c.layers[0].reused, "the unchanged representation was recomputed");
+    assert!(
+        c.layers[0].reused,
+        "the unchanged representation was recomputed"
+    );
     assert!(!c.layers[1].reused, "the changed one was not recomputed");
     assert_eq!(c.layers[0].output.area, first_area);
     assert_eq!(core.history.reps().len(), 2);

@@ -3,12 +3,11 @@
 //! error bounds, meshes are closed with the right Euler characteristic, normals and winding
 //! point outward, and raising I never grows the volume.
 
-
 use std::f64::consts::PI;
 
+use crate::surface_common::{cluster, sphere_radius, surface};
 use glam::Vec3;
 use mdsurf::surface::{Quality, SurfaceParams};
-use crate::surface_common::{cluster, sphere_radius, surface};
 
 fn one_atom_errors(alpha_over_h: f32, iso: f32) -> (f64, f64) {
     let r = 1.5f32;

@@ -178,8 +178,14 @@ fn sparse_equals_dense_on_a_hollow_shell_and_skips_its_inside() {
         stats.occupied_fraction()
     );
     eprintln!("shell bricks: {stats:?}");
-    assert!(stats.active < stats.occupied && stats.active_fraction() < 0.4, "{stats:?}");
+    assert!(
+        stats.active < stats.occupied && stats.active_fraction() < 0.4,
+        "{stats:?}"
+    );
 }
+
+/// Positions (Å), radii (Å) and colours of one system.
+type System<'a> = (&'a [Vec3], &'a [f32], &'a [[f32; 3]]);
 
 #[test]
 fn one_engine_reused_across_systems_matches_fresh_dense_results() {
@@ -193,7 +199,7 @@ fn one_engine_reused_across_systems_matches_fresh_dense_results() {
         .collect();
     let params = SurfaceParams::default();
     let mut engine = CpuEngine::new();
-    let systems: [(&[Vec3], &[f32], &[[f32; 3]]); 4] = [
+    let systems: [System<'_>; 4] = [
         (&pos, &radii, &colours),
         (&spos, &sradii, &scolours),
         (&shifted, &radii, &colours),

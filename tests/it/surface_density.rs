@@ -1,10 +1,9 @@
 //! The density and colour volumes against the direct formula of DESIGN section 2, evaluated
 //! here by brute force over every (sample, atom) pair in f64 with the same f32 cutoff test.
 
-
+use crate::surface_common::{Rng, cluster};
 use glam::Vec3;
 use mdsurf::surface::{AtomSet, GridSpec, Quality, SurfaceParams, density};
-use crate::surface_common::{Rng, cluster};
 
 /// Direct `rho` and `sum w colour / I` at sample `(i, j, k)`.
 fn direct(

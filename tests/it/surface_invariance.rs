@@ -2,10 +2,9 @@
 //! merge), and a translation (which moves only positions). Also the colour volume: a uniformly
 //! coloured system gives that colour everywhere on its surface.
 
-
+use crate::surface_common::{Rng, cluster, surface};
 use glam::Vec3;
 use mdsurf::surface::{AtomSet, GridSpec, McTables, SurfaceParams, density, marching_cubes};
-use crate::surface_common::{Rng, cluster, surface};
 
 #[test]
 fn permuting_atoms_changes_nothing() {

@@ -1,10 +1,9 @@
 //! The CPU surface of a real protein (adenylate kinase, `tests/data/adk_open.pdb`, 3,341
 //! atoms): a closed, outward mesh whose area and volume converge as H shrinks.
 
-
+use crate::surface_common::surface;
 use glam::Vec3;
 use mdsurf::surface::{Quality, SurfaceParams};
-use crate::surface_common::surface;
 
 use crate::data_support::DATA;
 
