@@ -80,15 +80,21 @@ pub(crate) fn within(
             .zip(marks)
             .for_each(|(o, m)| *o = m.into_inner());
     } else {
-        // Few sources: bin them, and let each target near one look for one.
+        // Few sources: bin them, and let each target near one look for one. A target that is
+        // itself a source (at a finite position) is at distance 0: no search.
         let grid = binned(&mut sources.iter().map(|&s| s as usize));
+        let mut is_source = vec![false; n];
+        for &s in &sources {
+            is_source[s as usize] = positions[s as usize].is_finite();
+        }
         out[..n]
             .par_chunks_mut(CHUNK)
             .enumerate()
             .for_each(|(k, chunk)| {
                 for (j, o) in chunk.iter_mut().enumerate() {
                     let i = k * CHUNK + j;
-                    *o = targets[i] && place(i).is_some_and(|p| grid.any_within(p, d2));
+                    *o = targets[i]
+                        && (is_source[i] || place(i).is_some_and(|p| grid.any_within(p, d2)));
                 }
             });
     }
