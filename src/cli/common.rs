@@ -114,8 +114,14 @@ pub enum Backend {
     Auto,
 }
 
-/// Creates the engine for `backend`; `auto` says on stderr which one it picked and why.
-pub fn make_engine(backend: Backend) -> Result<Box<dyn SurfaceEngine>> {
+/// Creates the engine for `backend`; `auto` says on stderr which one it picked and why (unless
+/// `quiet`).
+pub fn make_engine(backend: Backend, quiet: bool) -> Result<Box<dyn SurfaceEngine>> {
+    let note = |text: String| {
+        if !quiet {
+            eprintln!("{text}");
+        }
+    };
     match backend {
         Backend::Cpu => Ok(Box::new(CpuEngine::new())),
         Backend::Gpu => Ok(Box::new(
@@ -123,19 +129,19 @@ pub fn make_engine(backend: Backend) -> Result<Box<dyn SurfaceEngine>> {
         )),
         Backend::Auto => match GpuEngine::new() {
             Ok(gpu) if gpu.context().software_adapter => {
-                eprintln!(
+                note(format!(
                     "backend: cpu (the only GPU adapter, {}, is a software rasterizer, slower than \
                      the CPU engine; --backend gpu uses it anyway)",
                     gpu.context().adapter_name
-                );
+                ));
                 Ok(Box::new(CpuEngine::new()))
             }
             Ok(gpu) => {
-                eprintln!("backend: gpu ({})", gpu.context().adapter_name);
+                note(format!("backend: gpu ({})", gpu.context().adapter_name));
                 Ok(Box::new(gpu))
             }
             Err(err) => {
-                eprintln!("backend: cpu (no usable GPU: {err:#})");
+                note(format!("backend: cpu (no usable GPU: {err:#})"));
                 Ok(Box::new(CpuEngine::new()))
             }
         },

@@ -295,7 +295,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let gpu = HeadlessGpu::new()
         .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
     let renderer = Renderer::new(&gpu.device);
-    let mut engine = make_engine(args.backend)?;
+    let mut engine = make_engine(args.backend, false)?;
     choice.print_defaults();
     if args.transforms.any() {
         reader.print_summary();

@@ -115,7 +115,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             );
         }
     }
-    let mut engine = make_engine(args.backend)?;
+    let mut engine = make_engine(args.backend, args.quiet)?;
     choice.print_defaults();
     if args.transforms.any() && !args.quiet {
         reader.print_summary();

@@ -384,3 +384,13 @@ fn viewer_recomputes_only_the_changed_representation() {
     assert_eq!(c.layers.len(), 1);
     assert_eq!(c.layers[0].particles.positions.len(), 15);
 }
+
+/// `-q` prints nothing on success: no engine choice, no representation list, no summary.
+#[test]
+fn quiet_surface_prints_nothing_on_success() {
+    let dir = tempfile::tempdir().unwrap();
+    let gro = path("md_1u19.gro");
+    let r = mdsurf(dir.path(), &["surface", &gro, "--spacing", "2", "-q"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert_eq!(r.stderr, "", "-q printed something");
+}
