@@ -92,6 +92,15 @@ impl Viewer {
     }
 
     fn finish_script(&mut self, ctx: &egui::Context, error: Option<String>) {
+        if let Some(asked) = self.script.play_frames
+            && asked > self.core.timeline.len
+            && error.is_none()
+        {
+            eprintln!(
+                "note: --play-frames {asked} but the trajectory has {} frame(s); played them all",
+                self.core.timeline.len
+            );
+        }
         eprintln!(
             "scripted run: showed {} frame(s), last frame {}, engine {}{}",
             self.script_played + 1,
