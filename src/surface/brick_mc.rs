@@ -18,9 +18,11 @@ use rayon::prelude::*;
 
 use super::Mesh;
 use super::bricks::{BRICK, BrickVolume};
-use super::marching_cubes::{ALL_ONE, FOREIGN, McScratch, SlabMesh, merge, word};
+use super::marching_cubes::{
+    ALL_ONE, FOREIGN, McScratch, SlabMesh, edge_refs, merge, push_cell_triangles, word,
+};
 use super::mc_vertex::edge_geometry;
-use super::tables::{EDGE_CORNERS, McTables, corner_offset, edge_axis};
+use super::tables::McTables;
 
 /// The isosurface of `vol` at the isovalue it was prepared for, reusing `scratch`.
 pub fn extract_bricks(vol: &BrickVolume, scratch: &mut McScratch) -> Mesh {
@@ -124,10 +126,7 @@ impl Ctx<'_> {
         self.flags(c0, &mut fa);
         self.flags(c0 + 1, &mut fb);
         self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut *out), &mut cursor);
-        let edge_ref: [(usize, usize, usize); 12] = std::array::from_fn(|e| {
-            let [dx, dy, dz] = corner_offset(EDGE_CORNERS[e][0]).map(|d| d as usize);
-            (dz, dx + dy * nx, edge_axis(e as u8) as usize)
-        });
+        let edge_ref = edge_refs(nx);
         for k in c0..c1 {
             let owned = k + 1 < c1 || last;
             let up = k + 2 < nz;
@@ -177,17 +176,15 @@ impl Ctx<'_> {
                             continue;
                         }
                         let p = r + i;
-                        for tri in self.tables.case_triangles(case) {
-                            for &e in tri {
-                                let (dz, off, axis) = edge_ref[e as usize];
-                                let idx = if dz == 0 {
-                                    cur[(p + off) * 3 + axis]
-                                } else {
-                                    next[(p + off) * 3 + axis] | flag
-                                };
-                                out.indices.push(idx);
-                            }
-                        }
+                        push_cell_triangles(
+                            self.tables,
+                            case,
+                            p,
+                            &edge_ref,
+                            [&cur, &next],
+                            flag,
+                            &mut out.indices,
+                        );
                     }
                 }
             }

@@ -126,6 +126,44 @@ pub(super) struct SlabMesh {
     pub(super) maps: [Vec<u32>; 2],
 }
 
+/// For each cell edge: (plane 0 or 1 of the cell, offset of its start point within the plane
+/// for planes `nx` points wide, axis), to find the edge's vertex in the per-plane edge maps.
+pub(super) type EdgeRefs = [(usize, usize, usize); 12];
+
+/// The [`EdgeRefs`] of planes `nx` points wide.
+pub(super) fn edge_refs(nx: usize) -> EdgeRefs {
+    std::array::from_fn(|e| {
+        let [dx, dy, dz] = corner_offset(EDGE_CORNERS[e][0]).map(|d| d as usize);
+        (dz, dx + dy * nx, edge_axis(e as u8) as usize)
+    })
+}
+
+/// Appends the triangles of Marching Cubes `case` for the cell whose first point is `p` (flat
+/// index in its plane): vertex indices come from the edge maps of the cell's lower and upper
+/// planes (`maps`), the upper plane's tagged with `flag` ([`FOREIGN`] when another slab owns
+/// it). Shared by the dense and the brick-sparse extraction, so both emit the same triangles.
+pub(super) fn push_cell_triangles(
+    tables: &McTables,
+    case: u8,
+    p: usize,
+    edge_ref: &EdgeRefs,
+    maps: [&[u32]; 2],
+    flag: u32,
+    indices: &mut Vec<u32>,
+) {
+    for tri in tables.case_triangles(case) {
+        for &e in tri {
+            let (dz, off, axis) = edge_ref[e as usize];
+            let idx = if dz == 0 {
+                maps[0][(p + off) * 3 + axis]
+            } else {
+                maps[1][(p + off) * 3 + axis] | flag
+            };
+            indices.push(idx);
+        }
+    }
+}
+
 /// Eight inside flags (bytes 0 or 1) starting at `q`, as one word.
 pub(super) fn word(flags: &[u8], q: usize) -> u64 {
     let mut b = [0u8; 8];
@@ -167,11 +205,7 @@ impl Ctx<'_> {
         self.flags(c0, &mut fa);
         self.flags(c0 + 1, &mut fb);
         self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut *out));
-        // Cell edge -> (plane 0 or 1, point offset within the plane, axis).
-        let edge_ref: [(usize, usize, usize); 12] = std::array::from_fn(|e| {
-            let [dx, dy, dz] = corner_offset(EDGE_CORNERS[e][0]).map(|d| d as usize);
-            (dz, dx + dy * nx, edge_axis(e as u8) as usize)
-        });
+        let edge_ref = edge_refs(nx);
         for k in c0..c1 {
             let owned = k + 1 < c1 || last;
             let up = k + 2 < nz;
@@ -215,17 +249,15 @@ impl Ctx<'_> {
                     if case == 0 || case == 255 {
                         continue;
                     }
-                    for tri in self.tables.case_triangles(case) {
-                        for &e in tri {
-                            let (dz, off, axis) = edge_ref[e as usize];
-                            let idx = if dz == 0 {
-                                cur[(p + off) * 3 + axis]
-                            } else {
-                                next[(p + off) * 3 + axis] | flag
-                            };
-                            out.indices.push(idx);
-                        }
-                    }
+                    push_cell_triangles(
+                        self.tables,
+                        case,
+                        p,
+                        &edge_ref,
+                        [&cur, &next],
+                        flag,
+                        &mut out.indices,
+                    );
                 }
             }
             std::mem::swap(&mut cur, &mut next);
