@@ -147,14 +147,17 @@ pub struct Computed {
     pub time_ps: Option<f64>,
     /// Time to read the frame in ms.
     pub read_ms: f64,
-    /// The visible representations, in drawing order.
-    pub layers: Vec<LayerResult>,
+    /// The visible representations, in drawing order (shared with the worker's cache).
+    pub layers: Vec<Arc<LayerResult>>,
 }
 
 impl Computed {
     /// The surface representations.
     pub fn surfaces(&self) -> impl Iterator<Item = &LayerResult> {
-        self.layers.iter().filter(|l| l.is_surface())
+        self.layers
+            .iter()
+            .map(Arc::as_ref)
+            .filter(|l| l.is_surface())
     }
 
     /// Triangles of every surface together.
@@ -164,7 +167,7 @@ impl Computed {
 
     /// The result of representation `id`, when it is visible.
     pub fn layer(&self, id: u64) -> Option<&LayerResult> {
-        self.layers.iter().find(|l| l.id == id)
+        self.layers.iter().map(Arc::as_ref).find(|l| l.id == id)
     }
 }
 
@@ -333,8 +336,8 @@ struct RepSlot {
     layer: Layer,
     /// Its own GPU engine (GPU backend only; the first representation uses the main engine).
     gpu: Option<Box<GpuEngine>>,
-    /// The inputs and result of its last successful frame.
-    last: Option<(usize, LayerResult)>,
+    /// The inputs and result of its last successful frame (shared with the reply, not copied).
+    last: Option<(usize, Arc<LayerResult>)>,
     /// What its engine's last frame was computed from, to send only what changed since.
     sent: Option<Sent>,
 }
@@ -530,39 +533,40 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
             && !slot.layer.is_dynamic()
             && compute_key(&last.rep) == compute_key(rep)
         {
-            layers.push(LayerResult {
+            layers.push(Arc::new(LayerResult {
                 rep: rep.clone(),
                 reused: true,
                 gpu_work: None,
-                ..last.clone()
-            });
+                ..(**last).clone()
+            }));
             continue;
         }
         let lf = slot
             .layer
             .frame(topology, &frame)
             .map_err(|e| format!("frame {}: {e}", req.frame))?;
-        let data = ParticleData {
-            positions: lf.positions.clone(),
-            radii: Arc::new(lf.particles.radii().to_vec()),
-            colours: Arc::new(lf.particles.colours().to_vec()),
-            bonds: lf.bonds.clone(),
-        };
-        let data = match &slot.sent {
-            // Keep the same Arcs when nothing changed, so the engine sees no change.
-            Some(sent) if !lf.rebuilt => ParticleData {
-                radii: sent.radii.clone(),
-                colours: sent.colours.clone(),
-                ..data
-            },
-            _ => data,
+        // The particles' radii and colours change only when they were rebuilt: otherwise keep
+        // the same Arcs (no copy per frame, and the engine sees no change).
+        let (radii, colours) = match &slot.last {
+            Some((_, last)) if !lf.rebuilt => {
+                (last.particles.radii.clone(), last.particles.colours.clone())
+            }
+            _ => (
+                Arc::new(lf.particles.radii().to_vec()),
+                Arc::new(lf.particles.colours().to_vec()),
+            ),
         };
         let mut result = LayerResult {
             id: *id,
             rep: rep.clone(),
             output: SurfaceOutput::default(),
             gpu_surface: None,
-            particles: data,
+            particles: ParticleData {
+                positions: Vec::new(),
+                radii,
+                colours,
+                bonds: lf.bonds.clone(),
+            },
             beads: lf.particles.is_beads(),
             gpu_work: None,
             reused: false,
@@ -602,6 +606,8 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
                 colours: result.particles.colours.clone(),
             });
         }
+        result.particles.positions = lf.positions;
+        let result = Arc::new(result);
         slot.last = Some((req.frame, result.clone()));
         layers.push(result);
     }

@@ -235,22 +235,7 @@ impl Staging {
                 .join(" ");
             return Err(GpuError::Readback(msg));
         }
-        let result: MapResult = Arc::default();
-        let r2 = Arc::clone(&result);
-        staging.map_async(wgpu::MapMode::Read, 0..total, move |r| {
-            if let Ok(mut g) = r2.lock() {
-                *g = Some(r.map_err(|e| e.to_string()));
-            }
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Device(e.to_string()))?;
-        let done = result.lock().ok().and_then(|mut r| r.take());
-        match done {
-            Some(Ok(())) => {}
-            Some(Err(e)) => return Err(GpuError::Readback(e)),
-            None => return Err(GpuError::Readback("map did not complete".into())),
-        }
+        map_and_wait(device, &staging, 0..total)?;
         let out = {
             let view = staging
                 .get_mapped_range(0..total)
@@ -349,22 +334,7 @@ pub fn read_bytes(
             .join(" ");
         return Err(GpuError::Readback(msg));
     }
-    let result: MapResult = Arc::default();
-    let r2 = Arc::clone(&result);
-    staging.map_async(wgpu::MapMode::Read, .., move |r| {
-        if let Ok(mut g) = r2.lock() {
-            *g = Some(r.map_err(|e| e.to_string()));
-        }
-    });
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| GpuError::Device(e.to_string()))?;
-    let done = result.lock().ok().and_then(|mut r| r.take());
-    match done {
-        Some(Ok(())) => {}
-        Some(Err(e)) => return Err(GpuError::Readback(e)),
-        None => return Err(GpuError::Readback("map did not complete".into())),
-    }
+    map_and_wait(device, &staging, 0..staging.size())?;
     let bytes = staging
         .get_mapped_range(..)
         .map_err(|e| GpuError::Readback(e.to_string()))?
@@ -395,4 +365,28 @@ pub fn read_mesh(
     let verts: Vec<GpuVertex> = read_pod(device, queue, &surface.vertices, vertices as u64)?;
     let indices: Vec<u32> = read_pod(device, queue, &surface.indices, 3 * triangles as u64)?;
     Ok(mesh_of(&verts, indices))
+}
+
+/// Maps `range` of `staging` for reading and waits for the device until it is mapped.
+fn map_and_wait(
+    device: &wgpu::Device,
+    staging: &wgpu::Buffer,
+    range: std::ops::Range<u64>,
+) -> Result<(), GpuError> {
+    let result: MapResult = Arc::default();
+    let r2 = Arc::clone(&result);
+    staging.map_async(wgpu::MapMode::Read, range, move |r| {
+        if let Ok(mut g) = r2.lock() {
+            *g = Some(r.map_err(|e| e.to_string()));
+        }
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+    let done = result.lock().ok().and_then(|mut r| r.take());
+    match done {
+        Some(Ok(())) => Ok(()),
+        Some(Err(e)) => Err(GpuError::Readback(e)),
+        None => Err(GpuError::Readback("map did not complete".into())),
+    }
 }
