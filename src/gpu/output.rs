@@ -235,7 +235,7 @@ impl Staging {
                 .join(" ");
             return Err(GpuError::Readback(msg));
         }
-        map_and_wait(device, &staging, 0..total)?;
+        map_and_wait(device, staging, 0..total)?;
         let out = {
             let view = staging
                 .get_mapped_range(0..total)
