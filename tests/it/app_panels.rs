@@ -160,3 +160,44 @@ fn timeline_buttons_step_frames() {
         Some(3.0)
     );
 }
+
+/// A selection typed in the panel: a bad one shows its error (with the column) and changes
+/// nothing; a good one is applied and recomputes that representation.
+#[test]
+fn typed_selection_shows_its_error_and_keeps_the_last_good_one() {
+    let mut state = loaded();
+    let mut rep = state.core.reps[0].clone();
+    rep.selection = "protein".into();
+    state.core.apply(Command::UpdateRep(0, Box::new(rep)));
+    let mut h = panel_harness(state);
+    let before = h.state().core.reps[0].selection.clone();
+    let field = h.get_by_role_and_label(Role::TextInput, "selection");
+    field.focus();
+    field.type_text(" and resid");
+    h.run();
+    assert!(
+        h.query_by_label_contains("column").is_some(),
+        "no error shown for '{}'",
+        h.state().draft.selection
+    );
+    assert_eq!(
+        h.state().core.reps[0].selection,
+        before,
+        "a bad selection was applied"
+    );
+    let field = h.get_by_role_and_label(Role::TextInput, "selection");
+    field.type_text(" 1 to 5");
+    h.run();
+    let s = h.state_mut();
+    assert!(
+        s.draft.selection_error.is_none(),
+        "{:?}",
+        s.draft.selection_error
+    );
+    assert_eq!(
+        s.core.reps[0].selection,
+        format!("{before} and resid 1 to 5")
+    );
+    assert!(s.core.wait_idle(WAIT));
+    assert_eq!(shown(&s.core).particles.positions.len(), 15);
+}
