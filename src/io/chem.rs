@@ -131,24 +131,7 @@ impl ChemReader {
         let cell = cell_rows(raw);
         // A property that is not UTF-8 (a DCD title) panics in the binding: no time then.
         let time_ps = quiet::silenced(|| frame_time_ps(raw, base)).unwrap_or(None);
-        if let Some(atom) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(IoError::NonFiniteCoordinate {
-                path: self.path.clone(),
-                frame: index,
-                atom,
-            });
-        }
-        if let Some(atom) = positions
-            .iter()
-            .position(|p| p.abs().max_element() > MAX_COORDINATE)
-        {
-            return Err(IoError::AbsurdCoordinate {
-                path: self.path.clone(),
-                frame: index,
-                atom,
-                value: positions[atom].abs().max_element(),
-            });
-        }
+        check_positions(&self.path, index, &positions)?;
         Ok(Frame {
             index,
             time_ps,
@@ -227,6 +210,34 @@ fn to_vec3(positions: &[[f64; 3]]) -> Vec<Vec3> {
         .iter()
         .map(|p| Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32))
         .collect()
+}
+
+/// Fails on the first NaN, infinite or absurd (beyond [`MAX_COORDINATE`]) position of frame
+/// `index` of `path`, naming the frame and the atom.
+pub(crate) fn check_positions(
+    path: &Path,
+    index: usize,
+    positions: &[Vec3],
+) -> Result<(), IoError> {
+    if let Some(atom) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(IoError::NonFiniteCoordinate {
+            path: path.to_path_buf(),
+            frame: index,
+            atom,
+        });
+    }
+    if let Some(atom) = positions
+        .iter()
+        .position(|p| p.abs().max_element() > MAX_COORDINATE)
+    {
+        return Err(IoError::AbsurdCoordinate {
+            path: path.to_path_buf(),
+            frame: index,
+            atom,
+            value: positions[atom].abs().max_element(),
+        });
+    }
+    Ok(())
 }
 
 /// The periodic box as rows a, b, c in Å, or `None` for an infinite (absent) box.

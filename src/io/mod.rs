@@ -26,6 +26,7 @@ mod trajectory;
 mod warnings;
 mod wwpdb;
 mod xdr;
+mod xdr_reader;
 
 pub use error::IoError;
 pub use format::{FileFormat, WwFormat, detect};

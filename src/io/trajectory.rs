@@ -8,6 +8,8 @@ use std::sync::{Mutex, MutexGuard};
 
 use super::chem::ChemReader;
 use super::format::detect;
+use super::prepare::prepare;
+use super::xdr_reader::{XdrKind, XdrReader};
 use super::{IoError, dcd, wwpdb, xdr};
 use crate::model::{Frame, Topology, sizing};
 
@@ -31,7 +33,7 @@ pub struct Trajectory {
     topology: Topology,
     topology_path: PathBuf,
     frames_path: PathBuf,
-    reader: Mutex<ChemReader>,
+    reader: Mutex<FrameSource>,
     len: usize,
     damage: Option<Damage>,
 }
@@ -82,25 +84,38 @@ pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     sizing::fit_untyped_radii(&mut topology, &first);
     let mut walk = None;
     let reader = match traj {
-        None => top_reader,
+        None => FrameSource::Chem(top_reader),
         Some(path) => {
             let format = detect(path)?;
             drop(top_reader);
-            // XTC and TRR: the frame headers are checked before chemfiles reads a frame.
-            walk = xdr::walk(path, format.base)
-                .map_err(|reason| IoError::bad_frame(path, 0, reason))?;
-            if let Some(w) = &walk
-                && w.natoms != topology.len()
-            {
-                return Err(IoError::AtomCountMismatch {
-                    topology: top.to_path_buf(),
-                    topology_atoms: topology.len(),
-                    trajectory: path.to_path_buf(),
-                    trajectory_atoms: w.natoms,
-                    frame: 0,
-                });
+            // XTC and TRR (also compressed): the frame headers are checked, then the frames
+            // are read in Rust.
+            let kind = match format.base {
+                "XTC" => Some(XdrKind::Xtc),
+                "TRR" => Some(XdrKind::Trr),
+                _ => None,
+            };
+            match kind {
+                Some(kind) => {
+                    let prepared = prepare(path, &format)?;
+                    let w = xdr::walk(&prepared.open_path, format.base)
+                        .map_err(|reason| IoError::bad_frame(path, 0, reason))?
+                        .ok_or_else(|| IoError::unreadable(path, "not an XTC or TRR file"))?;
+                    if w.natoms != topology.len() {
+                        return Err(IoError::AtomCountMismatch {
+                            topology: top.to_path_buf(),
+                            topology_atoms: topology.len(),
+                            trajectory: path.to_path_buf(),
+                            trajectory_atoms: w.natoms,
+                            frame: 0,
+                        });
+                    }
+                    let reader = XdrReader::new(path, prepared, kind, &w)?;
+                    walk = Some(w);
+                    FrameSource::Xdr(reader)
+                }
+                None => FrameSource::Chem(ChemReader::open(path, &format)?),
             }
-            ChemReader::open(path, &format)?
         }
     };
     let mut trajectory = Trajectory {
@@ -201,7 +216,7 @@ impl Trajectory {
         }
     }
 
-    fn lock(&self) -> MutexGuard<'_, ChemReader> {
+    fn lock(&self) -> MutexGuard<'_, FrameSource> {
         // A panic while holding the lock cannot leave our state inconsistent (the reader is
         // re-positioned on every read), so a poisoned lock is still usable.
         self.reader
@@ -289,6 +304,49 @@ impl Trajectory {
         if let Some((frame, error)) = first_bad {
             self.len = frame;
             self.damage = Some(Damage { frame, error });
+        }
+    }
+}
+
+/// Where frames come from: chemfiles, or our own readers for XTC and TRR.
+enum FrameSource {
+    Chem(ChemReader),
+    Xdr(XdrReader),
+}
+
+impl FrameSource {
+    fn path(&self) -> &Path {
+        match self {
+            FrameSource::Chem(r) => r.path(),
+            FrameSource::Xdr(r) => r.path(),
+        }
+    }
+
+    fn base(&self) -> &'static str {
+        match self {
+            FrameSource::Chem(r) => r.base(),
+            FrameSource::Xdr(r) => r.base(),
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            FrameSource::Chem(r) => r.len(),
+            FrameSource::Xdr(r) => r.len(),
+        }
+    }
+
+    fn truncated(&self) -> Option<(&str, bool)> {
+        match self {
+            FrameSource::Chem(r) => r.truncated(),
+            FrameSource::Xdr(_) => None,
+        }
+    }
+
+    fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
+        match self {
+            FrameSource::Chem(r) => r.read_frame(index),
+            FrameSource::Xdr(r) => r.read_frame(index),
         }
     }
 }

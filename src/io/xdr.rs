@@ -34,12 +34,14 @@ pub(crate) struct Walk {
     pub frames: usize,
     /// Why frame `frames` cannot be read, when the walk stopped before the end of the file.
     pub damage: Option<String>,
+    /// Byte offset of each readable frame (`frames` of them).
+    pub offsets: Vec<u64>,
 }
 
 /// Walks the frames of the XTC or TRR file `path` (`base` is `"XTC"` or `"TRR"`). `Ok(None)` for
 /// other formats; `Err` (a one-line reason) when not even the first frame is sound.
 pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
-    let step: fn(&mut Reader, u64) -> Result<FrameInfo, String> = match base {
+    let step: fn(&mut Reader<File>, u64) -> Result<FrameInfo, String> = match base {
         "XTC" => xtc_frame,
         "TRR" => trr_frame,
         _ => return Ok(None),
@@ -48,6 +50,7 @@ pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
     let size = file.metadata().map_err(|e| e.to_string())?.len();
     let mut reader = Reader { file, size };
     let mut offset = 0u64;
+    let mut offsets = Vec::new();
     let mut frames = 0usize;
     let mut natoms = None;
     let mut damage = None;
@@ -74,6 +77,7 @@ pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
         });
         match result {
             Ok(info) => {
+                offsets.push(offset);
                 offset += info.bytes;
                 frames += 1;
             }
@@ -99,10 +103,12 @@ pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
             reason
         }
     });
+    offsets.truncate(frames);
     Ok(Some(Walk {
         natoms,
         frames,
         damage,
+        offsets,
     }))
 }
 
@@ -112,12 +118,31 @@ struct FrameInfo {
     bytes: u64,
 }
 
-struct Reader {
-    file: File,
+/// Where a TRR frame keeps what we read (byte offsets from the start of the file).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TrrBlocks {
+    /// Bytes per real number: 4 (single precision) or 8 (double).
+    pub real: u64,
+    /// The frame's time (ps), a real.
+    pub time_at: u64,
+    /// The box (9 reals, nm, rows a, b, c), when the frame has one.
+    pub box_at: Option<u64>,
+    /// The positions (3 reals per atom, nm), when the frame has them.
+    pub x_at: Option<u64>,
+}
+
+/// Reads the blocks of the TRR frame at `offset` of `file` (whose size is `size` bytes).
+pub(crate) fn trr_blocks(file: &mut File, size: u64, offset: u64) -> Result<TrrBlocks, String> {
+    let mut reader = Reader { file, size };
+    Ok(trr_header(&mut reader, offset)?.1)
+}
+
+struct Reader<F> {
+    file: F,
     size: u64,
 }
 
-impl Reader {
+impl<F: Read + Seek> Reader<F> {
     /// Up to `n` bytes at `offset` (fewer at the end of the file).
     fn bytes(&mut self, offset: u64, n: usize) -> Result<Vec<u8>, String> {
         let n = n.min(self.size.saturating_sub(offset) as usize);
@@ -142,7 +167,7 @@ fn truncated_header(offset: u64) -> String {
     format!("the file ends inside the frame header at byte {offset} (truncated)")
 }
 
-fn xtc_frame(reader: &mut Reader, offset: u64) -> Result<FrameInfo, String> {
+fn xtc_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<FrameInfo, String> {
     let b = reader.bytes(offset, 92)?;
     if b.len() < 56 {
         return Err(truncated_header(offset));
@@ -200,7 +225,14 @@ fn xtc_frame(reader: &mut Reader, offset: u64) -> Result<FrameInfo, String> {
     })
 }
 
-fn trr_frame(reader: &mut Reader, offset: u64) -> Result<FrameInfo, String> {
+fn trr_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<FrameInfo, String> {
+    Ok(trr_header(reader, offset)?.0)
+}
+
+fn trr_header(
+    reader: &mut Reader<impl Read + Seek>,
+    offset: u64,
+) -> Result<(FrameInfo, TrrBlocks), String> {
     let head = reader.bytes(offset, 12)?;
     if head.len() < 12 {
         return Err(truncated_header(offset));
@@ -260,10 +292,19 @@ fn trr_frame(reader: &mut Reader, offset: u64) -> Result<FrameInfo, String> {
     }
     let header = (ints_at + 13 * 4) as u64 + 2 * real;
     let body: u64 = sizes.iter().map(|&s| s as u64).sum();
-    Ok(FrameInfo {
+    // Blocks in order: ir, e, box, vir, pres, top, sym, x, v, f.
+    let before = |k: usize| offset + header + sizes[..k].iter().map(|&s| s as u64).sum::<u64>();
+    let blocks = TrrBlocks {
+        real,
+        time_at: offset + (ints_at + 13 * 4) as u64,
+        box_at: (box_size > 0).then(|| before(2)),
+        x_at: (x > 0).then(|| before(7)),
+    };
+    let info = FrameInfo {
         natoms: natoms as usize,
         bytes: header + body,
-    })
+    };
+    Ok((info, blocks))
 }
 
 #[cfg(test)]
