@@ -153,6 +153,10 @@ pub fn reopen_args(
     if script.quit {
         args.push("--quit".into());
     }
+    if let Some(log) = &script.memory_log {
+        args.push("--memory-log".into());
+        args.push(log.into());
+    }
     args
 }
 
@@ -215,6 +219,7 @@ mod tests {
             play_frames: Some(3),
             screenshot: Some("s.png".into()),
             quit: true,
+            memory_log: None,
         };
         let args: Vec<String> = reopen_args(
             &session,

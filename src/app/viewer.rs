@@ -31,6 +31,8 @@ pub struct Script {
     pub screenshot: Option<PathBuf>,
     /// Close the window when done.
     pub quit: bool,
+    /// Write the process's anonymous memory after each frame shown to this CSV (a leak check).
+    pub memory_log: Option<PathBuf>,
 }
 
 /// Where a scripted run reports failure (read after the window closes).
@@ -52,6 +54,9 @@ pub struct Viewer {
     script: Script,
     script_played: usize,
     script_result: ScriptResult,
+    /// (frames shown, anonymous memory in KiB) after each frame of a scripted run with a
+    /// memory log.
+    memory_samples: Vec<(usize, u64)>,
     last_update: Instant,
     fps: f64,
     /// Files of the trajectory on screen (set when a load succeeds).
@@ -83,6 +88,7 @@ impl Viewer {
             picked: None,
             script,
             script_played: 0,
+            memory_samples: Vec::new(),
             script_result,
             last_update: Instant::now(),
             fps: 0.0,

@@ -8,6 +8,13 @@ use crate::app::state::Command;
 use crate::app::timeline::TimelineCmd;
 use crate::render::write_png;
 
+/// This process's anonymous resident memory in KiB (`RssAnon` in `/proc/self/status`; Linux).
+fn anonymous_memory_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("RssAnon:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
 impl Viewer {
     /// Advances a running movie by at most one image per UI update.
     pub(super) fn step_movie(&mut self) {
@@ -73,6 +80,11 @@ impl Viewer {
         if self.core.computing() || shown != Some(self.core.timeline.current) {
             return;
         }
+        if self.script.memory_log.is_some()
+            && let Some(kib) = anonymous_memory_kib()
+        {
+            self.memory_samples.push((self.script_played + 1, kib));
+        }
         if self.script_played + 1 < want {
             if self.script_played == 1
                 && device_loss::inject_loss_now()
@@ -92,6 +104,16 @@ impl Viewer {
     }
 
     fn finish_script(&mut self, ctx: &egui::Context, error: Option<String>) {
+        let mut error = error;
+        if let Some(path) = &self.script.memory_log {
+            let mut csv = String::from("frames_shown,anonymous_kib\n");
+            for (shown, kib) in &self.memory_samples {
+                csv.push_str(&format!("{shown},{kib}\n"));
+            }
+            if let Err(e) = std::fs::write(path, csv) {
+                error.get_or_insert(format!("cannot write {}: {e}", path.display()));
+            }
+        }
         if let Some(asked) = self.script.play_frames
             && asked > self.core.timeline.len
             && error.is_none()
