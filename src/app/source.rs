@@ -28,6 +28,10 @@ pub trait FrameSource: Send + Sync {
     fn read_frame(&self, index: usize) -> Result<Frame, String>;
     /// Short name for the window title and messages (file name).
     fn name(&self) -> String;
+    /// The images shown when surfaces are periodic (`--periodic`), else `None`.
+    fn periodic(&self) -> Option<crate::transform::Replicate> {
+        None
+    }
 }
 
 /// Frames held in memory.
@@ -89,6 +93,8 @@ pub struct StreamedSource {
     streamer: FrameStreamer,
     /// Half-width of the smoothing window (0: none).
     smooth: usize,
+    /// Periodic surfaces and their images (`None`: off).
+    periodic: Option<crate::transform::Replicate>,
 }
 
 impl StreamedSource {
@@ -97,6 +103,7 @@ impl StreamedSource {
         StreamedSource {
             streamer: FrameStreamer::new(trajectory, options),
             smooth: 0,
+            periodic: None,
         }
     }
 
@@ -109,6 +116,7 @@ impl StreamedSource {
         chain: TransformChain,
     ) -> StreamedSource {
         let smooth = chain.smooth();
+        let periodic = chain.periodic();
         options.behind = options.behind.max(smooth);
         options.ahead = options.ahead.max(smooth + 1);
         options.capacity = options.capacity.max(options.behind + options.ahead + 2);
@@ -119,6 +127,7 @@ impl StreamedSource {
         StreamedSource {
             streamer: FrameStreamer::with_hook(trajectory, options, hook),
             smooth,
+            periodic,
         }
     }
 
@@ -156,6 +165,9 @@ impl FrameSource for StreamedSource {
     }
     fn name(&self) -> String {
         FrameSource::name(self.streamer.trajectory())
+    }
+    fn periodic(&self) -> Option<crate::transform::Replicate> {
+        self.periodic
     }
 }
 

@@ -1,9 +1,11 @@
 //! The Trajectory section of the window's side panel: the per-frame transformations (make
-//! whole, centre, fit, smooth; see [`crate::transform`]) as the command line's flags set them.
+//! whole, centre, fit, smooth; see [`crate::transform`]) and the periodic surface (with its
+//! replicated images), as the command line's flags set them.
 //! Edits are a draft until Apply, which reloads the files with the new transformations (the
 //! representations stay).
 
-use crate::transform::{FitReference, MAX_SMOOTH, TransformOptions};
+use crate::surface::periodic::MAX_REPLICATE;
+use crate::transform::{FitReference, MAX_SMOOTH, Replicate, TransformOptions};
 
 /// The transformations in use and the section's unapplied edits.
 #[derive(Debug, Clone, Default)]
@@ -16,6 +18,8 @@ pub struct TransformDraft {
     fit: String,
     fit_reference: FitReference,
     smooth: usize,
+    periodic: bool,
+    replicate: [u32; 3],
     /// A reload with `applied` is due (set by Apply or a state file).
     reload: bool,
 }
@@ -34,6 +38,8 @@ impl TransformDraft {
                 .unwrap_or_else(|| "protein and name CA".into()),
             fit_reference: options.fit_reference,
             smooth: options.smooth,
+            periodic: options.periodic,
+            replicate: options.replicate.0,
             applied: options,
             reload: false,
         }
@@ -62,6 +68,12 @@ impl TransformDraft {
             fit: text(self.fit_on, &self.fit),
             fit_reference: self.fit_reference,
             smooth: self.smooth,
+            periodic: self.periodic,
+            replicate: if self.periodic {
+                Replicate(self.replicate)
+            } else {
+                Replicate::default()
+            },
         }
     }
 }
@@ -80,20 +92,24 @@ pub fn trajectory_ui(ui: &mut egui::Ui, draft: &mut TransformDraft) -> bool {
                 ui.selectable_value(&mut draft.whole, Some(false), "off");
             });
             ui.horizontal(|ui| {
-                ui.checkbox(&mut draft.center_on, "Centre")
+                let label = ui
+                    .checkbox(&mut draft.center_on, "Centre")
                     .on_hover_text("Put this selection's centre at the box centre");
                 ui.add_enabled(
                     draft.center_on,
                     egui::TextEdit::singleline(&mut draft.center).desired_width(140.0),
-                );
+                )
+                .labelled_by(label.id);
             });
             ui.horizontal(|ui| {
-                ui.checkbox(&mut draft.fit_on, "Fit")
+                let label = ui
+                    .checkbox(&mut draft.fit_on, "Fit")
                     .on_hover_text("Superpose every frame on the reference (least squares)");
                 ui.add_enabled(
                     draft.fit_on,
                     egui::TextEdit::singleline(&mut draft.fit).desired_width(140.0),
-                );
+                )
+                .labelled_by(label.id);
             });
             ui.add_enabled_ui(draft.fit_on, |ui| {
                 ui.horizontal(|ui| {
@@ -114,6 +130,24 @@ pub fn trajectory_ui(ui: &mut egui::Ui, draft: &mut TransformDraft) -> bool {
                 egui::Slider::new(&mut draft.smooth, 0..=MAX_SMOOTH.min(20))
                     .text("smooth ± frames"),
             );
+            ui.checkbox(&mut draft.periodic, "Periodic surface")
+                .on_hover_text(
+                    "Gaussians reach across the box faces: no walls at the faces; area and \
+                     volume per box (rectangular boxes; computed on the CPU)",
+                );
+            ui.add_enabled_ui(draft.periodic, |ui| {
+                ui.horizontal(|ui| {
+                    ui.label("Images");
+                    for (n, axis) in draft.replicate.iter_mut().zip(["x", "y", "z"]) {
+                        ui.add(
+                            egui::DragValue::new(n)
+                                .range(1..=MAX_REPLICATE)
+                                .prefix(format!("{axis} ")),
+                        )
+                        .on_hover_text("Copies of the box side by side along this axis");
+                    }
+                });
+            });
             let edited = draft.edited();
             let changed = edited != draft.applied;
             if ui

@@ -351,6 +351,8 @@ struct Cache {
     slots: HashMap<u64, RepSlot>,
     /// The id of the representation computing on the main GPU engine.
     main_engine_owner: Option<u64>,
+    /// The CPU engine of periodic surfaces (`--periodic`), whatever the main engine.
+    periodic: crate::surface::periodic::PeriodicEngine,
 }
 
 /// Inputs of an engine's last successful frame.
@@ -410,6 +412,7 @@ fn run(
         radius_overrides: RadiusOverrides::default(),
         slots: HashMap::new(),
         main_engine_owner: None,
+        periodic: Default::default(),
     };
     loop {
         let request = {
@@ -571,7 +574,22 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
             gpu_work: None,
             reused: false,
         };
-        if rep.style.is_surface() && !lf.positions.is_empty() {
+        if rep.style.is_surface()
+            && !lf.positions.is_empty()
+            && let Some(replicate) = req.source.periodic()
+        {
+            // Periodic surfaces come from the CPU periodic engine for every backend.
+            result.output = cache
+                .periodic
+                .compute_in_cell(
+                    frame.cell.as_ref(),
+                    &lf.atom_set(),
+                    &rep.params(),
+                    replicate,
+                )
+                .map_err(|e| format!("frame {}: representation '{}': {e}", req.frame, rep.name))?;
+            slot.sent = None;
+        } else if rep.style.is_surface() && !lf.positions.is_empty() {
             let changes = match slot.sent.take() {
                 Some(sent) => sent.changes(req.frame, &lf, &result.particles),
                 None => Changes::ALL,

@@ -14,6 +14,8 @@ use mdsurf::surface::{StageTimings, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
 
 use super::bench_table::{Table, peak_rss_bytes};
+use mdsurf::surface::VertexMode;
+
 use super::common::{
     BenchBackend, BenchEngine, InputArgs, ParamArgs, ParticleArgs, System, demo_files, engines_for,
     ms_since,
@@ -141,6 +143,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let mut engines = engines_for(args.backend)?;
     let cases = build_cases(&args, params)?;
     let mut results = Vec::new();
+    let mut refine_notes = Vec::new();
     for case in cases {
         let Case {
             label,
@@ -150,14 +153,39 @@ pub fn run(args: BenchArgs) -> Result<()> {
         for engine in engines.iter_mut() {
             let name = engine.name().to_string();
             eprintln!("timing {label} on {name} ...");
+            let mode = args.params.vertices;
+            engine.engine().set_vertices(mode);
             let mut r = time_case(&mut source, engine, &params, &args)
                 .map_err(|e| anyhow!("{label} on {name}: {e:#}"))?;
             r.case = label.clone();
+            if mode == VertexMode::Refined {
+                // The refinement's cost: the same case with interpolated vertices.
+                engine.engine().set_vertices(VertexMode::Interpolated);
+                let mut base = time_case(&mut source, engine, &params, &args)
+                    .map_err(|e| anyhow!("{label} on {name}: {e:#}"))?;
+                engine.engine().set_vertices(mode);
+                let got = engine.engine().vertices();
+                let extra = r.compute_wall_ms - base.compute_wall_ms;
+                refine_notes.push(format!(
+                    "{label} on {name}: refined vertices ({got}) cost {extra:.2} ms per frame, \
+                     {:.0} % of the interpolated frame ({:.2} ms)",
+                    100.0 * extra / base.compute_wall_ms.max(1e-9),
+                    base.compute_wall_ms
+                ));
+                r.case = format!("{label} refined");
+                base.case = format!("{label} interpolated");
+                results.push(r);
+                results.push(base);
+                continue;
+            }
             results.push(r);
         }
     }
     let table = Table::from_results(&results);
     println!("{}", table.to_text());
+    for note in &refine_notes {
+        println!("{note}");
+    }
     if let Some(csv) = &args.csv {
         let text = table.to_csv();
         write_atomic(csv, |w| w.write_all(text.as_bytes()))?;

@@ -13,7 +13,7 @@ use glam::Vec3;
 use mdsurf::gpu::GpuEngine;
 use mdsurf::io::{self, Trajectory};
 use mdsurf::model::{ColorScheme, Frame, ParticleOptions, Particles, RadiusOverrides};
-use mdsurf::surface::{CpuEngine, Quality, SurfaceEngine, SurfaceParams};
+use mdsurf::surface::{CpuEngine, Preset, Quality, SurfaceEngine, SurfaceParams, VertexMode};
 
 /// Input files and how their atoms become particles.
 #[derive(clap::Args, Debug, Clone)]
@@ -86,6 +86,13 @@ pub struct ParamArgs {
     /// Gaussian cutoff: low (2 alpha), medium (2.5), high (3), max (4).
     #[arg(long, value_name = "Q", default_value = "medium")]
     pub quality: Quality,
+    /// Named R, I and quality (H kept): `ses` = area within 2 % of the solvent-excluded surface.
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["radius_scale", "isovalue", "quality"])]
+    pub preset: Option<Preset>,
+    /// Vertices: `interpolated` (linear along grid edges, as the paper) or `refined` (on the
+    /// exact Gaussian sum, analytic normals, area and volume that hold at any H; slower).
+    #[arg(long, value_name = "MODE", default_value = "interpolated")]
+    pub vertices: VertexMode,
 }
 
 impl ParamArgs {
@@ -96,6 +103,10 @@ impl ParamArgs {
             radius_scale: self.radius_scale,
             isovalue: self.isovalue,
             quality: self.quality,
+        };
+        let params = match self.preset {
+            Some(preset) => preset.apply(params),
+            None => params,
         };
         params.validate()?;
         Ok(params)

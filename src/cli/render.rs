@@ -18,9 +18,9 @@ use mdsurf::render::{
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::surface::SurfaceOutput;
 
-use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
+use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, ms_since};
 use super::scene_args::{SceneArgs, bind_layers};
-use super::transform_args::{FrameReader, TransformArgs};
+use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
 
 /// Arguments of `mdsurf render`.
 #[derive(clap::Args, Debug)]
@@ -295,7 +295,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let gpu = HeadlessGpu::new()
         .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
     let renderer = Renderer::new(&gpu.device);
-    let mut engine = make_engine(args.backend, false)?;
+    let mut engine = FrameEngine::new(args.backend, reader.chain(), false)?;
+    if let FrameEngine::Plain(e) = &mut engine {
+        e.set_vertices(args.params.vertices);
+        if e.vertices() != args.params.vertices {
+            eprintln!(
+                "note: the {} engine places vertices {}; --vertices {} needs --backend cpu",
+                e.name(),
+                e.vertices(),
+                args.params.vertices
+            );
+        }
+    }
     choice.print_defaults();
     if args.transforms.any() {
         reader.print_summary();
@@ -350,9 +361,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
             let out = if lf.positions.is_empty() {
                 SurfaceOutput::default()
             } else {
-                engine.compute(&lf.atom_set(), &rep.params()).map_err(|e| {
-                    anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name)
-                })?
+                engine
+                    .compute(&frame, &lf.atom_set(), &rep.params())
+                    .map_err(|e| {
+                        anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name)
+                    })?
             };
             scene.set_layer_mesh(k, &gpu.device, &gpu.queue, &out.mesh);
             scene.layer_mut(k).opacity = Some(rep.opacity);

@@ -15,9 +15,9 @@ use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
 
 use mdsurf::surface::SurfaceOutput;
 
-use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, make_engine, ms_since};
+use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, ms_since};
 use super::scene_args::{SceneArgs, bind_layers};
-use super::transform_args::{FrameReader, TransformArgs};
+use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
 
 /// Above this many frames on a terminal, a progress bar replaces the per-frame lines.
 const PROGRESS_BAR_FRAMES: usize = 20;
@@ -115,7 +115,18 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             );
         }
     }
-    let mut engine = make_engine(args.backend, args.quiet)?;
+    let mut engine = FrameEngine::new(args.backend, reader.chain(), args.quiet)?;
+    if let FrameEngine::Plain(e) = &mut engine {
+        e.set_vertices(args.params.vertices);
+        if e.vertices() != args.params.vertices {
+            eprintln!(
+                "note: the {} engine places vertices {}; --vertices {} needs --backend cpu",
+                e.name(),
+                e.vertices(),
+                args.params.vertices
+            );
+        }
+    }
     choice.print_defaults();
     if args.transforms.any() && !args.quiet {
         reader.print_summary();
@@ -144,9 +155,11 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                     // A per-frame selection (within ...) that picks nothing in this frame.
                     SurfaceOutput::default()
                 } else {
-                    engine.compute(&lf.atom_set(), &rep.params()).map_err(|e| {
-                        anyhow!("{files}: frame {index}: representation '{}': {e}", rep.name)
-                    })?
+                    engine
+                        .compute(&frame, &lf.atom_set(), &rep.params())
+                        .map_err(|e| {
+                            anyhow!("{files}: frame {index}: representation '{}': {e}", rep.name)
+                        })?
                 };
                 if let Some(out) = &output {
                     export::write_mesh(&out.path_for(index, &rep.name), &surf.mesh)?;

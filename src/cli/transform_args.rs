@@ -2,11 +2,16 @@
 //! (`--whole`/`--no-whole`, `--center`, `--fit`, `--fit-reference`, `--smooth`), and
 //! [`FrameReader`]: a trajectory read through the transformations the flags ask for.
 
+use super::common::{Backend, make_engine};
 use anyhow::{Result, anyhow};
 use mdsurf::io::{self, Trajectory};
 use mdsurf::model::Frame;
 use mdsurf::scene::state_file::StateFile;
-use mdsurf::transform::{FitReference, TransformChain, TransformOptions, TransformedFrames};
+use mdsurf::surface::periodic::{GPU_NOTE, PeriodicEngine};
+use mdsurf::surface::{AtomSet, SurfaceEngine, SurfaceOutput, SurfaceParams};
+use mdsurf::transform::{
+    FitReference, Replicate, TransformChain, TransformOptions, TransformedFrames,
+};
 
 /// Per-frame transformations, applied in this order: whole, center, fit, smooth.
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -33,6 +38,14 @@ pub struct TransformArgs {
     /// Average positions over ±K frames (after the steps above); 0: off.
     #[arg(long, value_name = "K", default_value_t = 0)]
     pub smooth: usize,
+    /// Periodic density: Gaussians near a box face also reach across it, so a liquid or a
+    /// membrane patch has no walls at the box faces; the mesh is the surface in one box and
+    /// area and volume are per box (needs a rectangular box; computed on the CPU).
+    #[arg(long)]
+    pub periodic: bool,
+    /// With --periodic (implied): show A x B x C images of the box side by side.
+    #[arg(long, value_name = "A,B,C")]
+    pub replicate: Option<Replicate>,
 }
 
 impl TransformArgs {
@@ -43,6 +56,8 @@ impl TransformArgs {
             || self.center.is_some()
             || self.fit.is_some()
             || self.smooth > 0
+            || self.periodic
+            || self.replicate.is_some()
     }
 
     /// The library's options for these flags; a state file's options fill in what the flags
@@ -63,6 +78,65 @@ impl TransformArgs {
             fit: self.fit.clone(),
             fit_reference: self.fit_reference,
             smooth: self.smooth,
+            periodic: self.periodic || self.replicate.is_some(),
+            replicate: self.replicate.unwrap_or_default(),
+        }
+    }
+}
+
+/// The engine a command computes surfaces with: the backend asked for, or the CPU periodic
+/// engine ([`mdsurf::surface::periodic`]) when the transformations ask for periodic surfaces.
+pub enum FrameEngine {
+    /// The backend's engine.
+    Plain(Box<dyn SurfaceEngine>),
+    /// The periodic engine and the images shown.
+    Periodic {
+        /// The engine.
+        engine: PeriodicEngine,
+        /// Images side by side.
+        replicate: Replicate,
+    },
+}
+
+impl FrameEngine {
+    /// The engine for `backend`, or the periodic engine when `chain` is periodic (then a GPU
+    /// asked for with `--backend gpu` is not started, and a note says so unless `quiet`).
+    pub fn new(backend: Backend, chain: &TransformChain, quiet: bool) -> Result<FrameEngine> {
+        match chain.periodic() {
+            None => Ok(FrameEngine::Plain(make_engine(backend, quiet)?)),
+            Some(replicate) => {
+                if backend == Backend::Gpu && !quiet {
+                    eprintln!("{GPU_NOTE}");
+                }
+                Ok(FrameEngine::Periodic {
+                    engine: PeriodicEngine::new(),
+                    replicate,
+                })
+            }
+        }
+    }
+
+    /// Name for messages (`cpu`, `gpu`, `cpu (periodic)`).
+    pub fn name(&self) -> &str {
+        match self {
+            FrameEngine::Plain(e) => e.name(),
+            FrameEngine::Periodic { .. } => "cpu (periodic)",
+        }
+    }
+
+    /// The surface of `atoms` (particles of `frame`, whose cell the periodic engine uses);
+    /// the error is one line without the file and frame.
+    pub fn compute(
+        &mut self,
+        frame: &Frame,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+    ) -> Result<SurfaceOutput, String> {
+        match self {
+            FrameEngine::Plain(e) => e.compute(atoms, params).map_err(|e| e.to_string()),
+            FrameEngine::Periodic { engine, replicate } => engine
+                .compute_in_cell(frame.cell.as_ref(), atoms, params, *replicate)
+                .map_err(|e| e.to_string()),
         }
     }
 }

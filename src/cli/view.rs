@@ -41,6 +41,9 @@ pub struct ViewArgs {
     /// Scripted run: then close the window (exit status 0 when everything worked).
     #[arg(long)]
     pub quit: bool,
+    /// Scripted run: write the anonymous memory (KiB) after each frame shown to this CSV.
+    #[arg(long, value_name = "FILE", hide = true)]
+    pub memory_log: Option<PathBuf>,
     /// Surface engine: `gpu` (drawn straight from its buffers; even on a software adapter),
     /// `cpu`, or `auto` (GPU on a hardware adapter, else CPU).
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
@@ -62,6 +65,9 @@ pub fn run(args: ViewArgs) -> Result<()> {
     let particles = args.particles.options()?;
     let state = args.scene.load_state()?;
     let transforms = args.transforms.options(state.as_ref());
+    if transforms.periodic && args.backend == Backend::Gpu && !args.cpu {
+        eprintln!("{}", mdsurf::surface::periodic::GPU_NOTE);
+    }
     let mut render = RenderSettings {
         stereo: args.stereo,
         eye_separation: args.eyes.eye_separation,
@@ -93,6 +99,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             play_frames: args.play_frames,
             screenshot: args.screenshot,
             quit: args.quit,
+            memory_log: args.memory_log,
         },
         backend: if args.cpu {
             app::Backend::Cpu

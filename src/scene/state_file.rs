@@ -217,6 +217,12 @@ pub struct TrajectoryState {
     /// Half-width of the smoothing window in frames.
     #[serde(default)]
     pub smooth: usize,
+    /// Periodic density (`--periodic`): Gaussians reach across the box faces.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub periodic: bool,
+    /// Images of the box shown side by side along x, y, z with `periodic` (`--replicate`).
+    #[serde(default, skip_serializing_if = "crate::transform::Replicate::is_one")]
+    pub replicate: crate::transform::Replicate,
 }
 
 impl Default for TrajectoryState {
@@ -230,6 +236,8 @@ impl Default for TrajectoryState {
             fit: None,
             fit_reference: crate::transform::FitReference::First,
             smooth: 0,
+            periodic: false,
+            replicate: crate::transform::Replicate::default(),
         }
     }
 }
@@ -243,6 +251,8 @@ impl TrajectoryState {
             fit: self.fit.clone(),
             fit_reference: self.fit_reference,
             smooth: self.smooth,
+            periodic: self.periodic,
+            replicate: self.replicate,
         }
     }
 
@@ -253,6 +263,8 @@ impl TrajectoryState {
         self.fit = options.fit.clone();
         self.fit_reference = options.fit_reference;
         self.smooth = options.smooth;
+        self.periodic = options.periodic;
+        self.replicate = options.replicate;
     }
 }
 
@@ -292,6 +304,11 @@ impl StateFile {
             .look
             .apply(&mut probe)
             .map_err(|e| format!("{origin}: {e}"))?;
+        state
+            .trajectory
+            .replicate
+            .validate()
+            .map_err(|e| format!("{origin}: [trajectory] {e}"))?;
         Ok(state)
     }
 

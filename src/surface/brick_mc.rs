@@ -17,15 +17,26 @@
 use rayon::prelude::*;
 
 use super::Mesh;
+use super::analytic::AnalyticField;
 use super::bricks::{BRICK, BrickVolume};
 use super::marching_cubes::{
     ALL_ONE, FOREIGN, McScratch, SlabMesh, edge_refs, merge, push_cell_triangles, word,
 };
-use super::mc_vertex::edge_geometry;
+use super::mc_vertex::edge_geometry_refined;
 use super::tables::McTables;
 
 /// The isosurface of `vol` at the isovalue it was prepared for, reusing `scratch`.
 pub fn extract_bricks(vol: &BrickVolume, scratch: &mut McScratch) -> Mesh {
+    extract_bricks_refined(vol, None, scratch)
+}
+
+/// [`extract_bricks`], with every vertex refined on the exact Gaussian sum `field` when given
+/// (as [`super::marching_cubes::extract_refined`]).
+pub fn extract_bricks_refined(
+    vol: &BrickVolume,
+    field: Option<&AnalyticField>,
+    scratch: &mut McScratch,
+) -> Mesh {
     let [nx, ny, nz] = vol.grid.dims.map(|d| d as usize);
     if nx < 2 || ny < 2 || nz < 2 {
         return Mesh::default();
@@ -38,6 +49,7 @@ pub fn extract_bricks(vol: &BrickVolume, scratch: &mut McScratch) -> Mesh {
     let ctx = Ctx {
         vol,
         iso: vol.iso,
+        field,
         tables: McTables::get(),
     };
     scratch.slabs.resize_with(slabs, SlabMesh::default);
@@ -52,6 +64,7 @@ pub fn extract_bricks(vol: &BrickVolume, scratch: &mut McScratch) -> Mesh {
 struct Ctx<'a> {
     vol: &'a BrickVolume,
     iso: f32,
+    field: Option<&'a AnalyticField>,
     tables: &'static McTables,
 }
 
@@ -249,8 +262,14 @@ impl Ctx<'_> {
                         count += 1;
                         if let Some(m) = emit.as_deref_mut() {
                             let value = |q: [usize; 3]| self.vol.get(q[0], q[1], q[2]);
-                            let (position, normal, _) =
-                                edge_geometry(grid, value, self.iso, [i, j, k], axis);
+                            let (position, normal, _) = edge_geometry_refined(
+                                grid,
+                                value,
+                                self.iso,
+                                [i, j, k],
+                                axis,
+                                self.field,
+                            );
                             m.positions.push(position);
                             m.normals.push(normal);
                             let colour = if self.vol.with_colour {

@@ -5,13 +5,14 @@
 
 use std::time::Instant;
 
+use super::analytic::AnalyticField;
 use super::bin::{bin_atoms, bin_atoms_overlapping};
-use super::brick_mc::extract_bricks;
+use super::brick_mc::extract_bricks_refined;
 use super::bricks::{self, BrickScratch, BrickStats, BrickVolume};
-use super::marching_cubes::{McScratch, extract_with};
+use super::marching_cubes::{McScratch, extract_refined};
 use super::{
     AtomSet, DensityVolume, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
-    SurfaceParams, available_memory_bytes, density,
+    SurfaceParams, VertexMode, available_memory_bytes, curved, density,
 };
 
 /// The multi-threaded CPU surface engine (uses rayon's global thread pool).
@@ -37,6 +38,8 @@ pub struct CpuEngine {
     last_bricks: Option<BrickStats>,
     /// Marching Cubes working memory kept between calls.
     mc: McScratch,
+    /// Vertex placement and measurement ([`VertexMode`], interpolated by default).
+    vertices: VertexMode,
 }
 
 impl std::fmt::Debug for CpuEngine {
@@ -80,6 +83,12 @@ impl CpuEngine {
         self
     }
 
+    /// This engine with vertices placed as `mode` says.
+    pub fn with_vertices(mut self, mode: VertexMode) -> CpuEngine {
+        self.vertices = mode;
+        self
+    }
+
     /// True on the dense path.
     pub fn is_dense(&self) -> bool {
         self.dense
@@ -120,6 +129,14 @@ impl SurfaceEngine for CpuEngine {
         "cpu"
     }
 
+    fn set_vertices(&mut self, mode: VertexMode) {
+        self.vertices = mode;
+    }
+
+    fn vertices(&self) -> VertexMode {
+        self.vertices
+    }
+
     fn compute(
         &mut self,
         atoms: &AtomSet<'_>,
@@ -129,16 +146,20 @@ impl SurfaceEngine for CpuEngine {
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
 
         let with_colour = atoms.colours.is_some();
+        let refined = self.vertices == VertexMode::Refined;
+        let field;
         let (mesh, bin_ms, density_ms, t) = if self.dense {
             let t = Instant::now();
             let bins = bin_atoms(atoms, params, &grid, density::slab_planes(&grid));
             let bin_ms = ms(t);
             let t = Instant::now();
             density::compute_binned_into(&bins, params, &grid, with_colour, &mut self.volume);
-            drop(bins);
             let density_ms = ms(t);
             let t = Instant::now();
-            let mesh = extract_with(&grid, &self.volume, params.isovalue, &mut self.mc);
+            field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
+            drop(bins);
+            let iso = params.isovalue;
+            let mesh = extract_refined(&grid, &self.volume, iso, field.as_ref(), &mut self.mc);
             self.last_bricks = None;
             (mesh, bin_ms, density_ms, t)
         } else {
@@ -151,14 +172,18 @@ impl SurfaceEngine for CpuEngine {
             let t = Instant::now();
             self.bricks
                 .compute(&bins, params, &grid, with_colour, &mut self.brick_scratch);
-            drop(bins);
             let density_ms = ms(t);
             let t = Instant::now();
-            let mesh = extract_bricks(&self.bricks, &mut self.mc);
+            field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
+            drop(bins);
+            let mesh = extract_bricks_refined(&self.bricks, field.as_ref(), &mut self.mc);
             self.last_bricks = Some(self.bricks.stats());
             (mesh, bin_ms, density_ms, t)
         };
-        let (area, enclosed) = mesh.area_and_volume();
+        let (area, enclosed) = match &field {
+            Some(_) => curved::curved_area_volume(&mesh),
+            None => mesh.area_and_volume(),
+        };
         let mc_ms = ms(t);
 
         Ok(SurfaceOutput {

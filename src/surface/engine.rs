@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::{GridSpec, Mesh, SurfaceError, SurfaceParams};
+use super::{GridSpec, Mesh, SurfaceError, SurfaceParams, VertexMode};
 
 /// The particles one surface is built from. All slices have the same length.
 #[derive(Debug, Clone, Copy)]
@@ -125,4 +125,13 @@ pub trait SurfaceEngine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
     ) -> Result<SurfaceOutput, SurfaceError>;
+
+    /// Sets how later surfaces place their vertices and normals (issue 13); an engine that
+    /// cannot refine keeps interpolating and reports so through [`SurfaceEngine::vertices`].
+    fn set_vertices(&mut self, _mode: VertexMode) {}
+
+    /// How this engine places vertices and normals.
+    fn vertices(&self) -> VertexMode {
+        VertexMode::Interpolated
+    }
 }

@@ -18,7 +18,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::mc_vertex::edge_vertex;
+use super::analytic::AnalyticField;
+use super::mc_vertex::edge_vertex_refined;
 use super::tables::{EDGE_CORNERS, McTables, corner_offset, edge_axis};
 use super::{DensityVolume, GridSpec, Mesh};
 
@@ -76,6 +77,19 @@ pub fn extract_with(
     iso: f32,
     scratch: &mut McScratch,
 ) -> Mesh {
+    extract_refined(grid, density, iso, None, scratch)
+}
+
+/// [`extract_with`], with every vertex refined on the exact Gaussian sum `field` when given
+/// ([`super::mc_vertex::edge_geometry_refined`]): same triangles and indices, positions on the
+/// analytic surface, analytic normals.
+pub fn extract_refined(
+    grid: &GridSpec,
+    density: &DensityVolume,
+    iso: f32,
+    field: Option<&AnalyticField>,
+    scratch: &mut McScratch,
+) -> Mesh {
     let [nx, ny, nz] = grid.dims.map(|d| d as usize);
     let enough = density.values.len() >= nx * ny * nz
         && density
@@ -93,6 +107,7 @@ pub fn extract_with(
         grid,
         density,
         iso,
+        field,
         tables: McTables::get(),
     };
     scratch.slabs.resize_with(slabs, SlabMesh::default);
@@ -109,6 +124,7 @@ struct Ctx<'a> {
     grid: &'a GridSpec,
     density: &'a DensityVolume,
     iso: f32,
+    field: Option<&'a AnalyticField>,
     tables: &'static McTables,
 }
 
@@ -314,7 +330,14 @@ impl Ctx<'_> {
                     map[p * 3 + axis] = count;
                     count += 1;
                     if let Some(m) = emit.as_deref_mut() {
-                        let vert = edge_vertex(self.grid, self.density, self.iso, [i, j, k], axis);
+                        let vert = edge_vertex_refined(
+                            self.grid,
+                            self.density,
+                            self.iso,
+                            [i, j, k],
+                            axis,
+                            self.field,
+                        );
                         m.positions.push(vert.position);
                         m.normals.push(vert.normal);
                         m.colours.push(vert.colour);

@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::analytic::AnalyticField;
 use super::{DensityVolume, GridSpec};
 
 /// One mesh vertex.
@@ -32,8 +33,22 @@ pub fn edge_vertex(
     a: [usize; 3],
     axis: usize,
 ) -> EdgeVertex {
+    edge_vertex_refined(grid, density, iso, a, axis, None)
+}
+
+/// [`edge_vertex`], with the position and normal refined on the exact Gaussian sum `field`
+/// when given (see [`edge_geometry_refined`]); the colour keeps the linear parameter `t`.
+pub fn edge_vertex_refined(
+    grid: &GridSpec,
+    density: &DensityVolume,
+    iso: f32,
+    a: [usize; 3],
+    axis: usize,
+    field: Option<&AnalyticField>,
+) -> EdgeVertex {
     let v = &density.values;
-    let (position, normal, t) = edge_geometry(grid, |p| v[index(grid, p)], iso, a, axis);
+    let (position, normal, t) =
+        edge_geometry_refined(grid, |p| v[index(grid, p)], iso, a, axis, field);
     let colour = match &density.colours {
         Some(c) => {
             let mut b = a;
@@ -97,6 +112,36 @@ pub fn edge_geometry(
         d
     };
     (position, normal, t)
+}
+
+/// [`edge_geometry`], or with `field` the refined vertex: the position where the exact Gaussian
+/// sum crosses `iso` on the edge ([`AnalyticField::refine_edge`], started from the linear
+/// estimate) and the normal `-grad rho` normalised there (the interpolated normal if the
+/// gradient vanishes). The returned `t` is always the linear one (colours use it).
+#[inline]
+pub fn edge_geometry_refined(
+    grid: &GridSpec,
+    value: impl Fn([usize; 3]) -> f32,
+    iso: f32,
+    a: [usize; 3],
+    axis: usize,
+    field: Option<&AnalyticField>,
+) -> (Vec3, Vec3, f32) {
+    let Some(field) = field else {
+        return edge_geometry(grid, value, iso, a, axis);
+    };
+    let mut b = a;
+    b[axis] += 1;
+    let (va, vb) = (value(a), value(b));
+    let t = edge_t(va, vb, iso);
+    let (position, normal) = field.refine_edge(point(grid, a), point(grid, b), va, vb, iso, t);
+    match normal {
+        Some(normal) => (position, normal, t),
+        None => {
+            let (_, normal, _) = edge_geometry(grid, value, iso, a, axis);
+            (position, normal, t)
+        }
+    }
 }
 
 fn index(grid: &GridSpec, p: [usize; 3]) -> usize {

