@@ -55,14 +55,28 @@ fn main() -> ExitCode {
         Some(Command::Select(args)) => cli::select::run(args),
         None => cli::view::run(cli.view),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
+    let code = match result {
+        Ok(()) => 0,
         Err(err) => {
             // One line: the error and its causes, outermost first.
             eprintln!("error: {err:#}");
-            ExitCode::from(2)
+            2
         }
-    }
+    };
+    exit_without_static_destructors(code)
+}
+
+/// Ends the process with `code` once our output is flushed, without running C++ static
+/// destructors: after chemfiles' LAMMPS reader has thrown on some damaged files, destroying its
+/// static tables at exit crashes (SIGSEGV after the one-line error was printed). Every file we
+/// write is complete and closed by now, so nothing is lost by skipping them.
+fn exit_without_static_destructors(code: i32) -> ExitCode {
+    use std::io::Write;
+    let _ = std::io::stdout().flush();
+    let _ = std::io::stderr().flush();
+    // SAFETY: `_exit` ends the process at once; no Rust state needs to outlive this point (all
+    // outputs were written and closed before `run` returned, and stdout/stderr are flushed).
+    unsafe { libc::_exit(code) }
 }
 
 /// A clap usage error squeezed onto one line: its text up to the usage hint, lines joined.

@@ -214,6 +214,13 @@ impl Viewer {
                     false,
                 ),
                 Command::StartMovie(plan) => {
+                    // The folder typed in the movie panel is made here (image writes never
+                    // create folders, as for every other output).
+                    if let Err(e) = std::fs::create_dir_all(&plan.dir) {
+                        self.core.error =
+                            Some(format!("cannot create {}: {e}", plan.dir.display()));
+                        continue;
+                    }
                     let steps = plan.steps(self.core.timeline.current);
                     self.core.timeline.playing = false;
                     self.movie = Some(MovieJob {

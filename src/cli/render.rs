@@ -237,6 +237,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
         frames = vec![frames[0]; images];
     }
     let paths = output_paths(&args.output, &frames)?;
+    // Like `surface`, a missing output folder is refused before any work (never created).
+    if let Some(first) = paths.first() {
+        super::surface::check_parent_dir(first)?;
+    }
     let mut settings = RenderSettings {
         background: args.background,
         surface_opacity: args.opacity.clamp(0.0, 1.0),

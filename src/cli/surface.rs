@@ -271,7 +271,7 @@ fn progress_bar(len: usize) -> ProgressBar {
 }
 
 /// Fails with a one-line message when `path`'s directory does not exist.
-fn check_parent_dir(path: &Path) -> Result<()> {
+pub(crate) fn check_parent_dir(path: &Path) -> Result<()> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
     if let Some(dir) = dir
         && !dir.is_dir()

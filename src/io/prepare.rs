@@ -6,7 +6,8 @@
 //!   fixed-column formats (PDB, GRO) every non-ASCII byte becomes `?` (so columns stay where they
 //!   are); in the free formats (mmCIF, XYZ, LAMMPS, MOL2) a byte that is not UTF-8 is read as
 //!   Latin-1 and written as UTF-8.
-//! - `.gz` and `.bz2` files are decompressed here, by memory-safe Rust decoders, into a
+//! - `.gz`, `.bz2` and `.xz` files are decompressed here, by memory-safe Rust decoders
+//!   (flate2, bzip2, lzma-rust2), into a
 //!   temporary plain file (chemfiles' bzip2 reader spins forever on a truncated stream). A stream
 //!   that ends early keeps what decompressed: the frames before the cut stay readable and the
 //!   last, cut frame is reported as damage.
@@ -49,7 +50,9 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
         .map(|(_, c)| c.to_string());
     let text = text_kind(format.base);
     match compression.as_deref() {
-        Some("GZ") | Some("BZ2") => decompress(path, format, compression.as_deref(), text),
+        Some("GZ") | Some("BZ2") | Some("XZ") => {
+            decompress(path, format, compression.as_deref(), text)
+        }
         _ => {
             if format.base == "PDB" && compression.is_none() {
                 let bytes =
@@ -273,6 +276,10 @@ fn decompress(
         Some("GZ") => Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(
             file,
         ))),
+        Some("XZ") => Box::new(lzma_rust2::XzReader::new(
+            std::io::BufReader::new(file),
+            true,
+        )),
         _ => Box::new(bzip2::read::MultiBzDecoder::new(std::io::BufReader::new(
             file,
         ))),

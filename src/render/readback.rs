@@ -188,14 +188,10 @@ pub fn read_texture(
 }
 
 /// Writes `image` as an 8-bit RGBA PNG. The file appears complete or not at all: the data goes
-/// to a temporary file beside `path`, which is then renamed over it. Missing folders are created.
+/// to a temporary file beside `path`, which is then renamed over it. A missing folder is an
+/// error, as for every other output (a mistyped path never leaves new folders behind).
 pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), RenderError> {
     let err = |e: String| RenderError::Png(path.display().to_string(), e);
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
     // Written to a temporary file and renamed, with the permissions of the file it replaces
     // (or rw-r--r--), like every other output.
     crate::export::write_atomic(path, |w| {

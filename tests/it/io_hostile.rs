@@ -1,7 +1,7 @@
 //! Hostile inputs (issue 10): files that are damaged the way real files get damaged (text in
 //! Latin-1, a cut compressed stream, chunks of a trajectory duplicated or deleted, absurd sizes
 //! and coordinates) must give a correct read or one line of error, never a crash, a hang, a
-//! panic or a silently wrong result. Plus a seeded mutation test through the real binary.
+//! panic or a silently wrong result. The seeded mutation test is in `io_mutants`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -324,107 +324,6 @@ fn render_rejects_nan_view_and_turntable() {
     }
 }
 
-/// A small deterministic generator (xorshift), so the mutants are the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
-/// One seeded mutant of `bytes`: byte flips, a truncation, or a chunk duplicated or deleted.
-fn mutate(bytes: &[u8], rng: &mut Rng) -> Vec<u8> {
-    let mut out = bytes.to_vec();
-    let n = out.len();
-    match rng.below(4) {
-        0 => {
-            for _ in 0..1 + rng.below(8) {
-                let at = rng.below(n);
-                out[at] ^= 1 << rng.below(8);
-            }
-            out
-        }
-        1 => {
-            out.truncate(1 + rng.below(n - 1));
-            out
-        }
-        2 => {
-            let (a, len, at) = (rng.below(n), 1 + rng.below(4096), rng.below(n));
-            let chunk = out[a..(a + len).min(n)].to_vec();
-            out.splice(at..at, chunk);
-            out
-        }
-        _ => {
-            let (a, len) = (rng.below(n), 1 + rng.below(4096));
-            out.drain(a..(a + len).min(n));
-            out
-        }
-    }
-}
-
-/// Seeded mutants of four real files through `mdsurf surface`: every run must end with exit 0
-/// or 2 (never a signal, a panic's 101 or a hang), with one line of error on exit 2. Set
-/// `MDSURF_MUTANTS=N` to run N per file, `MDSURF_MUTANT_SEED=S` for another seed.
-#[test]
-fn mutants_never_crash_or_hang() {
-    let per_file: usize = std::env::var("MDSURF_MUTANTS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(10);
-    let seed: u64 = std::env::var("MDSURF_MUTANT_SEED")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0x5eed_1010);
-    let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, Option<&str>, &str); 4] = [
-        ("md_1u19.xtc", Some("md_1u19.gro"), "xtc"),
-        ("md_1u19.gro", None, "gro"),
-        ("adk_dims.dcd", Some("adk_open.pdb"), "dcd"),
-        ("1hpv.pdb", None, "pdb"),
-    ];
-    let mut rng = Rng(seed);
-    let mut failures = Vec::new();
-    for (file, top, ext) in cases {
-        let original = std::fs::read(data(file)).unwrap();
-        for k in 0..per_file {
-            let bytes = mutate(&original, &mut rng);
-            let name = format!("m{k}.{ext}");
-            let path = write(dir.path(), &name, &bytes);
-            let top_path = top.map(data);
-            let mut files: Vec<&Path> = top_path.iter().map(PathBuf::as_path).collect();
-            files.push(&path);
-            // Two frames keep it quick; a damaged middle or end still gets probed at open.
-            let o = surface_limited(
-                dir.path(),
-                &files,
-                &["--frames", "0:2"],
-                Duration::from_secs(20),
-            );
-            let lines = o.stderr.lines().filter(|l| !l.trim().is_empty()).count();
-            let ok = !o.timed_out
-                && matches!(o.code, Some(0) | Some(2))
-                && !o.stderr.contains("panicked")
-                && (o.code == Some(0) || lines == 1);
-            if !ok {
-                let keep = dir.path().join(format!("failed_{name}"));
-                std::fs::copy(&path, &keep).ok();
-                failures.push(format!(
-                    "{file} mutant {k} (seed {seed:#x}): code {:?}, timed out {}: {}",
-                    o.code, o.timed_out, o.stderr
-                ));
-            }
-        }
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
-}
-
 #[test]
 fn damaged_tng_is_refused_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
@@ -439,4 +338,75 @@ fn damaged_tng_is_refused_in_one_line() {
     let e = io::open(&f, None).expect_err("a flipped byte fails the block checksum");
     assert!(e.to_string().contains("checksum"), "{e}");
     assert!(io::open(&data("argon_npt_compressed.tng"), None).is_ok());
+}
+
+#[test]
+fn render_and_surface_both_refuse_a_missing_output_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = data("1hpv.pdb");
+    let missing = dir.path().join("no_such_folder");
+    let png = missing.join("a.png");
+    let o = run_limited(
+        dir.path(),
+        &[
+            "render",
+            pdb.to_str().unwrap(),
+            "--size",
+            "32x32",
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        Duration::from_secs(60),
+    );
+    assert_clean_error(&o, "no_such_folder", "render into a missing folder");
+    let ply = missing.join("a.ply");
+    let o = surface(dir.path(), &[&pdb], &["-o", ply.to_str().unwrap()]);
+    assert_clean_error(&o, "no_such_folder", "surface into a missing folder");
+    assert!(!missing.exists(), "a folder was created");
+}
+
+/// An `.xz` file reads like the plain one; a cut one keeps its whole frames and names the cut.
+#[test]
+fn xz_files_are_decompressed_in_rust() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut dump = Vec::new();
+    std::io::Read::read_to_end(
+        &mut bzip2::read::BzDecoder::new(
+            &std::fs::read(data("spce_all_coords.lammpstrj.bz2")).unwrap()[..],
+        ),
+        &mut dump,
+    )
+    .unwrap();
+    let plain = write(dir.path(), "d.lammpstrj", &dump);
+    let mut xz = Vec::new();
+    let mut encoder =
+        lzma_rust2::XzWriter::new(&mut xz, lzma_rust2::XzOptions::with_preset(1)).unwrap();
+    std::io::Write::write_all(&mut encoder, &dump).unwrap();
+    encoder.finish().unwrap();
+    let whole = write(dir.path(), "d.lammpstrj.xz", &xz);
+    let a = io::open(&plain, None).unwrap();
+    let b = io::open(&whole, None).expect("an .xz file reads");
+    assert_eq!(a.len(), b.len());
+    assert_eq!(
+        a.read_frame(a.len() - 1).unwrap().positions,
+        b.read_frame(b.len() - 1).unwrap().positions
+    );
+    let cut = write(dir.path(), "c.lammpstrj.xz", &xz[..xz.len() / 2]);
+    let c = io::open(&cut, None).expect("a cut .xz keeps its good frames");
+    assert!(
+        c.len() >= 1 && c.len() < a.len(),
+        "{} of {}",
+        c.len(),
+        a.len()
+    );
+    assert_eq!(
+        c.read_frame(0).unwrap().positions,
+        a.read_frame(0).unwrap().positions
+    );
+    let damage = c.damage().expect("the cut is reported");
+    assert!(
+        damage.error.to_string().contains("c.lammpstrj.xz"),
+        "{}",
+        damage.error
+    );
 }
