@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use super::format::FileFormat;
 use super::prepare::prepare;
-use super::{IoError, dcd, quiet, tng, warnings};
+use super::{IoError, dcd, quiet, warnings};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
 
@@ -173,7 +173,8 @@ impl ChemReader {
 /// Rejects files that plainly are not in `base` format, or are damaged in ways the C libraries
 /// do not survive, before a C library sees them. The TNG library prints straight to stderr (past
 /// chemfiles' warning callback), tries huge allocations on garbage and crashes on damaged
-/// blocks, so a TNG file must start with its GENERAL INFO block and pass [`tng::check`]; a DCD
+/// blocks, so a TNG file must start with its GENERAL INFO block and pass `tng::salvage` (called
+/// by `prepare`); a DCD
 /// header must announce sizes that fit the file ([`dcd::check_header`]).
 fn sniff(path: &Path, base: &str) -> Result<(), IoError> {
     if base == "DCD" {
@@ -187,7 +188,8 @@ fn sniff(path: &Path, base: &str) -> Result<(), IoError> {
     let read = std::fs::File::open(path).and_then(|mut f| std::io::Read::read(&mut f, &mut head));
     let n = read.map_err(|e| IoError::unreadable(path, e.to_string()))?;
     if head[..n].windows(12).any(|w| w == b"GENERAL INFO") {
-        tng::check(path).map_err(|reason| IoError::unreadable(path, reason))
+        // The block chain is checked (and a damaged file salvaged) in `prepare`.
+        Ok(())
     } else {
         Err(IoError::unreadable(
             path,

@@ -20,8 +20,8 @@ use std::fs::File;
 use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
-use super::IoError;
 use super::format::FileFormat;
+use super::{IoError, tng};
 
 /// Bytes read at a time while scanning or copying.
 const CHUNK: usize = 1 << 20;
@@ -54,6 +54,9 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
             decompress(path, format, compression.as_deref(), text)
         }
         _ => {
+            if format.base == "TNG" && compression.is_none() {
+                return prepare_tng(path, format);
+            }
             if format.base == "PDB" && compression.is_none() {
                 let bytes =
                     std::fs::read(path).map_err(|e| IoError::unreadable(path, e.to_string()))?;
@@ -265,6 +268,32 @@ impl Cleaner {
 }
 
 /// Decompresses a `.gz` or `.bz2` file into a temporary plain file (cleaning its text).
+/// A TNG file as it is when its block chain is sound, or a copy of its whole frame sets before
+/// the damage (see [`tng::salvage`]); an error when none is sound.
+fn prepare_tng(path: &Path, format: &FileFormat) -> Result<Prepared, IoError> {
+    let as_is = || Prepared {
+        open_path: path.to_path_buf(),
+        chemfiles: format.chemfiles.clone(),
+        truncated: None,
+        cut_removed: false,
+        temp: None,
+    };
+    match tng::salvage(path).map_err(|reason| IoError::unreadable(path, reason))? {
+        tng::Salvage::Sound => Ok(as_is()),
+        tng::Salvage::Kept { bytes, reason } => {
+            let (temp, copy) = temp_file(path, format.base)?;
+            std::fs::write(&copy, bytes).map_err(|e| write_failed(path, e))?;
+            Ok(Prepared {
+                open_path: copy,
+                chemfiles: format.chemfiles.clone(),
+                truncated: Some(reason),
+                cut_removed: true,
+                temp: Some(temp),
+            })
+        }
+    }
+}
+
 fn decompress(
     path: &Path,
     format: &FileFormat,

@@ -2,8 +2,12 @@
 //! (SIGSEGV) on some damaged files and prints its own complaints to stderr. A TNG file is a chain
 //! of blocks, each with a header (its own size, the contents' size, an id, the MD5 of the
 //! contents, a name, ...) followed by its contents. This walks the chain and checks each block's
-//! MD5 where the writer recorded one, so a flipped byte, a cut or a duplicated or deleted chunk
-//! is found here and reported as one line.
+//! MD5 where the writer recorded one (the `md5` crate), so a flipped byte, a cut or a duplicated
+//! or deleted chunk is found here. Frames come in frame sets (a frame-set block followed by its
+//! data blocks); when the damage comes after some whole frame sets, a copy of the file holding
+//! only those is made, with the pointers to the removed frame sets cleared and the patched
+//! blocks' MD5 recomputed, so the good frames stay readable. The frame set holding the damage is
+//! dropped whole (a damaged block cannot say which frame set it belonged to).
 
 use std::fs::File;
 use std::io::Read;
@@ -11,9 +15,67 @@ use std::path::Path;
 
 /// Header sizes outside this range (bytes) are damage.
 const HEADER_SIZES: std::ops::RangeInclusive<i64> = 40..=4096;
+/// Block ids (TNG 1.x): the file's general information and the start of a frame set.
+const GENERAL_INFO: i64 = 0;
+const FRAME_SET: i64 = 2;
 
-/// Checks the block chain of the TNG file at `path`; `Err` gives the first damaged block.
-pub(crate) fn check(path: &Path) -> Result<(), String> {
+/// One block of the chain: where it starts, its header and contents sizes (bytes), its id.
+#[derive(Debug, Clone, Copy)]
+struct Block {
+    offset: usize,
+    header: usize,
+    contents: usize,
+    id: i64,
+}
+
+impl Block {
+    fn end(&self) -> usize {
+        self.offset + self.header + self.contents
+    }
+}
+
+/// Reads 8-byte integers in the file's byte order.
+#[derive(Clone, Copy)]
+struct Ints {
+    little: bool,
+}
+
+impl Ints {
+    fn get(self, bytes: &[u8], at: usize) -> i64 {
+        let b: [u8; 8] = bytes
+            .get(at..at + 8)
+            .and_then(|s| s.try_into().ok())
+            .unwrap_or([0; 8]);
+        if self.little {
+            i64::from_le_bytes(b)
+        } else {
+            i64::from_be_bytes(b)
+        }
+    }
+
+    fn put(self, bytes: &mut [u8], at: usize, value: i64) {
+        let b = if self.little {
+            value.to_le_bytes()
+        } else {
+            value.to_be_bytes()
+        };
+        bytes[at..at + 8].copy_from_slice(&b);
+    }
+}
+
+/// What [`salvage`] found.
+pub(crate) enum Salvage {
+    /// The chain is sound: open the file as it is.
+    Sound,
+    /// The chain is damaged after some whole frame sets: `bytes` is a copy holding only those,
+    /// with the pointers to the removed frame sets cleared; `reason` says where the damage is.
+    Kept { bytes: Vec<u8>, reason: String },
+}
+
+/// Checks the block chain of the TNG file at `path` (each block's size and, where the writer
+/// recorded one, its MD5). A damaged file keeps the frame sets before the damage (see
+/// [`Salvage::Kept`]); `Err` (one line) when not even one frame set is sound.
+pub(crate) fn salvage(path: &Path) -> Result<Salvage, String> {
     let mut bytes = Vec::new();
     File::open(path)
         .and_then(|mut f| f.read_to_end(&mut bytes))
@@ -22,114 +84,102 @@ pub(crate) fn check(path: &Path) -> Result<(), String> {
         return Err("the file ends inside its first block (truncated)".into());
     }
     // The first block's header size says the byte order (a small number: high bytes zero).
-    let little = bytes[0] != 0 && bytes[7] == 0;
-    let int = |at: usize| -> i64 {
-        let b: [u8; 8] = bytes[at..at + 8].try_into().unwrap_or([0; 8]);
-        if little {
-            i64::from_le_bytes(b)
-        } else {
-            i64::from_be_bytes(b)
-        }
+    let ints = Ints {
+        little: bytes[0] != 0 && bytes[7] == 0,
     };
-    let size = bytes.len();
-    let mut offset = 0usize;
-    let mut block = 0usize;
-    while offset < size {
-        let damaged = |what: &str| format!("block {block} at byte {offset} {what} (damaged file)");
-        if size - offset < 40 {
-            return Err(damaged("is cut by the end of the file"));
+    let (blocks, damage) = walk(&bytes, ints);
+    let Some((damaged_at, reason)) = damage else {
+        return Ok(Salvage::Sound);
+    };
+    // Keep the frame sets that start before the damaged one; the frame set holding the damage
+    // and everything after it go.
+    let frame_sets: Vec<&Block> = blocks.iter().filter(|b| b.id == FRAME_SET).collect();
+    let damaged_set = frame_sets.iter().rposition(|b| b.offset <= damaged_at);
+    let (Some(j), Some(info)) = (damaged_set.filter(|&j| j > 0), blocks.first()) else {
+        return Err(reason);
+    };
+    if info.id != GENERAL_INFO || info.contents < 40 {
+        return Err(reason);
+    }
+    let cut = frame_sets[j].offset;
+    let last_kept = frame_sets[j - 1].offset as i64;
+    let mut kept = bytes[..cut].to_vec();
+    // The general information points at the last frame set (40 bytes before the end of its
+    // contents come the first and the last frame set's positions).
+    let info_end = info.end();
+    ints.put(&mut kept, info_end - 32, last_kept);
+    rehash(&mut kept, info);
+    // Frame set contents end with: next, previous, medium-stride next and previous, long-stride
+    // next and previous frame set positions, the first frame's time and the time per frame.
+    for set in &frame_sets[..j] {
+        if set.contents < 64 {
+            return Err(reason);
         }
-        let header = int(offset);
-        let contents = int(offset + 8);
+        let end = set.end();
+        for back in [64, 48, 32] {
+            if ints.get(&kept, end - back) >= cut as i64 {
+                ints.put(&mut kept, end - back, -1);
+            }
+        }
+        rehash(&mut kept, set);
+    }
+    Ok(Salvage::Kept {
+        bytes: kept,
+        reason: format!("{reason}; the frame sets before it are kept"),
+    })
+}
+
+/// Walks the chain; returns the sound blocks and, when the chain breaks, the offset of the
+/// first damaged block and why.
+fn walk(bytes: &[u8], ints: Ints) -> (Vec<Block>, Option<(usize, String)>) {
+    let size = bytes.len();
+    let mut blocks = Vec::new();
+    let mut offset = 0usize;
+    while offset < size {
+        let n = blocks.len();
+        let damaged = |what: &str| {
+            Some((
+                offset,
+                format!("block {n} at byte {offset} {what} (damaged file)"),
+            ))
+        };
+        if size - offset < 40 {
+            return (blocks, damaged("is cut by the end of the file"));
+        }
+        let header = ints.get(bytes, offset);
+        let contents = ints.get(bytes, offset + 8);
         if !HEADER_SIZES.contains(&header) || contents < 0 {
-            return Err(damaged("has an invalid header"));
+            return (blocks, damaged("has an invalid header"));
         }
         let end = (offset as u64)
             .checked_add(header as u64)
             .and_then(|e| e.checked_add(contents as u64));
         let Some(end) = end.filter(|&e| e <= size as u64) else {
-            return Err(damaged("runs past the end of the file"));
+            return (blocks, damaged("runs past the end of the file"));
         };
         let hash: [u8; 16] = bytes[offset + 24..offset + 40]
             .try_into()
             .unwrap_or([0; 16]);
-        if hash != [0; 16] && md5(&bytes[offset + header as usize..end as usize]) != hash {
-            return Err(damaged("fails its checksum"));
+        if hash != [0; 16] && md5::compute(&bytes[offset + header as usize..end as usize]).0 != hash
+        {
+            return (blocks, damaged("fails its checksum"));
         }
+        blocks.push(Block {
+            offset,
+            header: header as usize,
+            contents: contents as usize,
+            id: ints.get(bytes, offset + 16),
+        });
         offset = end as usize;
-        block += 1;
     }
-    Ok(())
+    (blocks, None)
 }
 
-/// The MD5 digest of `data` (RFC 1321).
-fn md5(data: &[u8]) -> [u8; 16] {
-    const S: [u32; 64] = [
-        7, 12, 17, 22, 7, 12, 17, 22, 7, 12, 17, 22, 7, 12, 17, 22, 5, 9, 14, 20, 5, 9, 14, 20, 5,
-        9, 14, 20, 5, 9, 14, 20, 4, 11, 16, 23, 4, 11, 16, 23, 4, 11, 16, 23, 4, 11, 16, 23, 6, 10,
-        15, 21, 6, 10, 15, 21, 6, 10, 15, 21, 6, 10, 15, 21,
-    ];
-    let k: Vec<u32> = (0..64)
-        .map(|i| ((i as f64 + 1.0).sin().abs() * 4_294_967_296.0) as u32)
-        .collect();
-    let mut state: [u32; 4] = [0x6745_2301, 0xefcd_ab89, 0x98ba_dcfe, 0x1032_5476];
-    let mut message = data.to_vec();
-    message.push(0x80);
-    while message.len() % 64 != 56 {
-        message.push(0);
-    }
-    message.extend_from_slice(&((data.len() as u64).wrapping_mul(8)).to_le_bytes());
-    for chunk in message.chunks_exact(64) {
-        let m: Vec<u32> = chunk
-            .chunks_exact(4)
-            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
-            .collect();
-        let [mut a, mut b, mut c, mut d] = state;
-        for i in 0..64 {
-            let (f, g) = match i / 16 {
-                0 => ((b & c) | (!b & d), i),
-                1 => ((d & b) | (!d & c), (5 * i + 1) % 16),
-                2 => (b ^ c ^ d, (3 * i + 5) % 16),
-                _ => (c ^ (b | !d), (7 * i) % 16),
-            };
-            let rotated = a
-                .wrapping_add(f)
-                .wrapping_add(k[i])
-                .wrapping_add(m[g])
-                .rotate_left(S[i]);
-            a = d;
-            d = c;
-            c = b;
-            b = b.wrapping_add(rotated);
-        }
-        state = [
-            state[0].wrapping_add(a),
-            state[1].wrapping_add(b),
-            state[2].wrapping_add(c),
-            state[3].wrapping_add(d),
-        ];
-    }
-    let mut out = [0u8; 16];
-    for (i, word) in state.iter().enumerate() {
-        out[4 * i..4 * i + 4].copy_from_slice(&word.to_le_bytes());
-    }
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::md5;
-
-    fn hex(d: [u8; 16]) -> String {
-        d.iter().map(|b| format!("{b:02x}")).collect()
-    }
-
-    #[test]
-    fn md5_known_answers() {
-        assert_eq!(hex(md5(b"")), "d41d8cd98f00b204e9800998ecf8427e");
-        assert_eq!(
-            hex(md5(b"The quick brown fox jumps over the lazy dog")),
-            "9e107d9d372bb6826bd81d3542a419d6"
-        );
+/// Recomputes the MD5 of `block`'s contents in `bytes` after a patch (when it has one).
+fn rehash(bytes: &mut [u8], block: &Block) {
+    let at = block.offset + 24;
+    if bytes[at..at + 16] != [0; 16] {
+        let digest = md5::compute(&bytes[block.offset + block.header..block.end()]).0;
+        bytes[at..at + 16].copy_from_slice(&digest);
     }
 }

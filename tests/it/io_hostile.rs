@@ -410,3 +410,36 @@ fn xz_files_are_decompressed_in_rust() {
         damage.error
     );
 }
+
+/// A TNG damaged in its last frame set keeps the whole frame sets before it, frame for frame.
+#[test]
+fn damaged_tng_keeps_the_frame_sets_before_the_damage() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = std::fs::read(data("argon_npt_compressed.tng")).unwrap();
+    let good = io::open(&data("argon_npt_compressed.tng"), None).unwrap();
+    let mut flipped = original.clone();
+    // A byte inside the last frame set's data (its frame-set block starts at byte 398,576).
+    flipped[400_500] ^= 0x10;
+    for (name, bytes) in [
+        ("flip.tng", flipped),
+        ("cut.tng", original[..400_000].to_vec()),
+    ] {
+        let path = write(dir.path(), name, &bytes);
+        let read = io::open(&path, None).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(
+            read.len() > 0 && read.len() < good.len(),
+            "{name}: {}",
+            read.len()
+        );
+        let damage = read.damage().expect("the damage is reported");
+        assert_eq!(damage.frame, read.len());
+        assert!(damage.error.to_string().contains(name), "{}", damage.error);
+        for k in [0, read.len() - 1] {
+            assert_eq!(
+                read.read_frame(k).unwrap().positions,
+                good.read_frame(k).unwrap().positions,
+                "{name} frame {k}"
+            );
+        }
+    }
+}
