@@ -88,20 +88,47 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, String> {
         little: bytes[0] != 0 && bytes[7] == 0,
     };
     let (blocks, damage) = walk(&bytes, ints);
-    let Some((damaged_at, reason)) = damage else {
-        return Ok(Salvage::Sound);
-    };
-    // Keep the frame sets that start before the damaged one; the frame set holding the damage
-    // and everything after it go.
     let frame_sets: Vec<&Block> = blocks.iter().filter(|b| b.id == FRAME_SET).collect();
-    let damaged_set = frame_sets.iter().rposition(|b| b.offset <= damaged_at);
-    let (Some(j), Some(info)) = (damaged_set.filter(|&j| j > 0), blocks.first()) else {
+    let info = blocks
+        .first()
+        .filter(|b| b.id == GENERAL_INFO && b.contents >= 40);
+    // How many frame sets to keep, and why not all of them.
+    let (keep, reason) = match damage {
+        // The frame set holding the damage and everything after it go.
+        Some((damaged_at, reason)) => (
+            frame_sets.iter().rposition(|b| b.offset <= damaged_at),
+            reason,
+        ),
+        None => {
+            let (Some(info), Some(last)) = (info, frame_sets.last().filter(|b| b.contents >= 64))
+            else {
+                return Ok(Salvage::Sound);
+            };
+            // A sound chain cut at a block boundary: the index still points past the end.
+            let last_pointer = ints.get(&bytes, info.end() - 32);
+            let next = ints.get(&bytes, last.end() - 64);
+            if last_pointer == last.offset as i64 && next == -1 {
+                return Ok(Salvage::Sound);
+            }
+            // The last frame set is whole when the next one would start where the file ends.
+            let whole = next >= 0 && next as u64 >= bytes.len() as u64;
+            let keep = if whole {
+                frame_sets.len()
+            } else {
+                frame_sets.len() - 1
+            };
+            let reason = format!(
+                "the file ends after frame set {} of the {} its index promises (truncated)",
+                frame_sets.len(),
+                frame_sets.len() + 1
+            );
+            (Some(keep), reason)
+        }
+    };
+    let (Some(j), Some(info)) = (keep.filter(|&j| j > 0), info) else {
         return Err(reason);
     };
-    if info.id != GENERAL_INFO || info.contents < 40 {
-        return Err(reason);
-    }
-    let cut = frame_sets[j].offset;
+    let cut = frame_sets.get(j).map_or(bytes.len(), |b| b.offset);
     let last_kept = frame_sets[j - 1].offset as i64;
     let mut kept = bytes[..cut].to_vec();
     // The general information points at the last frame set (40 bytes before the end of its

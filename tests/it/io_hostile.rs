@@ -423,6 +423,8 @@ fn damaged_tng_keeps_the_frame_sets_before_the_damage() {
     for (name, bytes) in [
         ("flip.tng", flipped),
         ("cut.tng", original[..400_000].to_vec()),
+        // Cut exactly at a block boundary: every block is whole, the index points past the end.
+        ("boundary.tng", original[..398_576].to_vec()),
     ] {
         let path = write(dir.path(), name, &bytes);
         let read = io::open(&path, None).unwrap_or_else(|e| panic!("{name}: {e}"));
