@@ -27,6 +27,13 @@ struct MeasureUniform {
 
 const PARTIAL_GROUPS: u32 = 256u;
 
+// True with refined vertices (issue 13): area and volume with the curvature correction of
+// crate::surface::curved (each triangle split in four at its edge midpoints lifted onto the
+// surface from the end points' normals, then Richardson over the two levels).
+override CURVED: bool = false;
+// Twin of crate::surface::curved::MAX_LIFT (in units of the edge length).
+const MAX_LIFT: f32 = 0.5;
+
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::measure`): the Rust side
 // builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
 // declarations against it with naga.
@@ -45,6 +52,60 @@ var<workgroup> sh: array<vec2<f32>, 256>;
 fn vertex(i: u32) -> vec3<f32> {
     let o = 9u * i;
     return vec3<f32>(vertices[o], vertices[o + 1u], vertices[o + 2u]) - mu.centre;
+}
+
+fn vertex_normal(i: u32) -> vec3<f32> {
+    let o = 9u * i + 3u;
+    return vec3<f32>(vertices[o], vertices[o + 1u], vertices[o + 2u]);
+}
+
+// Twin of crate::surface::curved::lifted_midpoint, on the edge i -> j taken in index order (so
+// both triangles of an edge get the same point).
+fn lifted_midpoint(i: u32, j: u32) -> vec3<f32> {
+    let a = min(i, j);
+    let b = max(i, j);
+    let p = vertex(a);
+    let q = vertex(b);
+    let np = vertex_normal(a);
+    let nq = vertex_normal(b);
+    let d = q - p;
+    let c2 = sqrt(max(0.5 * (1.0 + dot(np, nq)), 0.0));
+    let s = dot(nq - np, d) / 8.0 / max(0.5 * (1.0 + c2), 0.5);
+    let cap = MAX_LIFT * length(d);
+    let n = np + nq;
+    let nl = length(n);
+    let m = 0.5 * (p + q);
+    if (nl > 0.0 && abs(s) < 1e30) {
+        return m + clamp(s, -cap, cap) * (n / nl);
+    }
+    return m;
+}
+
+fn tri_area(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
+    return 0.5 * length(cross(b - a, c - a));
+}
+
+fn tri_volume(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
+    return dot(a, cross(b, c)) / 6.0;
+}
+
+// Area and volume of triangle (i0, i1, i2), flat or curvature-corrected.
+fn measure_triangle(i0: u32, i1: u32, i2: u32) -> vec2<f32> {
+    let a = vertex(i0);
+    let b = vertex(i1);
+    let c = vertex(i2);
+    let flat = vec2<f32>(tri_area(a, b, c), tri_volume(a, b, c));
+    if (!CURVED) {
+        return flat;
+    }
+    let ab = lifted_midpoint(i0, i1);
+    let bc = lifted_midpoint(i1, i2);
+    let ca = lifted_midpoint(i2, i0);
+    let a1 = tri_area(a, ab, ca) + tri_area(ab, b, bc) + tri_area(ca, bc, c) + tri_area(ab, bc, ca);
+    let v1 = tri_volume(a, ab, ca) + tri_volume(ab, b, bc) + tri_volume(ca, bc, c)
+        + tri_volume(ab, bc, ca);
+    let fine = vec2<f32>(a1, v1);
+    return fine + (fine - flat) / 3.0;
 }
 
 fn tree_sum(lid: u32) {
@@ -67,10 +128,7 @@ fn partial_sums(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
         let i1 = indices[3u * t + 1u];
         let i2 = indices[3u * t + 2u];
         if (i0 < nvert && i1 < nvert && i2 < nvert) {
-            let a = vertex(i0);
-            let b = vertex(i1);
-            let c = vertex(i2);
-            acc += vec2<f32>(0.5 * length(cross(b - a, c - a)), dot(a, cross(b, c)) / 6.0);
+            acc += measure_triangle(i0, i1, i2);
         }
     }
     sh[lid] = acc;

@@ -32,6 +32,8 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// Count (and list) the atoms a selection matches in one frame.
     Select(cli::select::SelectArgs),
+    /// Join the stats parts of a chunked run (--chunk) into one CSV sorted by frame.
+    Merge(cli::merge::MergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -53,6 +55,7 @@ fn main() -> ExitCode {
         Some(Command::Render(args)) => cli::render::run(args),
         Some(Command::Bench(args)) => cli::bench::run(args),
         Some(Command::Select(args)) => cli::select::run(args),
+        Some(Command::Merge(args)) => cli::merge::run(args),
         None => cli::view::run(cli.view),
     };
     let code = match result {

@@ -1,6 +1,8 @@
 //! Synthetic large systems for benchmarks: a real structure tiled on a 3D lattice up to a
-//! requested particle count, with fresh random jitter in every frame so no frame repeats data.
-//! Feeds `mdsurf bench --synthetic N` and `--table1` in place of a trajectory file.
+//! requested particle count, or particles on hollow spherical shells (a capsid-like system that
+//! is mostly empty space inside its box), with fresh random jitter in every frame so no frame
+//! repeats data. Feeds `mdsurf bench --synthetic N`, `--synthetic-shell N` and `--table1` in
+//! place of a trajectory file.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -40,6 +42,14 @@ pub struct SyntheticSystem {
 
 /// Gap in Å between the bounding boxes of neighbouring copies.
 pub const TILE_GAP: f32 = 2.0;
+/// Layers of a synthetic shell ([`SyntheticSystem::shell`]): with [`SHELL_SPACING`] a coat
+/// about 9 Å thick, a thin capsid-like shell that grows in radius with the particle count.
+pub const SHELL_LAYERS: usize = 6;
+/// Distance in Å between a shell's layers and between neighbouring particles on a layer.
+pub const SHELL_SPACING: f32 = 1.5;
+/// Radius in Å of a shell's innermost layer when the particles fit (the paper's hollow-shell
+/// test uses 60 Å).
+pub const SHELL_INNER_RADIUS: f32 = 60.0;
 /// Default jitter amplitude in Å (each coordinate moves uniformly within ± this per frame).
 pub const DEFAULT_JITTER: f32 = 0.1;
 
@@ -110,6 +120,75 @@ impl SyntheticSystem {
             radii: out_radii,
             colours: out_colours,
             copies,
+            jitter: DEFAULT_JITTER,
+            seed: 0x6d64_7375_7266,
+        })
+    }
+
+    /// Places `count` particles on hollow concentric spherical shells around the origin, like a
+    /// virus capsid: [`SHELL_LAYERS`] layers [`SHELL_SPACING`] Å apart, particles
+    /// [`SHELL_SPACING`] Å apart on each layer (Fibonacci spirals), the innermost layer at
+    /// [`SHELL_INNER_RADIUS`] Å or further out when `count` needs more room. The bounding box
+    /// is mostly empty inside, which the sparse bricks skip. Radii and colours are those of the
+    /// structure (`radii` in Å, optional linear RGB `colours`), repeated in order.
+    pub fn shell(
+        radii: &[f32],
+        colours: Option<&[[f32; 3]]>,
+        count: usize,
+    ) -> Result<SyntheticSystem, SyntheticError> {
+        let n = radii.len();
+        if n == 0 {
+            return Err(SyntheticError::EmptySource);
+        }
+        if count == 0 {
+            return Err(SyntheticError::ZeroParticles);
+        }
+        if let Some(c) = colours
+            && c.len() != n
+        {
+            return Err(SyntheticError::LengthMismatch {
+                positions: n,
+                other: c.len(),
+            });
+        }
+        if let Some(i) = radii.iter().position(|r| !r.is_finite()) {
+            return Err(SyntheticError::NonFinite(i));
+        }
+        let per_layer = |r: f32| {
+            (4.0 * std::f32::consts::PI * r * r / (SHELL_SPACING * SHELL_SPACING)) as usize
+        };
+        let capacity = |inner: f32| -> usize {
+            (0..SHELL_LAYERS)
+                .map(|k| per_layer(inner + SHELL_SPACING * k as f32).max(1))
+                .sum()
+        };
+        let mut inner = SHELL_INNER_RADIUS;
+        while capacity(inner) < count {
+            inner += 1.0;
+        }
+        // Spread the particles over the layers in proportion to their area.
+        let total = capacity(inner);
+        let mut base = Vec::with_capacity(count);
+        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        for k in 0..SHELL_LAYERS {
+            let r = inner + SHELL_SPACING * k as f32;
+            let want = (per_layer(r).max(1) * count).div_ceil(total);
+            let m = want.min(count - base.len());
+            for i in 0..m {
+                let y = 1.0 - 2.0 * (i as f32 + 0.5) / m as f32;
+                let ring = (1.0 - y * y).max(0.0).sqrt();
+                let phi = golden * i as f32 + k as f32;
+                base.push(r * Vec3::new(ring * phi.cos(), y, ring * phi.sin()));
+            }
+        }
+        let out_radii = (0..count).map(|i| radii[i % n]).collect();
+        let out_colours = colours.map(|c| (0..count).map(|i| c[i % n]).collect());
+        base.truncate(count);
+        Ok(SyntheticSystem {
+            base,
+            radii: out_radii,
+            colours: out_colours,
+            copies: [1, 1, 1],
             jitter: DEFAULT_JITTER,
             seed: 0x6d64_7375_7266,
         })
@@ -250,6 +329,26 @@ mod tests {
         for (a, b) in f0.iter().zip(s.base_positions()) {
             assert!((*a - *b).abs().max_element() <= DEFAULT_JITTER);
         }
+    }
+
+    #[test]
+    fn shells_are_hollow_and_exact_in_count() {
+        let s = SyntheticSystem::shell(&[1.5, 1.7], None, 50_000).unwrap();
+        assert_eq!(s.len(), 50_000);
+        assert_eq!(s.radii()[1], 1.7);
+        let outer = SHELL_INNER_RADIUS + SHELL_SPACING * SHELL_LAYERS as f32;
+        for p in s.base_positions() {
+            let r = p.length();
+            assert!((SHELL_INNER_RADIUS - 1e-3..outer).contains(&r), "{r}");
+        }
+        let big = SyntheticSystem::shell(&[1.5], None, 2_000_000).unwrap();
+        assert_eq!(big.len(), 2_000_000);
+        assert!(
+            big.base_positions()
+                .iter()
+                .all(|p| p.length() > SHELL_INNER_RADIUS)
+        );
+        assert!(SyntheticSystem::shell(&[], None, 10).is_err());
     }
 
     #[test]

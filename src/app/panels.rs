@@ -7,7 +7,7 @@ use crate::model::ColorScheme;
 use crate::render::{Background, Projection, Stereo};
 use crate::scene::representation::RepStyle;
 use crate::scene::selection::Selection;
-use crate::surface::{Quality, SurfaceParams};
+use crate::surface::{Preset, Quality, SurfaceParams, VertexMode};
 
 /// The selected representation's edits in progress: surface parameters become the
 /// representation's only when the grid fits, and a selection only when it parses.
@@ -146,6 +146,20 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
         });
     ui.add(egui::Slider::new(&mut edited.opacity, 0.0..=1.0).text("opacity"));
     colour_ui(ui, &mut edited.colour);
+    if rep.style.is_surface() {
+        egui::ComboBox::from_label("vertices")
+            .selected_text(edited.vertices.name())
+            .show_ui(ui, |ui| {
+                for m in VertexMode::ALL {
+                    ui.selectable_value(&mut edited.vertices, m, m.name());
+                }
+            })
+            .response
+            .on_hover_text(
+                "interpolated: linear along grid edges; refined: on the exact Gaussian sum, \
+                 analytic normals, area and volume that hold at any H (slower)",
+            );
+    }
     if edited != *rep {
         out.push(Command::UpdateRep(i, Box::new(edited)));
     }
@@ -191,6 +205,18 @@ fn params_ui(
                 );
             }
         });
+    ui.horizontal(|ui| {
+        ui.label("preset");
+        for preset in Preset::ALL {
+            if ui
+                .button(preset.name())
+                .on_hover_text(format!("R, I and quality: {}", preset.description()))
+                .clicked()
+            {
+                *p = preset.apply(*p);
+            }
+        }
+    });
     match core.grid_estimate(i, p) {
         Some((grid, bytes)) => {
             let [x, y, z] = grid.dims;
@@ -253,6 +279,34 @@ fn colour_ui(ui: &mut egui::Ui, scheme: &mut ColorScheme) {
             ui.color_edit_button_rgb(c);
         });
     }
+    if let ColorScheme::Data(d) = scheme {
+        data_colour_ui(ui, d);
+    }
+}
+
+/// Colour map and range of data colours (`--color data:FILE.csv`): the range is the data's
+/// (see [`crate::model::ColourMap::default_range`]) until "fixed range" is ticked.
+fn data_colour_ui(ui: &mut egui::Ui, d: &mut crate::model::DataColours) {
+    egui::ComboBox::from_label("colour map")
+        .selected_text(d.map.name())
+        .show_ui(ui, |ui| {
+            for m in crate::model::ColourMap::ALL {
+                ui.selectable_value(&mut d.map, m, m.name());
+            }
+        });
+    let mut fixed = d.range.is_some();
+    let mut range = d.effective_range();
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut fixed, "fixed range");
+        let step = ((range[1] - range[0]).abs() / 100.0).max(1e-4) as f64;
+        ui.add_enabled(fixed, egui::DragValue::new(&mut range[0]).speed(step));
+        ui.add_enabled(fixed, egui::DragValue::new(&mut range[1]).speed(step));
+    });
+    d.range = match (fixed, range[0] < range[1]) {
+        (false, _) => None,
+        (true, true) => Some(range),
+        (true, false) => d.range.or(Some(d.effective_range())),
+    };
 }
 
 /// Stick radius, background, projection, depth cue, stereo, turntable (opacity and atom styles

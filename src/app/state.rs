@@ -232,6 +232,7 @@ impl AppCore {
             || old.style != rep.style
             || old.colour != rep.colour
             || old.params() != rep.params()
+            || old.vertices != rep.vertices
             || old.visible != rep.visible;
         *old = rep;
         if recompute {

@@ -27,7 +27,7 @@ use crate::gpu::{Changes, GpuEngine, GpuSurface, Work};
 use crate::model::{ParticleOptions, RadiusOverrides};
 use crate::scene::layer::{Layer, LayerFrame};
 use crate::scene::representation::{RepStyle, Representation};
-use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams};
+use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams, VertexMode};
 
 /// Frames kept in the worker's cache (around the playhead; oldest evicted first).
 const FRAME_CACHE: usize = 16;
@@ -223,14 +223,18 @@ fn compute_on(
     engine: EngineRef<'_>,
     atoms: &AtomSet<'_>,
     params: &SurfaceParams,
+    vertices: VertexMode,
     changes: Changes,
 ) -> Result<(SurfaceOutput, Option<GpuSurface>, Option<Work>), String> {
     match engine {
-        EngineRef::Host(e) => e
-            .compute(atoms, params)
-            .map(|o| (o, None, None))
-            .map_err(|e| e.to_string()),
+        EngineRef::Host(e) => {
+            e.set_vertices(vertices);
+            e.compute(atoms, params)
+                .map(|o| (o, None, None))
+                .map_err(|e| e.to_string())
+        }
         EngineRef::Gpu(e) => {
+            e.set_vertices(vertices);
             let stats = e
                 .run_blocking(atoms, params, changes)
                 .map_err(|e| e.to_string())?;
@@ -393,7 +397,7 @@ fn compute_key(rep: &Representation) -> impl PartialEq + '_ {
         &rep.selection,
         rep.style,
         rep.colour,
-        rep.style.is_surface().then(|| rep.params()),
+        rep.style.is_surface().then(|| (rep.params(), rep.vertices)),
     )
 }
 
@@ -611,9 +615,9 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
             };
             let atoms = lf.atom_set();
             let (output, gpu_surface, gpu_work) =
-                compute_on(engine_ref, &atoms, &rep.params(), changes).map_err(|e| {
-                    format!("frame {}: representation '{}': {e}", req.frame, rep.name)
-                })?;
+                compute_on(engine_ref, &atoms, &rep.params(), rep.vertices, changes).map_err(
+                    |e| format!("frame {}: representation '{}': {e}", req.frame, rep.name),
+                )?;
             result.output = output;
             result.gpu_surface = gpu_surface;
             result.gpu_work = gpu_work;

@@ -1,6 +1,7 @@
 //! `mdsurf bench`: times each stage (read, upload, bin, density, Marching Cubes) as medians over
 //! repeats, per backend, on the bundled demo, on a file given, and on synthetic tiled systems
-//! (`--synthetic N`), and prints an aligned table (optionally a CSV too); `--table1` runs the
+//! (`--synthetic N`) and hollow shells (`--synthetic-shell N`, also on the dense CPU engine),
+//! and prints an aligned table (optionally a CSV too); `--table1` runs the
 //! GPU engine's reproduction of the paper's Table 1. Speed claims of the project are measured
 //! here, never in tests.
 
@@ -10,7 +11,7 @@ use std::time::Instant;
 use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 use mdsurf::export::write_atomic;
-use mdsurf::surface::{StageTimings, SurfaceParams};
+use mdsurf::surface::{CpuEngine, StageTimings, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
 
 use super::bench_table::{Table, peak_rss_bytes};
@@ -34,6 +35,11 @@ pub struct BenchArgs {
     /// the demo with per-frame jitter; accepts 1000000, 1e6, 950k, 2.37M (repeatable).
     #[arg(long, value_name = "N", value_parser = parse_count)]
     pub synthetic: Vec<usize>,
+    /// Also (or only) time N particles on hollow spherical shells (a capsid: 6 layers from
+    /// 60 Å out, radii and colours from TOP or the demo), mostly empty space inside the box;
+    /// the CPU engine is timed with sparse bricks and dense (repeatable).
+    #[arg(long, value_name = "N", value_parser = parse_count)]
+    pub synthetic_shell: Vec<usize>,
     /// Run the GPU engine's reproduction of the paper's Table 1 (its sizes and spacings,
     /// R = 1, I = 0.5) and print it beside the paper's figures.
     #[arg(long)]
@@ -94,6 +100,8 @@ struct Case {
     label: String,
     source: Source,
     params: SurfaceParams,
+    /// Also time the dense CPU engine (every grid sample), to show what sparse bricks save.
+    dense_too: bool,
 }
 
 /// Medians of one case on one engine.
@@ -136,7 +144,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let params = args.params.params()?;
     if args.table1 {
         print_table1(&args)?;
-        if args.top.is_none() && args.synthetic.is_empty() {
+        if args.top.is_none() && args.synthetic.is_empty() && args.synthetic_shell.is_empty() {
             return Ok(());
         }
     }
@@ -149,6 +157,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             label,
             mut source,
             params,
+            dense_too,
         } = case;
         for engine in engines.iter_mut() {
             let name = engine.name().to_string();
@@ -178,7 +187,24 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 results.push(base);
                 continue;
             }
+            let sparse_ms =
+                (dense_too && matches!(engine, BenchEngine::Cpu(_))).then_some(r.compute_wall_ms);
             results.push(r);
+            if let Some(sparse_ms) = sparse_ms {
+                eprintln!("timing {label} on the dense cpu engine ...");
+                let mut dense = BenchEngine::Cpu(CpuEngine::dense());
+                dense.engine().set_vertices(mode);
+                let mut d = time_case(&mut source, &mut dense, &params, &args)
+                    .map_err(|e| anyhow!("{label} on dense cpu: {e:#}"))?;
+                d.case = format!("{label} dense");
+                refine_notes.push(format!(
+                    "{label}: sparse bricks {sparse_ms:.1} ms per frame, dense {:.1} ms \
+                     ({:.1}x)",
+                    d.compute_wall_ms,
+                    d.compute_wall_ms / sparse_ms.max(1e-9)
+                ));
+                results.push(d);
+            }
         }
     }
     let table = Table::from_results(&results);
@@ -257,11 +283,17 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
         )?)
     };
 
-    if args.top.is_some() || args.synthetic.is_empty() {
+    let shells: Vec<SyntheticSystem> = args
+        .synthetic_shell
+        .iter()
+        .map(|&n| SyntheticSystem::shell(&base_radii, colours, n))
+        .collect::<Result<_, _>>()?;
+    if args.top.is_some() || (args.synthetic.is_empty() && args.synthetic_shell.is_empty()) {
         cases.push(Case {
             label: name.clone(),
             source: Source::Real(Box::new(system)),
             params,
+            dense_too: false,
         });
     }
     for &n in &args.synthetic {
@@ -269,6 +301,15 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
             label: format!("synthetic {n} ({name})"),
             source: Source::Synthetic(tile(n)?),
             params,
+            dense_too: false,
+        });
+    }
+    for (shell, &n) in shells.into_iter().zip(&args.synthetic_shell) {
+        cases.push(Case {
+            label: format!("shell {n}"),
+            source: Source::Synthetic(shell),
+            params,
+            dense_too: true,
         });
     }
     Ok(cases)

@@ -12,7 +12,11 @@ use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
 use mdsurf::gpu::GpuEngine;
 use mdsurf::io::{self, Trajectory};
-use mdsurf::model::{ColorScheme, Frame, ParticleOptions, Particles, RadiusOverrides};
+use mdsurf::model::colour_data;
+use mdsurf::model::colour_map::parse_range;
+use mdsurf::model::{
+    ColorScheme, ColourMap, DataColours, Frame, ParticleOptions, Particles, RadiusOverrides,
+};
 use mdsurf::surface::{CpuEngine, Preset, Quality, SurfaceEngine, SurfaceParams, VertexMode};
 
 /// Input files and how their atoms become particles.
@@ -34,9 +38,19 @@ pub struct ParticleArgs {
     /// One bead per residue instead of one particle per atom.
     #[arg(long)]
     pub beads: bool,
-    /// Colour scheme: element, chain, residue-type, residue-index, b-factor or single:#rrggbb.
+    /// Colour scheme: element, chain, residue-type, residue-index, b-factor, single:#rrggbb, or
+    /// data:FILE.csv (rows index,value or frame,index,value; atoms without a value are grey).
     #[arg(long = "color", value_name = "SCHEME", default_value = "element")]
     pub color: String,
+    /// Colour map of --color data:FILE (and of per-model B-factors): viridis or bwr
+    /// (blue-white-red, for signed data).
+    #[arg(long = "color-map", value_name = "MAP")]
+    pub color_map: Option<ColourMap>,
+    /// Values at the ends of the colour map, LOW:HIGH (default: the data's minimum and maximum;
+    /// for bwr, ± the largest magnitude, so that 0 is white).
+    #[arg(long = "color-range", value_name = "LOW:HIGH", allow_hyphen_values = true,
+          value_parser = parse_range)]
+    pub color_range: Option<[f32; 2]>,
     /// Radius override in Å per element or particle type, e.g. `C=1.7` or `2=1.2` (repeatable).
     #[arg(long = "radius", value_name = "TYPE=Å")]
     pub radius: Vec<String>,
@@ -45,7 +59,19 @@ pub struct ParticleArgs {
 impl ParticleArgs {
     /// The library's particle options; fails with a one-line message on a bad scheme or radius.
     pub fn options(&self) -> Result<ParticleOptions> {
-        let colours = ColorScheme::from_str(&self.color).map_err(|e| anyhow!("--color: {e}"))?;
+        let mut colours =
+            ColorScheme::from_str(&self.color).map_err(|e| anyhow!("--color: {e}"))?;
+        match &mut colours {
+            ColorScheme::Data(d) => {
+                d.map = self.color_map.unwrap_or(d.map);
+                d.range = self.color_range.or(d.range);
+            }
+            ColorScheme::BFactor => {}
+            _ if self.color_map.is_some() || self.color_range.is_some() => {
+                bail!("--color-map and --color-range apply to --color data:FILE.csv or b-factor")
+            }
+            _ => {}
+        }
         let radius_overrides =
             RadiusOverrides::parse_all(&self.radius).map_err(|e| anyhow!("--radius: {e}"))?;
         Ok(ParticleOptions {
@@ -54,6 +80,49 @@ impl ParticleArgs {
             colours,
         })
     }
+}
+
+impl ParticleArgs {
+    /// [`ParticleArgs::options`] for `trajectory`: a data file is checked against its atoms and
+    /// frames (one line naming the file and line), and `b-factor` on a multi-model PDB becomes
+    /// the B-factors of each model, per frame.
+    pub fn options_for(&self, trajectory: &Trajectory) -> Result<ParticleOptions> {
+        let mut options = self.options()?;
+        let path = trajectory.path();
+        let is_pdb = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("pdb") || e.eq_ignore_ascii_case("ent"));
+        if options.colours == ColorScheme::BFactor && is_pdb && trajectory.len() > 1 {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("{}: cannot read", path.display()))?;
+            let table = colour_data::parse_pdb_bfactors(path, &text).map_err(|e| anyhow!(e))?;
+            let map = self.color_map.unwrap_or(ColourMap::BlueWhiteRed);
+            let range = self.color_range.unwrap_or(table.min_max);
+            options.colours = ColorScheme::Data(DataColours {
+                id: colour_data::register(table),
+                map,
+                range: Some(range),
+            });
+        }
+        if let Some(table) = options.colours.data().and_then(|d| d.table()) {
+            table
+                .check(trajectory.topology().len(), None)
+                .map_err(|e| anyhow!("--color: {e}"))?;
+        }
+        Ok(options)
+    }
+}
+
+/// Fails with one line when per-frame data colours have no values for a frame of `frames`.
+pub fn check_colour_frames(options: &ParticleOptions, frames: &[usize]) -> Result<()> {
+    let table = options.colours.data().and_then(|d| d.table());
+    if let (Some(table), Some(&last)) = (table, frames.iter().max()) {
+        table
+            .check(usize::MAX, Some(last + 1))
+            .map_err(|e| anyhow!("--color: {e}"))?;
+    }
+    Ok(())
 }
 
 /// The surface parameters H, R, I and quality.
@@ -324,8 +393,8 @@ impl System {
     /// Opens `input`, reads `first_frame` to size beads, and builds the particles.
     /// Returns the system and that frame.
     pub fn open(input: &InputArgs, first_frame: usize) -> Result<(System, Frame)> {
-        let options = input.particles.options()?;
         let trajectory = io::open(&input.top, input.traj.as_deref())?;
+        let options = input.particles.options_for(&trajectory)?;
         let frames_path = trajectory.path().to_path_buf();
         if trajectory.is_empty() {
             bail!("{}: the trajectory has no frames", frames_path.display());

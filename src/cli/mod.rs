@@ -3,7 +3,9 @@
 
 pub mod bench;
 pub mod bench_table;
+pub mod chunk;
 pub mod common;
+pub mod merge;
 pub mod render;
 pub mod scene_args;
 pub mod select;

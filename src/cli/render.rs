@@ -15,10 +15,14 @@ use mdsurf::render::{
     Stereo, atom_instances, bounding_sphere, render_to_rgba, write_png,
 };
 
+use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::surface::SurfaceOutput;
 
-use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, ms_since};
+use super::chunk::ChunkSpec;
+use super::common::{
+    Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
+};
 use super::scene_args::{SceneArgs, bind_layers};
 use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
 
@@ -82,6 +86,12 @@ pub struct RenderArgs {
     /// Surface engine.
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: Backend,
+    /// Render one block of the images: I/N (0-based I of N contiguous blocks) or `slurm`
+    /// (I = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, N = SLURM_ARRAY_TASK_COUNT). Names,
+    /// camera and turntable angles are those of the whole run, so the blocks together give the
+    /// same images as one run.
+    #[arg(long, value_name = "I/N|slurm")]
+    pub chunk: Option<ChunkSpec>,
 }
 
 /// Stereo eye flags shared by `mdsurf render` and the viewer.
@@ -210,6 +220,7 @@ fn output_paths(pattern: &Path, frames: &[usize]) -> Result<Vec<PathBuf>> {
 /// Runs `mdsurf render`.
 pub fn run(args: RenderArgs) -> Result<()> {
     let params = args.params.params()?;
+    let chunk = args.chunk.map(ChunkSpec::resolve).transpose()?;
     let state = args.scene.load_state()?;
     let transforms = args.transforms.options(state.as_ref());
     let first = args.frames.map_or(args.frame, |r| r.start);
@@ -241,6 +252,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(first) = paths.first() {
         super::surface::check_parent_dir(first)?;
     }
+    // The images this process writes; the camera is still fitted to the run's first frame.
+    let block = chunk.map_or(0..frames.len(), |c| c.block(frames.len()));
+    if block.is_empty() {
+        eprintln!(
+            "chunk {}: no image to render ({} in all)",
+            chunk.map(|c| c.to_string()).unwrap_or_default(),
+            frames.len()
+        );
+        return Ok(());
+    }
     let mut settings = RenderSettings {
         background: args.background,
         surface_opacity: args.opacity.clamp(0.0, 1.0),
@@ -252,7 +273,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         depth_cue: args.depth_cue.clamp(0.0, 1.0),
         ..RenderSettings::default()
     };
-    let options = args.input.particles.options()?;
+    let options = args.input.particles.options_for(&system.trajectory)?;
+    check_colour_frames(&options, &frames)?;
     let topology = system.trajectory.topology().clone();
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
     let first_frame = reader.read_frame(frames[0])?;
@@ -327,6 +349,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let surface_count = layers.iter().filter(|l| l.rep().style.is_surface()).count();
     scene.set_surface_count(surface_count);
     for (i, &f) in frames.iter().enumerate() {
+        if i >= block.end {
+            break;
+        }
+        if i > 0 && i < block.start {
+            continue;
+        }
         let t0 = Instant::now();
         let frame = if i == 0 {
             first_frame.clone()
@@ -397,9 +425,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 camera.pitch = pitch.to_radians();
             }
         }
+        if !block.contains(&i) {
+            // Frame 0 of a later chunk: computed only to fit the camera.
+            continue;
+        }
         let mut cam = camera;
         cam.turn(args.turntable.unwrap_or(0.0) * i as f32);
-        let image = render_to_rgba(
+        let mut image = render_to_rgba(
             &gpu.device,
             &gpu.queue,
             &renderer,
@@ -408,6 +440,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
             &settings,
             args.size,
         )?;
+        // Data colours get a colour bar (the first representation coloured by data).
+        if let Some(d) = layers.iter().find_map(|l| l.rep().colour.data().copied()) {
+            draw_colour_bar(&mut image, d.map, d.effective_range());
+        }
         let path = &paths[i];
         write_png(path, &image)?;
         eprintln!(

@@ -11,11 +11,17 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use mdsurf::export::glb::GlbAnimation;
+use mdsurf::export::stats_merge::{PartHeader, part_path};
 use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
 
-use mdsurf::surface::SurfaceOutput;
+use mdsurf::surface::{SurfaceOutput, SurfaceParams};
 
-use super::common::{Backend, FrameRange, InputArgs, ParamArgs, System, ms_since};
+use super::chunk::ChunkSpec;
+
+use super::common::{
+    Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
+};
 use super::scene_args::{SceneArgs, bind_layers};
 use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
 
@@ -41,7 +47,8 @@ pub struct SurfaceArgs {
     pub backend: Backend,
     /// Mesh output (.ply, .obj, .stl, .glb); with several frames a pattern such as
     /// `out_{frame}.ply` or `out_{frame:04}.ply` (the frame's index in the trajectory), with
-    /// several surface representations `{rep}` (the representation's name).
+    /// several surface representations `{rep}` (the representation's name). A .glb without
+    /// `{frame}` holds all frames as an animation (one node per frame, shown in turn).
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
     /// Per-frame statistics CSV (area, volume, counts, timings).
@@ -50,12 +57,35 @@ pub struct SurfaceArgs {
     /// Print only errors (no per-frame lines, progress bar or final summary).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Do one block of the selected frames: I/N (0-based I of N contiguous blocks) or `slurm`
+    /// (I = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, N = SLURM_ARRAY_TASK_COUNT). Meshes keep
+    /// the global frame index; --stats goes to STATS.part-IIII-of-NNNN.csv (join them with
+    /// `mdsurf merge STATS.csv`).
+    #[arg(long, value_name = "I/N|slurm")]
+    pub chunk: Option<ChunkSpec>,
+    /// Leave the ms_* timing columns of --stats empty, so that two runs (or a merged chunked
+    /// run) give the same file byte for byte.
+    #[arg(long)]
+    pub no_timings: bool,
+    /// Playback rate of an animated .glb in trajectory frames per second (frames keep the
+    /// spacing of their simulation times).
+    #[arg(long, value_name = "FPS", default_value_t = export::glb::DEFAULT_FPS,
+          value_parser = parse_fps)]
+    pub fps: f64,
+}
+
+fn parse_fps(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1000.0 => Ok(v),
+        _ => Err(format!("bad frame rate '{s}': expected 0 < FPS <= 1000")),
+    }
 }
 
 /// Runs `mdsurf surface`.
 pub fn run(args: SurfaceArgs) -> Result<()> {
     // Everything that can be checked before reading data is checked first.
     let params = args.params.params()?;
+    let chunk = args.chunk.map(ChunkSpec::resolve).transpose()?;
     let output = args.output.as_deref().map(OutputPattern::new).transpose()?;
     if let Some(stats) = &args.stats {
         check_parent_dir(stats)?;
@@ -77,7 +107,8 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             system.len()
         );
     }
-    let options = args.input.particles.options()?;
+    let options = args.input.particles.options_for(&system.trajectory)?;
+    check_colour_frames(&options, &frames)?;
     let topology = system.trajectory.topology().clone();
     let choice = args
         .scene
@@ -95,8 +126,17 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if layers.is_empty() {
         bail!("no visible surface representation to compute (the state file hides them all)");
     }
+    // A .glb without {frame} takes every frame as an animation.
+    let animate = output
+        .as_ref()
+        .is_some_and(|o| o.format == MeshFormat::Glb && !o.has_frame && frames.len() > 1);
+    if animate && chunk.is_some() {
+        bail!(
+            "--chunk: an animated .glb needs every frame in one process; write one file per frame (-o surf_{{frame}}.glb) or run without --chunk"
+        );
+    }
     if let Some(out) = &output {
-        if frames.len() > 1 && !out.has_frame {
+        if frames.len() > 1 && !out.has_frame && !animate {
             bail!(
                 "-o {}: {} frames selected, so the output needs a {{frame}} pattern (e.g. surf_{{frame}}.{})",
                 out.raw,
@@ -131,7 +171,48 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if args.transforms.any() && !args.quiet {
         reader.print_summary();
     }
-    let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
+    // A chunk does its block of the selection and writes its stats to a part file.
+    let selection = [
+        range.start,
+        range
+            .stop
+            .unwrap_or(usize::MAX)
+            .min(system.selectable_len()),
+        range.step,
+    ];
+    let frames = match chunk {
+        Some(c) => frames[c.block(frames.len())].to_vec(),
+        None => frames,
+    };
+    let mut stats = match (&args.stats, chunk) {
+        (None, _) => None,
+        (Some(path), None) => Some(StatsWriter::create(path)?),
+        (Some(path), Some(c)) => {
+            let header = PartHeader {
+                index: c.index,
+                count: c.count,
+                selection,
+                params: part_params(&args, &params, engine.name()),
+            };
+            Some(StatsWriter::create_with(
+                &part_path(path, c.index, c.count),
+                Some(&header),
+            )?)
+        }
+    };
+    if let Some(stats) = stats.as_mut() {
+        stats.set_timings(!args.no_timings);
+    }
+
+    let mut movies = Vec::new();
+    if let Some(out) = output.as_ref().filter(|_| animate) {
+        for layer in &layers {
+            movies.push(GlbAnimation::create(
+                &out.path_for(0, &layer.rep().name),
+                args.fps,
+            )?);
+        }
+    }
 
     let bar =
         (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
@@ -145,7 +226,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             let frame = reader.read_frame(index)?;
             let read_ms = ms_since(t0);
             let mut rows = Vec::with_capacity(layers.len());
-            for layer in layers.iter_mut() {
+            for (k, layer) in layers.iter_mut().enumerate() {
                 let t1 = Instant::now();
                 let rep = layer.rep().clone();
                 let lf = layer
@@ -161,7 +242,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                             anyhow!("{files}: frame {index}: representation '{}': {e}", rep.name)
                         })?
                 };
-                if let Some(out) = &output {
+                if let Some(movie) = movies.get_mut(k) {
+                    movie.add_frame(index, frame.time_ps, &surf.mesh)?;
+                } else if let Some(out) = &output {
                     export::write_mesh(&out.path_for(index, &rep.name), &surf.mesh)?;
                 }
                 rows.push(StatsRow {
@@ -206,11 +289,17 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         bar.finish_and_clear();
     }
 
-    // Keep what the good frames produced; a run where no frame succeeded changes no file.
+    // Keep what the good frames produced; a run where no frame succeeded changes no file (a
+    // chunk with an empty block writes its empty part, so the merge knows it ran).
     if let Some(stats) = stats
-        && stats.rows() > 0
+        && (stats.rows() > 0 || frames.is_empty())
     {
         stats.finish()?;
+    }
+    for movie in movies {
+        if movie.frames() > 0 {
+            movie.finish()?;
+        }
     }
     if let Some(err) = failure {
         if ok_frames == 0 {
@@ -233,6 +322,29 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The settings a stats part records so that `mdsurf merge` refuses parts of different runs:
+/// H, R, I, quality, vertices and engine by name, everything else that can change the numbers
+/// (files, particles, colours, radii, selection or state file, transformations) as a digest.
+fn part_params(args: &SurfaceArgs, params: &SurfaceParams, engine: &str) -> Vec<(String, String)> {
+    let inputs = format!(
+        "{:?}|{:?}|{:?}|{:?}",
+        args.input, args.params, args.scene, args.transforms
+    );
+    let digest = format!("{:x}", md5::compute(inputs.as_bytes()));
+    [
+        ("spacing", params.spacing.to_string()),
+        ("radius_scale", params.radius_scale.to_string()),
+        ("isovalue", params.isovalue.to_string()),
+        ("quality", params.quality.to_string()),
+        ("vertices", args.params.vertices.to_string()),
+        ("engine", engine.to_string()),
+        ("inputs", digest[..16].to_string()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
 }
 
 /// The one-line summary of a frame (and representation, when `with_rep`).

@@ -87,6 +87,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             };
             let mut rep = Representation::new("selection", expr, style);
             rep.set_params(&params);
+            rep.vertices = args.params.vertices;
             rep.colour = particles.colours;
             rep.validate().map_err(anyhow::Error::msg)?;
             (Some(vec![rep]), None)
@@ -107,6 +108,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             args.backend.into()
         },
         params,
+        vertices: args.params.vertices,
         particles,
         render,
         reps,

@@ -9,6 +9,7 @@ pub mod glb;
 pub mod obj;
 pub mod ply;
 pub mod stats;
+pub mod stats_merge;
 pub mod stl;
 
 use std::fmt;

@@ -1,9 +1,11 @@
 //! Per-frame statistics as CSV (`mdsurf surface --stats`): one row per computed frame, written to
-//! a temporary file and renamed into place by [`StatsWriter::finish`].
+//! a temporary file and renamed into place by [`StatsWriter::finish`]. A chunk of a job array
+//! writes a part file whose first line records the run (see [`super::stats_merge`]).
 
 use std::io::Write;
 use std::path::Path;
 
+use super::stats_merge::PartHeader;
 use super::{AtomicFile, ExportError};
 use crate::surface::StageTimings;
 
@@ -60,7 +62,20 @@ pub struct StatsRow {
 impl StatsRow {
     /// The row as CSV fields, in [`STATS_COLUMNS`] order.
     pub fn fields(&self) -> [String; 17] {
+        self.fields_with(true)
+    }
+
+    /// The row as CSV fields; without `timings` the `ms_*` fields are empty (a file that two
+    /// runs reproduce byte for byte).
+    pub fn fields_with(&self, timings: bool) -> [String; 17] {
         let t = &self.timings;
+        let ms = |v: f64| {
+            if timings {
+                format!("{v:.3}")
+            } else {
+                String::new()
+            }
+        };
         [
             self.frame.to_string(),
             csv_text(&self.rep),
@@ -73,18 +88,18 @@ impl StatsRow {
             self.triangles.to_string(),
             format!("{:.4}", self.area),
             format!("{:.4}", self.volume),
-            format!("{:.3}", self.total_ms),
-            format!("{:.3}", self.read_ms),
-            format!("{:.3}", t.upload_ms),
-            format!("{:.3}", t.bin_ms),
-            format!("{:.3}", t.density_ms),
-            format!("{:.3}", t.mc_ms),
+            ms(self.total_ms),
+            ms(self.read_ms),
+            ms(t.upload_ms),
+            ms(t.bin_ms),
+            ms(t.density_ms),
+            ms(t.mc_ms),
         ]
     }
 }
 
 /// `text` as one CSV field: quoted (with doubled quotes) when it holds a comma, quote or newline.
-fn csv_text(text: &str) -> String {
+pub(crate) fn csv_text(text: &str) -> String {
     if text.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", text.replace('"', "\"\""))
     } else {
@@ -97,20 +112,39 @@ fn csv_text(text: &str) -> String {
 pub struct StatsWriter {
     file: AtomicFile,
     rows: usize,
+    timings: bool,
 }
 
 impl StatsWriter {
     /// Starts a CSV at `path` and writes its header.
     pub fn create(path: &Path) -> Result<StatsWriter, ExportError> {
+        StatsWriter::create_with(path, None)
+    }
+
+    /// Starts a CSV at `path`; a chunk's part file first gets the line of its `part` header.
+    pub fn create_with(path: &Path, part: Option<&PartHeader>) -> Result<StatsWriter, ExportError> {
         let mut file = AtomicFile::create(path)?;
+        if let Some(part) = part {
+            writeln!(file.writer(), "{}", part.line()).map_err(|e| ExportError::io(path, e))?;
+        }
         writeln!(file.writer(), "{}", STATS_COLUMNS.join(","))
             .map_err(|e| ExportError::io(path, e))?;
-        Ok(StatsWriter { file, rows: 0 })
+        Ok(StatsWriter {
+            file,
+            rows: 0,
+            timings: true,
+        })
+    }
+
+    /// Whether the `ms_*` columns are written (default) or left empty, so that two runs give
+    /// the same file byte for byte.
+    pub fn set_timings(&mut self, timings: bool) {
+        self.timings = timings;
     }
 
     /// Appends one row.
     pub fn write_row(&mut self, row: &StatsRow) -> Result<(), ExportError> {
-        let line = row.fields().join(",");
+        let line = row.fields_with(self.timings).join(",");
         writeln!(self.file.writer(), "{line}")
             .map_err(|e| ExportError::io(self.file.target(), e))?;
         self.rows += 1;

@@ -21,6 +21,7 @@ use super::types::{GpuCounters, pack_colour};
 use super::{GpuError, inputs};
 use crate::surface::{
     AtomSet, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput, SurfaceParams,
+    VertexMode,
 };
 
 #[derive(Debug, Default)]
@@ -48,6 +49,8 @@ pub struct GpuEngine {
     latest: Option<FrameStats>,
     init_error: Option<String>,
     staging: std::sync::Mutex<Staging>,
+    /// Vertex placement (refined: `shaders/refine.wgsl` after emission, curved measurement).
+    vertices: VertexMode,
 }
 
 impl std::fmt::Debug for GpuEngine {
@@ -116,6 +119,7 @@ impl GpuEngine {
             latest: None,
             init_error: None,
             staging: Default::default(),
+            vertices: VertexMode::default(),
             ctx,
         };
         (engine, scope_error.or(table_error))
@@ -337,6 +341,7 @@ impl GpuEngine {
                 &plan,
                 work,
                 colour,
+                self.vertices == VertexMode::Refined,
             )
             .map_err(SurfaceError::from)?;
         let slot =
@@ -483,6 +488,14 @@ fn estimate_mesh(plan: &FramePlan) -> (u64, u64) {
 impl SurfaceEngine for GpuEngine {
     fn name(&self) -> &str {
         "gpu"
+    }
+
+    fn set_vertices(&mut self, mode: VertexMode) {
+        self.vertices = mode;
+    }
+
+    fn vertices(&self) -> VertexMode {
+        self.vertices
     }
 
     fn compute(

@@ -1,5 +1,6 @@
 //! Recording one frame's compute work (DESIGN section 3, steps 2 to 5): binning, then per z-slab
-//! the density pass and the Marching Cubes pass (classify, three scans, compaction, emission),
+//! the density pass and the Marching Cubes pass (classify, three scans, compaction, emission and,
+//! with refined vertices, refinement),
 //! then the end-of-frame bookkeeping, area/volume reduction and indirect draw arguments. Which
 //! stages run depends on what changed ([`Work`]). Called by [`super::engine::GpuEngine`].
 
@@ -9,7 +10,7 @@ use super::GpuError;
 use super::bin::Binner;
 use super::context::GpuContext;
 use super::density::{DensityMode, DensityStage};
-use super::mc::{Classify, Compact, Emit};
+use super::mc::{Classify, Compact, Emit, Refine};
 use super::measure::Measure;
 use super::plan::{FramePlan, Slab};
 use super::resources::Buffers;
@@ -39,6 +40,7 @@ pub struct Stages {
     classify: Classify,
     compact: Compact,
     emit: Emit,
+    refine: Refine,
     measure: Measure,
     /// Scans of the block sums of vertices, triangles, active cells.
     block_scans: [ScanPlan; 3],
@@ -142,6 +144,7 @@ impl Stages {
             classify: Classify::new(ctx),
             compact: Compact::new(ctx),
             emit: Emit::new(ctx),
+            refine: Refine::new(ctx),
             measure: Measure::new(ctx),
             block_scans: Default::default(),
             slab_values: Vec::new(),
@@ -198,10 +201,13 @@ impl Stages {
         self.classify.prepare(ctx, b);
         self.compact.prepare(ctx, b);
         self.emit.prepare(ctx, b);
+        self.refine.prepare(ctx, b);
     }
 
     /// Records the frame prepared by [`Stages::prepare`] into `rec` (after the caller reset the
-    /// counters).
+    /// counters); `refined`: vertices refined on the exact Gaussian sum and area and volume
+    /// curvature-corrected ([`crate::surface::VertexMode::Refined`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         rec: &mut Recorder<'_>,
@@ -210,6 +216,7 @@ impl Stages {
         plan: &FramePlan,
         work: Work,
         colour: bool,
+        refined: bool,
     ) -> Result<(), GpuError> {
         if work != Work::Mc {
             let ts = timer.pass(Stage::Bin);
@@ -254,6 +261,9 @@ impl Stages {
             self.compact
                 .record(&mut pass, offset, blocks, self.max_groups);
             self.emit.record(&mut pass, offset, b, colour);
+            if refined {
+                self.refine.record(&mut pass, offset, b);
+            }
             self.measure.slab_end(&mut pass);
             drop(pass);
             rec.end_stage(Stage::Mc)?;
@@ -265,7 +275,7 @@ impl Stages {
                 label: Some("measure"),
                 timestamp_writes: ts,
             });
-        self.measure.frame_end(&mut pass);
+        self.measure.frame_end(&mut pass, refined);
         drop(pass);
         rec.end_stage(Stage::Mc)
     }

@@ -234,6 +234,42 @@ pub mod emit {
     ];
 }
 
+/// `shaders/refine.wgsl` (issue 13: refined vertices; eight storage buffers, so the cell
+/// starts are read as the previous cell's end).
+pub mod refine {
+    use super::*;
+    /// The slab uniform.
+    pub const U: Slot = slot(0, "u", SLAB);
+    /// Slab density.
+    pub const DENSITY: Slot = slot(1, "density", Read);
+    /// Class words.
+    pub const CLASSES: Slot = slot(2, "classes", Read);
+    /// Vertex base per point.
+    pub const VERTEX_BASE: Slot = slot(3, "vertex_base", Read);
+    /// Active cells.
+    pub const ACTIVE: Slot = slot(4, "active_cells", Read);
+    /// Sorted atoms.
+    pub const SORTED_ATOMS: Slot = slot(5, "sorted_atoms", Read);
+    /// One past the last slot per cell.
+    pub const CELL_END: Slot = slot(6, "cell_end", Read);
+    /// Frame counters (read only here).
+    pub const COUNTERS: Slot = slot(7, "counters", Read);
+    /// The emitted vertices, refined in place.
+    pub const VERTICES: Slot = slot(8, "vertices", ReadWrite);
+    /// Every binding (the layout).
+    pub const ALL: &[Slot] = &[
+        U,
+        DENSITY,
+        CLASSES,
+        VERTEX_BASE,
+        ACTIVE,
+        SORTED_ATOMS,
+        CELL_END,
+        COUNTERS,
+        VERTICES,
+    ];
+}
+
 /// `shaders/measure.wgsl`.
 pub mod measure {
     use super::*;
@@ -281,6 +317,7 @@ pub const SHADERS: &[(&str, &[Slot])] = &[
     ("classify.wgsl", classify::ALL),
     ("compact.wgsl", compact::ALL),
     ("emit.wgsl", emit::ALL),
+    ("refine.wgsl", refine::ALL),
     ("measure.wgsl", measure::ALL),
 ];
 

@@ -2,11 +2,13 @@
 //! case byte, crossed own edges and triangle count per point, sums per 256-point block), three
 //! scans of the block sums ([`super::scan`]), [`Compact`] (`shaders/compact.wgsl`: global vertex
 //! base per point and the list of active cells) and [`Emit`] (`shaders/emit.wgsl`: shared
-//! vertices per crossed edge and indexed triangles, dispatched indirectly over the active cells).
+//! vertices per crossed edge and indexed triangles, dispatched indirectly over the active cells),
+//! then, with refined vertices, [`Refine`] (`shaders/refine.wgsl`: the same cells' vertices moved
+//! onto the exact Gaussian sum, normals from its gradient; issue 13).
 
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Layout, groups_1d, module};
-use super::layout::{classify as cl, compact as co, emit as em};
+use super::layout::{classify as cl, compact as co, emit as em, refine as rf};
 use super::resources::Buffers;
 
 /// Classification kernel and its cached bind group.
@@ -24,6 +26,10 @@ pub struct Emit {
     plain: Kernel,
     bind: Bound,
 }
+
+/// Vertex refinement kernel and its cached bind group.
+#[derive(Debug)]
+pub struct Refine(Kernel, Bound);
 
 impl Classify {
     /// Compiles the kernel.
@@ -151,5 +157,42 @@ impl Emit {
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, offset: u32, b: &Buffers, colour: bool) {
         self.kernel(colour)
             .dispatch_indirect(pass, &self.bind, &[offset], &b.dispatch_args);
+    }
+}
+
+impl Refine {
+    /// Compiles the kernel.
+    pub fn new(ctx: &GpuContext) -> Refine {
+        let m = module(&ctx.device, "refine.wgsl", super::shaders::REFINE);
+        Refine(
+            Kernel::with_slots(ctx, &m, "main", rf::ALL),
+            Bound::default(),
+        )
+    }
+
+    /// Refreshes the bind group (shared by every slab).
+    pub fn prepare(&mut self, ctx: &GpuContext, b: &Buffers) {
+        self.0.bind(
+            ctx,
+            &mut self.1,
+            &[
+                (rf::U, &b.slab_uniforms.buffer),
+                (rf::DENSITY, &b.density.buffer),
+                (rf::CLASSES, &b.classes.buffer),
+                (rf::VERTEX_BASE, &b.vertex_base.buffer),
+                (rf::ACTIVE, &b.active.buffer),
+                (rf::SORTED_ATOMS, &b.sorted_atoms.buffer),
+                (rf::CELL_END, &b.cell_end.buffer),
+                (rf::COUNTERS, &b.counters),
+                (rf::VERTICES, &b.vertices.buffer),
+            ],
+        );
+    }
+
+    /// Records refinement of the vertices the slab at `offset` emitted (indirect, with the
+    /// emission's arguments).
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, offset: u32, b: &Buffers) {
+        self.0
+            .dispatch_indirect(pass, &self.1, &[offset], &b.dispatch_args);
     }
 }

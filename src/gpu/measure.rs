@@ -1,6 +1,7 @@
 //! Bookkeeping between slabs and the end-of-frame reduction (`shaders/measure.wgsl`): emit
 //! dispatch sizes, running vertex/triangle bases, totals, overflow bits, the renderer's indirect
-//! draw arguments, and area and volume by a deterministic two-level sum.
+//! draw arguments, and area and volume by a deterministic two-level sum (of the flat triangles,
+//! or with refined vertices curvature-corrected as [`crate::surface::curved`] does).
 
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Uniform, module};
@@ -15,6 +16,8 @@ pub struct Measure {
     slab_end: Kernel,
     frame_end: Kernel,
     partial_sums: Kernel,
+    /// `partial_sums` with `CURVED` (refined vertices).
+    partial_sums_curved: Kernel,
     final_sum: Kernel,
     uniform: Uniform<MeasureUniform>,
     binds: [Bound; 5],
@@ -25,11 +28,20 @@ impl Measure {
     pub fn new(ctx: &GpuContext) -> Measure {
         let module = module(&ctx.device, "measure.wgsl", super::shaders::MEASURE);
         let k = |e, slots| Kernel::with_slots(ctx, &module, e, slots);
+        // One layout for both variants, so they share the bind group.
+        let sums = super::kernel::Layout::new(ctx, "partial_sums", m::PARTIAL_SUMS);
         Measure {
             slab_begin: k("slab_begin", m::SLAB_BEGIN),
             slab_end: k("slab_end", m::SLAB_END),
             frame_end: k("frame_end", m::FRAME_END),
-            partial_sums: k("partial_sums", m::PARTIAL_SUMS),
+            partial_sums: Kernel::new(ctx, &module, "partial_sums", &[], &sums),
+            partial_sums_curved: Kernel::new(
+                ctx,
+                &module,
+                "partial_sums",
+                &[("CURVED", 1.0)],
+                &sums,
+            ),
             final_sum: k("final_sum", m::FINAL_SUM),
             uniform: Uniform::new(ctx, "measure uniform"),
             binds: Default::default(),
@@ -86,12 +98,17 @@ impl Measure {
         self.slab_end.dispatch(pass, &self.binds[1], &[], [1, 1, 1]);
     }
 
-    /// After the last slab: totals, draw arguments, area and volume.
-    pub fn frame_end(&self, pass: &mut wgpu::ComputePass<'_>) {
+    /// After the last slab: totals, draw arguments, area and volume (`curved`: with the
+    /// curvature correction, for refined vertices).
+    pub fn frame_end(&self, pass: &mut wgpu::ComputePass<'_>, curved: bool) {
         self.frame_end
             .dispatch(pass, &self.binds[2], &[], [1, 1, 1]);
-        self.partial_sums
-            .dispatch(pass, &self.binds[3], &[], [256, 1, 1]);
+        let sums = if curved {
+            &self.partial_sums_curved
+        } else {
+            &self.partial_sums
+        };
+        sums.dispatch(pass, &self.binds[3], &[], [256, 1, 1]);
         self.final_sum
             .dispatch(pass, &self.binds[4], &[], [1, 1, 1]);
     }

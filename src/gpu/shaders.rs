@@ -27,6 +27,11 @@ pub const EMIT: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
     include_str!("../../shaders/emit.wgsl")
 );
+/// Refined vertices on the exact Gaussian sum (`shaders/refine.wgsl` after the slab uniform).
+pub const REFINE: &str = concat!(
+    include_str!("../../shaders/slab_uniform.wgsl"),
+    include_str!("../../shaders/refine.wgsl")
+);
 /// Area, volume and indirect draw arguments (`shaders/measure.wgsl`).
 pub const MEASURE: &str = include_str!("../../shaders/measure.wgsl");
 
@@ -38,5 +43,6 @@ pub const ALL: &[(&str, &str)] = &[
     ("classify.wgsl", CLASSIFY),
     ("compact.wgsl", COMPACT),
     ("emit.wgsl", EMIT),
+    ("refine.wgsl", REFINE),
     ("measure.wgsl", MEASURE),
 ];

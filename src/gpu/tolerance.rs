@@ -11,6 +11,10 @@ pub const CLASSIFY_NEAR_ISO: f32 = 1e-5;
 pub const TRIANGLES_REL: f64 = 0.005;
 /// Relative tolerance of surface area and volume.
 pub const AREA_VOLUME_REL: f64 = 0.001;
+/// Distance in Å between a GPU vertex and the CPU's (interpolated or refined, issue 13).
+pub const VERTEX_ABS: f32 = 1e-3;
+/// Smallest cosine between a GPU vertex normal and the CPU's.
+pub const NORMAL_COS: f32 = 0.999;
 /// Absolute tolerance of a colour channel (linear RGB, 0..1).
 pub const COLOUR_ABS: f32 = 1.0 / 255.0;
 

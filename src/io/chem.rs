@@ -244,7 +244,11 @@ pub(crate) fn check_positions(
 
 /// The periodic box as rows a, b, c in Å, or `None` for an infinite (absent) box.
 fn cell_rows(frame: &chemfiles::Frame) -> Option<[Vec3; 3]> {
-    let cell = frame.cell();
+    cell_rows_of(&frame.cell())
+}
+
+/// The periodic box of `cell` as rows a, b, c in Å, or `None` for an infinite (absent) box.
+pub(crate) fn cell_rows_of(cell: &chemfiles::UnitCell) -> Option<[Vec3; 3]> {
     if cell.shape() == CellShape::Infinite {
         return None;
     }
@@ -353,7 +357,7 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
 /// Sets [`Topology::residue_index`]: a new residue starts at every atom whose (residue number,
 /// name, chain, segment) or `group` differs from the previous atom's; atoms whose `group` is
 /// `u32::MAX` (in no residue) are residues of their own.
-fn number_residue_runs(top: &mut Topology, group: &[u32]) {
+pub(crate) fn number_residue_runs(top: &mut Topology, group: &[u32]) {
     let n = top.len();
     top.residue_index.resize(n, 0);
     let mut next = 0u32;

@@ -12,25 +12,30 @@ use crate::model::Topology;
 
 /// The bonds the CONECT records of `text` list, as sorted pairs of 0-based atom indices, and
 /// the number of atoms of the first model (`None` when the text has no CONECT record).
-fn conect_bonds(text: &str) -> Option<(HashSet<[u32; 2]>, usize)> {
+/// Bytes that are not ASCII never form a number.
+fn conect_bonds(text: &[u8]) -> Option<(HashSet<[u32; 2]>, usize)> {
+    let number = |field: Option<&[u8]>| -> Option<i64> {
+        std::str::from_utf8(field?).ok()?.trim().parse().ok()
+    };
     let mut serials: HashMap<i64, u32> = HashMap::new();
     let mut atoms = 0u32;
     let mut model_done = false;
     let mut bonds = HashSet::new();
-    for line in text.lines() {
+    for line in super::fast::lines(text) {
         let record = line.get(..6).unwrap_or(line);
-        match record.trim_end() {
-            "ATOM" | "HETATM" if !model_done => {
-                if let Some(serial) = line.get(6..11).and_then(|s| s.trim().parse().ok()) {
+        match record.trim_ascii_end() {
+            b"ATOM" | b"HETATM" if !model_done => {
+                if let Some(serial) = number(line.get(6..11)) {
                     serials.entry(serial).or_insert(atoms);
                 }
                 atoms += 1;
             }
-            "ENDMDL" => model_done = true,
-            "CONECT" => {
+            b"ENDMDL" => model_done = true,
+            b"CONECT" => {
                 let field = |k: usize| -> Option<u32> {
-                    let text = line.get(6 + 5 * k..11 + 5 * k)?.trim();
-                    serials.get(&text.parse::<i64>().ok()?).copied()
+                    serials
+                        .get(&number(line.get(6 + 5 * k..11 + 5 * k))?)
+                        .copied()
                 };
                 let Some(a) = field(0) else { continue };
                 for b in (1..5).filter_map(field) {
@@ -49,11 +54,14 @@ fn conect_bonds(text: &str) -> Option<(HashSet<[u32; 2]>, usize)> {
 /// list. Does nothing when the file has no CONECT record, cannot be read as text, or its first
 /// model has another atom count than `topology`.
 pub(crate) fn apply_conect(path: &Path, topology: &mut Topology) {
-    let Ok(bytes) = std::fs::read(path) else {
-        return;
-    };
-    let text = String::from_utf8_lossy(&bytes);
-    let Some((conect, atoms)) = conect_bonds(&text) else {
+    if let Ok(bytes) = std::fs::read(path) {
+        apply_conect_bytes(&bytes, topology);
+    }
+}
+
+/// [`apply_conect`] on the bytes of a PDB file already in memory.
+pub(crate) fn apply_conect_bytes(text: &[u8], topology: &mut Topology) {
+    let Some((conect, atoms)) = conect_bonds(text) else {
         return;
     };
     if atoms != topology.len() {
@@ -87,7 +95,7 @@ CONECT    3    4                                                    1XYZ  12
 CONECT    4    3
 END
 ";
-        let (bonds, atoms) = conect_bonds(text).expect("bonds");
+        let (bonds, atoms) = conect_bonds(text.as_bytes()).expect("bonds");
         assert_eq!(atoms, 3);
         assert_eq!(bonds, HashSet::from([[1, 2]]));
     }

@@ -4,7 +4,8 @@
 //! one at a time (the whole trajectory is never loaded). [`FrameStreamer`] wraps a trajectory in
 //! a reader thread with a bounded cache for the viewer.
 //!
-//! Every format goes through chemfiles (PDB, mmCIF, GRO, XTC, TRR, DCD, LAMMPS dump, XYZ, TNG,
+//! Large plain PDB and XYZ files take a fast path (`fast`): read once, in Rust, giving exactly
+//! what the chemfiles path gives. Every other format goes through chemfiles (PDB, mmCIF, GRO, XTC, TRR, DCD, LAMMPS dump, XYZ, TNG,
 //! Amber NetCDF, with `.gz`/`.bz2`/`.xz` compression); wwPDB files are additionally read by pdbtbx
 //! for element columns, B-factors and chains. All failures are [`IoError`]s that print as one
 //! line naming the file (and frame, and atom); chemfiles' own warnings are captured (see
@@ -17,7 +18,11 @@ mod chem;
 mod conect;
 mod dcd;
 pub mod error;
+mod fast;
+mod fast_pdb;
+mod fast_xyz;
 pub mod format;
+mod pdb_templates;
 mod prepare;
 mod quiet;
 pub mod stream;
@@ -33,5 +38,5 @@ pub use format::{FileFormat, WwFormat, detect};
 pub use stream::{
     FrameHook, FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions,
 };
-pub use trajectory::{Damage, Trajectory, open};
+pub use trajectory::{Damage, Trajectory, open, open_via_chemfiles, reads_fast};
 pub use warnings::take_warnings;

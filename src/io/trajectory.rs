@@ -6,11 +6,14 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
-use super::chem::ChemReader;
+use glam::Vec3;
+
+use super::chem::{ChemReader, check_positions};
 use super::format::detect;
 use super::prepare::prepare;
 use super::xdr_reader::{XdrKind, XdrReader};
-use super::{IoError, dcd, wwpdb, xdr};
+use super::{IoError, dcd, fast, wwpdb, xdr};
+
 use crate::model::{Frame, Topology, sizing};
 
 /// How many frames at the end of a file are probed for damage when it opens (a truncated
@@ -58,34 +61,71 @@ impl std::fmt::Debug for Trajectory {
 /// parsed, holds no atoms or frames, or when the two files disagree on the atom count. A
 /// trajectory whose last frames are damaged (truncated) still opens: [`Trajectory::len`] counts
 /// the good frames and [`Trajectory::damage`] says where it breaks.
+///
+/// Large plain PDB and XYZ files are read by our own readers (see `fast`), every other file by
+/// chemfiles; setting the environment variable `MDSURF_NO_FAST_READ` sends every file to
+/// chemfiles (for timing the two paths against each other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
+    open_with(top, traj, true)
+}
+
+/// [`open`] with every file read through chemfiles, never a fast reader: the reference the fast
+/// readers are tested against.
+pub fn open_via_chemfiles(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
+    open_with(top, traj, false)
+}
+
+/// True when `path` is a file a fast reader reads (a plain single-frame PDB or XYZ file it
+/// reproduces exactly); false for every other file, which goes through chemfiles.
+pub fn reads_fast(path: &Path) -> Result<bool, IoError> {
+    Ok(fast::read(path, &detect(path)?).is_some())
+}
+
+fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajectory, IoError> {
     let top_format = detect(top)?;
     if traj.is_none() && !top_format.has_names {
         return Err(IoError::NeedsTopology {
             path: top.to_path_buf(),
         });
     }
-    let mut top_reader = ChemReader::open(top, &top_format)?;
-    let mut topology = top_reader.read_topology(0)?;
+    // Large plain PDB and XYZ files: read once, in Rust (see `fast`); else through chemfiles.
+    let fast = allow_fast.then(|| fast::read(top, &top_format)).flatten();
+    let (mut topology, first, top_reader) = match fast {
+        Some(read) => (read.topology, FirstFrame::Read(read.frame), None),
+        None => {
+            let mut reader = ChemReader::open(top, &top_format)?;
+            let topology = reader.read_topology(0)?;
+            let positions = if topology.is_empty() {
+                Vec::new()
+            } else {
+                reader.read_positions(0)?
+            };
+            (topology, FirstFrame::Positions(positions), Some(reader))
+        }
+    };
     if topology.is_empty() {
         return Err(IoError::Empty {
             path: top.to_path_buf(),
             what: "no atoms",
         });
     }
-    let first = top_reader.read_positions(0)?;
-    if let Some(format) = top_format.wwpdb {
-        wwpdb::enrich(top, format, &mut topology, &first);
+    if let (Some(format), FirstFrame::Positions(first)) = (top_format.wwpdb, &first) {
+        wwpdb::enrich(top, format, &mut topology, first);
         if format == super::format::WwFormat::Pdb {
             super::conect::apply_conect(top, &mut topology);
         }
     }
     topology.complete_elements_and_radii();
-    sizing::fit_untyped_radii(&mut topology, &first);
+    sizing::fit_untyped_radii(&mut topology, first.positions());
     let mut walk = None;
-    let reader = match traj {
-        None => FrameSource::Chem(top_reader),
-        Some(path) => {
+    let reader = match (traj, top_reader, first) {
+        (None, Some(reader), _) => FrameSource::Chem(reader),
+        (None, None, first) => FrameSource::Memory {
+            path: top.to_path_buf(),
+            base: top_format.base,
+            frame: first.into_frame(),
+        },
+        (Some(path), top_reader, _) => {
             let format = detect(path)?;
             drop(top_reader);
             // XTC and TRR (also compressed): the frame headers are checked, then the frames
@@ -308,10 +348,43 @@ impl Trajectory {
     }
 }
 
-/// Where frames come from: chemfiles, or our own readers for XTC and TRR.
+/// Frame 0 of the topology file as the reader gave it: a whole frame (fast path) or positions.
+enum FirstFrame {
+    Read(Frame),
+    Positions(Vec<Vec3>),
+}
+
+impl FirstFrame {
+    /// Positions in Å.
+    fn positions(&self) -> &[Vec3] {
+        match self {
+            FirstFrame::Read(frame) => &frame.positions,
+            FirstFrame::Positions(p) => p,
+        }
+    }
+
+    /// The frame (the fast path always gives one; positions alone become a frame without box).
+    fn into_frame(self) -> Frame {
+        match self {
+            FirstFrame::Read(frame) => frame,
+            FirstFrame::Positions(positions) => Frame {
+                positions,
+                ..Frame::default()
+            },
+        }
+    }
+}
+
+/// Where frames come from: chemfiles, our own readers for XTC and TRR, or the one frame a fast
+/// reader read with the topology (kept in memory).
 enum FrameSource {
     Chem(ChemReader),
     Xdr(XdrReader),
+    Memory {
+        path: PathBuf,
+        base: &'static str,
+        frame: Frame,
+    },
 }
 
 impl FrameSource {
@@ -319,6 +392,7 @@ impl FrameSource {
         match self {
             FrameSource::Chem(r) => r.path(),
             FrameSource::Xdr(r) => r.path(),
+            FrameSource::Memory { path, .. } => path,
         }
     }
 
@@ -326,6 +400,7 @@ impl FrameSource {
         match self {
             FrameSource::Chem(r) => r.base(),
             FrameSource::Xdr(r) => r.base(),
+            FrameSource::Memory { base, .. } => base,
         }
     }
 
@@ -333,13 +408,14 @@ impl FrameSource {
         match self {
             FrameSource::Chem(r) => r.len(),
             FrameSource::Xdr(r) => r.len(),
+            FrameSource::Memory { .. } => 1,
         }
     }
 
     fn truncated(&self) -> Option<(&str, bool)> {
         match self {
             FrameSource::Chem(r) => r.truncated(),
-            FrameSource::Xdr(_) => None,
+            FrameSource::Xdr(_) | FrameSource::Memory { .. } => None,
         }
     }
 
@@ -347,6 +423,17 @@ impl FrameSource {
         match self {
             FrameSource::Chem(r) => r.read_frame(index),
             FrameSource::Xdr(r) => r.read_frame(index),
+            FrameSource::Memory { path, frame, .. } => {
+                if index != 0 {
+                    return Err(IoError::FrameOutOfRange {
+                        path: path.clone(),
+                        frame: index,
+                        len: 1,
+                    });
+                }
+                check_positions(path, index, &frame.positions)?;
+                Ok(frame.clone())
+            }
         }
     }
 }

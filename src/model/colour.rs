@@ -1,14 +1,21 @@
 //! Per-atom colour schemes (element, chain, residue type, residue index, B-factor or any number,
-//! single colour). Colours are linear RGB in 0..1, as the colour volume and renderer expect.
+//! single colour, the user's data through a colour map). Colours are linear RGB in 0..1, as the
+//! colour volume and renderer expect.
 
 use std::fmt;
 use std::str::FromStr;
 
+use std::path::Path;
+use std::sync::Arc;
+
+use super::colour_data::{self, DataId, DataTable};
+use super::colour_map::{ColourMap, parse_range};
 use super::residues::{ResidueClass, residue_class};
 use super::{ModelError, Topology};
 
 /// How atoms are coloured. `FromStr` accepts `element`, `chain`, `residue-type`,
-/// `residue-index` (alias `rainbow`), `b-factor`, and `single:#rrggbb` (or just `#rrggbb`).
+/// `residue-index` (alias `rainbow`), `b-factor`, `single:#rrggbb` (or just `#rrggbb`), and
+/// `data:FILE[;map=viridis|bwr][;range=LOW:HIGH]` (which reads FILE: see [`colour_data`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub enum ColorScheme {
     /// CPK-like colours by element; particles without an element get a colour per name.
@@ -24,6 +31,59 @@ pub enum ColorScheme {
     BFactor,
     /// The same linear RGB colour for every atom.
     Single([f32; 3]),
+    /// The user's numbers per atom (or per frame and atom) through a colour map.
+    Data(DataColours),
+}
+
+/// Colouring by a loaded [`colour_data::DataTable`]: which table, the map, and the value range
+/// (`None`: the map's default over the table's values, see [`ColourMap::default_range`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DataColours {
+    /// The table in the registry.
+    pub id: DataId,
+    /// The colour map.
+    pub map: ColourMap,
+    /// Values mapped to the map's ends (same unit as the data).
+    pub range: Option<[f32; 2]>,
+}
+
+impl DataColours {
+    /// Loads `path` (errors name the file and line) and colours by it with `map`.
+    pub fn load(path: &Path, map: ColourMap) -> Result<DataColours, ModelError> {
+        let table = colour_data::load(path).map_err(|e| ModelError::Parse(e.0))?;
+        Ok(DataColours {
+            id: colour_data::register(table),
+            map,
+            range: None,
+        })
+    }
+
+    /// The table (`None` only for an id of no table).
+    pub fn table(&self) -> Option<Arc<DataTable>> {
+        colour_data::get(self.id)
+    }
+
+    /// The range in use: the given one, else the map's default over the values.
+    pub fn effective_range(&self) -> [f32; 2] {
+        match (self.range, self.table()) {
+            (Some(r), _) => r,
+            (None, Some(t)) => self.map.default_range(t.min_max[0], t.min_max[1]),
+            (None, None) => [0.0, 1.0],
+        }
+    }
+
+    /// Colours of `atoms` atoms in trajectory frame `frame`: grey where there is no value.
+    pub fn colours(&self, atoms: usize, frame: usize) -> Vec<[f32; 3]> {
+        let table = self.table();
+        let values = table.as_ref().and_then(|t| t.values(frame)).unwrap_or(&[]);
+        let range = self.effective_range();
+        (0..atoms)
+            .map(|i| {
+                self.map
+                    .colour(values.get(i).copied().unwrap_or(f32::NAN), range)
+            })
+            .collect()
+    }
 }
 
 impl FromStr for ColorScheme {
@@ -37,11 +97,12 @@ impl FromStr for ColorScheme {
             "residue-type" | "restype" | "residue_type" => ColorScheme::ResidueType,
             "residue-index" | "residue_index" | "rainbow" => ColorScheme::ResidueIndex,
             "b-factor" | "bfactor" | "b_factor" => ColorScheme::BFactor,
+            _ if lower.starts_with("data:") => return parse_data(s.trim()),
             _ => {
                 let hex = lower.strip_prefix("single:").unwrap_or(&lower);
                 ColorScheme::Single(parse_hex(hex).ok_or_else(|| {
                     ModelError::Parse(format!(
-                        "bad colour scheme '{s}': use element, chain, residue-type, residue-index, b-factor or single:#rrggbb"
+                        "bad colour scheme '{s}': use element, chain, residue-type, residue-index, b-factor, single:#rrggbb or data:FILE.csv"
                     ))
                 })?)
             }
@@ -61,12 +122,48 @@ impl fmt::Display for ColorScheme {
                 let [r, g, b] = c.map(|v| (linear_to_srgb(v) * 255.0).round() as u8);
                 write!(f, "single:#{r:02x}{g:02x}{b:02x}")
             }
+            ColorScheme::Data(d) => {
+                let path = d.table().map(|t| t.path.display().to_string());
+                write!(f, "data:{}", path.unwrap_or_default())?;
+                if d.map != ColourMap::default() {
+                    write!(f, ";map={}", d.map)?;
+                }
+                if let Some([lo, hi]) = d.range {
+                    write!(f, ";range={lo}:{hi}")?;
+                }
+                Ok(())
+            }
         }
     }
 }
 
 impl ColorScheme {
-    /// The linear RGB colour of every atom of `topology`.
+    /// True when colours change from frame to frame (per-frame data).
+    pub fn is_per_frame(&self) -> bool {
+        match self {
+            ColorScheme::Data(d) => d.table().is_some_and(|t| t.per_frame),
+            _ => false,
+        }
+    }
+
+    /// The data colouring, if this is one.
+    pub fn data(&self) -> Option<&DataColours> {
+        match self {
+            ColorScheme::Data(d) => Some(d),
+            _ => None,
+        }
+    }
+
+    /// The linear RGB colour of every atom of `topology` in trajectory frame `frame` (only
+    /// per-frame data depends on it).
+    pub fn atom_colours_at(&self, topology: &Topology, frame: usize) -> Vec<[f32; 3]> {
+        match self {
+            ColorScheme::Data(d) => d.colours(topology.len(), frame),
+            _ => self.atom_colours(topology),
+        }
+    }
+
+    /// The linear RGB colour of every atom of `topology` (frame 0 for per-frame data).
     pub fn atom_colours(&self, topology: &Topology) -> Vec<[f32; 3]> {
         let n = topology.len();
         match self {
@@ -92,6 +189,7 @@ impl ColorScheme {
             }
             ColorScheme::BFactor => colours_from_values(&topology.b_factors),
             ColorScheme::Single(c) => vec![*c; n],
+            ColorScheme::Data(d) => d.colours(n, 0),
         }
     }
 }
@@ -120,6 +218,33 @@ pub fn colours_from_values(values: &[f32]) -> Vec<[f32; 3]> {
             }
         })
         .collect()
+}
+
+/// Parses `data:FILE[;map=NAME][;range=LOW:HIGH]`, reading FILE.
+fn parse_data(s: &str) -> Result<ColorScheme, ModelError> {
+    let rest = &s["data:".len()..];
+    let mut parts = rest.split(';');
+    let path = parts.next().unwrap_or("").trim();
+    if path.is_empty() {
+        return Err(ModelError::Parse(format!(
+            "bad colour scheme '{s}': expected data:FILE.csv"
+        )));
+    }
+    let (mut map, mut range) = (ColourMap::default(), None);
+    for part in parts {
+        match part.split_once('=') {
+            Some(("map", v)) => map = v.parse().map_err(ModelError::Parse)?,
+            Some(("range", v)) => range = Some(parse_range(v).map_err(ModelError::Parse)?),
+            _ => {
+                return Err(ModelError::Parse(format!(
+                    "bad colour scheme '{s}': after the file name, expected ;map=viridis|bwr or ;range=LOW:HIGH"
+                )));
+            }
+        }
+    }
+    let mut data = DataColours::load(Path::new(path), map)?;
+    data.range = range;
+    Ok(ColorScheme::Data(data))
 }
 
 /// Converts one sRGB channel (0..1) to linear.

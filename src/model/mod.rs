@@ -5,6 +5,8 @@ use glam::Vec3;
 
 pub mod beads;
 pub mod colour;
+pub mod colour_data;
+pub mod colour_map;
 pub mod elements;
 pub mod particles;
 pub mod radii;
@@ -12,7 +14,8 @@ pub mod residues;
 pub mod sizing;
 
 pub use beads::BeadModel;
-pub use colour::ColorScheme;
+pub use colour::{ColorScheme, DataColours};
+pub use colour_map::ColourMap;
 pub use particles::{ParticleOptions, Particles};
 pub use radii::{RadiusOverride, RadiusOverrides};
 pub use residues::ResidueClass;

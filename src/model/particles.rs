@@ -51,7 +51,7 @@ impl Particles {
         subset: Option<&[u32]>,
     ) -> Result<Self, ModelError> {
         check_count(first, topology.len())?;
-        let atom_colours = options.colours.atom_colours(topology);
+        let atom_colours = options.colours.atom_colours_at(topology, first.index);
         let (beads, radii, colours) = if options.beads {
             let model = BeadModel::new_subset(topology, first, subset)?;
             let colours = model.colours(&atom_colours);

@@ -5,6 +5,7 @@
 
 pub mod atoms;
 pub mod camera;
+pub mod colour_bar;
 pub mod headless;
 mod pipelines;
 pub mod readback;

@@ -134,7 +134,9 @@ impl Layer {
             }));
         }
         let atoms = self.selection.indices(frame);
-        let reuse = self.built.as_ref().is_some_and(|(a, _, _)| *a == atoms);
+        // Per-frame data colours rebuild the particles (their colours) every frame.
+        let reuse = self.built.as_ref().is_some_and(|(a, _, _)| *a == atoms)
+            && !self.rep.colour.is_per_frame();
         let rebuilt = !reuse;
         if rebuilt {
             let all = atoms.len() == topology.len();

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{ColorScheme, ParticleOptions, RadiusOverrides};
 use crate::render::AtomStyle;
-use crate::surface::{Quality, SurfaceParams};
+use crate::surface::{Quality, SurfaceParams, VertexMode};
 
 use super::selection::{Selection, SelectionError};
 
@@ -123,6 +123,10 @@ pub struct Representation {
     /// Gaussian cutoff: low, medium, high or max (surfaces).
     #[serde(with = "as_text")]
     pub quality: Quality,
+    /// Vertex placement (surfaces): `interpolated` or `refined` (on the exact Gaussian sum,
+    /// analytic normals). State files written before it existed load as interpolated.
+    #[serde(with = "as_text")]
+    pub vertices: VertexMode,
     /// Drawn (and, for surfaces, computed) when true.
     pub visible: bool,
 }
@@ -140,6 +144,7 @@ impl Default for Representation {
             radius_scale: p.radius_scale,
             isovalue: p.isovalue,
             quality: p.quality,
+            vertices: VertexMode::default(),
             visible: true,
         }
     }

@@ -394,7 +394,7 @@ fn xz_files_are_decompressed_in_rust() {
     let cut = write(dir.path(), "c.lammpstrj.xz", &xz[..xz.len() / 2]);
     let c = io::open(&cut, None).expect("a cut .xz keeps its good frames");
     assert!(
-        c.len() >= 1 && c.len() < a.len(),
+        !c.is_empty() && c.len() < a.len(),
         "{} of {}",
         c.len(),
         a.len()
@@ -429,7 +429,7 @@ fn damaged_tng_keeps_the_frame_sets_before_the_damage() {
         let path = write(dir.path(), name, &bytes);
         let read = io::open(&path, None).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(
-            read.len() > 0 && read.len() < good.len(),
+            !read.is_empty() && read.len() < good.len(),
             "{name}: {}",
             read.len()
         );

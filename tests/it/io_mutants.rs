@@ -164,6 +164,7 @@ struct Outcome {
 
 /// Runs `mdsurf ARGS`, killing it after [`TIME_LIMIT`], and collects its peak memory through
 /// `wait4` (this child's own resource usage, whatever other tests run at the same time).
+#[allow(clippy::zombie_processes)] // reaped by `wait4` below, not by `Child::wait`
 fn run(args: &[String]) -> Outcome {
     let mut child = Command::new(env!("CARGO_BIN_EXE_mdsurf"))
         .args(args)

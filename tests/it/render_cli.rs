@@ -81,6 +81,8 @@ fn turntable_sequence_writes_numbered_turning_images() {
         return;
     }
     let dir = tempfile::tempdir().expect("tempdir");
+    // Output folders are never created (a missing one is refused, as for `surface`).
+    std::fs::create_dir(dir.path().join("seq")).expect("folder");
     let pattern = dir.path().join("seq/frame_{frame:05}.png");
     let (gro, xtc) = (demo("md_1u19.gro"), demo("md_1u19.xtc"));
     let p = pattern.to_str().expect("utf-8 path");

@@ -4,10 +4,12 @@
 //! here with the preset at H = 1 Å and refined vertices on the same atoms (the count is
 //! checked), against the SES area.
 //!
-//! The target is 2 % on every row; it holds on the two fit rows and on YiiP, not on adenylate
-//! kinase (+2.7 %) nor on one chain of 1hpv (+3.1 %), and no (R, I) on the grid searched brings
-//! all rows within 2 % (best worst case over five proteins: 3.2 %). So the test requires 2 % on
-//! at least three rows and 4 % on every row.
+//! The target is 2 % on every row. The preset was fitted on the five `fit` rows (smallest worst
+//! deviation: 1.5 %), and they are held to 2 %. The `check` row, chain B of 1hpv, never used in
+//! a fit, misses it: +2.9 %, where chain A of the same dimer gives +1.5 % (the two chains' SES
+//! areas differ by 0.9 %, the Gaussian areas by 0.6 % the other way). No R and I holds 2 % on
+//! all six rows (the best worst case is 2.3 %, R 0.79, I 0.32), so check rows are held to the
+//! measured state, 3.5 %, and the miss is reported in the README.
 
 use glam::Vec3;
 use mdsurf::model::{ParticleOptions, Particles};
@@ -40,11 +42,10 @@ fn ses_preset_area_is_near_the_msms_ses_area_on_every_protein() {
     let header: Vec<&str> = lines.next().expect("header").split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
     let (c_name, c_file, c_sel) = (col("protein"), col("file"), col("selection"));
-    let (c_atoms, c_ses) = (col("atoms"), col("ses_area_A2"));
+    let (c_atoms, c_ses, c_role) = (col("atoms"), col("ses_area_A2"), col("role"));
     let params = Preset::Ses.apply(SurfaceParams::default());
     let mut failures = Vec::new();
-    let mut rows = 0;
-    let mut within_2 = 0;
+    let (mut rows, mut checks) = (0, 0);
     for line in lines.filter(|l| !l.trim().is_empty()) {
         let f: Vec<&str> = line.split(',').collect();
         let (pos, radii) = atoms(f[c_file], f[c_sel]);
@@ -66,18 +67,27 @@ fn ses_preset_area_is_near_the_msms_ses_area_on_every_protein() {
             .compute(&set, &params)
             .expect("surface");
         let dev = out.area / ses - 1.0;
-        within_2 += usize::from(dev.abs() <= 0.02);
-        if dev.abs() > 0.04 {
+        let limit = match f[c_role] {
+            "fit" => 0.02,
+            "check" => {
+                checks += 1;
+                0.035
+            }
+            other => panic!("{}: unknown role '{other}'", f[c_name]),
+        };
+        if dev.abs() > limit {
             failures.push(format!(
-                "{}: {:.1} Å² vs SES {ses:.1} Å² ({:+.2} %)",
+                "{} ({}): {:.1} Å² vs SES {ses:.1} Å² ({:+.2} %, limit {} %)",
                 f[c_name],
+                f[c_role],
                 out.area,
-                100.0 * dev
+                100.0 * dev,
+                100.0 * limit
             ));
         }
         rows += 1;
     }
-    assert!(rows >= 5, "only {rows} proteins in the table");
+    assert!(rows >= 6, "only {rows} proteins in the table");
+    assert!(checks >= 1, "no held-out row");
     assert!(failures.is_empty(), "{}", failures.join("; "));
-    assert!(within_2 >= 3, "only {within_2} of {rows} rows within 2 %");
 }

@@ -1,0 +1,492 @@
+//! Stats of a job array: each chunk (`mdsurf surface --chunk I/N --stats STATS.csv`) writes
+//! `STATS.part-IIII-of-NNNN.csv`, whose first line (a `#` comment, which pandas skips with
+//! `comment="#"`) records the chunk, the whole run's frame selection and the parameters that
+//! affect the numbers. [`merge_parts`] (`mdsurf merge STATS.csv`) checks that the parts come from
+//! one run and together hold every selected frame exactly once, and writes `STATS.csv` sorted by
+//! frame, as one run without chunks would have written it.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use super::stats::{STATS_COLUMNS, csv_text};
+use super::{ExportError, write_atomic};
+
+/// How a part file's first line starts.
+pub const PART_MARK: &str = "# mdsurf-part";
+
+/// What a part file records about the run it belongs to.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PartHeader {
+    /// This chunk, `0..count`.
+    pub index: usize,
+    /// Number of chunks.
+    pub count: usize,
+    /// The whole run's frames: start, stop (exclusive, already clipped to the trajectory) and
+    /// step, so the merge knows every frame that should be there.
+    pub selection: [usize; 3],
+    /// Parameters that affect the numbers, as `key=value` without spaces, in a fixed order.
+    pub params: Vec<(String, String)>,
+}
+
+impl PartHeader {
+    /// The header line (no newline).
+    pub fn line(&self) -> String {
+        let [a, b, s] = self.selection;
+        let mut line = format!(
+            "{PART_MARK} chunk={}/{} frames={a}:{b}:{s}",
+            self.index, self.count
+        );
+        for (k, v) in &self.params {
+            let _ = write!(line, " {}={}", clean(k), clean(v));
+        }
+        line
+    }
+
+    /// Parses a header line; `None` when it is not one.
+    pub fn parse(line: &str) -> Option<PartHeader> {
+        let rest = line.trim_end().strip_prefix(PART_MARK)?;
+        let mut words = rest.split_whitespace().map(|w| w.split_once('='));
+        let (index, count) = match words.next()?? {
+            ("chunk", v) => {
+                let (i, n) = v.split_once('/')?;
+                (i.parse().ok()?, n.parse().ok()?)
+            }
+            _ => return None,
+        };
+        let selection = match words.next()?? {
+            ("frames", v) => {
+                let mut it = v.split(':').map(|p| p.parse::<usize>().ok());
+                [it.next()??, it.next()??, it.next()??]
+            }
+            _ => return None,
+        };
+        let params = words
+            .map(|kv| kv.map(|(k, v)| (k.to_string(), v.to_string())))
+            .collect::<Option<Vec<_>>>()?;
+        if count == 0 || index >= count || selection[2] == 0 {
+            return None;
+        }
+        Some(PartHeader {
+            index,
+            count,
+            selection,
+            params,
+        })
+    }
+
+    /// Every frame index of the whole run.
+    pub fn frames(&self) -> Vec<usize> {
+        let [a, b, s] = self.selection;
+        (a..b).step_by(s).collect()
+    }
+}
+
+/// A value with its whitespace replaced, so the header stays `key=value` words.
+fn clean(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_whitespace() { '_' } else { c })
+        .collect()
+}
+
+/// The part file of chunk `index` of `count` for the stats path `stats`:
+/// `DIR/STEM.part-IIII-of-NNNN.EXT` (at least 4 digits, I from 0).
+pub fn part_path(stats: &Path, index: usize, count: usize) -> PathBuf {
+    let width = count.to_string().len().max(4);
+    let (stem, ext) = stem_ext(stats);
+    let name = format!("{stem}.part-{index:0width$}-of-{count:0width$}{ext}");
+    stats.with_file_name(name)
+}
+
+/// `STEM` and `.EXT` (empty when there is none) of a stats path's file name.
+fn stem_ext(stats: &Path) -> (String, String) {
+    let stem = stats
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = stats
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    (stem, ext)
+}
+
+/// Why parts could not be merged; each message is one line naming the file(s).
+#[derive(Debug, thiserror::Error)]
+pub enum MergeError {
+    /// A part could not be read, or the merged file not written.
+    #[error(transparent)]
+    Io(#[from] ExportError),
+    /// Anything else: no parts, parts of different runs, missing or duplicated frames, a
+    /// malformed part.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// What [`merge_parts`] did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MergeSummary {
+    /// The part files read, in chunk order.
+    pub parts: Vec<PathBuf>,
+    /// Rows written (one per frame and surface representation).
+    pub rows: usize,
+    /// Distinct frames.
+    pub frames: usize,
+}
+
+/// One data row of a part.
+struct Row {
+    frame: usize,
+    rep: String,
+    line: String,
+    /// Where it came from, for messages: `file:line`.
+    at: String,
+}
+
+/// Joins the parts of `stats` (see [`part_path`]) into `stats`, atomically. Fails with one line
+/// when there are no parts, parts with different chunk counts or parameters, a frame (and
+/// representation) in two parts, or frames of the selection that no part holds.
+pub fn merge_parts(stats: &Path) -> Result<MergeSummary, MergeError> {
+    let invalid = |m: String| MergeError::Invalid(m);
+    let parts = find_parts(stats)?;
+    let counts: BTreeSet<usize> = parts.iter().map(|(_, n, _)| *n).collect();
+    if counts.len() > 1 {
+        let list: Vec<String> = counts.iter().map(|n| format!("of-{n:04}")).collect();
+        return Err(invalid(format!(
+            "{}: parts of runs with different chunk counts ({}); remove the stale ones",
+            show_pattern(stats),
+            list.join(", ")
+        )));
+    }
+    let mut first: Option<(PathBuf, PartHeader)> = None;
+    let mut rows: Vec<Row> = Vec::new();
+    let mut present = BTreeSet::new();
+    for (index, count, path) in &parts {
+        let (header, part_rows) = read_part(path)?;
+        if (header.index, header.count) != (*index, *count) {
+            return Err(invalid(format!(
+                "{}:1: the header says chunk {}/{}, the file name {index}/{count}",
+                path.display(),
+                header.index,
+                header.count
+            )));
+        }
+        match &first {
+            None => first = Some((path.clone(), header)),
+            Some((first_path, first_header)) => {
+                if let Some(diff) = difference(first_header, &header) {
+                    return Err(invalid(format!(
+                        "{}: written with {diff}, {} with {}; parts of runs with different parameters are not merged",
+                        path.display(),
+                        first_path.display(),
+                        difference(&header, first_header).unwrap_or_default()
+                    )));
+                }
+            }
+        }
+        present.insert(*index);
+        rows.extend(part_rows);
+    }
+    let Some((_, header)) = first else {
+        return Err(invalid(format!(
+            "no part files {} next to {}",
+            show_pattern(stats),
+            stats.display()
+        )));
+    };
+
+    // Every frame of the selection exactly once per representation; nothing else.
+    let expected: BTreeSet<usize> = header.frames().into_iter().collect();
+    let mut seen: BTreeMap<(usize, &str), &str> = BTreeMap::new();
+    let mut duplicated = BTreeSet::new();
+    let mut dup_at = None;
+    for row in &rows {
+        if !expected.contains(&row.frame) {
+            return Err(invalid(format!(
+                "{}: frame {} is not in the run's selection {}",
+                row.at,
+                row.frame,
+                frames_text(&header)
+            )));
+        }
+        if let Some(prev) = seen.insert((row.frame, row.rep.as_str()), row.at.as_str()) {
+            duplicated.insert(row.frame);
+            dup_at.get_or_insert_with(|| format!("{prev} and {}", row.at));
+        }
+    }
+    if !duplicated.is_empty() {
+        return Err(invalid(format!(
+            "{}: duplicated frames {} (first at {})",
+            show_pattern(stats),
+            ranges(&duplicated),
+            dup_at.unwrap_or_default()
+        )));
+    }
+    let have: BTreeSet<usize> = rows.iter().map(|r| r.frame).collect();
+    let missing: BTreeSet<usize> = expected.difference(&have).copied().collect();
+    if !missing.is_empty() {
+        let absent: Vec<String> = (0..header.count)
+            .filter(|i| !present.contains(i))
+            .map(|i| {
+                part_path(stats, i, header.count)
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            })
+            .collect();
+        let why = if absent.is_empty() {
+            String::new()
+        } else {
+            format!(" (no file {})", absent.join(", "))
+        };
+        return Err(invalid(format!(
+            "{}: missing frames {}{why}",
+            show_pattern(stats),
+            ranges(&missing)
+        )));
+    }
+
+    rows.sort_by_key(|r| r.frame);
+    write_atomic(stats, |w: &mut dyn Write| {
+        writeln!(w, "{}", STATS_COLUMNS.join(","))?;
+        for row in &rows {
+            writeln!(w, "{}", row.line)?;
+        }
+        Ok(())
+    })?;
+    Ok(MergeSummary {
+        parts: parts.into_iter().map(|(_, _, p)| p).collect(),
+        rows: rows.len(),
+        frames: have.len(),
+    })
+}
+
+/// `DIR/STEM.part-*-of-*.EXT`, for messages.
+fn show_pattern(stats: &Path) -> String {
+    let (stem, ext) = stem_ext(stats);
+    stats
+        .with_file_name(format!("{stem}.part-*-of-*{ext}"))
+        .display()
+        .to_string()
+}
+
+/// The part files next to `stats`: (chunk index, chunk count, path), sorted.
+fn find_parts(stats: &Path) -> Result<Vec<(usize, usize, PathBuf)>, MergeError> {
+    let dir = match stats.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let (stem, ext) = stem_ext(stats);
+    let prefix = format!("{stem}.part-");
+    let entries = fs::read_dir(dir).map_err(|e| ExportError::io(dir, e))?;
+    let mut parts = Vec::new();
+    for entry in entries {
+        let entry = entry.map_err(|e| ExportError::io(dir, e))?;
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else { continue };
+        let Some(middle) = name
+            .strip_prefix(&prefix)
+            .and_then(|m| m.strip_suffix(ext.as_str()))
+        else {
+            continue;
+        };
+        let Some((i, n)) = middle.split_once("-of-") else {
+            continue;
+        };
+        let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+        if !digits(i) || !digits(n) {
+            continue;
+        }
+        if let (Ok(i), Ok(n)) = (i.parse(), n.parse()) {
+            parts.push((i, n, stats.with_file_name(name)));
+        }
+    }
+    parts.sort();
+    Ok(parts)
+}
+
+/// Reads one part: its header and rows.
+fn read_part(path: &Path) -> Result<(PartHeader, Vec<Row>), MergeError> {
+    let text = fs::read_to_string(path).map_err(|e| ExportError::io(path, e))?;
+    let bad = |line: usize, what: String| {
+        MergeError::Invalid(format!("{}:{line}: {what}", path.display()))
+    };
+    let mut lines = text.lines();
+    let header = lines.next().and_then(PartHeader::parse).ok_or_else(|| {
+        bad(
+            1,
+            format!("not a stats part (no '{PART_MARK} ...' first line)"),
+        )
+    })?;
+    let columns = STATS_COLUMNS.join(",");
+    if lines.next() != Some(columns.as_str()) {
+        return Err(bad(
+            2,
+            "the columns differ from this mdsurf's stats columns".into(),
+        ));
+    }
+    // The data rows (after the two header lines), read as CSV so quoted names round-trip.
+    let body_start = text
+        .match_indices('\n')
+        .nth(1)
+        .map(|(i, _)| i + 1)
+        .unwrap_or(text.len());
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(&text.as_bytes()[body_start..]);
+    let mut rows = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line() as usize + 2);
+            bad(line, format!("bad CSV row: {e}"))
+        })?;
+        let line = record.position().map_or(0, |p| p.line() as usize + 2);
+        if record.len() != STATS_COLUMNS.len() {
+            return Err(bad(
+                line,
+                format!("{} fields, expected {}", record.len(), STATS_COLUMNS.len()),
+            ));
+        }
+        let frame = record[0]
+            .parse()
+            .map_err(|_| bad(line, format!("frame '{}' is not a frame index", &record[0])))?;
+        let fields: Vec<String> = record.iter().map(csv_text).collect();
+        rows.push(Row {
+            frame,
+            rep: record[1].to_string(),
+            line: fields.join(","),
+            at: format!("{}:{line}", path.display()),
+        });
+    }
+    Ok((header, rows))
+}
+
+/// The first setting of `a` that `b` does not share, as `key=value` (or the frame selection).
+fn difference(a: &PartHeader, b: &PartHeader) -> Option<String> {
+    if a.selection != b.selection {
+        return Some(format!("--frames {}", frames_text(a)));
+    }
+    for (k, v) in &a.params {
+        if b.params.iter().find(|(bk, _)| bk == k).map(|(_, bv)| bv) != Some(v) {
+            return Some(format!("{k}={v}"));
+        }
+    }
+    b.params
+        .iter()
+        .find(|(k, _)| !a.params.iter().any(|(ak, _)| ak == k))
+        .map(|(k, _)| format!("no {k}"))
+}
+
+/// A header's selection as `START:STOP:STEP`.
+fn frames_text(h: &PartHeader) -> String {
+    let [a, b, s] = h.selection;
+    format!("{a}:{b}:{s}")
+}
+
+/// Frame numbers as runs, e.g. `3-5, 9` (the first 8 runs, then how many more frames).
+fn ranges(frames: &BTreeSet<usize>) -> String {
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for &f in frames {
+        match runs.last_mut() {
+            Some((_, end)) if *end + 1 == f => *end = f,
+            _ => runs.push((f, f)),
+        }
+    }
+    let shown: Vec<String> = runs
+        .iter()
+        .take(8)
+        .map(|&(a, b)| {
+            if a == b {
+                a.to_string()
+            } else {
+                format!("{a}-{b}")
+            }
+        })
+        .collect();
+    let rest: usize = runs.iter().skip(8).map(|(a, b)| b - a + 1).sum();
+    if rest > 0 {
+        format!("{} and {rest} more", shown.join(", "))
+    } else {
+        shown.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header(index: usize, iso: &str) -> PartHeader {
+        PartHeader {
+            index,
+            count: 2,
+            selection: [0, 4, 1],
+            params: vec![
+                ("isovalue".into(), iso.into()),
+                ("engine".into(), "cpu".into()),
+            ],
+        }
+    }
+
+    fn write_part(dir: &Path, h: &PartHeader, frames: &[usize]) {
+        let mut text = format!("{}\n{}\n", h.line(), STATS_COLUMNS.join(","));
+        for f in frames {
+            text += &format!("{f},\"a,b\",,1,2,2,2,3,4,5.0000,6.0000,,,,,,\n");
+        }
+        fs::write(part_path(&dir.join("s.csv"), h.index, h.count), text).unwrap();
+    }
+
+    #[test]
+    fn header_round_trips_and_paths_are_padded() {
+        let h = header(1, "0.5");
+        assert_eq!(PartHeader::parse(&h.line()), Some(h.clone()));
+        assert_eq!(h.frames(), [0, 1, 2, 3]);
+        assert_eq!(PartHeader::parse("frame,rep"), None);
+        assert_eq!(
+            part_path(Path::new("out/s.csv"), 3, 12),
+            Path::new("out/s.part-0003-of-0012.csv")
+        );
+        assert_eq!(
+            part_path(Path::new("s"), 3, 12345),
+            Path::new("s.part-00003-of-12345")
+        );
+        assert_eq!(ranges(&[1, 2, 3, 7, 9, 10].into()), "1-3, 7, 9-10");
+    }
+
+    #[test]
+    fn merge_sorts_and_refuses_gaps_duplicates_and_other_parameters() {
+        let dir = tempfile::tempdir().unwrap();
+        let stats = dir.path().join("s.csv");
+        let err = merge_parts(&stats).unwrap_err().to_string();
+        assert!(err.starts_with("no part files"), "{err}");
+
+        write_part(dir.path(), &header(1, "0.5"), &[2, 3]);
+        let err = merge_parts(&stats).unwrap_err().to_string();
+        assert!(
+            err.contains("missing frames 0-1 (no file s.part-0000-of-0002.csv)"),
+            "{err}"
+        );
+        assert!(!stats.exists());
+
+        write_part(dir.path(), &header(0, "0.5"), &[0, 1]);
+        let sum = merge_parts(&stats).unwrap();
+        assert_eq!((sum.rows, sum.frames, sum.parts.len()), (4, 4, 2));
+        let text = fs::read_to_string(&stats).unwrap();
+        let frames: Vec<&str> = text.lines().skip(1).map(|l| &l[..1]).collect();
+        assert_eq!(frames, ["0", "1", "2", "3"]);
+        assert!(text.contains("\"a,b\""), "{text}");
+
+        write_part(dir.path(), &header(0, "0.5"), &[0, 1, 2]);
+        let err = merge_parts(&stats).unwrap_err().to_string();
+        assert!(err.contains("duplicated frames 2"), "{err}");
+
+        write_part(dir.path(), &header(0, "0.6"), &[0, 1]);
+        let err = merge_parts(&stats).unwrap_err().to_string();
+        assert!(
+            err.contains("isovalue=0.5") && err.contains("isovalue=0.6"),
+            "{err}"
+        );
+        assert!(!err.contains('\n'));
+    }
+}
