@@ -90,6 +90,10 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if let Some(stats) = &args.stats {
         check_parent_dir(stats)?;
     }
+    let inputs: Vec<PathBuf> = std::iter::once(args.input.top.clone())
+        .chain(args.input.traj.clone())
+        .collect();
+    refuse_shared_paths(output.as_ref(), args.stats.as_deref(), &inputs)?;
 
     let state = args.scene.load_state()?;
     let transforms = args.transforms.options(state.as_ref());
@@ -380,6 +384,51 @@ fn progress_bar(len: usize) -> ProgressBar {
         bar.set_style(style);
     }
     bar
+}
+
+/// Fails with one line when two outputs, or an output and an input, are one file (the second
+/// write would silently replace the first, or the input).
+fn refuse_shared_paths(
+    output: Option<&OutputPattern>,
+    stats: Option<&Path>,
+    inputs: &[PathBuf],
+) -> Result<()> {
+    let mesh = output
+        .filter(|o| !o.has_frame && !o.has_rep)
+        .map(|o| o.path_for(0, ""));
+    if let (Some(mesh), Some(stats)) = (&mesh, stats)
+        && same_file(mesh, stats)
+    {
+        bail!(
+            "-o {} and --stats {} are the same file: give them different names",
+            mesh.display(),
+            stats.display()
+        );
+    }
+    for out in mesh.iter().map(PathBuf::as_path).chain(stats) {
+        if let Some(input) = inputs.iter().find(|i| same_file(out, i)) {
+            bail!(
+                "{} is an input file: an output may not replace it",
+                input.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// True when `a` and `b` name the same file (after following symbolic links and resolving their
+/// folders), whether or not it exists yet.
+fn same_file(a: &Path, b: &Path) -> bool {
+    let key = |p: &Path| {
+        let p = export::resolve_links(p);
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
+        p.file_name().map(|name| dir.join(name))
+    };
+    key(a).is_some() && key(a) == key(b)
 }
 
 /// Fails with a one-line message when `path`'s directory does not exist.

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use crate::surface::Mesh;
 
-pub use atomic::{AtomicFile, write_atomic};
+pub use atomic::{AtomicFile, resolve_links, write_atomic};
 pub use stats::{STATS_COLUMNS, StatsRow, StatsWriter};
 
 /// Why an output file could not be written.

@@ -150,3 +150,88 @@ fn replaced_file_keeps_its_permissions_and_new_files_are_readable() {
         0o644
     );
 }
+
+/// A symbolic link is written through: the file it points at gets the new content, the link
+/// stays a link (also when it dangles).
+#[test]
+fn symbolic_links_are_written_through() {
+    let dir = tempfile::tempdir().unwrap();
+    let real = dir.path().join("real.csv");
+    fs::write(&real, OLD).unwrap();
+    let link = dir.path().join("link.csv");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    write_atomic(&link, |w| w.write_all(b"new\n")).unwrap();
+    assert!(
+        fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(fs::read(&real).unwrap(), b"new\n");
+    let dangling = dir.path().join("dangling.csv");
+    std::os::unix::fs::symlink("made_later.csv", &dangling).unwrap();
+    write_atomic(&dangling, |w| w.write_all(b"later\n")).unwrap();
+    assert!(
+        fs::symlink_metadata(&dangling)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(
+        fs::read(dir.path().join("made_later.csv")).unwrap(),
+        b"later\n"
+    );
+}
+
+/// A special file (here a named pipe) is written in place, never replaced by a regular file.
+#[test]
+fn special_files_are_written_in_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || fs::read(fifo).unwrap())
+    };
+    write_atomic(&fifo, |w| w.write_all(b"through the pipe\n")).unwrap();
+    assert_eq!(reader.join().unwrap(), b"through the pipe\n");
+    use std::os::unix::fs::FileTypeExt;
+    assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+}
+
+/// `surface` refuses two outputs on one file, and an output on an input, in one line.
+#[test]
+fn one_file_for_two_outputs_or_an_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = dir.path().join("in.pdb");
+    fs::copy(crate::data_support::data("1hpv.pdb"), &pdb).unwrap();
+    let same = dir.path().join("same.ply");
+    fs::write(&same, OLD).unwrap();
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_mdsurf"))
+            .arg("surface")
+            .arg(&pdb)
+            .args(["--backend", "cpu", "-q"])
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let s = same.to_str().unwrap();
+    for (args, what) in [
+        (vec!["-o", s, "--stats", s], "same file"),
+        (vec!["--stats", pdb.to_str().unwrap()], "input file"),
+    ] {
+        let out = run(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(what), "{err}");
+    }
+    assert_eq!(fs::read(&same).unwrap(), OLD);
+    assert_eq!(
+        fs::read(&pdb).unwrap(),
+        fs::read(crate::data_support::data("1hpv.pdb")).unwrap()
+    );
+}
