@@ -115,7 +115,7 @@ pub fn extract_refined(
         .slabs
         .par_iter_mut()
         .enumerate()
-        .for_each(|(s, out)| ctx.slab(s * planes, ((s + 1) * planes).min(layers), out));
+        .for_each(|(s, out)| march_slab(&ctx, s * planes, ((s + 1) * planes).min(layers), out));
     merge(&mut scratch.slabs)
 }
 
@@ -190,7 +190,15 @@ pub(super) fn word(flags: &[u8], q: usize) -> u64 {
 /// Eight flags that are all 1.
 pub(super) const ALL_ONE: u64 = 0x0101_0101_0101_0101;
 
-impl Ctx<'_> {
+impl PlaneSource for Ctx<'_> {
+    fn points(&self) -> [usize; 3] {
+        self.grid.dims.map(|d| d as usize)
+    }
+
+    fn tables(&self) -> &McTables {
+        self.tables
+    }
+
     /// Inside flags (1 when `rho >= iso`) of plane `k`.
     fn flags(&self, k: usize, out: &mut [u8]) {
         let plane = out.len();
@@ -198,90 +206,6 @@ impl Ctx<'_> {
         for (flag, &x) in out.iter_mut().zip(v) {
             *flag = u8::from(x >= self.iso);
         }
-    }
-
-    /// Cells of layers `c0..c1` (layer k lies between planes k and k + 1).
-    fn slab(&self, c0: usize, c1: usize, out: &mut SlabMesh) {
-        let [nx, ny, nz] = self.grid.dims.map(|d| d as usize);
-        let plane = nx * ny;
-        let last = c1 == nz - 1;
-        out.positions.clear();
-        out.normals.clear();
-        out.colours.clear();
-        out.indices.clear();
-        // Inside flags of planes k, k + 1, k + 2 and edge maps of planes k, k + 1.
-        let [mut fa, mut fb, mut fc] = std::mem::take(&mut out.flags);
-        let [mut cur, mut next] = std::mem::take(&mut out.maps);
-        for f in [&mut fa, &mut fb, &mut fc] {
-            f.resize(plane, 0);
-        }
-        for m in [&mut cur, &mut next] {
-            m.resize(plane * 3, 0);
-        }
-        self.flags(c0, &mut fa);
-        self.flags(c0 + 1, &mut fb);
-        self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut *out));
-        let edge_ref = edge_refs(nx);
-        for k in c0..c1 {
-            let owned = k + 1 < c1 || last;
-            let up = k + 2 < nz;
-            if up {
-                self.flags(k + 2, &mut fc);
-            }
-            let emit = owned.then_some(&mut *out);
-            self.plane(k + 1, &fb, up.then_some(&fc[..]), &mut next, emit);
-            let flag = if owned { 0 } else { FOREIGN };
-            let (a, b) = (&fa, &fb);
-            for j in 0..ny - 1 {
-                let r = j * nx;
-                let column = |i: usize| {
-                    let p = r + i;
-                    a[p] | a[p + nx] << 2 | b[p] << 4 | b[p + nx] << 6
-                };
-                let mut i = 0;
-                let mut left = column(0);
-                while i < nx - 1 {
-                    if i + 9 <= nx {
-                        let ws = [r + i, r + i + 1, r + nx + i, r + nx + i + 1];
-                        let (mut or, mut and) = (0u64, u64::MAX);
-                        for q in ws {
-                            for f in [a, b] {
-                                let w = word(f, q);
-                                or |= w;
-                                and &= w;
-                            }
-                        }
-                        if or == 0 || and == ALL_ONE {
-                            i += 8;
-                            left = column(i);
-                            continue;
-                        }
-                    }
-                    let right = column(i + 1);
-                    let case = left | right << 1;
-                    left = right;
-                    let p = r + i;
-                    i += 1;
-                    if case == 0 || case == 255 {
-                        continue;
-                    }
-                    push_cell_triangles(
-                        self.tables,
-                        case,
-                        p,
-                        &edge_ref,
-                        [&cur, &next],
-                        flag,
-                        &mut out.indices,
-                    );
-                }
-            }
-            std::mem::swap(&mut cur, &mut next);
-            std::mem::swap(&mut fa, &mut fb);
-            std::mem::swap(&mut fb, &mut fc);
-        }
-        out.flags = [fa, fb, fc];
-        out.maps = [cur, next];
     }
 
     /// Fills `map` with the index of each crossed edge starting on plane `k` (inside flags `a`,
@@ -380,4 +304,113 @@ pub(super) fn merge(parts: &mut [SlabMesh]) -> Mesh {
         p.indices = Vec::new();
     }
     mesh
+}
+
+/// What the slab walk ([`march_slab`]) needs from a sampled field: the size of its point grid,
+/// the inside flags of each point plane, and the numbering (and emission) of the crossed edges
+/// starting on a plane. The dense grid and the periodic box grid both provide it.
+pub(super) trait PlaneSource: Sync {
+    /// Points per axis.
+    fn points(&self) -> [usize; 3];
+    /// The case tables.
+    fn tables(&self) -> &McTables;
+    /// Inside flags (0 or 1) of point plane `k`.
+    fn flags(&self, k: usize, out: &mut [u8]);
+    /// Numbers the crossed edges starting on plane `k` (flags `a`, flags of plane `k + 1` in
+    /// `up` unless `k` is the top plane) into `map`, appending their vertices to `emit` when
+    /// given (else numbering from 0: the next slab's numbering of its first plane).
+    fn plane(
+        &self,
+        k: usize,
+        a: &[u8],
+        up: Option<&[u8]>,
+        map: &mut [u32],
+        emit: Option<&mut SlabMesh>,
+    );
+}
+
+/// Marching Cubes over the cell layers `c0..c1` of `src` (layer k between point planes k and
+/// k + 1) into `out`: vertices of the edges the slab owns, triangles of its cells, skipping
+/// runs of 8 cells whose corners are all inside or all outside.
+pub(super) fn march_slab(src: &impl PlaneSource, c0: usize, c1: usize, out: &mut SlabMesh) {
+    let [nx, ny, nz] = src.points();
+    let plane = nx * ny;
+    let last = c1 == nz - 1;
+    out.positions.clear();
+    out.normals.clear();
+    out.colours.clear();
+    out.indices.clear();
+    // Inside flags of planes k, k + 1, k + 2 and edge maps of planes k, k + 1.
+    let [mut fa, mut fb, mut fc] = std::mem::take(&mut out.flags);
+    let [mut cur, mut next] = std::mem::take(&mut out.maps);
+    for f in [&mut fa, &mut fb, &mut fc] {
+        f.resize(plane, 0);
+    }
+    for m in [&mut cur, &mut next] {
+        m.resize(plane * 3, 0);
+    }
+    src.flags(c0, &mut fa);
+    src.flags(c0 + 1, &mut fb);
+    src.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut *out));
+    let edge_ref = edge_refs(nx);
+    for k in c0..c1 {
+        let owned = k + 1 < c1 || last;
+        let up = k + 2 < nz;
+        if up {
+            src.flags(k + 2, &mut fc);
+        }
+        let emit = owned.then_some(&mut *out);
+        src.plane(k + 1, &fb, up.then_some(&fc[..]), &mut next, emit);
+        let flag = if owned { 0 } else { FOREIGN };
+        let (a, b) = (&fa, &fb);
+        for j in 0..ny - 1 {
+            let r = j * nx;
+            let column = |i: usize| {
+                let p = r + i;
+                a[p] | a[p + nx] << 2 | b[p] << 4 | b[p + nx] << 6
+            };
+            let mut i = 0;
+            let mut left = column(0);
+            while i < nx - 1 {
+                if i + 9 <= nx {
+                    let ws = [r + i, r + i + 1, r + nx + i, r + nx + i + 1];
+                    let (mut or, mut and) = (0u64, u64::MAX);
+                    for q in ws {
+                        for f in [a, b] {
+                            let w = word(f, q);
+                            or |= w;
+                            and &= w;
+                        }
+                    }
+                    if or == 0 || and == ALL_ONE {
+                        i += 8;
+                        left = column(i);
+                        continue;
+                    }
+                }
+                let right = column(i + 1);
+                let case = left | right << 1;
+                left = right;
+                let p = r + i;
+                i += 1;
+                if case == 0 || case == 255 {
+                    continue;
+                }
+                push_cell_triangles(
+                    src.tables(),
+                    case,
+                    p,
+                    &edge_ref,
+                    [&cur, &next],
+                    flag,
+                    &mut out.indices,
+                );
+            }
+        }
+        std::mem::swap(&mut cur, &mut next);
+        std::mem::swap(&mut fa, &mut fb);
+        std::mem::swap(&mut fb, &mut fc);
+    }
+    out.flags = [fa, fb, fc];
+    out.maps = [cur, next];
 }

@@ -19,9 +19,7 @@ use rayon::prelude::*;
 
 use super::density::{PeriodicGrid, PeriodicVolume};
 use crate::surface::Mesh;
-use crate::surface::marching_cubes::{
-    ALL_ONE, FOREIGN, SlabMesh, edge_refs, merge, push_cell_triangles, word,
-};
+use crate::surface::marching_cubes::{PlaneSource, SlabMesh, march_slab, merge, word};
 use crate::surface::mc_vertex::{edge_t, lerp_colour};
 use crate::surface::tables::McTables;
 
@@ -49,7 +47,7 @@ pub fn extract(grid: &PeriodicGrid, vol: &PeriodicVolume, iso: f32) -> Mesh {
     parts
         .par_iter_mut()
         .enumerate()
-        .for_each(|(s, out)| ctx.slab(s * planes, ((s + 1) * planes).min(layers), out));
+        .for_each(|(s, out)| march_slab(&ctx, s * planes, ((s + 1) * planes).min(layers), out));
     merge(&mut parts)
 }
 
@@ -126,7 +124,15 @@ pub fn periodic_edge_vertex(
     }
 }
 
-impl Ctx<'_> {
+impl PlaneSource for Ctx<'_> {
+    fn points(&self) -> [usize; 3] {
+        self.points
+    }
+
+    fn tables(&self) -> &McTables {
+        self.tables
+    }
+
     /// Inside flags (1 when `rho >= iso`) of point plane `k` (`N_x + 1` by `N_y + 1`).
     fn flags(&self, k: usize, out: &mut [u8]) {
         let [px, py, _] = self.points;
@@ -140,86 +146,6 @@ impl Ctx<'_> {
             }
             dst[px - 1] = u8::from(row[0] >= self.iso);
         }
-    }
-
-    /// Cells of layers `c0..c1` (layer k between point planes k and k + 1); as the slab of
-    /// [`crate::surface::marching_cubes`].
-    fn slab(&self, c0: usize, c1: usize, out: &mut SlabMesh) {
-        let [nx, ny, nz] = self.points;
-        let plane = nx * ny;
-        let last = c1 == nz - 1;
-        let [mut fa, mut fb, mut fc] = std::mem::take(&mut out.flags);
-        let [mut cur, mut next] = std::mem::take(&mut out.maps);
-        for f in [&mut fa, &mut fb, &mut fc] {
-            f.resize(plane, 0);
-        }
-        for m in [&mut cur, &mut next] {
-            m.resize(plane * 3, 0);
-        }
-        self.flags(c0, &mut fa);
-        self.flags(c0 + 1, &mut fb);
-        self.plane(c0, &fa, Some(&fb), &mut cur, Some(&mut *out));
-        let edge_ref = edge_refs(nx);
-        for k in c0..c1 {
-            let owned = k + 1 < c1 || last;
-            let up = k + 2 < nz;
-            if up {
-                self.flags(k + 2, &mut fc);
-            }
-            let emit = owned.then_some(&mut *out);
-            self.plane(k + 1, &fb, up.then_some(&fc[..]), &mut next, emit);
-            let flag = if owned { 0 } else { FOREIGN };
-            let (a, b) = (&fa, &fb);
-            for j in 0..ny - 1 {
-                let r = j * nx;
-                let column = |i: usize| {
-                    let p = r + i;
-                    a[p] | a[p + nx] << 2 | b[p] << 4 | b[p + nx] << 6
-                };
-                let mut i = 0;
-                let mut left = column(0);
-                while i < nx - 1 {
-                    if i + 9 <= nx {
-                        let ws = [r + i, r + i + 1, r + nx + i, r + nx + i + 1];
-                        let (mut or, mut and) = (0u64, u64::MAX);
-                        for q in ws {
-                            for f in [a, b] {
-                                let w = word(f, q);
-                                or |= w;
-                                and &= w;
-                            }
-                        }
-                        if or == 0 || and == ALL_ONE {
-                            i += 8;
-                            left = column(i);
-                            continue;
-                        }
-                    }
-                    let right = column(i + 1);
-                    let case = left | right << 1;
-                    left = right;
-                    let p = r + i;
-                    i += 1;
-                    if case == 0 || case == 255 {
-                        continue;
-                    }
-                    push_cell_triangles(
-                        self.tables,
-                        case,
-                        p,
-                        &edge_ref,
-                        [&cur, &next],
-                        flag,
-                        &mut out.indices,
-                    );
-                }
-            }
-            std::mem::swap(&mut cur, &mut next);
-            std::mem::swap(&mut fa, &mut fb);
-            std::mem::swap(&mut fb, &mut fc);
-        }
-        out.flags = [fa, fb, fc];
-        out.maps = [cur, next];
     }
 
     /// Numbers the crossed edges starting on point plane `k` (flags `a`, flags of plane
