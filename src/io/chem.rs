@@ -281,23 +281,7 @@ fn frame_time_ps(frame: &chemfiles::Frame, base: &str) -> Option<f64> {
 /// new run also starts wherever chemfiles' residue changes.
 fn convert_topology(top: &chemfiles::Topology) -> Topology {
     let n = top.size();
-    let mut out = Topology {
-        names: Vec::with_capacity(n),
-        elements: Vec::with_capacity(n),
-        radii: vec![0.0; n],
-        residue_names: vec![String::new(); n],
-        residue_ids: vec![0; n],
-        residue_index: vec![u32::MAX; n],
-        chains: vec![String::new(); n],
-        segments: vec![String::new(); n],
-        b_factors: vec![0.0; n],
-        occupancies: vec![1.0; n],
-        types: Vec::with_capacity(n),
-        masses: Vec::with_capacity(n),
-        charges: Vec::with_capacity(n),
-        serials: (1..=n as i64).collect(),
-        bonds: Vec::new(),
-    };
+    let mut out = super::fast::empty_topology(n);
     for i in 0..n {
         let atom = top.atom(i);
         let kind = atom.atomic_type();

@@ -16,15 +16,16 @@ use mdsurf::app::{AppCore, Command};
 use mdsurf::scene::representation::RepStyle;
 use mdsurf::surface::CpuEngine;
 
-const WAIT: Duration = Duration::from_secs(60);
+pub(crate) const WAIT: Duration = Duration::from_secs(60);
 
-struct State {
-    core: AppCore,
-    draft: SurfaceDraft,
+/// The app core and the Surface section's draft a panel test drives.
+pub(crate) struct State {
+    pub(crate) core: AppCore,
+    pub(crate) draft: SurfaceDraft,
 }
 
 /// A core showing frame 0 of a 20-residue (60-atom), 5-frame helix.
-fn loaded() -> State {
+pub(crate) fn loaded() -> State {
     let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
     let mut core = AppCore::new(worker);
     core.set_source(Arc::new(helix_source(20, 5)));
@@ -41,13 +42,20 @@ fn apply_all(core: &mut AppCore, cmds: Vec<Command>) {
 }
 
 fn panel_harness(state: State) -> Harness<'static, State> {
-    Harness::builder().with_size([500.0, 600.0]).build_ui_state(
-        |ui, s: &mut State| {
-            let cmds = surface_ui(ui, &s.core, &mut s.draft);
-            apply_all(&mut s.core, cmds);
-        },
-        state,
-    )
+    panel_harness_sized(state, 600.0)
+}
+
+/// The Surface section alone in a 500-pixel-wide window `height` pixels high.
+pub(crate) fn panel_harness_sized(state: State, height: f32) -> Harness<'static, State> {
+    Harness::builder()
+        .with_size([500.0, height])
+        .build_ui_state(
+            |ui, s: &mut State| {
+                let cmds = surface_ui(ui, &s.core, &mut s.draft);
+                apply_all(&mut s.core, cmds);
+            },
+            state,
+        )
 }
 
 /// The first representation on screen (the helix's one default surface).

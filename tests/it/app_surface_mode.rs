@@ -3,50 +3,18 @@
 //! vertices lie on the Gaussian sum (checked against a brute-force sum here), the `ses` preset
 //! sets R, I and quality, and state files written before the switch existed still load.
 
-use std::sync::Arc;
-use std::time::Duration;
-
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use mdsurf::app::panels::{SurfaceDraft, surface_ui};
-use mdsurf::app::source::helix_source;
-use mdsurf::app::worker::{LayerResult, Worker};
-use mdsurf::app::{AppCore, Command};
+use mdsurf::app::AppCore;
+use mdsurf::app::worker::LayerResult;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
-use mdsurf::surface::{CpuEngine, Preset, VertexMode};
+use mdsurf::surface::{Preset, VertexMode};
 
-const WAIT: Duration = Duration::from_secs(60);
-
-struct State {
-    core: AppCore,
-    draft: SurfaceDraft,
-}
-
-fn loaded() -> State {
-    let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
-    let mut core = AppCore::new(worker);
-    core.set_source(Arc::new(helix_source(20, 5)));
-    assert!(core.wait_idle(WAIT), "first surface not computed in time");
-    assert!(core.error.is_none(), "{:?}", core.error);
-    let draft = SurfaceDraft::new(core.reps[0].params());
-    State { core, draft }
-}
-
-fn apply_all(core: &mut AppCore, cmds: Vec<Command>) {
-    for c in cmds {
-        core.apply(c);
-    }
-}
+use crate::app_panels::{State, WAIT, loaded};
 
 fn panel_harness(state: State) -> Harness<'static, State> {
-    Harness::builder().with_size([500.0, 800.0]).build_ui_state(
-        |ui, s: &mut State| {
-            let cmds = surface_ui(ui, &s.core, &mut s.draft);
-            apply_all(&mut s.core, cmds);
-        },
-        state,
-    )
+    crate::app_panels::panel_harness_sized(state, 800.0)
 }
 
 fn shown(core: &AppCore) -> &LayerResult {
