@@ -12,7 +12,8 @@ use mdsurf::render::{
     write_png,
 };
 
-fn gpu() -> Option<HeadlessGpu> {
+/// The headless device, or `None` (with a note) when there is none and `REQUIRE_GPU` is unset.
+pub(crate) fn gpu() -> Option<HeadlessGpu> {
     match HeadlessGpu::new() {
         Ok(g) => Some(g),
         Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
@@ -59,7 +60,7 @@ fn render(g: &HeadlessGpu, settings: &RenderSettings, size: [u32; 2]) -> RgbaIma
     .expect("render")
 }
 
-fn compare_golden(name: &str, image: &RgbaImage) {
+pub(crate) fn compare_golden(name: &str, image: &RgbaImage) {
     let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden")).join(name);
     if std::env::var("UPDATE_GOLDEN").is_ok_and(|v| v == "1") {
         write_png(&path, image).expect("write golden");

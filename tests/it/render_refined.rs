@@ -5,27 +5,12 @@
 //! interpolated H = 2 (whose central-difference normals facet the shading). Uniform white
 //! surface, so only shading and shape differ. Needs a wgpu adapter, as tests/it/render_images.rs.
 
-use std::path::PathBuf;
-
 use crate::gpu_support::load_pdb;
+use crate::render_images::{compare_golden, gpu};
 use mdsurf::render::{
-    Camera, GpuScene, HeadlessGpu, MEAN_TOLERANCE, OUTLIER_FRACTION, RenderSettings, Renderer,
-    RgbaImage, render_to_rgba, write_png,
+    Camera, GpuScene, HeadlessGpu, RenderSettings, Renderer, RgbaImage, render_to_rgba,
 };
 use mdsurf::surface::{CpuEngine, Mesh, Quality, SurfaceEngine, SurfaceParams, VertexMode};
-
-fn gpu() -> Option<HeadlessGpu> {
-    match HeadlessGpu::new() {
-        Ok(g) => Some(g),
-        Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("REQUIRE_GPU=1 but no adapter: {e}")
-        }
-        Err(e) => {
-            eprintln!("note: skipping GPU render test: {e}");
-            None
-        }
-    }
-}
 
 fn surface(spacing: f32, mode: VertexMode) -> Mesh {
     let mut atoms = load_pdb("1hpv.pdb");
@@ -65,27 +50,6 @@ fn draw(
         [160, 160],
     )
     .expect("render")
-}
-
-fn compare_golden(name: &str, image: &RgbaImage) {
-    let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden")).join(name);
-    if std::env::var("UPDATE_GOLDEN").is_ok_and(|v| v == "1") {
-        write_png(&path, image).expect("write golden");
-        eprintln!("wrote {}", path.display());
-        return;
-    }
-    let golden = RgbaImage::read_png(&path)
-        .unwrap_or_else(|e| panic!("{e} (run with UPDATE_GOLDEN=1 to create it)"));
-    let (mean, frac) = golden.difference(image).expect("same size");
-    if mean > MEAN_TOLERANCE || frac > OUTLIER_FRACTION {
-        let out = std::env::temp_dir().join(format!("mdsurf-actual-{name}"));
-        let _ = write_png(&out, image);
-        panic!(
-            "{name}: mean difference {mean:.2}, {:.2}% outliers; actual image at {}",
-            frac * 100.0,
-            out.display()
-        );
-    }
 }
 
 #[test]
