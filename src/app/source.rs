@@ -241,13 +241,13 @@ pub fn helix_source(residues: usize, frames: usize) -> MemorySource {
     let mut top = Topology::default();
     for r in 0..residues {
         for (name, el, radius) in [("N", "N", 1.4), ("CA", "C", 1.5), ("O", "O", 1.3)] {
-            top.names.push(name.into());
-            top.elements.push(el.into());
+            top.names.push(name);
+            top.elements.push(el);
             top.radii.push(radius);
-            top.residue_names.push("ALA".into());
+            top.residue_names.push("ALA");
             top.residue_ids.push(r as i64 + 1);
             top.residue_index.push(r as u32);
-            top.chains.push("A".into());
+            top.chains.push("A");
             top.b_factors.push(0.0);
         }
     }

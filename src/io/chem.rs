@@ -322,10 +322,10 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         let chain = residue_chain(&residue);
         let segment = residue_string(&residue, &["segname"]);
         for a in residue.atoms().into_iter().filter(|&a| a < n) {
-            out.residue_names[a].clone_from(&name);
+            out.residue_names.set(a, &name);
             out.residue_ids[a] = id;
-            out.chains[a].clone_from(&chain);
-            out.segments[a].clone_from(&segment);
+            out.chains.set(a, &chain);
+            out.segments.set(a, &segment);
             chem_residue[a] = r as u32;
         }
     }
@@ -370,7 +370,7 @@ fn apply_gro_residues(top: &mut Topology, lines: &[(i64, String)]) {
     let mut group = vec![0u32; lines.len()];
     for (i, (id, name)) in lines.iter().enumerate() {
         top.residue_ids[i] = *id;
-        top.residue_names[i].clone_from(name);
+        top.residue_names.set(i, name);
         group[i] = u32::from(i > 0 && (lines[i - 1].0 != *id || lines[i - 1].1 != *name));
     }
     // Runs split where number or name change, whatever chemfiles grouped.
@@ -429,15 +429,16 @@ fn residue_string(residue: &chemfiles::Residue, keys: &[&str]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Labels;
 
     fn topology(residues: &[(i64, &str)]) -> Topology {
         let n = residues.len();
         Topology {
-            names: vec!["C".into(); n],
+            names: Labels::filled("C", n),
             residue_ids: residues.iter().map(|r| r.0).collect(),
             residue_names: residues.iter().map(|r| r.1.to_string()).collect(),
-            chains: vec![String::new(); n],
-            segments: vec![String::new(); n],
+            chains: Labels::filled("", n),
+            segments: Labels::filled("", n),
             ..Default::default()
         }
     }
@@ -452,7 +453,7 @@ mod tests {
         let mut top = topology(&[(1, "ALA"); 4]);
         apply_gro_residues(&mut top, &lines);
         assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
-        assert_eq!(top.residue_names[2], "POPE");
+        assert_eq!(&top.residue_names[2], "POPE");
         let mut top = topology(&[(5, "SOL"), (5, "SOL"), (6, "SOL"), (5, "SOL")]);
         number_residue_runs(&mut top, &[0, 0, 1, 0]);
         assert_eq!(top.residue_index, vec![0, 0, 1, 2]);

@@ -21,7 +21,7 @@ use glam::Vec3;
 
 use super::format::FileFormat;
 use super::{fast_pdb, fast_xyz};
-use crate::model::{Frame, Topology};
+use crate::model::{Frame, Labels, Topology};
 
 /// What a fast reader read: the topology (as the chemfiles path leaves it before
 /// [`Topology::complete_elements_and_radii`]) and the file's only frame (positions in Å, box).
@@ -243,17 +243,17 @@ impl TypeTable {
 /// starts from (serials 1..=n, occupancy 1, each atom outside any residue).
 pub(crate) fn empty_topology(n: usize) -> Topology {
     Topology {
-        names: Vec::with_capacity(n),
-        elements: Vec::with_capacity(n),
+        names: Labels::with_capacity(n),
+        elements: Labels::with_capacity(n),
         radii: vec![0.0; n],
-        residue_names: vec![String::new(); n],
+        residue_names: Labels::filled("", n),
         residue_ids: vec![0; n],
         residue_index: vec![u32::MAX; n],
-        chains: vec![String::new(); n],
-        segments: vec![String::new(); n],
+        chains: Labels::filled("", n),
+        segments: Labels::filled("", n),
         b_factors: vec![0.0; n],
         occupancies: vec![1.0; n],
-        types: Vec::with_capacity(n),
+        types: Labels::with_capacity(n),
         masses: Vec::with_capacity(n),
         charges: Vec::with_capacity(n),
         serials: (1..=n as i64).collect(),

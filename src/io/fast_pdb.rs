@@ -365,10 +365,10 @@ impl Reader {
         for residue in &self.residues {
             for &a in &residue.atoms {
                 let a = a as usize;
-                top.residue_names[a].clone_from(&residue.name);
+                top.residue_names.set(a, &residue.name);
                 top.residue_ids[a] = residue.key.1;
-                top.chains[a].clone_from(&residue.chain);
-                top.segments[a].clone_from(&residue.segment);
+                top.chains.set(a, &residue.chain);
+                top.segments.set(a, &residue.segment);
             }
         }
         super::chem::number_residue_runs(&mut top, &self.residue_of);
@@ -435,12 +435,12 @@ fn apply_enrichment(top: &mut Topology, columns: &[Columns]) {
             top.serials[i] = serial;
         }
         if top.chains[i].is_empty() {
-            top.chains[i].clone_from(&c.chain);
+            top.chains.set(i, &c.chain);
         }
         if top.elements[i].is_empty()
             && let Some(element) = c.element
         {
-            top.elements[i] = element.to_string();
+            top.elements.set(i, element);
         }
     }
 }

@@ -35,7 +35,7 @@ pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
         // Most neighbours share a name: reuse the previous atom's strings and charge.
         match last {
             Some((prev, i)) if prev == name => {
-                let (name, charge) = (top.names[i].clone(), top.charges[i]);
+                let (name, charge) = (top.names[i].to_string(), top.charges[i]);
                 top.types.push(name.clone());
                 top.names.push(name);
                 top.charges.push(charge);
@@ -49,7 +49,7 @@ pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
                 last = Some((name, top.names.len() - 1));
             }
         }
-        top.elements.push(String::new());
+        top.elements.push("");
         top.masses.push(0.0);
     }
     // chemfiles counts another frame unless the next line is blank (or there is none).

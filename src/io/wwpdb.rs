@@ -58,12 +58,12 @@ pub(crate) fn enrich(
             *s = serial;
         }
         if topology.chains[i].is_empty() {
-            topology.chains[i].clone_from(&atom.chain);
+            topology.chains.set(i, &atom.chain);
         }
         if topology.elements[i].is_empty()
             && let Some(element) = atom.element
         {
-            topology.elements[i] = element.to_string();
+            topology.elements.set(i, element);
         }
     }
     true

@@ -11,7 +11,7 @@ use std::sync::Arc;
 use super::colour_data::{self, DataId, DataTable};
 use super::colour_map::{ColourMap, parse_range};
 use super::residues::{ResidueClass, residue_class};
-use super::{ModelError, Topology};
+use super::{Labels, ModelError, Topology};
 
 /// How atoms are coloured. `FromStr` accepts `element`, `chain`, `residue-type`,
 /// `residue-index` (alias `rainbow`), `b-factor`, `single:#rrggbb` (or just `#rrggbb`), and
@@ -173,7 +173,7 @@ impl ColorScheme {
             ColorScheme::Chain => chain_colours(&topology.chains),
             ColorScheme::ResidueType => (0..n)
                 .map(|i| {
-                    let residue = topology.residue_names.get(i).map_or("", String::as_str);
+                    let residue = topology.residue_names.get(i).unwrap_or("");
                     residue_type_colour(residue_class(residue))
                 })
                 .collect(),
@@ -320,7 +320,7 @@ fn element_colour(element: &str, name: &str) -> [f32; 3] {
 }
 
 /// One palette colour per distinct chain id, in order of first appearance.
-fn chain_colours(chains: &[String]) -> Vec<[f32; 3]> {
+fn chain_colours(chains: &Labels) -> Vec<[f32; 3]> {
     let mut seen: Vec<&str> = Vec::new();
     chains
         .iter()

@@ -8,6 +8,7 @@ pub mod colour;
 pub mod colour_data;
 pub mod colour_map;
 pub mod elements;
+pub mod labels;
 pub mod particles;
 pub mod radii;
 pub mod residues;
@@ -16,6 +17,7 @@ pub mod sizing;
 pub use beads::BeadModel;
 pub use colour::{ColorScheme, DataColours};
 pub use colour_map::ColourMap;
+pub use labels::Labels;
 pub use particles::{ParticleOptions, Particles};
 pub use radii::{RadiusOverride, RadiusOverrides};
 pub use residues::ResidueClass;
@@ -44,29 +46,29 @@ pub enum ModelError {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Topology {
     /// Atom names as written in the file (`CA`, `OW`, `PO4`).
-    pub names: Vec<String>,
+    pub names: Labels,
     /// Element symbols, capitalised (`C`, `Fe`); guessed from the name when the file has none.
     /// Empty string for particles with no element (coarse-grained beads, unknown types).
-    pub elements: Vec<String>,
+    pub elements: Labels,
     /// Radius of each particle in Å (from the file, an override, or the element table).
     pub radii: Vec<f32>,
     /// Residue name of each atom (`ALA`, `SOL`, `DPPC`).
-    pub residue_names: Vec<String>,
+    pub residue_names: Labels,
     /// Residue number of each atom as written in the file.
     pub residue_ids: Vec<i64>,
     /// Index of each atom's residue, counting residues in file order from 0.
     pub residue_index: Vec<u32>,
     /// Chain or segment identifier of each atom (empty when the file has none).
-    pub chains: Vec<String>,
+    pub chains: Labels,
     /// Segment name of each atom (PDB columns 73-76, PSF segid; empty when the file has none).
-    pub segments: Vec<String>,
+    pub segments: Labels,
     /// Temperature factor of each atom in Å² (0 when the file has none).
     pub b_factors: Vec<f32>,
     /// Occupancy of each atom, 0 to 1 (1 when the file has none).
     pub occupancies: Vec<f32>,
     /// Atom type as the file gives it (force-field type, LAMMPS numeric type, or the PDB
     /// element column); equal to the name when the file has no type.
-    pub types: Vec<String>,
+    pub types: Labels,
     /// Mass of each atom in amu (from the file, else from the element; 0 when neither is known).
     pub masses: Vec<f32>,
     /// Partial charge of each atom in units of the elementary charge e (0 when the file has none).
@@ -99,8 +101,8 @@ impl Topology {
         let n = self.len();
         self.complete_defaults();
         self.radii.resize(n, 0.0);
-        if elements::looks_coarse_grained(self.names.iter().map(String::as_str)) {
-            self.elements.iter_mut().for_each(String::clear);
+        if elements::looks_coarse_grained(self.names.iter()) {
+            self.elements.fill("");
             for r in self.radii.iter_mut().filter(|r| r.is_nan() || **r <= 0.0) {
                 *r = elements::BEAD_RADIUS;
             }
@@ -108,9 +110,9 @@ impl Topology {
         }
         for i in 0..n {
             if self.elements[i].is_empty() {
-                let residue = self.residue_names.get(i).map_or("", String::as_str);
+                let residue = self.residue_names.get(i).unwrap_or("");
                 let guess = elements::guess_element(&self.names[i], residue);
-                self.elements[i] = guess.unwrap_or_default().to_string();
+                self.elements.set(i, guess.unwrap_or_default());
             }
             if self.radii[i].is_nan() || self.radii[i] <= 0.0 {
                 self.radii[i] = elements::element_radius(&self.elements[i]);
@@ -132,7 +134,7 @@ impl Topology {
             &mut self.chains,
             &mut self.segments,
         ] {
-            v.resize(n, String::new());
+            v.resize(n, "");
         }
         for v in [&mut self.b_factors, &mut self.masses, &mut self.charges] {
             v.resize(n, 0.0);
@@ -141,7 +143,7 @@ impl Topology {
         let first = self.serials.len();
         self.serials.extend((first..n).map(|i| i as i64 + 1));
         let first = self.types.len();
-        self.types.extend_from_slice(&self.names[first.min(n)..]);
+        self.types.extend_from(&self.names, first.min(n)..n);
     }
 
     /// Number of residues (one more than the largest [`Topology::residue_index`]).

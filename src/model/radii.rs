@@ -83,7 +83,7 @@ impl RadiusOverrides {
     pub fn apply(&self, topology: &Topology) -> Vec<f32> {
         (0..topology.len())
             .map(|i| {
-                let element = topology.elements.get(i).map_or("", String::as_str);
+                let element = topology.elements.get(i).unwrap_or("");
                 self.radius_for(&topology.names[i], element).unwrap_or(
                     topology
                         .radii

@@ -30,12 +30,12 @@ pub fn fit_untyped_radii(topology: &mut Topology, positions: &[Vec3]) {
     if positions.len() != n || topology.elements.len() != n || topology.radii.len() != n {
         return;
     }
-    if super::elements::looks_coarse_grained(topology.names.iter().map(String::as_str)) {
+    if super::elements::looks_coarse_grained(topology.names.iter()) {
         return;
     }
     let mut types: HashMap<&str, Vec<usize>> = HashMap::new();
     for i in (0..n).filter(|&i| topology.elements[i].is_empty()) {
-        types.entry(topology.names[i].as_str()).or_default().push(i);
+        types.entry(&topology.names[i]).or_default().push(i);
     }
     let fitted: Vec<(Vec<usize>, f32)> = types
         .into_iter()
@@ -104,6 +104,7 @@ fn median_nearest_distance(points: &[Vec3]) -> Option<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Labels;
 
     fn lattice(spacing: f32, side: usize) -> Vec<Vec3> {
         let mut v = Vec::new();
@@ -125,13 +126,13 @@ mod tests {
         let points = lattice(3.0, 5);
         let n = points.len();
         let mut top = Topology {
-            names: vec!["1".to_string(); n],
-            elements: vec![String::new(); n],
+            names: Labels::filled("1", n),
+            elements: Labels::filled("", n),
             radii: vec![1.5; n],
             ..Default::default()
         };
-        top.names[0] = "C".into();
-        top.elements[0] = "C".into();
+        top.names.set(0, "C");
+        top.elements.set(0, "C");
         fit_untyped_radii(&mut top, &points);
         assert_eq!(top.radii[0], 1.5, "atoms with an element keep their radius");
         assert!(

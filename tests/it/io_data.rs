@@ -59,13 +59,13 @@ fn adk_pdb_dcd() {
     let top = t.topology();
     assert_eq!(top.residue_count(), 214, "adk has 214 residues");
     // MD-style PDB without element column: CD (in ILE/LYS/...) must be carbon.
-    let cd: Vec<usize> = (0..top.len()).filter(|&i| top.names[i] == "CD").collect();
+    let cd: Vec<usize> = (0..top.len()).filter(|&i| &top.names[i] == "CD").collect();
     assert!(!cd.is_empty());
     for i in cd {
         assert_eq!(
-            top.elements[i], "C",
+            &top.elements[i], "C",
             "CD in {} must be carbon",
-            top.residue_names[i]
+            &top.residue_names[i]
         );
         assert_eq!(top.radii[i], 1.5);
     }
@@ -85,7 +85,7 @@ fn adk_water_box_gro_xtc() {
         .iter()
         .position(|n| n == "OW")
         .expect("water oxygen");
-    assert_eq!(top.elements[ow], "O");
+    assert_eq!(&top.elements[ow], "O");
     assert_eq!(top.radii[ow], 1.3);
 }
 
@@ -99,7 +99,7 @@ fn yiip_gzipped_gro_xtc() {
 fn hiv_protease_wwpdb() {
     let t = check("1hpv.pdb", None, 1631, 1);
     let top = t.topology();
-    let chains: std::collections::BTreeSet<&str> = top.chains.iter().map(String::as_str).collect();
+    let chains: std::collections::BTreeSet<&str> = top.chains.iter().collect();
     assert!(
         chains.contains("A") && chains.contains("B"),
         "chains {chains:?}"
@@ -126,7 +126,7 @@ fn martini_beads_get_bead_radius() {
         "Martini beads are 2.35 Å"
     );
     assert!(
-        top.elements.iter().all(String::is_empty),
+        top.elements.iter().all(str::is_empty),
         "beads have no element"
     );
 }
@@ -135,7 +135,7 @@ fn martini_beads_get_bead_radius() {
 fn lammps_bz2() {
     let t = check("spce_all_coords.lammpstrj.bz2", None, 4500, 11);
     let top = t.topology();
-    let types: std::collections::BTreeSet<&str> = top.names.iter().map(String::as_str).collect();
+    let types: std::collections::BTreeSet<&str> = top.names.iter().collect();
     assert!(types.len() >= 2, "SPC/E has two particle types: {types:?}");
 }
 

@@ -33,7 +33,7 @@ fn protein_radii_follow_the_element_table() {
             expected(&top.elements[i]),
             "atom {} {}",
             i,
-            top.names[i]
+            &top.names[i]
         );
         let first = top.names[i]
             .trim_start_matches(|c: char| c.is_ascii_digit())
@@ -41,9 +41,9 @@ fn protein_radii_follow_the_element_table() {
             .next();
         assert_eq!(
             first.map(String::from),
-            Some(top.elements[i].clone()),
+            Some(top.elements[i].to_string()),
             "{}",
-            top.names[i]
+            &top.names[i]
         );
     }
     assert!(top.elements.iter().any(|e| e == "S"), "MET/CYS sulphur");
@@ -111,7 +111,7 @@ fn radius_overrides_by_element_and_by_type() {
     );
     let top = t.topology();
     for i in 0..top.len() {
-        let want = if top.elements[i] == "C" {
+        let want = if &top.elements[i] == "C" {
             1.7
         } else {
             top.radii[i]
@@ -169,7 +169,7 @@ fn colour_schemes_on_a_real_protein() {
     assert_ne!(element[c], element[o]);
     assert!(
         (0..n)
-            .filter(|&i| top.elements[i] == "C")
+            .filter(|&i| &top.elements[i] == "C")
             .all(|i| element[i] == element[c])
     );
     // Residue type: acids are red, bases blue.

@@ -61,8 +61,8 @@ fn check(top: &Path, traj: Option<&Path>, atoms: usize, frames: usize, tolerance
     assert_eq!(t.topology().len(), atoms, "{top:?}");
     assert_eq!(t.len(), frames, "{traj:?}");
     assert!(t.damage().is_none());
-    assert_eq!(t.topology().names[1], "CA");
-    assert_eq!(t.topology().elements[1], "C");
+    assert_eq!(&t.topology().names[1], "CA");
+    assert_eq!(&t.topology().elements[1], "C");
     for k in 0..frames {
         let f = t.read_frame(k).unwrap_or_else(|e| panic!("{e}"));
         let want = positions(atoms, k);

@@ -81,8 +81,8 @@ fn adk_in_water_shows_the_protein_not_the_box() {
     let mut f = chemfiles::Frame::new();
     for &i in &protein {
         let p = frame.positions[i as usize];
-        let mut atom = chemfiles::Atom::new(top.names[i as usize].as_str());
-        atom.set_atomic_type(top.elements[i as usize].as_str());
+        let mut atom = chemfiles::Atom::new(&top.names[i as usize]);
+        atom.set_atomic_type(&top.elements[i as usize]);
         f.add_atom(&atom, [p.x as f64, p.y as f64, p.z as f64], None);
     }
     let alone = dir.path().join("protein.xyz");

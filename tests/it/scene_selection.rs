@@ -161,7 +161,7 @@ fn residues_are_runs_in_file_order() {
     // Every residue is one contiguous run with one name.
     for w in 0..top.len() - 1 {
         if top.residue_index[w] == top.residue_index[w + 1] {
-            assert_eq!(top.residue_names[w], top.residue_names[w + 1]);
+            assert_eq!(&top.residue_names[w], &top.residue_names[w + 1]);
         } else {
             assert_eq!(top.residue_index[w] + 1, top.residue_index[w + 1]);
         }

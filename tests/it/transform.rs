@@ -207,7 +207,7 @@ fn smoothing_averages_the_window_and_uses_the_frames_that_exist_at_the_ends() {
     let (n, atoms, k) = (9usize, 5usize, 2usize);
     let frames = quadratic_frames(n, atoms);
     let topology = Topology {
-        names: vec!["C".into(); atoms],
+        names: mdsurf::model::Labels::filled("C", atoms),
         ..Topology::default()
     };
     let options = TransformOptions {

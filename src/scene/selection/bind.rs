@@ -8,7 +8,7 @@ use regex::Regex;
 
 use super::ast::{Expr, Group, NumField, NumTest, Pattern, StrField};
 use super::within::within;
-use crate::model::{Frame, Topology};
+use crate::model::{Frame, Labels, Topology};
 
 /// A bound selection expression.
 #[derive(Debug, Clone)]
@@ -126,14 +126,14 @@ fn glob_to_regex(glob: &str) -> Result<String, String> {
 /// The value of string `field` for atom `i` (empty when the topology lacks the field).
 fn string_of(topology: &Topology, field: StrField, i: usize) -> &str {
     let v = match field {
-        StrField::Name => Some(&topology.names[i]),
-        StrField::Type => topology.types.get(i).or(Some(&topology.names[i])),
+        StrField::Name => topology.names.get(i),
+        StrField::Type => topology.types.get(i).or(topology.names.get(i)),
         StrField::Element => topology.elements.get(i),
         StrField::ResName => topology.residue_names.get(i),
         StrField::Chain => topology.chains.get(i),
         StrField::Segment => topology.segments.get(i),
     };
-    v.map_or("", String::as_str)
+    v.unwrap_or("")
 }
 
 /// The value of constant numeric `field` for atom `i`, with the topology's defaults.
@@ -274,11 +274,11 @@ fn string_mask(topology: &Topology, field: StrField, patterns: &[Pattern]) -> Ve
 /// Group ids `0..count` of every atom for `same GROUP as`.
 fn group_ids(topology: &Topology, group: Group) -> (Vec<u32>, usize) {
     let n = topology.len();
-    let by_string = |values: &[String]| {
+    let by_string = |values: &Labels| {
         let mut ids: HashMap<&str, u32> = HashMap::new();
         let groups: Vec<u32> = (0..n)
             .map(|i| {
-                let s = values.get(i).map_or("", String::as_str);
+                let s = values.get(i).unwrap_or("");
                 let next = ids.len() as u32;
                 *ids.entry(s).or_insert(next)
             })

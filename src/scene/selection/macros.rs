@@ -77,9 +77,9 @@ impl Macro {
     /// Whether each atom of `topology` belongs to this class.
     pub(crate) fn mask(self, topology: &Topology) -> Vec<bool> {
         let n = topology.len();
-        let residue = |i: usize| topology.residue_names.get(i).map_or("", String::as_str);
-        let name = |i: usize| topology.names[i].as_str();
-        let element = |i: usize| topology.elements.get(i).map_or("", String::as_str);
+        let residue = |i: usize| topology.residue_names.get(i).unwrap_or("");
+        let name = |i: usize| &topology.names[i];
+        let element = |i: usize| topology.elements.get(i).unwrap_or("");
         let by_residue = |test: fn(&str) -> bool| per_residue_name(topology, test);
         match self {
             Macro::Protein => by_residue(is_amino_acid),
@@ -120,7 +120,7 @@ fn per_residue_name(topology: &Topology, test: fn(&str) -> bool) -> Vec<bool> {
     let mut cache: std::collections::HashMap<&str, bool> = std::collections::HashMap::new();
     (0..topology.len())
         .map(|i| {
-            let r = topology.residue_names.get(i).map_or("", String::as_str);
+            let r = topology.residue_names.get(i).unwrap_or("");
             *cache.entry(r).or_insert_with(|| test(r))
         })
         .collect()
