@@ -113,7 +113,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
     let options = args.input.particles.options_for(&system.trajectory)?;
     check_colour_frames(&options, &frames)?;
-    let topology = system.trajectory.topology().clone();
+    let topology = system.trajectory.topology();
     let choice = args
         .scene
         .representations(state, &topology, &first, &params, &options, args.quiet)?;

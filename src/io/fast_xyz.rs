@@ -6,7 +6,7 @@
 
 use super::fast::{FastRead, TypeTable, empty_topology, free_text, is_space, lines, parse_f64};
 use super::fast::{parse_u64, to_vec3, trim};
-use crate::model::Frame;
+use crate::model::{Frame, Labels};
 
 /// Reads an XYZ file's only frame, or `None` when chemfiles should read it.
 pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
@@ -35,23 +35,22 @@ pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
         // Most neighbours share a name: reuse the previous atom's strings and charge.
         match last {
             Some((prev, i)) if prev == name => {
-                let (name, charge) = (top.names[i].to_string(), top.charges[i]);
-                top.types.push(name.clone());
-                top.names.push(name);
-                top.charges.push(charge);
+                top.names.push_like(i);
+                top.charges.push(top.charges[i]);
             }
             _ => {
                 let text = free_text(name);
                 let (_, charge) = table.get(&text);
-                top.types.push(text.clone());
                 top.names.push(text);
                 top.charges.push(charge);
                 last = Some((name, top.names.len() - 1));
             }
         }
-        top.elements.push("");
-        top.masses.push(0.0);
     }
+    // Names are the types; no element (guessed later from the name) and no mass.
+    top.types = top.names.clone();
+    top.elements = Labels::filled("", n);
+    top.masses = vec![0.0; n];
     // chemfiles counts another frame unless the next line is blank (or there is none).
     if it.next().is_some_and(|line| !trim(line).is_empty()) {
         return None;

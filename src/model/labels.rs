@@ -45,7 +45,7 @@ impl Labels {
     }
 
     /// The index of `value` in the table of distinct strings, added when new.
-    fn intern(&mut self, value: &str) -> u32 {
+    pub fn intern(&mut self, value: &str) -> u32 {
         if let Some(&id) = self.lookup.get(value) {
             return id;
         }
@@ -62,6 +62,11 @@ impl Labels {
         self.ids.push(id);
     }
 
+    /// Appends one atom with the value of atom `i` (no lookup: for runs of equal values).
+    pub fn push_like(&mut self, i: usize) {
+        self.ids.push(self.ids[i]);
+    }
+
     /// Appends `count` atoms with the same value.
     pub fn push_repeated(&mut self, value: &str, count: usize) {
         let id = self.intern(value);
@@ -76,6 +81,17 @@ impl Labels {
     /// Sets atom `i`'s value (panics past the end, like slice indexing).
     pub fn set(&mut self, i: usize, value: impl AsRef<str>) {
         let id = self.intern(value.as_ref());
+        self.ids[i] = id;
+    }
+
+    /// The index of atom `i`'s value in the table of distinct strings (see [`Labels::distinct`]).
+    pub fn id(&self, i: usize) -> u32 {
+        self.ids[i]
+    }
+
+    /// Sets atom `i`'s value to the distinct string `id` (from [`Labels::intern`]).
+    pub fn set_id(&mut self, i: usize, id: u32) {
+        assert!((id as usize) < self.values.len(), "label id {id} out of range");
         self.ids[i] = id;
     }
 

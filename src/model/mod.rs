@@ -108,17 +108,38 @@ impl Topology {
             }
             return;
         }
+        // Guesses and table lookups are made once per distinct name, residue or element.
+        let mut guesses: std::collections::HashMap<(u32, u32), u32> = Default::default();
+        let mut radius_of: std::collections::HashMap<u32, (f32, f32)> = Default::default();
         for i in 0..n {
             if self.elements[i].is_empty() {
-                let residue = self.residue_names.get(i).unwrap_or("");
-                let guess = elements::guess_element(&self.names[i], residue);
-                self.elements.set(i, guess.unwrap_or_default());
+                let residue_id = if i < self.residue_names.len() {
+                    self.residue_names.id(i)
+                } else {
+                    u32::MAX
+                };
+                let key = (self.names.id(i), residue_id);
+                let element = match guesses.get(&key) {
+                    Some(&id) => id,
+                    None => {
+                        let residue = self.residue_names.get(i).unwrap_or("");
+                        let guess = elements::guess_element(&self.names[i], residue);
+                        let id = self.elements.intern(guess.unwrap_or_default());
+                        guesses.insert(key, id);
+                        id
+                    }
+                };
+                self.elements.set_id(i, element);
             }
+            let (radius, mass) = *radius_of.entry(self.elements.id(i)).or_insert_with(|| {
+                let e = &self.elements[i];
+                (elements::element_radius(e), elements::element_mass(e))
+            });
             if self.radii[i].is_nan() || self.radii[i] <= 0.0 {
-                self.radii[i] = elements::element_radius(&self.elements[i]);
+                self.radii[i] = radius;
             }
             if self.masses[i].is_nan() || self.masses[i] <= 0.0 {
-                self.masses[i] = elements::element_mass(&self.elements[i]);
+                self.masses[i] = mass;
             }
         }
     }

@@ -117,13 +117,12 @@ impl Macro {
 
 /// Applies `test` once per distinct residue name (names repeat, tests are string searches).
 fn per_residue_name(topology: &Topology, test: fn(&str) -> bool) -> Vec<bool> {
-    let mut cache: std::collections::HashMap<&str, bool> = std::collections::HashMap::new();
-    (0..topology.len())
-        .map(|i| {
-            let r = topology.residue_names.get(i).unwrap_or("");
-            *cache.entry(r).or_insert_with(|| test(r))
-        })
-        .collect()
+    let (names, ids) = topology.residue_names.distinct();
+    let verdicts: Vec<bool> = names.iter().map(|name| test(name)).collect();
+    let mut mask: Vec<bool> = ids.iter().map(|&id| verdicts[id as usize]).collect();
+    // Atoms past the end of the residue names have the empty name.
+    mask.resize(topology.len(), test(""));
+    mask
 }
 
 /// Nucleotide names, with AMBER's 5'/3' terminal marks (`DA5`, `RU3`) allowed.
