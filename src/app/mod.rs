@@ -53,18 +53,10 @@ pub struct ViewOptions {
     pub transforms: crate::transform::TransformOptions,
 }
 
-/// Which surface engine the window uses.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub enum Backend {
-    /// The CPU reference engine (the mesh is uploaded for drawing).
-    Cpu,
-    /// The GPU engine on the window's device, even on a software adapter (lavapipe); the
-    /// surface is drawn straight from its buffers.
-    Gpu,
-    /// The GPU engine on a hardware adapter, the CPU engine on a software one.
-    #[default]
-    Auto,
-}
+/// Which surface engine the window uses: [`Backend::Gpu`] uses the GPU engine on the window's
+/// device even on a software adapter (lavapipe), [`Backend::Auto`] only on a hardware one (the
+/// rule lives in [`crate::gpu::pick_engine`]).
+pub use crate::gpu::Backend;
 
 /// Why the window could not run.
 #[derive(Debug, thiserror::Error)]
@@ -84,9 +76,8 @@ pub enum ViewError {
 
 /// The surface engine for the window: the GPU engine on eframe's own wgpu device (so no second
 /// device is opened, and the renderer draws the engine's buffers in place), else the CPU
-/// reference engine. [`Backend::Auto`] passes over a software adapter (lavapipe: it still draws
-/// the window but computes slower than the CPU engine); [`Backend::Gpu`] uses it anyway. When the
-/// GPU engine cannot start, the CPU engine takes over with a note on stderr.
+/// reference engine, as [`crate::gpu::pick_engine`] decides for `backend`. When the GPU engine
+/// cannot start, the CPU engine takes over with a note on stderr.
 fn make_engine(state: Option<&egui_wgpu::RenderState>, backend: Backend) -> worker::Engine {
     let cpu = || worker::Engine::Host(Box::new(crate::surface::CpuEngine::new()));
     let Some(s) = state.filter(|_| backend != Backend::Cpu) else {
@@ -96,14 +87,14 @@ fn make_engine(state: Option<&egui_wgpu::RenderState>, backend: Backend) -> work
         return cpu();
     };
     let info = s.adapter.get_info();
-    if backend == Backend::Auto && info.device_type == wgpu::DeviceType::Cpu {
-        return cpu();
-    }
-    match crate::gpu::GpuEngine::try_from_device(s.device.clone(), s.queue.clone()) {
-        Ok(engine) => {
-            eprintln!("surface engine: gpu on {} ({:?})", info.name, info.backend);
-            worker::Engine::Gpu(Box::new(engine))
+    let ctx = crate::gpu::GpuContext::from_device(s.device.clone(), s.queue.clone(), String::new())
+        .with_adapter(&info);
+    match crate::gpu::pick_engine(backend, Some(ctx)) {
+        Ok(crate::gpu::Picked::Gpu(engine)) => {
+            eprintln!("surface engine: gpu on {}", engine.context().adapter_name);
+            worker::Engine::Gpu(engine)
         }
+        Ok(crate::gpu::Picked::Cpu { .. }) => cpu(),
         Err(err) => {
             eprintln!("GPU surface engine unavailable ({err}); using the CPU engine");
             cpu()

@@ -13,6 +13,15 @@
 //! parameters), so an isovalue change re-runs only Marching Cubes and a colour scheme only the
 //! colour pass. With the GPU engine the mesh stays on the GPU: the reply carries the engine's
 //! [`GpuSurface`] buffers for the renderer and the counters (triangles, area, volume).
+//!
+//! The GPU path never blocks the window and never times stages: every surface of a request is
+//! submitted first ([`GpuEngine::submit`], one submit each, while the window keeps drawing the
+//! previous frame), then their counters are collected ([`GpuEngine::wait_stats`]); a surface
+//! that overflowed its mesh buffers is submitted again with nothing changed, so only Marching
+//! Cubes re-runs, with grown buffers. The engine alternates between two output sets, so the
+//! surface on screen is never the one being written; before writing again into the set the
+//! window may still draw, the worker waits until the window has taken the previous reply
+//! (`Worker::try_recv`), so what is drawn (surface, atoms, readouts) belongs to one frame.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -216,54 +225,80 @@ fn sibling_of(engine: &GpuEngine) -> Box<GpuEngine> {
     ))
 }
 
-/// Computes one surface on `engine`. For a GPU engine it submits the frame, waits for its
-/// counters (resubmitting after an overflow, see [`GpuEngine::run_blocking`]) and returns an
-/// empty mesh plus the surface buffers.
-fn compute_on(
-    engine: EngineRef<'_>,
+/// Computes one surface on a host engine (the mesh comes back to the host).
+fn compute_on_host(
+    e: &mut (dyn SurfaceEngine + Send),
     atoms: &AtomSet<'_>,
     params: &SurfaceParams,
     vertices: VertexMode,
-    changes: Changes,
-) -> Result<(SurfaceOutput, Option<GpuSurface>, Option<Work>), String> {
-    match engine {
-        EngineRef::Host(e) => {
-            e.set_vertices(vertices);
-            e.compute(atoms, params)
-                .map(|o| (o, None, None))
-                .map_err(|e| e.to_string())
-        }
-        EngineRef::Gpu(e) => {
-            e.set_vertices(vertices);
-            let stats = e
-                .run_blocking(atoms, params, changes)
-                .map_err(|e| e.to_string())?;
-            let mut surface = e.surface();
-            surface.stats = Some(stats);
-            let output = SurfaceOutput {
-                grid: surface.grid,
-                mesh: Mesh::default(),
-                area: stats.area,
-                volume: stats.volume,
-                timings: stats.timings,
-            };
-            Ok((output, Some(surface), e.last_frame().map(|f| f.work)))
-        }
+) -> Result<SurfaceOutput, String> {
+    e.set_vertices(vertices);
+    e.compute(atoms, params).map_err(|e| e.to_string())
+}
+
+/// Collects a surface submitted on `e` as frame `frame` ([`GpuEngine::finish`]: counters
+/// waited for, overflows re-run as Marching Cubes only) and returns the readouts and buffers.
+fn collect_gpu(
+    e: &mut GpuEngine,
+    frame: u64,
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+) -> Result<(SurfaceOutput, GpuSurface), String> {
+    let stats = e.finish(frame, atoms, params).map_err(|e| e.to_string())?;
+    let mut surface = e.surface();
+    surface.stats = Some(stats);
+    let output = SurfaceOutput {
+        grid: surface.grid,
+        mesh: Mesh::default(),
+        area: stats.area,
+        volume: stats.volume,
+        timings: stats.timings,
+    };
+    Ok((output, surface))
+}
+
+/// A surface submitted to a GPU engine whose counters are not collected yet.
+struct Submitted {
+    /// The engine's frame number.
+    frame: u64,
+    /// Which stages the submit ran.
+    work: Work,
+}
+
+/// A representation's result while a request is computed: reused as it was, or new (with a
+/// GPU submit still to collect).
+enum Entry {
+    Reused(Arc<LayerResult>),
+    New(Box<LayerResult>, Option<Submitted>),
+}
+
+/// The GPU engine of representation `id`, when the worker runs the GPU engine.
+fn gpu_engine_of<'a>(
+    engine: &'a mut Engine,
+    cache: &'a mut Cache,
+    id: u64,
+) -> Option<&'a mut GpuEngine> {
+    let Engine::Gpu(main) = engine else {
+        return None;
+    };
+    if cache.main_engine_owner == Some(id) {
+        Some(main.as_mut())
+    } else {
+        cache.slots.get_mut(&id)?.gpu.as_deref_mut()
     }
 }
 
-/// The engine one representation computes on.
-enum EngineRef<'a> {
-    Host(&'a mut (dyn SurfaceEngine + Send)),
-    Gpu(&'a mut GpuEngine),
-}
-
 type Slot = Arc<(Mutex<Option<Request>>, Condvar)>;
+
+/// How many replies the window has taken, so the worker knows when an output set is no longer
+/// drawn.
+type Taken = Arc<(Mutex<u64>, Condvar)>;
 
 /// Handle to the worker thread. Dropping it stops the thread after its current job.
 pub struct Worker {
     slot: Slot,
     replies: Receiver<Reply>,
+    taken: Taken,
     busy: Arc<AtomicBool>,
     stop: Arc<AtomicBool>,
     engine_name: String,
@@ -282,14 +317,21 @@ impl Worker {
         let busy = Arc::new(AtomicBool::new(false));
         let stop = Arc::new(AtomicBool::new(false));
         let engine_name = engine.name().to_string();
+        let taken: Taken = Arc::default();
+        let channel = Channel {
+            tx,
+            taken: taken.clone(),
+            sent: 0,
+        };
         let (s, b, st) = (slot.clone(), busy.clone(), stop.clone());
         std::thread::Builder::new()
             .name("mdsurf compute".into())
-            .spawn(move || run(engine, s, tx, b, st, notify))
+            .spawn(move || run(engine, s, channel, b, st, notify))
             .ok();
         Worker {
             slot,
             replies,
+            taken,
             busy,
             stop,
             engine_name,
@@ -306,14 +348,25 @@ impl Worker {
         }
     }
 
-    /// The next reply, if one is ready (never blocks).
+    /// The next reply, if one is ready (never blocks). Taking a reply tells the worker that
+    /// the window no longer draws the GPU buffers of the reply before it.
     pub fn try_recv(&self) -> Option<Reply> {
-        self.replies.try_recv().ok()
+        self.took(self.replies.try_recv().ok())
     }
 
     /// Waits up to `timeout` for the next reply (for scripted runs and tests).
     pub fn recv_timeout(&self, timeout: std::time::Duration) -> Option<Reply> {
-        self.replies.recv_timeout(timeout).ok()
+        self.took(self.replies.recv_timeout(timeout).ok())
+    }
+
+    fn took(&self, reply: Option<Reply>) -> Option<Reply> {
+        if reply.is_some()
+            && let Ok(mut n) = self.taken.0.lock()
+        {
+            *n += 1;
+            self.taken.1.notify_all();
+        }
+        reply
     }
 
     /// True while a request is queued or running.
@@ -401,10 +454,37 @@ fn compute_key(rep: &Representation) -> impl PartialEq + '_ {
     )
 }
 
+/// The worker's end of the reply channel, counting what it sent against what was taken.
+struct Channel {
+    tx: Sender<Reply>,
+    taken: Taken,
+    sent: u64,
+}
+
+impl Channel {
+    /// Waits until the window has taken every reply sent (or `stop`): after that, no output
+    /// set of an earlier reply but the last is drawn, so the engines may write into it again.
+    fn wait_taken(&self, stop: &AtomicBool) {
+        let Ok(mut n) = self.taken.0.lock() else {
+            return;
+        };
+        while *n < self.sent && !stop.load(Ordering::SeqCst) {
+            n = match self
+                .taken
+                .1
+                .wait_timeout(n, std::time::Duration::from_millis(50))
+            {
+                Ok((n, _)) => n,
+                Err(_) => return,
+            };
+        }
+    }
+}
+
 fn run(
     mut engine: Engine,
     slot: Slot,
-    tx: Sender<Reply>,
+    mut channel: Channel,
     busy: Arc<AtomicBool>,
     stop: Arc<AtomicBool>,
     notify: Box<dyn Fn() + Send>,
@@ -436,6 +516,9 @@ fn run(
             }
         };
         let (generation, frame) = (request.generation, request.frame);
+        if matches!(engine, Engine::Gpu(_)) {
+            channel.wait_taken(&stop);
+        }
         let reply = match compute(&mut engine, &mut cache, &request) {
             Ok(c) => Reply::Done(Box::new(c)),
             Err(message) => Reply::Failed {
@@ -447,9 +530,10 @@ fn run(
         if let Ok(pending) = slot.0.lock() {
             busy.store(pending.is_some(), Ordering::SeqCst);
         }
-        if tx.send(reply).is_err() {
+        if channel.tx.send(reply).is_err() {
             return;
         }
+        channel.sent += 1;
         notify();
     }
 }
@@ -510,7 +594,8 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
     {
         cache.main_engine_owner = None;
     }
-    let mut layers = Vec::new();
+    // First every representation: host surfaces computed, GPU surfaces only submitted.
+    let mut entries = Vec::new();
     for RepRequest { id, rep } in req.reps.iter().filter(|r| r.rep.visible) {
         let slot = match cache.slots.get_mut(id) {
             // Same selection: keep the binding, the engine and what it was last sent.
@@ -540,12 +625,12 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
             && !slot.layer.is_dynamic()
             && compute_key(&last.rep) == compute_key(rep)
         {
-            layers.push(Arc::new(LayerResult {
+            entries.push(Entry::Reused(Arc::new(LayerResult {
                 rep: rep.clone(),
                 reused: true,
                 gpu_work: None,
                 ..(**last).clone()
-            }));
+            })));
             continue;
         }
         let lf = slot
@@ -563,6 +648,7 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
                 Arc::new(lf.particles.colours().to_vec()),
             ),
         };
+        let mut submitted = None;
         let mut result = LayerResult {
             id: *id,
             rep: rep.clone(),
@@ -598,29 +684,36 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
                 Some(sent) => sent.changes(req.frame, &lf, &result.particles),
                 None => Changes::ALL,
             };
-            let engine_ref = match engine {
-                Engine::Host(e) => EngineRef::Host(e.as_mut()),
+            let failed =
+                |e: String| format!("frame {}: representation '{}': {e}", req.frame, rep.name);
+            let atoms = lf.atom_set();
+            match engine {
+                Engine::Host(e) => {
+                    result.output =
+                        compute_on_host(e.as_mut(), &atoms, &rep.params(), rep.vertices)
+                            .map_err(failed)?;
+                }
                 Engine::Gpu(main) => {
                     // The main engine serves one representation (one that never had an engine
                     // of its own, so its change tracking stays valid); each other gets its own.
                     if cache.main_engine_owner.is_none() && slot.gpu.is_none() {
                         cache.main_engine_owner = Some(*id);
                     }
-                    if cache.main_engine_owner == Some(*id) {
-                        EngineRef::Gpu(main.as_mut())
+                    let e = if cache.main_engine_owner == Some(*id) {
+                        main.as_mut()
                     } else {
-                        EngineRef::Gpu(slot.gpu.get_or_insert_with(|| sibling_of(main)).as_mut())
-                    }
+                        slot.gpu.get_or_insert_with(|| sibling_of(main)).as_mut()
+                    };
+                    e.set_vertices(rep.vertices);
+                    let info = e
+                        .submit(&atoms, &rep.params(), changes)
+                        .map_err(|e| failed(e.to_string()))?;
+                    submitted = Some(Submitted {
+                        frame: info.frame,
+                        work: info.work,
+                    });
                 }
-            };
-            let atoms = lf.atom_set();
-            let (output, gpu_surface, gpu_work) =
-                compute_on(engine_ref, &atoms, &rep.params(), rep.vertices, changes).map_err(
-                    |e| format!("frame {}: representation '{}': {e}", req.frame, rep.name),
-                )?;
-            result.output = output;
-            result.gpu_surface = gpu_surface;
-            result.gpu_work = gpu_work;
+            }
             slot.sent = Some(Sent {
                 frame: req.frame,
                 atoms: atoms_key(&lf),
@@ -629,8 +722,48 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
             });
         }
         result.particles.positions = lf.positions;
-        let result = Arc::new(result);
-        slot.last = Some((req.frame, result.clone()));
+        entries.push(Entry::New(Box::new(result), submitted));
+    }
+    // Then the GPU counters, in the same order; each result is kept for reuse.
+    let mut layers = Vec::with_capacity(entries.len());
+    for entry in entries {
+        let (mut result, submitted) = match entry {
+            Entry::Reused(r) => {
+                layers.push(r);
+                continue;
+            }
+            Entry::New(r, s) => (r, s),
+        };
+        let id = result.id;
+        if let Some(Submitted { frame: f, work }) = submitted {
+            let e = gpu_engine_of(engine, cache, id).ok_or("internal: GPU engine missing")?;
+            let p = &result.particles;
+            let atoms = AtomSet {
+                positions: &p.positions,
+                radii: &p.radii,
+                colours: Some(&p.colours),
+            };
+            match collect_gpu(e, f, &atoms, &result.rep.params()) {
+                Ok((output, surface)) => {
+                    result.output = output;
+                    result.gpu_surface = Some(surface);
+                    result.gpu_work = Some(work);
+                }
+                Err(message) => {
+                    if let Some(slot) = cache.slots.get_mut(&id) {
+                        slot.sent = None;
+                    }
+                    return Err(format!(
+                        "frame {}: representation '{}': {message}",
+                        req.frame, result.rep.name
+                    ));
+                }
+            }
+        }
+        let result: Arc<LayerResult> = Arc::from(result);
+        if let Some(slot) = cache.slots.get_mut(&id) {
+            slot.last = Some((req.frame, result.clone()));
+        }
         layers.push(result);
     }
     Ok(Computed {

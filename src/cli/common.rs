@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
-use mdsurf::gpu::GpuEngine;
+use mdsurf::gpu::{GpuEngine, Picked};
 use mdsurf::io::{self, Trajectory};
 use mdsurf::model::colour_data;
 use mdsurf::model::colour_map::parse_range;
@@ -194,37 +194,30 @@ pub enum Backend {
     Auto,
 }
 
-/// Creates the engine for `backend`; `auto` says on stderr which one it picked and why (unless
-/// `quiet`).
+/// Creates the engine for `backend` on a headless device ([`mdsurf::gpu::pick_engine`]);
+/// `auto` says on stderr which one it picked and why (unless `quiet`).
 pub fn make_engine(backend: Backend, quiet: bool) -> Result<Box<dyn SurfaceEngine>> {
     let note = |text: String| {
         if !quiet {
             eprintln!("{text}");
         }
     };
-    match backend {
-        Backend::Cpu => Ok(Box::new(CpuEngine::new())),
-        Backend::Gpu => Ok(Box::new(
-            GpuEngine::new().context("--backend gpu: cannot start the GPU engine")?,
-        )),
-        Backend::Auto => match GpuEngine::new() {
-            Ok(gpu) if gpu.context().software_adapter => {
-                note(format!(
-                    "backend: cpu (the only GPU adapter, {}, is a software rasterizer, slower than \
-                     the CPU engine; --backend gpu uses it anyway)",
-                    gpu.context().adapter_name
-                ));
-                Ok(Box::new(CpuEngine::new()))
-            }
-            Ok(gpu) => {
+    // `From` lives beside the viewer's flags (`cli/view.rs`): the viewer's backend is this one.
+    let picked = mdsurf::gpu::pick_engine(backend.into(), None)
+        .context("--backend gpu: cannot start the GPU engine")?;
+    match picked {
+        Picked::Gpu(gpu) => {
+            if backend == Backend::Auto {
                 note(format!("backend: gpu ({})", gpu.context().adapter_name));
-                Ok(Box::new(gpu))
             }
-            Err(err) => {
-                note(format!("backend: cpu (no usable GPU: {err:#})"));
-                Ok(Box::new(CpuEngine::new()))
+            Ok(gpu)
+        }
+        Picked::Cpu { why } => {
+            if let Some(why) = why {
+                note(format!("backend: cpu ({why})"));
             }
-        },
+            Ok(Box::new(CpuEngine::new()))
+        }
     }
 }
 
@@ -282,11 +275,16 @@ pub fn engines_for(backend: BenchBackend) -> Result<Vec<BenchEngine>> {
     if backend == BenchBackend::Cpu {
         return Ok(engines);
     }
-    match GpuEngine::new() {
-        Ok(gpu) => {
+    match mdsurf::gpu::pick_engine(mdsurf::gpu::Backend::Gpu, None) {
+        Ok(Picked::Gpu(gpu)) => {
             eprintln!("gpu: {}", gpu.context().adapter_name);
-            engines.push(BenchEngine::Gpu(Box::new(gpu)));
+            engines.push(BenchEngine::Gpu(gpu));
         }
+        // `pick_engine` gives the CPU for `Backend::Gpu` never; say so rather than panic.
+        Ok(Picked::Cpu { why }) => eprintln!(
+            "note: no GPU engine ({}); timing the CPU only",
+            why.unwrap_or_default()
+        ),
         Err(err) if backend == BenchBackend::Gpu => {
             return Err(
                 anyhow::Error::new(err).context("--backend gpu: cannot start the GPU engine")

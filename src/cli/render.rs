@@ -15,8 +15,10 @@ use mdsurf::render::{
     Stereo, atom_instances, bounding_sphere, render_to_rgba, write_png,
 };
 
+use mdsurf::gpu::{Changes, GpuEngine, Picked, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::representation::{RepStyle, Representation};
+use mdsurf::surface::SurfaceEngine;
 use mdsurf::surface::SurfaceOutput;
 
 use super::chunk::ChunkSpec;
@@ -321,7 +323,19 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let gpu = HeadlessGpu::new()
         .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
     let renderer = Renderer::new(&gpu.device);
-    let mut engine = FrameEngine::new(args.backend, reader.chain(), false)?;
+    // The GPU engine computes on the render device and its buffers are drawn in place, as in
+    // the window; otherwise the mesh comes back to the host and is uploaded.
+    let mut in_place = in_place_engine(args.backend, &reader, &gpu)?;
+    // The host engine: the periodic one, or the CPU engine when the GPU was passed over (or
+    // draws in place and the host engine stays unused); never a second GPU device.
+    let host_backend = match reader.chain().periodic() {
+        Some(_) => args.backend,
+        None => Backend::Cpu,
+    };
+    let mut engine = FrameEngine::new(host_backend, reader.chain(), false)?;
+    if let Some(e) = in_place.as_mut().and_then(|v| v.first_mut()) {
+        e.set_vertices(args.params.vertices);
+    }
     if let FrameEngine::Plain(e) = &mut engine {
         e.set_vertices(args.params.vertices);
         if e.vertices() != args.params.vertices {
@@ -388,6 +402,37 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 spheres.extend(s);
                 cylinders.extend(c);
                 points.extend_from_slice(&lf.positions);
+                continue;
+            }
+            if let Some(engines) = in_place.as_mut()
+                && !lf.positions.is_empty()
+            {
+                let e = engine_of_layer(engines, k, &gpu, args.params.vertices)?;
+                let atoms = lf.atom_set();
+                let fail =
+                    |e: String| anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name);
+                let info = e
+                    .submit(&atoms, &rep.params(), Changes::ALL)
+                    .map_err(|e| fail(e.to_string()))?;
+                let stats = e
+                    .finish(info.frame, &atoms, &rep.params())
+                    .map_err(|e| fail(e.to_string()))?;
+                if i == 0 {
+                    // The camera is fitted to the first frame's surface: read it back once.
+                    let mesh = e.read_mesh(&stats).map_err(|e| fail(e.to_string()))?;
+                    points.extend_from_slice(&mesh.positions);
+                }
+                let surface = e.surface();
+                let g = surface.grid;
+                let hi = g.origin
+                    + g.spacing * glam::Vec3::from(g.dims.map(|d| d.saturating_sub(1) as f32));
+                scene.set_layer_gpu_surface(k, surface, Some((g.origin, hi)));
+                scene.layer_mut(k).opacity = Some(rep.opacity);
+                summary.push(format!(
+                    "{}: {} triangles, area {:.1} Å², volume {:.1} Å³",
+                    rep.name, stats.triangle_count, stats.area, stats.volume
+                ));
+                k += 1;
                 continue;
             }
             let out = if lf.positions.is_empty() {
@@ -458,6 +503,52 @@ pub fn run(args: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The GPU engine on `gpu`'s device when `backend` picks it and the surfaces are not periodic
+/// (the periodic engine runs on the CPU): the engine of the first surface layer.
+fn in_place_engine(
+    backend: Backend,
+    reader: &FrameReader,
+    gpu: &HeadlessGpu,
+) -> Result<Option<Vec<GpuEngine>>> {
+    if backend == Backend::Cpu || reader.chain().periodic().is_some() {
+        return Ok(None);
+    }
+    let picked = pick_engine(backend.into(), Some(gpu.context.clone()))
+        .context("--backend gpu: cannot start the GPU engine")?;
+    Ok(match picked {
+        Picked::Gpu(e) => {
+            eprintln!(
+                "backend: gpu ({}), drawn in place",
+                e.context().adapter_name
+            );
+            Some(vec![*e])
+        }
+        Picked::Cpu { why } => {
+            if let Some(why) = why {
+                eprintln!("backend: cpu ({why})");
+            }
+            None
+        }
+    })
+}
+
+/// The GPU engine of surface layer `k` (each surface keeps its own output buffers), created on
+/// `gpu`'s device the first time.
+fn engine_of_layer<'a>(
+    engines: &'a mut Vec<GpuEngine>,
+    k: usize,
+    gpu: &HeadlessGpu,
+    vertices: mdsurf::surface::VertexMode,
+) -> Result<&'a mut GpuEngine> {
+    while engines.len() <= k {
+        let mut e = GpuEngine::with_context(gpu.context.clone())
+            .context("--backend gpu: cannot start the GPU engine")?;
+        e.set_vertices(vertices);
+        engines.push(e);
+    }
+    Ok(&mut engines[k])
 }
 
 #[cfg(test)]

@@ -71,8 +71,10 @@ struct ObjectCounter {
 }
 
 impl GpuContext {
-    /// Opens the best adapter without a window, requesting its full storage-buffer, buffer-size
-    /// and workgroup limits and timestamp queries when supported.
+    /// Opens the best adapter without a window, requesting its full storage-buffer, buffer-size,
+    /// workgroup and texture-size limits and timestamp queries when supported. The only place
+    /// mdsurf opens a headless device: the engine, `render` and the tests share it
+    /// ([`crate::render::HeadlessGpu`] wraps one).
     pub fn new_headless() -> Result<GpuContext, GpuError> {
         pollster::block_on(Self::new_headless_async())
     }
@@ -103,14 +105,11 @@ impl GpuContext {
             })
             .await
             .map_err(|e| GpuError::Device(e.to_string()))?;
-        let mut context =
-            Self::from_device(device, queue, format!("{} ({:?})", info.name, info.backend));
-        context.software_adapter = info.device_type == wgpu::DeviceType::Cpu;
-        Ok(context)
+        Ok(Self::from_device(device, queue, String::new()).with_adapter(&info))
     }
 
-    /// The limits mdsurf asks for: the adapter's own maxima for what bounds problem size, the
-    /// WebGPU defaults elsewhere.
+    /// The limits mdsurf asks for: the adapter's own maxima for what bounds problem size and
+    /// picture size (`using_resolution`), the WebGPU defaults elsewhere.
     pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
         wgpu::Limits {
             max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
@@ -119,8 +118,18 @@ impl GpuContext {
             max_storage_buffers_per_shader_stage: adapter
                 .max_storage_buffers_per_shader_stage
                 .min(16),
+            // The renderer's order-independent transparency writes several targets at once.
+            max_color_attachment_bytes_per_sample: adapter.max_color_attachment_bytes_per_sample,
             ..wgpu::Limits::default().using_resolution(adapter.clone())
         }
+    }
+
+    /// Names the adapter the device came from (`llvmpipe (Vulkan)`) and notes whether it is a
+    /// software rasterizer ([`GpuContext::software_adapter`]).
+    pub fn with_adapter(mut self, info: &wgpu::AdapterInfo) -> GpuContext {
+        self.adapter_name = format!("{} ({:?})", info.name, info.backend);
+        self.software_adapter = info.device_type == wgpu::DeviceType::Cpu;
+        self
     }
 
     /// Wraps a device created elsewhere (the viewer's eframe device). `name` is for messages.

@@ -34,6 +34,11 @@ struct State {
     bounds: Option<(Vec3, Vec3, f32)>,
     fingerprints: inputs::Fingerprints,
     mesh_want: (u64, u64),
+    /// Output set the last submitted frame wrote ([`super::resources::OUTPUT_SETS`]).
+    output_set: usize,
+    /// True when the last submitted frame overflowed: nobody draws its output set, so the next
+    /// frame (its rerun) writes the same set instead of the one the renderer may be drawing.
+    rewrite_set: bool,
 }
 
 /// The GPU surface engine (see the module docs).
@@ -151,6 +156,12 @@ impl GpuEngine {
         self.state.last.as_ref()
     }
 
+    /// Which output set (0 or 1) the last submitted frame wrote its mesh into: frames alternate,
+    /// except that the rerun of an overflowed frame writes the same set again.
+    pub fn output_set(&self) -> usize {
+        self.state.output_set
+    }
+
     /// GPU objects (buffers, bind groups, textures, query sets) the engine has created so far,
     /// through its context. In steady state (same atom count, a grid that fits the buffers) a
     /// frame creates none: compare two snapshots.
@@ -163,15 +174,19 @@ impl GpuEngine {
         self.buffers.bytes()
     }
 
-    /// The GPU-resident surface of the last submitted frame (for the renderer).
+    /// The GPU-resident surface of the last submitted frame (for the renderer), with its
+    /// counters once they have arrived. Frames alternate between two output sets, so these
+    /// buffers keep this frame's mesh while the next frame is computed; the frame after that
+    /// (or a rerun of an overflowed frame) writes them again.
     pub fn surface(&self) -> GpuSurface {
+        let set = &self.buffers.outputs[self.state.output_set];
         GpuSurface {
-            vertices: self.buffers.vertices.buffer.clone(),
-            indices: self.buffers.indices.buffer.clone(),
-            draw_args: self.buffers.draw_args.clone(),
+            vertices: set.vertices.buffer.clone(),
+            indices: set.indices.buffer.clone(),
+            draw_args: set.draw_args.clone(),
             grid: self.state.plan.as_ref().map(|p| p.grid).unwrap_or_default(),
             frame: self.frame,
-            stats: self.latest,
+            stats: self.latest.filter(|s| s.frame == self.frame),
         }
     }
 
@@ -329,6 +344,11 @@ impl GpuEngine {
 
         self.frame += 1;
         let frame = self.frame;
+        let st = &mut self.state;
+        if !std::mem::take(&mut st.rewrite_set) {
+            st.output_set = (st.output_set + 1) % super::resources::OUTPUT_SETS;
+        }
+        let set = st.output_set;
         self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);
         self.stages
             .prepare(&self.ctx, &mut self.buffers, &plan, params, n, work);
@@ -340,6 +360,7 @@ impl GpuEngine {
                 &self.buffers,
                 &plan,
                 work,
+                set,
                 colour,
                 self.vertices == VertexMode::Refined,
             )
@@ -388,12 +409,17 @@ impl GpuEngine {
         }
         if let Some(last) = arrived.last() {
             self.latest = Some(*last);
+            // An overflowed last frame draws nothing: its rerun may write the same set.
+            self.state.rewrite_set = last.frame == self.frame && last.overflow;
         }
         Ok(arrived.last().copied())
     }
 
-    /// Blocks until frame `frame`'s counters have arrived.
-    fn wait_for(&mut self, frame: u64) -> Result<FrameStats, GpuError> {
+    /// Blocks until the counters of frame `frame` (as [`GpuEngine::submit`] numbered it) or of
+    /// a later frame have arrived, and returns them; no extra submit (the viewer's worker
+    /// collects a submitted frame with it). After an overflow, submit again with
+    /// `Changes::default()` (only Marching Cubes re-runs, into the same output set).
+    pub fn wait_stats(&mut self, frame: u64) -> Result<FrameStats, GpuError> {
         loop {
             self.ctx.wait()?;
             let arrived = self.take_arrived()?;
@@ -408,6 +434,28 @@ impl GpuEngine {
         }
     }
 
+    /// Finishes frame `frame` (as [`GpuEngine::submit`] numbered it) without timing stages:
+    /// waits for its counters and, while the mesh overflowed, submits again with nothing changed
+    /// (Marching Cubes only, grown buffers, the same output set). `atoms` and `params` are the
+    /// submitted ones. The viewer's worker and `mdsurf render` finish frames with it; the mesh
+    /// stays in [`GpuEngine::surface`].
+    pub fn finish(
+        &mut self,
+        frame: u64,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+    ) -> Result<FrameStats, SurfaceError> {
+        let mut frame = frame;
+        for _ in 0..MAX_SUBMITS {
+            let stats = self.wait_stats(frame)?;
+            if !stats.overflow {
+                return Ok(stats);
+            }
+            frame = self.submit(atoms, params, Changes::default())?.frame;
+        }
+        Err(overflowing())
+    }
+
     /// Computes one frame and waits for its counters, growing the mesh buffers and re-running
     /// Marching Cubes when it overflowed. Stage timings come from timestamps when the device has
     /// them, else from waiting after each stage.
@@ -418,9 +466,9 @@ impl GpuEngine {
         changes: Changes,
     ) -> Result<FrameStats, SurfaceError> {
         let mut changes = changes;
-        for _ in 0..4 {
+        for _ in 0..MAX_SUBMITS {
             let (info, wall) = self.submit_inner(atoms, params, changes, true)?;
-            let mut stats = self.wait_for(info.frame)?;
+            let mut stats = self.wait_stats(info.frame)?;
             if let Some(w) = wall {
                 stats.timings = w;
             }
@@ -430,10 +478,7 @@ impl GpuEngine {
             }
             changes = Changes::default();
         }
-        Err(
-            GpuError::Device("the mesh kept overflowing its buffers after 4 attempts".into())
-                .into(),
-        )
+        Err(overflowing())
     }
 
     /// Reads the mesh of the last finished frame back to the host.
@@ -476,6 +521,16 @@ impl GpuEngine {
         let n = self.state.plan.as_ref().map(len).unwrap_or(0);
         self.staging()?.read_pod(&self.ctx, buffer, n)
     }
+}
+
+/// Most submits of one frame whose mesh keeps overflowing the grown buffers.
+const MAX_SUBMITS: usize = 4;
+
+fn overflowing() -> SurfaceError {
+    GpuError::Device(format!(
+        "the mesh kept overflowing its buffers after {MAX_SUBMITS} attempts"
+    ))
+    .into()
 }
 
 /// A first guess of the mesh size: a surface through about an eighth of the grid's layers.

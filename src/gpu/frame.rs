@@ -154,7 +154,8 @@ impl Stages {
 
     /// Prepares a frame after the buffers were sized: writes every uniform in place (the slab
     /// uniforms into one buffer at dynamic offsets) and rebuilds only the bind groups whose
-    /// buffers were replaced. Creates no GPU object in steady state.
+    /// buffers were replaced, those of every output set together (so the first frame builds
+    /// both). Creates no GPU object in steady state.
     pub fn prepare(
         &mut self,
         ctx: &GpuContext,
@@ -205,8 +206,9 @@ impl Stages {
     }
 
     /// Records the frame prepared by [`Stages::prepare`] into `rec` (after the caller reset the
-    /// counters); `refined`: vertices refined on the exact Gaussian sum and area and volume
-    /// curvature-corrected ([`crate::surface::VertexMode::Refined`]).
+    /// counters), writing the mesh and draw arguments into output set `set`; `refined`:
+    /// vertices refined on the exact Gaussian sum and area and volume curvature-corrected
+    /// ([`crate::surface::VertexMode::Refined`]).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -215,6 +217,7 @@ impl Stages {
         b: &Buffers,
         plan: &FramePlan,
         work: Work,
+        set: usize,
         colour: bool,
         refined: bool,
     ) -> Result<(), GpuError> {
@@ -260,9 +263,9 @@ impl Stages {
             self.measure.slab_begin(&mut pass);
             self.compact
                 .record(&mut pass, offset, blocks, self.max_groups);
-            self.emit.record(&mut pass, offset, b, colour);
+            self.emit.record(&mut pass, offset, b, set, colour);
             if refined {
-                self.refine.record(&mut pass, offset, b);
+                self.refine.record(&mut pass, offset, b, set);
             }
             self.measure.slab_end(&mut pass);
             drop(pass);
@@ -275,7 +278,7 @@ impl Stages {
                 label: Some("measure"),
                 timestamp_writes: ts,
             });
-        self.measure.frame_end(&mut pass, refined);
+        self.measure.frame_end(&mut pass, set, refined);
         drop(pass);
         rec.end_stage(Stage::Mc)
     }

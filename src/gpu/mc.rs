@@ -9,7 +9,7 @@
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Layout, groups_1d, module};
 use super::layout::{classify as cl, compact as co, emit as em, refine as rf};
-use super::resources::Buffers;
+use super::resources::{Buffers, OUTPUT_SETS};
 
 /// Classification kernel and its cached bind group.
 #[derive(Debug)]
@@ -19,17 +19,18 @@ pub struct Classify(Kernel, Bound);
 #[derive(Debug)]
 pub struct Compact(Kernel, Bound);
 
-/// Emission kernels (with and without the colour volume, one layout) and their bind group.
+/// Emission kernels (with and without the colour volume, one layout) and their bind groups,
+/// one per output set.
 #[derive(Debug)]
 pub struct Emit {
     with_colour: Kernel,
     plain: Kernel,
-    bind: Bound,
+    bind: [Bound; OUTPUT_SETS],
 }
 
-/// Vertex refinement kernel and its cached bind group.
+/// Vertex refinement kernel and its cached bind groups, one per output set.
 #[derive(Debug)]
-pub struct Refine(Kernel, Bound);
+pub struct Refine(Kernel, [Bound; OUTPUT_SETS]);
 
 impl Classify {
     /// Compiles the kernel.
@@ -120,7 +121,7 @@ impl Emit {
         Emit {
             with_colour: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 1.0)], &layout),
             plain: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 0.0)], &layout),
-            bind: Bound::default(),
+            bind: Default::default(),
         }
     }
 
@@ -132,31 +133,40 @@ impl Emit {
         }
     }
 
-    /// Refreshes the bind group (shared by both variants and every slab).
+    /// Refreshes the bind group of each output set (shared by both variants and every slab).
     pub fn prepare(&mut self, ctx: &GpuContext, b: &Buffers) {
-        self.plain.bind(
-            ctx,
-            &mut self.bind,
-            &[
-                (em::U, &b.slab_uniforms.buffer),
-                (em::DENSITY, &b.density.buffer),
-                (em::COLOUR, &b.colour.buffer),
-                (em::CLASSES, &b.classes.buffer),
-                (em::VERTEX_BASE, &b.vertex_base.buffer),
-                (em::ACTIVE, &b.active.buffer),
-                (em::MC, &b.mc_tables),
-                (em::COUNTERS, &b.counters),
-                (em::VERTICES, &b.vertices.buffer),
-                (em::INDICES, &b.indices.buffer),
-            ],
-        );
+        for (bind, out) in self.bind.iter_mut().zip(&b.outputs) {
+            self.plain.bind(
+                ctx,
+                bind,
+                &[
+                    (em::U, &b.slab_uniforms.buffer),
+                    (em::DENSITY, &b.density.buffer),
+                    (em::COLOUR, &b.colour.buffer),
+                    (em::CLASSES, &b.classes.buffer),
+                    (em::VERTEX_BASE, &b.vertex_base.buffer),
+                    (em::ACTIVE, &b.active.buffer),
+                    (em::MC, &b.mc_tables),
+                    (em::COUNTERS, &b.counters),
+                    (em::VERTICES, &out.vertices.buffer),
+                    (em::INDICES, &out.indices.buffer),
+                ],
+            );
+        }
     }
 
-    /// Records emission over the active cells of the slab at `offset` (indirect: arguments
-    /// written by `slab_begin`).
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, offset: u32, b: &Buffers, colour: bool) {
+    /// Records emission into output set `set` over the active cells of the slab at `offset`
+    /// (indirect: arguments written by `slab_begin`).
+    pub fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        offset: u32,
+        b: &Buffers,
+        set: usize,
+        colour: bool,
+    ) {
         self.kernel(colour)
-            .dispatch_indirect(pass, &self.bind, &[offset], &b.dispatch_args);
+            .dispatch_indirect(pass, &self.bind[set], &[offset], &b.dispatch_args);
     }
 }
 
@@ -166,33 +176,35 @@ impl Refine {
         let m = module(&ctx.device, "refine.wgsl", super::shaders::REFINE);
         Refine(
             Kernel::with_slots(ctx, &m, "main", rf::ALL),
-            Bound::default(),
+            Default::default(),
         )
     }
 
-    /// Refreshes the bind group (shared by every slab).
+    /// Refreshes the bind group of each output set (shared by every slab).
     pub fn prepare(&mut self, ctx: &GpuContext, b: &Buffers) {
-        self.0.bind(
-            ctx,
-            &mut self.1,
-            &[
-                (rf::U, &b.slab_uniforms.buffer),
-                (rf::DENSITY, &b.density.buffer),
-                (rf::CLASSES, &b.classes.buffer),
-                (rf::VERTEX_BASE, &b.vertex_base.buffer),
-                (rf::ACTIVE, &b.active.buffer),
-                (rf::SORTED_ATOMS, &b.sorted_atoms.buffer),
-                (rf::CELL_END, &b.cell_end.buffer),
-                (rf::COUNTERS, &b.counters),
-                (rf::VERTICES, &b.vertices.buffer),
-            ],
-        );
+        for (bind, out) in self.1.iter_mut().zip(&b.outputs) {
+            self.0.bind(
+                ctx,
+                bind,
+                &[
+                    (rf::U, &b.slab_uniforms.buffer),
+                    (rf::DENSITY, &b.density.buffer),
+                    (rf::CLASSES, &b.classes.buffer),
+                    (rf::VERTEX_BASE, &b.vertex_base.buffer),
+                    (rf::ACTIVE, &b.active.buffer),
+                    (rf::SORTED_ATOMS, &b.sorted_atoms.buffer),
+                    (rf::CELL_END, &b.cell_end.buffer),
+                    (rf::COUNTERS, &b.counters),
+                    (rf::VERTICES, &out.vertices.buffer),
+                ],
+            );
+        }
     }
 
-    /// Records refinement of the vertices the slab at `offset` emitted (indirect, with the
-    /// emission's arguments).
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, offset: u32, b: &Buffers) {
+    /// Records refinement of the vertices the slab at `offset` emitted into output set `set`
+    /// (indirect, with the emission's arguments).
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>, offset: u32, b: &Buffers, set: usize) {
         self.0
-            .dispatch_indirect(pass, &self.1, &[offset], &b.dispatch_args);
+            .dispatch_indirect(pass, &self.1[set], &[offset], &b.dispatch_args);
     }
 }

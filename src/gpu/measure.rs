@@ -6,7 +6,7 @@
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Uniform, module};
 use super::layout::measure as m;
-use super::resources::Buffers;
+use super::resources::{Buffers, OUTPUT_SETS};
 use super::types::MeasureUniform;
 
 /// The bookkeeping and reduction kernels, their uniform and cached bind groups.
@@ -20,7 +20,10 @@ pub struct Measure {
     partial_sums_curved: Kernel,
     final_sum: Kernel,
     uniform: Uniform<MeasureUniform>,
-    binds: [Bound; 5],
+    /// `slab_begin`, `slab_end`, `final_sum` (no output buffer bound).
+    binds: [Bound; 3],
+    /// `frame_end` and `partial_sums` per output set (they bind its draw arguments and mesh).
+    set_binds: [[Bound; 2]; OUTPUT_SETS],
 }
 
 impl Measure {
@@ -45,6 +48,7 @@ impl Measure {
             final_sum: k("final_sum", m::FINAL_SUM),
             uniform: Uniform::new(ctx, "measure uniform"),
             binds: Default::default(),
+            set_binds: Default::default(),
         }
     }
 
@@ -52,7 +56,7 @@ impl Measure {
     pub fn prepare(&mut self, ctx: &GpuContext, b: &Buffers, uniform: &MeasureUniform) {
         self.uniform.write(&ctx.queue, uniform);
         let u = &self.uniform.buffer;
-        let [slab_begin, slab_end, frame_end, partial_sums, final_sum] = &mut self.binds;
+        let [slab_begin, slab_end, final_sum] = &mut self.binds;
         self.slab_begin.bind(
             ctx,
             slab_begin,
@@ -64,22 +68,24 @@ impl Measure {
         );
         self.slab_end
             .bind(ctx, slab_end, &[(m::COUNTERS, &b.counters)]);
-        self.frame_end.bind(
-            ctx,
-            frame_end,
-            &[(m::COUNTERS, &b.counters), (m::DRAW_ARGS, &b.draw_args)],
-        );
-        self.partial_sums.bind(
-            ctx,
-            partial_sums,
-            &[
-                (m::U, u),
-                (m::COUNTERS, &b.counters),
-                (m::VERTICES, &b.vertices.buffer),
-                (m::INDICES, &b.indices.buffer),
-                (m::PARTIALS, &b.partials),
-            ],
-        );
+        for ([frame_end, partial_sums], out) in self.set_binds.iter_mut().zip(&b.outputs) {
+            self.frame_end.bind(
+                ctx,
+                frame_end,
+                &[(m::COUNTERS, &b.counters), (m::DRAW_ARGS, &out.draw_args)],
+            );
+            self.partial_sums.bind(
+                ctx,
+                partial_sums,
+                &[
+                    (m::U, u),
+                    (m::COUNTERS, &b.counters),
+                    (m::VERTICES, &out.vertices.buffer),
+                    (m::INDICES, &out.indices.buffer),
+                    (m::PARTIALS, &b.partials),
+                ],
+            );
+        }
         self.final_sum.bind(
             ctx,
             final_sum,
@@ -98,18 +104,18 @@ impl Measure {
         self.slab_end.dispatch(pass, &self.binds[1], &[], [1, 1, 1]);
     }
 
-    /// After the last slab: totals, draw arguments, area and volume (`curved`: with the
-    /// curvature correction, for refined vertices).
-    pub fn frame_end(&self, pass: &mut wgpu::ComputePass<'_>, curved: bool) {
-        self.frame_end
-            .dispatch(pass, &self.binds[2], &[], [1, 1, 1]);
+    /// After the last slab: totals, draw arguments of output set `set`, area and volume of its
+    /// mesh (`curved`: with the curvature correction, for refined vertices).
+    pub fn frame_end(&self, pass: &mut wgpu::ComputePass<'_>, set: usize, curved: bool) {
+        let [frame_end, partial_sums] = &self.set_binds[set];
+        self.frame_end.dispatch(pass, frame_end, &[], [1, 1, 1]);
         let sums = if curved {
             &self.partial_sums_curved
         } else {
             &self.partial_sums
         };
-        sums.dispatch(pass, &self.binds[3], &[], [256, 1, 1]);
+        sums.dispatch(pass, partial_sums, &[], [256, 1, 1]);
         self.final_sum
-            .dispatch(pass, &self.binds[4], &[], [1, 1, 1]);
+            .dispatch(pass, &self.binds[2], &[], [1, 1, 1]);
     }
 }

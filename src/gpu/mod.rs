@@ -7,7 +7,9 @@
 //! [`layout`] names every binding once (explicit bind-group layouts, checked against the WGSL);
 //! [`kernel`] caches bind groups across frames, so a steady-state frame creates no GPU object
 //! ([`GpuEngine::objects_created`] counts them through [`GpuContext`]).
-//! [`GpuEngine`] runs a frame: blocking through [`crate::surface::SurfaceEngine`] (CLI, tests)
+//! [`context`] opens the one headless device (or wraps the viewer's), [`factory`] picks the
+//! engine for a backend (viewer, `render`, `surface`, `bench`). [`GpuEngine`] runs a frame:
+//! blocking through [`crate::surface::SurfaceEngine`] (CLI, tests)
 //! or non-blocking into a [`GpuSurface`] the renderer draws from (viewer). [`tolerance`] holds
 //! the CPU-parity tolerances, [`table1`] reproduces the paper's Table 1. The shaders live in
 //! `shaders/`, one file per stage.
@@ -16,6 +18,7 @@ pub mod bin;
 pub mod context;
 pub mod density;
 pub mod engine;
+pub mod factory;
 pub mod frame;
 pub mod inputs;
 pub mod kernel;
@@ -35,6 +38,7 @@ pub mod types;
 
 pub use context::{GpuContext, GpuObjects, gpu_required};
 pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
+pub use factory::{Backend, Picked, pick_engine};
 pub use frame::Work;
 pub use output::{FrameStats, GpuSurface};
 pub use types::{DrawIndexedArgs, GpuCounters, GpuVertex};

@@ -1,5 +1,7 @@
 //! The engine's GPU buffers: per-atom inputs and sorted copies, bin cells, per-slab volumes,
-//! Marching Cubes scratch, counters, the per-slab uniforms and the output mesh. Each grows
+//! Marching Cubes scratch, counters, the per-slab uniforms and two sets of output mesh buffers
+//! ([`OutputSet`]: frames alternate between them, so the surface the renderer draws is never
+//! overwritten by the frame computed after it). Each grows
 //! (never shrinks) to what a frame needs, the grid-sized ones with an eighth to spare so that a
 //! trajectory whose box breathes a little does not replace them every frame; see
 //! [`super::plan`] for the byte counts per voxel and per atom. A replaced buffer invalidates
@@ -86,22 +88,54 @@ pub struct Buffers {
     pub active: Grow,
     /// Block sums of vertices, triangles, active cells.
     pub block_sums: [Grow; 3],
-    /// Output vertices ([`GpuVertex`]).
-    pub vertices: Grow,
-    /// Output indices (u32, 3 per triangle).
-    pub indices: Grow,
+    /// The two output sets; frame after frame the engine writes the other one.
+    pub outputs: [OutputSet; OUTPUT_SETS],
     /// Frame counters ([`GpuCounters`]).
     pub counters: wgpu::Buffer,
     /// Emit dispatch arguments.
     pub dispatch_args: wgpu::Buffer,
-    /// Indirect draw arguments ([`DrawIndexedArgs`]).
-    pub draw_args: wgpu::Buffer,
     /// Area/volume partial sums.
     pub partials: wgpu::Buffer,
     /// MC tables ([`super::types::McTablesUniform`], a uniform buffer).
     pub mc_tables: wgpu::Buffer,
     /// One [`SlabUniform`] per slab, bound at dynamic offsets.
     pub slab_uniforms: SlabUniforms,
+}
+
+/// How many output sets the engine alternates between (double buffering).
+pub const OUTPUT_SETS: usize = 2;
+
+/// What the renderer draws from: one frame's mesh and its indirect draw arguments. The engine
+/// keeps [`OUTPUT_SETS`] of them, grown together, and writes a different one each frame.
+#[derive(Debug)]
+pub struct OutputSet {
+    /// Output vertices ([`GpuVertex`]).
+    pub vertices: Grow,
+    /// Output indices (u32, 3 per triangle).
+    pub indices: Grow,
+    /// Indirect draw arguments ([`DrawIndexedArgs`]).
+    pub draw_args: wgpu::Buffer,
+}
+
+impl OutputSet {
+    fn new(ctx: &GpuContext) -> OutputSet {
+        use wgpu::BufferUsages as U;
+        OutputSet {
+            vertices: Grow::new(ctx, "vertices", U::VERTEX | U::COPY_SRC),
+            indices: Grow::new(ctx, "indices", U::INDEX | U::COPY_SRC),
+            draw_args: storage(
+                ctx,
+                "draw args",
+                size_of::<DrawIndexedArgs>() as u64,
+                U::INDIRECT | U::COPY_SRC,
+            ),
+        }
+    }
+
+    /// Bytes of GPU memory held.
+    fn bytes(&self) -> u64 {
+        self.vertices.size() + self.indices.size() + self.draw_args.size()
+    }
 }
 
 /// The [`SlabUniform`]s of a frame in one uniform buffer, one per `stride` bytes (the device's
@@ -183,16 +217,9 @@ impl Buffers {
                 Grow::new(device, "block triangles", U::empty()),
                 Grow::new(device, "block active", U::empty()),
             ],
-            vertices: Grow::new(device, "vertices", U::VERTEX | U::COPY_SRC),
-            indices: Grow::new(device, "indices", U::INDEX | U::COPY_SRC),
+            outputs: [OutputSet::new(device), OutputSet::new(device)],
             counters: storage(device, "counters", size_of::<GpuCounters>() as u64, copy),
             dispatch_args: storage(device, "emit dispatch args", 16, U::INDIRECT),
-            draw_args: storage(
-                device,
-                "draw args",
-                size_of::<DrawIndexedArgs>() as u64,
-                U::INDIRECT | U::COPY_SRC,
-            ),
             partials: storage(device, "area/volume partials", 256 * 8, U::empty()),
             mc_tables: uniform(device, "mc tables", &*mc_tables),
             slab_uniforms: SlabUniforms::new(ctx),
@@ -230,21 +257,25 @@ impl Buffers {
         }
     }
 
-    /// Grows the mesh buffers to hold `vertices` and `triangles`.
+    /// Grows the mesh buffers of every output set to hold `vertices` and `triangles` (all
+    /// sets together, so the sets always have the same capacity).
     pub fn ensure_mesh(&mut self, device: &GpuContext, vertices: u64, triangles: u64) {
-        self.vertices
-            .ensure(device, vertices * size_of::<GpuVertex>() as u64);
-        self.indices.ensure(device, triangles * 12);
+        for set in &mut self.outputs {
+            set.vertices
+                .ensure(device, vertices * size_of::<GpuVertex>() as u64);
+            set.indices.ensure(device, triangles * 12);
+        }
     }
 
-    /// Vertex and triangle capacity of the mesh buffers.
+    /// Vertex and triangle capacity of the mesh buffers (the same in every output set).
     pub fn mesh_capacity(&self) -> (u32, u32) {
-        let v = self.vertices.size() / size_of::<GpuVertex>() as u64;
-        let t = self.indices.size() / 12;
+        let set = &self.outputs[0];
+        let v = set.vertices.size() / size_of::<GpuVertex>() as u64;
+        let t = set.indices.size() / 12;
         (v.min(u32::MAX as u64) as u32, t.min(u32::MAX as u64) as u32)
     }
 
-    /// Bytes of GPU memory held (all buffers).
+    /// Bytes of GPU memory held (all buffers, both output sets).
     pub fn bytes(&self) -> u64 {
         let grows = [
             &self.positions,
@@ -259,13 +290,10 @@ impl Buffers {
             &self.classes,
             &self.vertex_base,
             &self.active,
-            &self.vertices,
-            &self.indices,
         ];
         let fixed = [
             &self.counters,
             &self.dispatch_args,
-            &self.draw_args,
             &self.partials,
             &self.mc_tables,
             &self.slab_uniforms.buffer,
@@ -273,5 +301,6 @@ impl Buffers {
         grows.iter().map(|g| g.size()).sum::<u64>()
             + self.block_sums.iter().map(|g| g.size()).sum::<u64>()
             + fixed.iter().map(|b| b.size()).sum::<u64>()
+            + self.outputs.iter().map(OutputSet::bytes).sum::<u64>()
     }
 }

@@ -22,6 +22,7 @@ mod colour_data;
 mod export_atomic;
 mod export_formats;
 mod export_gltf_anim;
+mod gpu_double_buffer;
 mod gpu_frames;
 mod gpu_parity;
 mod gpu_refine;
