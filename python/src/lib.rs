@@ -1,0 +1,269 @@
+//! `mdsurf._mdsurf`, the native half of the Python package `mdsurf`: the Gaussian density
+//! surface engine (CPU reference or wgpu compute) on numpy arrays, without the file readers, the
+//! command line or the viewer. The Python half (`python/mdsurf/`) converts inputs to float32,
+//! documents the API, and holds the MDAnalysis analysis.
+//!
+//! Defaults and messages follow `mdsurf surface`: H = 1 Å, R = 1, I = 0.5, quality `medium`,
+//! backend `auto`, interpolated vertices; a bad argument raises `ValueError` with the engine's
+//! own one-line message, a grid too large for memory `MemoryError`, a GPU failure
+//! `RuntimeError`. Lengths are in Å, areas in Å², volumes in Å³.
+
+mod arrays;
+mod engines;
+mod topology;
+
+use mdsurf::surface::{AtomSet, Quality, SurfaceError, SurfaceOutput, SurfaceParams, VertexMode};
+use numpy::{PyArray1, PyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+
+use engines::Backend;
+
+/// The exception for an engine error: bad input is a `ValueError`, a grid that does not fit a
+/// `MemoryError`, anything else (the GPU) a `RuntimeError`.
+fn surface_err(prefix: &str, err: SurfaceError) -> PyErr {
+    let msg = format!("{prefix}{err}");
+    match err {
+        SurfaceError::InvalidParameter { .. }
+        | SurfaceError::EmptySystem
+        | SurfaceError::NonFiniteCoordinate { .. }
+        | SurfaceError::InvalidRadius { .. }
+        | SurfaceError::LengthMismatch { .. }
+        | SurfaceError::NonFiniteColour { .. } => PyValueError::new_err(msg),
+        SurfaceError::GridTooLarge { .. } => PyMemoryError::new_err(msg),
+        _ => PyRuntimeError::new_err(msg),
+    }
+}
+
+/// Parses the shared keyword arguments into checked parameters, backend and vertex mode.
+fn settings(
+    spacing: f32,
+    radius_scale: f32,
+    isovalue: f32,
+    quality: &str,
+    backend: &str,
+    vertices: &str,
+) -> PyResult<(SurfaceParams, Backend, VertexMode)> {
+    let quality: Quality = quality.parse().map_err(PyValueError::new_err)?;
+    let backend: Backend = backend.parse().map_err(PyValueError::new_err)?;
+    let vertices: VertexMode = vertices.parse().map_err(PyValueError::new_err)?;
+    let params = SurfaceParams {
+        spacing,
+        radius_scale,
+        isovalue,
+        quality,
+    };
+    params.validate().map_err(|e| surface_err("", e))?;
+    Ok((params, backend, vertices))
+}
+
+/// The grid a surface was sampled on: `origin` (x, y, z) in Å, `spacing` H in Å, `dims`
+/// samples along x, y and z.
+#[pyclass(frozen, module = "mdsurf", name = "Grid")]
+struct Grid {
+    /// Position of sample (0, 0, 0) in Å.
+    #[pyo3(get)]
+    origin: (f32, f32, f32),
+    /// Distance between neighbouring samples in Å.
+    #[pyo3(get)]
+    spacing: f32,
+    /// Number of samples along x, y and z.
+    #[pyo3(get)]
+    dims: (u32, u32, u32),
+}
+
+#[pymethods]
+impl Grid {
+    fn __repr__(&self) -> String {
+        let (x, y, z) = self.origin;
+        let (nx, ny, nz) = self.dims;
+        format!(
+            "Grid(origin=({x}, {y}, {z}), spacing={}, dims=({nx}, {ny}, {nz}))",
+            self.spacing
+        )
+    }
+}
+
+/// One surface: `vertices` (V, 3) and unit outward `normals` (V, 3) float32 in Å, per-vertex
+/// linear RGB `colors` (V, 3) or None when no atom colours were given, `triangles` (T, 3)
+/// uint32 vertex indices wound counter-clockwise seen from outside, `area` in Å², enclosed
+/// `volume` in Å³, the `grid` it was sampled on and the `engine` that computed it.
+#[pyclass(frozen, module = "mdsurf", name = "Surface")]
+struct Surface {
+    #[pyo3(get)]
+    vertices: Py<PyArray2<f32>>,
+    #[pyo3(get)]
+    normals: Py<PyArray2<f32>>,
+    #[pyo3(get)]
+    colors: Option<Py<PyArray2<f32>>>,
+    #[pyo3(get)]
+    triangles: Py<PyArray2<u32>>,
+    #[pyo3(get)]
+    area: f64,
+    #[pyo3(get)]
+    volume: f64,
+    #[pyo3(get)]
+    grid: Py<Grid>,
+    #[pyo3(get)]
+    engine: String,
+}
+
+#[pymethods]
+impl Surface {
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!(
+            "Surface({} vertices, {} triangles, area={:.1} Å², volume={:.1} Å³, engine='{}')",
+            self.vertices.bind(py).shape()[0],
+            self.triangles.bind(py).shape()[0],
+            self.area,
+            self.volume,
+            self.engine
+        )
+    }
+}
+
+impl Surface {
+    fn new(py: Python<'_>, out: SurfaceOutput, coloured: bool, engine: String) -> PyResult<Self> {
+        let mesh = out.mesh;
+        let vertices: Vec<[f32; 3]> = mesh.positions.iter().map(|v| v.to_array()).collect();
+        let normals: Vec<[f32; 3]> = mesh.normals.iter().map(|v| v.to_array()).collect();
+        let g = out.grid;
+        Ok(Surface {
+            vertices: arrays::array_f32(py, &vertices).unbind(),
+            normals: arrays::array_f32(py, &normals).unbind(),
+            colors: coloured.then(|| arrays::array_f32(py, &mesh.colours).unbind()),
+            triangles: arrays::to_array(py, mesh.indices).unbind(),
+            area: out.area,
+            volume: out.volume,
+            grid: Py::new(
+                py,
+                Grid {
+                    origin: (g.origin.x, g.origin.y, g.origin.z),
+                    spacing: g.spacing,
+                    dims: (g.dims[0], g.dims[1], g.dims[2]),
+                },
+            )?,
+            engine,
+        })
+    }
+}
+
+/// See `mdsurf.surface` (python/mdsurf/__init__.py) for the documentation.
+#[pyfunction]
+#[pyo3(signature = (positions, radii, colors, spacing, radius_scale, isovalue, quality, backend, vertices))]
+#[allow(clippy::too_many_arguments)]
+fn surface(
+    py: Python<'_>,
+    positions: PyReadonlyArrayDyn<'_, f32>,
+    radii: PyReadonlyArrayDyn<'_, f32>,
+    colors: Option<PyReadonlyArrayDyn<'_, f32>>,
+    spacing: f32,
+    radius_scale: f32,
+    isovalue: f32,
+    quality: &str,
+    backend: &str,
+    vertices: &str,
+) -> PyResult<Surface> {
+    let (params, backend, vertices) =
+        settings(spacing, radius_scale, isovalue, quality, backend, vertices)?;
+    let positions = arrays::positions(&positions)?;
+    let radii = arrays::radii(&radii, positions.len())?;
+    let colours = colors
+        .map(|c| arrays::colours(&c, positions.len()))
+        .transpose()?;
+    let result = py.detach(|| {
+        engines::with_engine(backend, vertices, |engine| {
+            let atoms = AtomSet {
+                positions: &positions,
+                radii: &radii,
+                colours: colours.as_deref(),
+            };
+            let name = engine.name().to_string();
+            engine.compute(&atoms, &params).map(|out| (out, name))
+        })
+    });
+    let (out, name) = result
+        .map_err(PyRuntimeError::new_err)?
+        .map_err(|e| surface_err("", e))?;
+    Surface::new(py, out, colours.is_some(), name)
+}
+
+/// Per-frame values (areas in Å², volumes in Å³) as a float64 array.
+type Measures<'py> = Bound<'py, PyArray1<f64>>;
+
+/// See `mdsurf.measure` (python/mdsurf/__init__.py) for the documentation.
+#[pyfunction]
+#[pyo3(signature = (trajectory, radii, spacing, radius_scale, isovalue, quality, backend, vertices))]
+#[allow(clippy::too_many_arguments)]
+fn measure<'py>(
+    py: Python<'py>,
+    trajectory: PyReadonlyArrayDyn<'py, f32>,
+    radii: PyReadonlyArrayDyn<'py, f32>,
+    spacing: f32,
+    radius_scale: f32,
+    isovalue: f32,
+    quality: &str,
+    backend: &str,
+    vertices: &str,
+) -> PyResult<(Measures<'py>, Measures<'py>)> {
+    let (params, backend, vertices) =
+        settings(spacing, radius_scale, isovalue, quality, backend, vertices)?;
+    let (frames, atoms) = arrays::trajectory(&trajectory)?;
+    let radii = arrays::radii(&radii, atoms)?;
+    if frames == 0 {
+        // Nothing to compute: no engine is chosen, so no GPU is opened.
+        return Ok((PyArray1::zeros(py, 0, false), PyArray1::zeros(py, 0, false)));
+    }
+    let view = trajectory.as_array();
+    let result = py.detach(|| {
+        engines::with_engine(backend, vertices, |engine| {
+            let mut area = Vec::with_capacity(frames);
+            let mut volume = Vec::with_capacity(frames);
+            let mut positions = Vec::with_capacity(atoms);
+            for f in 0..frames {
+                arrays::frame_into(&view, f, &mut positions);
+                let atoms = AtomSet {
+                    positions: &positions,
+                    radii: &radii,
+                    colours: None,
+                };
+                let out = engine
+                    .compute(&atoms, &params)
+                    .map_err(|e| surface_err(&format!("frame {f}: "), e))?;
+                area.push(out.area);
+                volume.push(out.volume);
+            }
+            Ok::<_, PyErr>((area, volume))
+        })
+    });
+    let (area, volume) = result.map_err(PyRuntimeError::new_err)??;
+    Ok((PyArray1::from_vec(py, area), PyArray1::from_vec(py, volume)))
+}
+
+/// See `mdsurf.engine_info`.
+#[pyfunction]
+fn engine_info(py: Python<'_>, backend: &str) -> PyResult<String> {
+    let backend: Backend = backend.parse().map_err(PyValueError::new_err)?;
+    py.detach(|| engines::describe(backend))
+        .map(|(_, text)| text)
+        .map_err(PyRuntimeError::new_err)
+}
+
+/// True once this process has opened (or tried to open) the GPU; a test hook for the promise
+/// that importing `mdsurf` opens no device.
+#[pyfunction]
+fn _gpu_opened() -> bool {
+    engines::gpu_opened()
+}
+
+#[pymodule]
+fn _mdsurf(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Surface>()?;
+    m.add_class::<Grid>()?;
+    m.add_function(wrap_pyfunction!(surface, m)?)?;
+    m.add_function(wrap_pyfunction!(measure, m)?)?;
+    m.add_function(wrap_pyfunction!(engine_info, m)?)?;
+    m.add_function(wrap_pyfunction!(_gpu_opened, m)?)?;
+    topology::register(m)?;
+    Ok(())
+}
