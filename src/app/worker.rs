@@ -36,7 +36,9 @@ use crate::gpu::{Changes, GpuEngine, GpuSurface, Work};
 use crate::model::{ParticleOptions, RadiusOverrides};
 use crate::scene::layer::{Layer, LayerFrame};
 use crate::scene::representation::{RepStyle, Representation};
-use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams, VertexMode};
+use crate::surface::{
+    AtomSet, Mesh, MeshCounts, SurfaceEngine, SurfaceOutput, SurfaceParams, VertexMode,
+};
 
 /// Frames kept in the worker's cache (around the playhead; oldest evicted first).
 const FRAME_CACHE: usize = 16;
@@ -253,6 +255,11 @@ fn collect_gpu(
         area: stats.area,
         volume: stats.volume,
         timings: stats.timings,
+        // The mesh stays in the engine's buffers.
+        counts_without_mesh: Some(MeshCounts {
+            vertices: stats.vertex_count as usize,
+            triangles: stats.triangle_count as usize,
+        }),
     };
     Ok((output, surface))
 }

@@ -354,7 +354,7 @@ fn time_case(
         };
         let output = engine.engine().compute(&atoms, params)?;
         let compute_ms = ms_since(t1);
-        (last_dims, last_triangles) = (output.grid.dims, output.mesh.triangle_count());
+        (last_dims, last_triangles) = (output.grid.dims, output.triangle_count());
         if i == 0 {
             objects_after_first = gpu_objects(engine);
         }

@@ -161,6 +161,8 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
     let mut engine = FrameEngine::new(args.backend, reader.chain(), args.quiet)?;
     if let FrameEngine::Plain(e) = &mut engine {
+        // Without -o only area, volume and counts are reported: the mesh need not be built.
+        e.set_keep_mesh(output.is_some());
         e.set_vertices(args.params.vertices);
         if e.vertices() != args.params.vertices {
             eprintln!(
@@ -257,8 +259,8 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                     time_ps: frame.time_ps,
                     atoms: lf.positions.len(),
                     dims: surf.grid.dims,
-                    vertices: surf.mesh.vertex_count(),
-                    triangles: surf.mesh.triangle_count(),
+                    vertices: surf.vertex_count(),
+                    triangles: surf.triangle_count(),
                     area: surf.area,
                     volume: surf.volume,
                     total_ms: ms_since(t1) + if rows.is_empty() { read_ms } else { 0.0 },

@@ -567,6 +567,7 @@ impl SurfaceEngine for GpuEngine {
             area: stats.area,
             volume: stats.volume,
             timings: stats.timings,
+            counts_without_mesh: None,
         })
     }
 }

@@ -91,7 +91,10 @@ impl Labels {
 
     /// Sets atom `i`'s value to the distinct string `id` (from [`Labels::intern`]).
     pub fn set_id(&mut self, i: usize, id: u32) {
-        assert!((id as usize) < self.values.len(), "label id {id} out of range");
+        assert!(
+            (id as usize) < self.values.len(),
+            "label id {id} out of range"
+        );
         self.ids[i] = id;
     }
 

@@ -37,9 +37,21 @@ pub fn extract_bricks_refined(
     field: Option<&AnalyticField>,
     scratch: &mut McScratch,
 ) -> Mesh {
+    march_bricks(vol, field, scratch);
+    merge(&mut scratch.slabs)
+}
+
+/// The slab walk of [`extract_bricks_refined`], leaving each slab's share of the mesh in
+/// `scratch` (for `merge` or `McScratch::measure`); no slab when the grid is degenerate.
+pub(super) fn march_bricks(
+    vol: &BrickVolume,
+    field: Option<&AnalyticField>,
+    scratch: &mut McScratch,
+) {
     let [nx, ny, nz] = vol.grid.dims.map(|d| d as usize);
     if nx < 2 || ny < 2 || nz < 2 {
-        return Mesh::default();
+        scratch.slabs.clear();
+        return;
     }
     let layers = nz - 1;
     let threads = rayon::current_num_threads().max(1);
@@ -58,7 +70,6 @@ pub fn extract_bricks_refined(
         .par_iter_mut()
         .enumerate()
         .for_each(|(s, out)| ctx.slab(s * planes, ((s + 1) * planes).min(layers), out));
-    merge(&mut scratch.slabs)
 }
 
 struct Ctx<'a> {

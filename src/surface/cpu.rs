@@ -7,12 +7,12 @@ use std::time::Instant;
 
 use super::analytic::AnalyticField;
 use super::bin::{bin_atoms, bin_atoms_overlapping};
-use super::brick_mc::extract_bricks_refined;
+use super::brick_mc::march_bricks;
 use super::bricks::{self, BrickScratch, BrickStats, BrickVolume};
-use super::marching_cubes::{McScratch, extract_refined};
+use super::marching_cubes::{McScratch, march_dense};
 use super::{
-    AtomSet, DensityVolume, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
-    SurfaceParams, VertexMode, available_memory_bytes, curved, density,
+    AtomSet, DensityVolume, GridSpec, Mesh, MeshCounts, StageTimings, SurfaceEngine, SurfaceError,
+    SurfaceOutput, SurfaceParams, VertexMode, available_memory_bytes, curved, density,
 };
 
 /// The multi-threaded CPU surface engine (uses rayon's global thread pool).
@@ -38,6 +38,9 @@ pub struct CpuEngine {
     last_bricks: Option<BrickStats>,
     /// Marching Cubes working memory kept between calls.
     mc: McScratch,
+    /// False when only area, volume and counts are wanted (the mesh is then never assembled;
+    /// see [`SurfaceEngine::set_keep_mesh`]).
+    measure_only: bool,
     /// Vertex placement and measurement ([`VertexMode`], interpolated by default).
     vertices: VertexMode,
 }
@@ -133,6 +136,10 @@ impl SurfaceEngine for CpuEngine {
         self.vertices = mode;
     }
 
+    fn set_keep_mesh(&mut self, keep: bool) {
+        self.measure_only = !keep;
+    }
+
     fn vertices(&self) -> VertexMode {
         self.vertices
     }
@@ -148,7 +155,7 @@ impl SurfaceEngine for CpuEngine {
         let with_colour = atoms.colours.is_some();
         let refined = self.vertices == VertexMode::Refined;
         let field;
-        let (mesh, bin_ms, density_ms, t) = if self.dense {
+        let (bin_ms, density_ms, t) = if self.dense {
             let t = Instant::now();
             let bins = bin_atoms(atoms, params, &grid, density::slab_planes(&grid));
             let bin_ms = ms(t);
@@ -159,9 +166,9 @@ impl SurfaceEngine for CpuEngine {
             field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
             drop(bins);
             let iso = params.isovalue;
-            let mesh = extract_refined(&grid, &self.volume, iso, field.as_ref(), &mut self.mc);
+            march_dense(&grid, &self.volume, iso, field.as_ref(), &mut self.mc);
             self.last_bricks = None;
-            (mesh, bin_ms, density_ms, t)
+            (bin_ms, density_ms, t)
         } else {
             // Free a dense volume a previous dense call may have left.
             self.volume = DensityVolume::default();
@@ -176,13 +183,25 @@ impl SurfaceEngine for CpuEngine {
             let t = Instant::now();
             field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
             drop(bins);
-            let mesh = extract_bricks_refined(&self.bricks, field.as_ref(), &mut self.mc);
+            march_bricks(&self.bricks, field.as_ref(), &mut self.mc);
             self.last_bricks = Some(self.bricks.stats());
-            (mesh, bin_ms, density_ms, t)
+            (bin_ms, density_ms, t)
         };
-        let (area, enclosed) = match &field {
-            Some(_) => curved::curved_area_volume(&mesh),
-            None => mesh.area_and_volume(),
+        // Refined vertices are measured on the assembled mesh (curvature needs its edges).
+        let (mesh, area, enclosed, counts_without_mesh) = if self.measure_only && field.is_none() {
+            let m = self.mc.measure();
+            let counts = MeshCounts {
+                vertices: m.vertices,
+                triangles: m.triangles,
+            };
+            (Mesh::default(), m.area, m.volume, Some(counts))
+        } else {
+            let mesh = self.mc.merge();
+            let (area, enclosed) = match &field {
+                Some(_) => curved::curved_area_volume(&mesh),
+                None => mesh.area_and_volume(),
+            };
+            (mesh, area, enclosed, None)
         };
         let mc_ms = ms(t);
 
@@ -197,6 +216,7 @@ impl SurfaceEngine for CpuEngine {
                 density_ms,
                 mc_ms,
             },
+            counts_without_mesh,
         })
     }
 }

@@ -102,6 +102,32 @@ pub struct SurfaceOutput {
     pub volume: f64,
     /// Time spent per stage.
     pub timings: StageTimings,
+    /// Set when the engine measured the surface without keeping its mesh (see
+    /// [`SurfaceEngine::set_keep_mesh`]); `mesh` is then empty.
+    pub counts_without_mesh: Option<MeshCounts>,
+}
+
+/// Size of a mesh that was measured but not kept.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MeshCounts {
+    /// Vertices of the mesh.
+    pub vertices: usize,
+    /// Triangles of the mesh.
+    pub triangles: usize,
+}
+
+impl SurfaceOutput {
+    /// Vertices of the surface (kept or not).
+    pub fn vertex_count(&self) -> usize {
+        self.counts_without_mesh
+            .map_or(self.mesh.vertex_count(), |c| c.vertices)
+    }
+
+    /// Triangles of the surface (kept or not).
+    pub fn triangle_count(&self) -> usize {
+        self.counts_without_mesh
+            .map_or(self.mesh.triangle_count(), |c| c.triangles)
+    }
 }
 
 impl Default for GridSpec {
@@ -125,6 +151,12 @@ pub trait SurfaceEngine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
     ) -> Result<SurfaceOutput, SurfaceError>;
+
+    /// With `false`, later surfaces may be measured (area, volume, counts) without keeping
+    /// their mesh, which saves the memory and time of assembling it (`mdsurf surface` with
+    /// `--stats` and no `-o`); see [`SurfaceOutput::counts_without_mesh`]. An engine that always
+    /// builds the mesh ignores it. Default: the mesh is kept.
+    fn set_keep_mesh(&mut self, _keep: bool) {}
 
     /// Sets how later surfaces place their vertices and normals (issue 13); an engine that
     /// cannot refine keeps interpolating and reports so through [`SurfaceEngine::vertices`].

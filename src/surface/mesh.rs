@@ -54,7 +54,7 @@ impl Mesh {
     /// Area in Å² and enclosed volume in Å³ in one pass (same values as [`Mesh::area`] and
     /// [`Mesh::volume`]).
     pub fn area_and_volume(&self) -> (f64, f64) {
-        const CHUNK: usize = 3 * 16384;
+        const CHUNK: usize = 3 * MEASURE_CHUNK_TRIANGLES;
         let partial: Vec<(f64, f64)> = self
             .indices
             .par_chunks(CHUNK)
@@ -73,7 +73,7 @@ impl Mesh {
     /// Sum of `f` over the triangles in f64, in parallel over fixed chunks summed in order, so
     /// the result does not depend on the thread count.
     fn sum_over_triangles(&self, f: impl Fn([Vec3; 3]) -> f64 + Sync) -> f64 {
-        const CHUNK: usize = 3 * 16384;
+        const CHUNK: usize = 3 * MEASURE_CHUNK_TRIANGLES;
         let partial: Vec<f64> = self
             .indices
             .par_chunks(CHUNK)
@@ -129,12 +129,17 @@ impl Mesh {
     }
 }
 
+/// Triangles per partial sum of area and volume: the sums are taken over fixed chunks in
+/// triangle order and the partial sums added in order, so they do not depend on the thread
+/// count (and [`super::marching_cubes::measure_slabs`] reproduces them without a merged mesh).
+pub(super) const MEASURE_CHUNK_TRIANGLES: usize = 16384;
+
 /// Area of triangle (a, b, c) in Å², in f64.
-fn triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+pub(super) fn triangle_area(a: Vec3, b: Vec3, c: Vec3) -> f64 {
     0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length()
 }
 
 /// Signed volume `a . (b x c) / 6` of the tetrahedron (origin, a, b, c) in Å³, in f64.
-fn signed_volume(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+pub(super) fn signed_volume(a: Vec3, b: Vec3, c: Vec3) -> f64 {
     a.as_dvec3().dot(b.as_dvec3().cross(c.as_dvec3())) / 6.0
 }

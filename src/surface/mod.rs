@@ -23,7 +23,7 @@ pub use analytic::VertexMode;
 pub use bricks::BrickStats;
 pub use cpu::CpuEngine;
 pub use density::DensityVolume;
-pub use engine::{AtomSet, StageTimings, SurfaceEngine, SurfaceOutput};
+pub use engine::{AtomSet, MeshCounts, StageTimings, SurfaceEngine, SurfaceOutput};
 pub use grid::{GridSpec, available_memory_bytes, estimate_grid_bytes};
 pub use mesh::Mesh;
 pub use params::{Quality, SurfaceParams};

@@ -3,12 +3,14 @@
 //! independently in the same test: same vertices, normals, colours and triangles in the same
 //! order, and the same area and volume to the last bit. On real proteins, a frame of a
 //! solvated trajectory, a hollow shell (mostly empty space) and across parameter changes.
+//! Measuring without keeping the mesh gives the same area and volume to the last bit.
 
 use glam::Vec3;
 use mdsurf::io;
 use mdsurf::model::ColorScheme;
 use mdsurf::surface::{
-    AtomSet, BrickStats, CpuEngine, Quality, SurfaceEngine, SurfaceOutput, SurfaceParams,
+    AtomSet, BrickStats, CpuEngine, MeshCounts, Quality, SurfaceEngine, SurfaceOutput,
+    SurfaceParams,
 };
 
 use crate::data_support::data;
@@ -55,6 +57,9 @@ fn assert_same(what: &str, a: &SurfaceOutput, b: &SurfaceOutput) {
 }
 
 /// Dense and sparse surfaces of the same atoms (fresh engines), plus the sparse brick counts.
+/// Each engine is also run without keeping its mesh (`set_keep_mesh(false)`, as `surface
+/// --stats` without `-o`), which must report the same area and volume to the last bit and the
+/// mesh's counts.
 fn both(atoms: &AtomSet<'_>, params: &SurfaceParams) -> (SurfaceOutput, SurfaceOutput, BrickStats) {
     let dense = CpuEngine::dense()
         .compute(atoms, params)
@@ -62,6 +67,34 @@ fn both(atoms: &AtomSet<'_>, params: &SurfaceParams) -> (SurfaceOutput, SurfaceO
     let mut engine = CpuEngine::new();
     let sparse = engine.compute(atoms, params).expect("sparse surface");
     let stats = engine.brick_stats().expect("sparse engine reports bricks");
+    assert_eq!(
+        dense.counts_without_mesh, None,
+        "the mesh is kept by default"
+    );
+    for (name, mut measurer) in [("dense", CpuEngine::dense()), ("sparse", CpuEngine::new())] {
+        measurer.set_keep_mesh(false);
+        let m = measurer.compute(atoms, params).expect("measured surface");
+        assert!(
+            m.mesh.positions.is_empty() && m.mesh.indices.is_empty(),
+            "{name}: no mesh kept"
+        );
+        let counts = MeshCounts {
+            vertices: dense.mesh.vertex_count(),
+            triangles: dense.mesh.triangle_count(),
+        };
+        assert_eq!(m.counts_without_mesh, Some(counts), "{name}: counts");
+        assert_eq!(m.vertex_count(), counts.vertices, "{name}: vertex_count()");
+        assert_eq!(
+            m.area.to_bits(),
+            dense.area.to_bits(),
+            "{name}: area without the mesh"
+        );
+        assert_eq!(
+            m.volume.to_bits(),
+            dense.volume.to_bits(),
+            "{name}: volume without the mesh"
+        );
+    }
     (dense, sparse, stats)
 }
 

@@ -273,6 +273,7 @@ impl PeriodicEngine {
             mesh,
             area: area * images,
             volume: volume * images,
+            counts_without_mesh: None,
             timings: StageTimings {
                 upload_ms: 0.0,
                 bin_ms,
