@@ -15,7 +15,7 @@ use super::fast::{
 };
 use super::pdb_templates::{NAMES, RESIDUES};
 use crate::model::elements::canonical_symbol;
-use crate::model::{Frame, Topology};
+use crate::model::{Frame, Labels, Topology};
 
 /// chemfiles' key of a residue within a TER segment, in its sort order: chain, number,
 /// insertion code, name (up to 3 bytes, zero-padded so that shorter names sort first).
@@ -37,7 +37,8 @@ struct Columns {
     b_factor: f32,
     occupancy: f32,
     serial: Option<i64>,
-    chain: String,
+    /// Chain column (22), trimmed: an id in [`Reader::column_chains`].
+    chain: u32,
     element: Option<&'static str>,
 }
 
@@ -91,8 +92,14 @@ fn frame_count(bytes: &[u8]) -> usize {
 /// The state of one read (chemfiles' `PDBFormat` members).
 #[derive(Default)]
 struct Reader {
-    names: Vec<String>,
-    kinds: Vec<Option<String>>,
+    /// Atom names (columns 13-16, trimmed).
+    names: Labels,
+    /// Element columns (77-78, trimmed) of lines long enough to have them ...
+    kinds: Labels,
+    /// ... and whether each atom's line had them.
+    kind_given: Vec<bool>,
+    /// Distinct values of the chain column of every atom.
+    column_chains: Labels,
     positions: Vec<[f64; 3]>,
     columns: Vec<Columns>,
     residue_of: Vec<u32>,
@@ -170,14 +177,21 @@ impl Reader {
             self.offsets.push(if first <= 0 { 0 } else { first - 1 });
         }
         let name = columns_text(trim(cols(line, 12, 16)));
-        let kind = (line.len() >= 78).then(|| columns_text(trim(cols(line, 76, 78))));
+        let kind_given = line.len() >= 78;
+        let kind = if kind_given {
+            columns_text(trim(cols(line, 76, 78)))
+        } else {
+            String::new()
+        };
         let p = |a: usize| parse_f64(cols(line, a, a + 8));
         let position = [p(30)?, p(38)?, p(46)?];
         let atom = self.names.len() as u32;
         self.names.push(name);
         self.kinds.push(kind);
+        self.kind_given.push(kind_given);
         self.positions.push(position);
-        self.columns.push(enrich_columns(line));
+        let columns = enrich_columns(line, &mut self.column_chains);
+        self.columns.push(columns);
         self.residue_of.push(u32::MAX);
         let Some(id) = decode_hybrid36(4, cols(line, 22, 26)) else {
             return Some(()); // no residue
@@ -275,7 +289,7 @@ impl Reader {
             };
             let mut by_name: Vec<(&str, u32)> = Vec::with_capacity(residue.atoms.len());
             for &a in &residue.atoms {
-                let name = self.names[a as usize].as_str();
+                let name = &self.names[a as usize];
                 match by_name.iter_mut().find(|(n, _)| *n == name) {
                     Some(slot) => slot.1 = a,
                     None => by_name.push((name, a)),
@@ -343,24 +357,48 @@ impl Reader {
         let n = self.names.len();
         let mut top = empty_topology(n);
         let mut table = TypeTable::default();
-        for (name, kind) in self.names.into_iter().zip(self.kinds) {
-            let kind = kind.unwrap_or_else(|| name.clone());
-            let name = if name.trim().is_empty() {
-                kind.clone()
-            } else {
-                name
+        // Name, type, element, mass and charge follow from the (name, type) pair: worked out
+        // once per distinct pair.
+        type Derived = (u32, u32, u32, f32, f32);
+        let mut derived: HashMap<(u32, u32), Derived> = HashMap::new();
+        for i in 0..n {
+            let given = self.kind_given[i];
+            let key = (
+                self.names.id(i),
+                if given { self.kinds.id(i) } else { u32::MAX },
+            );
+            let (name, kind, element, mass, charge) = match derived.get(&key) {
+                Some(&d) => d,
+                None => {
+                    let raw_name = &self.names[i];
+                    let kind = if given { &self.kinds[i] } else { raw_name };
+                    let name = if raw_name.trim().is_empty() {
+                        kind
+                    } else {
+                        raw_name
+                    };
+                    let (mass, charge) = table.get(kind);
+                    let (element, mass) = if kind != name {
+                        (canonical_symbol(kind).unwrap_or_default(), mass)
+                    } else {
+                        ("", 0.0)
+                    };
+                    let d = (
+                        top.names.intern(name),
+                        top.types.intern(kind),
+                        top.elements.intern(element),
+                        if mass.is_finite() { mass } else { 0.0 },
+                        charge,
+                    );
+                    derived.insert(key, d);
+                    d
+                }
             };
-            let (mass, charge) = table.get(&kind);
-            let (element, mass) = if kind != name {
-                (canonical_symbol(&kind).unwrap_or_default(), mass)
-            } else {
-                ("", 0.0)
-            };
-            top.masses.push(if mass.is_finite() { mass } else { 0.0 });
+            top.masses.push(mass);
             top.charges.push(charge);
-            top.elements.push(element.to_string());
-            top.types.push(kind);
-            top.names.push(name);
+            top.elements.push_id(element);
+            top.types.push_id(kind);
+            top.names.push_id(name);
         }
         for residue in &self.residues {
             for &a in &residue.atoms {
@@ -380,7 +418,7 @@ impl Reader {
         bonds.sort_unstable();
         bonds.dedup();
         top.bonds = bonds;
-        apply_enrichment(&mut top, &self.columns);
+        apply_enrichment(&mut top, &self.columns, &self.column_chains);
         super::conect::apply_conect_bytes(bytes, &mut top);
         let cell = match self.cell {
             Some((lengths, angles)) => {
@@ -414,20 +452,20 @@ fn field(line: &[u8], a: usize, b: usize) -> Cow<'_, str> {
 }
 
 /// The wwPDB columns of an ATOM/HETATM line, parsed as [`super::wwpdb`] parses them.
-fn enrich_columns(line: &[u8]) -> Columns {
+fn enrich_columns(line: &[u8], chains: &mut Labels) -> Columns {
     let number = |a: usize, b: usize| field(line, a, b).parse::<f64>().ok();
     Columns {
         b_factor: number(60, 66).unwrap_or(0.0) as f32,
         occupancy: number(54, 60).unwrap_or(1.0) as f32,
         serial: field(line, 6, 11).parse().ok(),
-        chain: field(line, 21, 22).into_owned(),
+        chain: chains.intern(&field(line, 21, 22)),
         element: canonical_symbol(&field(line, 76, 78)),
     }
 }
 
 /// What [`super::wwpdb::enrich`] copies: B-factors, occupancies, serials, and chains and
 /// elements where empty.
-fn apply_enrichment(top: &mut Topology, columns: &[Columns]) {
+fn apply_enrichment(top: &mut Topology, columns: &[Columns], chains: &Labels) {
     for (i, c) in columns.iter().enumerate() {
         top.b_factors[i] = c.b_factor;
         top.occupancies[i] = c.occupancy;
@@ -435,7 +473,7 @@ fn apply_enrichment(top: &mut Topology, columns: &[Columns]) {
             top.serials[i] = serial;
         }
         if top.chains[i].is_empty() {
-            top.chains.set(i, &c.chain);
+            top.chains.set(i, &*chains.distinct().0[c.chain as usize]);
         }
         if top.elements[i].is_empty()
             && let Some(element) = c.element

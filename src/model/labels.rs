@@ -62,6 +62,15 @@ impl Labels {
         self.ids.push(id);
     }
 
+    /// Appends one atom whose value is the distinct string `id` (from [`Labels::intern`]).
+    pub fn push_id(&mut self, id: u32) {
+        assert!(
+            (id as usize) < self.values.len(),
+            "label id {id} out of range"
+        );
+        self.ids.push(id);
+    }
+
     /// Appends one atom with the value of atom `i` (no lookup: for runs of equal values).
     pub fn push_like(&mut self, i: usize) {
         self.ids.push(self.ids[i]);

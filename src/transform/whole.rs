@@ -10,6 +10,7 @@
 use std::collections::VecDeque;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::pbc::PbcCell;
 use crate::model::{Frame, Topology};
@@ -255,44 +256,58 @@ pub fn guess_bonds_periodic(
         fill[k] += 1;
     }
     let cart: Vec<Vec3> = wrapped.iter().map(|&f| cell.cartesian(f)).collect();
-    let mut bonds = Vec::new();
-    let mut around = Vec::with_capacity(27);
-    for (i, &k) in keys.iter().enumerate() {
-        if k == usize::MAX {
-            continue;
-        }
-        let c = cell_of(wrapped[i]);
-        around.clear();
-        for dz in [-1i64, 0, 1] {
-            for dy in [-1i64, 0, 1] {
-                for dx in [-1i64, 0, 1] {
-                    let w =
-                        |x: usize, d: i64, n: usize| (x as i64 + d).rem_euclid(n as i64) as usize;
-                    around.push(flat([
-                        w(c[0], dx, dims[0]),
-                        w(c[1], dy, dims[1]),
-                        w(c[2], dz, dims[2]),
-                    ]));
+    // Each atom looks for partners of higher index in its 27 neighbouring cells; atoms are
+    // split into blocks searched in parallel, their bonds joined in block order.
+    const BLOCK: usize = 4096;
+    let bonds_of_block = |first: usize| -> Vec<[u32; 2]> {
+        let mut bonds = Vec::new();
+        let mut around = Vec::with_capacity(27);
+        for i in first..(first + BLOCK).min(keys.len()) {
+            if keys[i] == usize::MAX {
+                continue;
+            }
+            let c = cell_of(wrapped[i]);
+            around.clear();
+            for dz in [-1i64, 0, 1] {
+                for dy in [-1i64, 0, 1] {
+                    for dx in [-1i64, 0, 1] {
+                        let w = |x: usize, d: i64, n: usize| {
+                            (x as i64 + d).rem_euclid(n as i64) as usize
+                        };
+                        around.push(flat([
+                            w(c[0], dx, dims[0]),
+                            w(c[1], dy, dims[1]),
+                            w(c[2], dz, dims[2]),
+                        ]));
+                    }
+                }
+            }
+            around.sort_unstable();
+            around.dedup();
+            let ri = radii.get(i).copied().unwrap_or(1.5);
+            for &other in &around {
+                for &j in &sorted[start[other] as usize..start[other + 1] as usize] {
+                    let j = j as usize;
+                    if j <= i {
+                        continue;
+                    }
+                    let rj = radii.get(j).copied().unwrap_or(1.5);
+                    let limit = (BOND_RADIUS_FRACTION * (ri + rj)).min(MAX_BOND_LENGTH);
+                    if cell.min_image(cart[j] - cart[i]).length_squared() < limit * limit {
+                        bonds.push([i as u32, j as u32]);
+                    }
                 }
             }
         }
-        around.sort_unstable();
-        around.dedup();
-        let ri = radii.get(i).copied().unwrap_or(1.5);
-        for &other in &around {
-            for &j in &sorted[start[other] as usize..start[other + 1] as usize] {
-                let j = j as usize;
-                if j <= i {
-                    continue;
-                }
-                let rj = radii.get(j).copied().unwrap_or(1.5);
-                let limit = (BOND_RADIUS_FRACTION * (ri + rj)).min(MAX_BOND_LENGTH);
-                if cell.min_image(cart[j] - cart[i]).length_squared() < limit * limit {
-                    bonds.push([i as u32, j as u32]);
-                }
-            }
-        }
-    }
+        bonds
+    };
+    let blocks: Vec<Vec<[u32; 2]>> = (0..keys.len())
+        .step_by(BLOCK)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(bonds_of_block)
+        .collect();
+    let mut bonds = blocks.concat();
     bonds.sort_unstable();
     bonds
 }
