@@ -12,7 +12,7 @@ use super::plot::History;
 use super::source::FrameSource;
 use super::timeline::{Timeline, TimelineCmd};
 use super::worker::{Computed, RepRequest, Reply, Request, Worker};
-use crate::model::{ColorScheme, Frame, RadiusOverrides};
+use crate::model::{ColorScheme, ColourMap, Frame, RadiusOverrides};
 use crate::render::{Camera, Projection, RenderSettings};
 use crate::scene::defaults::default_representations;
 use crate::scene::representation::{RepStyle, Representation};
@@ -212,6 +212,17 @@ impl AppCore {
     fn fresh_id(&mut self) -> u64 {
         self.next_id += 1;
         self.next_id
+    }
+
+    /// The colour map and value range of the colour bar screenshots and movie frames carry:
+    /// that of the first visible representation coloured by data (`--color data:FILE.csv`),
+    /// as `mdsurf render` draws it; `None` without one.
+    pub fn colour_bar(&self) -> Option<(ColourMap, [f32; 2])> {
+        self.reps
+            .iter()
+            .filter(|r| r.visible)
+            .find_map(|r| r.colour.data())
+            .map(|d| (d.map, d.effective_range()))
     }
 
     /// The representation the panel edits, if any.

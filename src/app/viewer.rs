@@ -17,6 +17,7 @@ use super::source::{FrameSource, open_files_with};
 use super::state::{AppCore, Command};
 use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
+use crate::render::colour_bar::draw_colour_bar;
 use crate::render::write_png;
 use crate::scene::state_file::{CameraState, LookState, StateFile, TrajectoryState};
 
@@ -315,9 +316,12 @@ impl Viewer {
         let base = gpu.size().unwrap_or([1280, 720]);
         let size = size.unwrap_or([base[0] * scale.clamp(1, 4), base[1] * scale.clamp(1, 4)]);
         gpu.sync(&mut self.core);
-        let image = gpu
+        let mut image = gpu
             .snapshot(&self.core.camera, &self.core.render, size)
             .map_err(|e| e.to_string())?;
+        if let Some((map, range)) = self.core.colour_bar() {
+            draw_colour_bar(&mut image, map, range);
+        }
         write_png(path, &image).map_err(|e| e.to_string())?;
         self.core.status = format!("wrote {} ({}×{})", path.display(), size[0], size[1]);
         Ok(())

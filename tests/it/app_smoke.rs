@@ -25,6 +25,15 @@ fn skip_or_fail(reason: &str) {
 /// Runs the scripted window with `engine_args` (and `env` set) and checks its log and
 /// screenshot; returns the log (stderr).
 fn scripted_run(engine_args: &[&str], engine: &str, env: &[(&str, &str)]) -> Option<String> {
+    scripted_shot(engine_args, engine, env).map(|(log, _)| log)
+}
+
+/// [`scripted_run`], also returning the screenshot.
+fn scripted_shot(
+    engine_args: &[&str],
+    engine: &str,
+    env: &[(&str, &str)],
+) -> Option<(String, RgbaImage)> {
     if Command::new("xvfb-run").arg("--help").output().is_err() {
         skip_or_fail("xvfb-run is not installed (apt install xvfb)");
         return None;
@@ -71,7 +80,7 @@ fn scripted_run(engine_args: &[&str], engine: &str, env: &[(&str, &str)]) -> Opt
     let centre = image.pixel(image.width / 2, image.height / 2);
     let corner = image.pixel(0, 0);
     assert_ne!(centre, corner, "no surface in the middle of the view");
-    Some(log)
+    Some((log, image))
 }
 
 #[test]
@@ -102,5 +111,56 @@ fn a_lost_gpu_device_reopens_the_window_and_the_run_completes() {
     assert!(
         log.contains("the GPU device was lost") && log.contains("reopening the window"),
         "the device loss was not noticed and recovered: {log}"
+    );
+}
+
+/// Issue 14 section 4: a window screenshot of data colours carries the colour bar, as `mdsurf
+/// render` draws it (bottom right, a quarter of the width): along its middle row the blue-white-
+/// red map runs from blue on the left through white to red on the right.
+#[test]
+fn window_screenshots_of_data_colours_carry_the_colour_bar() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let csv = dir.path().join("charges.csv");
+    std::fs::write(&csv, "index,value\n0,-1\n1,1\n2,0.5\n").expect("write csv");
+    let scheme = format!("data:{}", csv.display());
+    let args = [
+        "--cpu",
+        "--color",
+        &scheme,
+        "--color-map",
+        "bwr",
+        "--color-range=-1:1",
+    ];
+    let Some((log, image)) = scripted_shot(&args, "cpu", &[]) else {
+        return;
+    };
+    let (w, h) = (image.width, image.height);
+    let scale = (h / 240).clamp(1, 4);
+    let (bar_w, bar_h, margin) = ((w / 4).max(48), 6 * scale, 4 * scale);
+    let (x0, y) = (w - bar_w - margin, h - margin - bar_h / 2);
+    let left = image.pixel(x0 + 1, y);
+    let middle = image.pixel(x0 + bar_w / 2, y);
+    let right = image.pixel(x0 + bar_w - 2, y);
+    assert!(
+        left[2] > 80 && left[2] > left[0] + 60,
+        "no blue end of the colour bar at ({}, {y}): {left:?}; log: {log}",
+        x0 + 1
+    );
+    assert!(
+        right[0] > 80 && right[0] > right[2] + 40,
+        "no red end of the colour bar: {right:?}"
+    );
+    // Without data colours the same pixels are the scene's (no bar).
+    let Some((_, plain)) = scripted_shot(&["--cpu"], "cpu", &[]) else {
+        return;
+    };
+    assert_ne!(
+        plain.pixel(x0 + bar_w / 2, y),
+        middle,
+        "a colour bar without data colours"
+    );
+    assert!(
+        middle.iter().take(3).all(|&c| c > 220),
+        "the middle of the colour bar is not white: {middle:?}"
     );
 }

@@ -6,6 +6,7 @@ use super::{Script, Viewer};
 use crate::app::device_loss;
 use crate::app::state::Command;
 use crate::app::timeline::TimelineCmd;
+use crate::render::colour_bar::draw_colour_bar;
 use crate::render::write_png;
 
 /// This process's anonymous resident memory in KiB (`RssAnon` in `/proc/self/status`; Linux).
@@ -47,10 +48,16 @@ impl Viewer {
         let mut camera = self.core.camera;
         camera.yaw = job.start_yaw;
         camera.turn(step.degrees);
+        let bar = self.core.colour_bar();
         let result = gpu
             .snapshot(&camera, &self.core.render, job.size)
             .map_err(|e| e.to_string())
-            .and_then(|img| write_png(&step.path, &img).map_err(|e| e.to_string()));
+            .and_then(|mut img| {
+                if let Some((map, range)) = bar {
+                    draw_colour_bar(&mut img, map, range);
+                }
+                write_png(&step.path, &img).map_err(|e| e.to_string())
+            });
         match result {
             Ok(()) => job.done += 1,
             Err(e) => {
