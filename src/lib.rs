@@ -14,32 +14,6 @@ pub mod export;
 pub mod gpu;
 #[cfg(feature = "app")]
 pub mod io;
-/// Stand-in for [`io`] without the `app` feature, for the one engine item that opens a file
-/// (`gpu::table1::Structure::from_file`): opening fails with a message naming the feature.
-#[cfg(not(feature = "app"))]
-mod io {
-    use std::path::Path;
-
-    use crate::model::{Frame, Topology};
-
-    /// A reader that cannot exist without the `app` feature.
-    pub(crate) enum NoReader {}
-
-    impl NoReader {
-        pub(crate) fn read_frame(&self, _index: usize) -> Result<Frame, &'static str> {
-            match *self {}
-        }
-
-        pub(crate) fn topology(&self) -> &Topology {
-            match *self {}
-        }
-    }
-
-    /// Always fails: there are no file readers without the `app` feature.
-    pub(crate) fn open(_top: &Path, _traj: Option<&Path>) -> Result<NoReader, &'static str> {
-        Err("reading files needs mdsurf's `app` feature")
-    }
-}
 pub mod model;
 pub mod render;
 pub mod scene;

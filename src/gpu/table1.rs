@@ -4,6 +4,7 @@
 //! Marching Cubes), whole-frame wall-clock time and fps, GPU memory, and the speed-up over the
 //! paper's GTX 580 figures. `mdsurf bench --table1 --backend gpu` prints [`format()`]'s table.
 
+#[cfg(feature = "app")]
 use std::path::Path;
 use std::time::Instant;
 
@@ -11,6 +12,7 @@ use glam::Vec3;
 
 use super::engine::{Changes, GpuEngine};
 use super::{GpuContext, GpuError};
+#[cfg(feature = "app")]
 use crate::model::{ParticleOptions, Particles};
 use crate::surface::{AtomSet, SurfaceError, SurfaceParams};
 use crate::synthetic::{SyntheticError, SyntheticSystem};
@@ -158,7 +160,9 @@ pub struct Structure {
 }
 
 impl Structure {
-    /// The first frame of `top` (+ `traj`) with default radii and element colours.
+    /// The first frame of `top` (+ `traj`) with default radii and element colours (the file
+    /// readers come with the `app` feature).
+    #[cfg(feature = "app")]
     pub fn from_file(top: &Path, traj: Option<&Path>) -> Result<Structure, Table1Error> {
         let err =
             |e: &dyn std::fmt::Display| Table1Error::Structure(format!("{}: {e}", top.display()));
@@ -344,6 +348,7 @@ pub fn format(rows: &[Table1Row], device: &str, timestamps: bool) -> String {
 }
 
 /// Opens the GPU, tiles the first frame of `top` (+ `traj`), runs the table and formats it.
+#[cfg(feature = "app")]
 pub fn table1(
     top: &Path,
     traj: Option<&Path>,
