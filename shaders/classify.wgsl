@@ -31,6 +31,30 @@ fn table_word(i: u32) -> u32 {
 @group(0) @binding(4) var<storage, read_write> block_vertices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> block_triangles: array<u32>;
 @group(0) @binding(6) var<storage, read_write> block_active: array<u32>;
+// Per BRICK^3 brick: 1 when some atom reaches it (shaders/bricks.wgsl); read when u.sparse != 0.
+@group(0) @binding(7) var<storage, read> brick_flags: array<u32>;
+
+// Samples per brick edge (crate::gpu::plan::BRICK).
+const BRICK: u32 = 8u;
+
+// True when a brick holding one of the points (i..=i+1, j..=j+1, k..=k+1) (clamped to the grid)
+// is reached by some atom. Otherwise every density this point's classification reads is 0 (the
+// sparse density pass left those bricks zeroed, as the dense pass computes them), so the class
+// word is 0 and the density need not be read.
+fn near_reached_brick(i: u32, j: u32, k: u32) -> bool {
+    let b0 = vec3<u32>(i, j, k) / BRICK;
+    let b1 = min(vec3<u32>(i + 1u, j + 1u, k + 1u), u.dims - vec3<u32>(1u)) / BRICK;
+    for (var bz = b0.z; bz <= b1.z; bz++) {
+        for (var by = b0.y; by <= b1.y; by++) {
+            for (var bx = b0.x; bx <= b1.x; bx++) {
+                if (brick_flags[bx + u.brick_dims.x * (by + u.brick_dims.y * bz)] != 0u) {
+                    return true;
+                }
+            }
+        }
+    }
+    return false;
+}
 
 var<workgroup> sh: array<vec3<u32>, 256>;
 
@@ -50,7 +74,12 @@ fn main(
     let k = u.own_z0 + n / layer;
     let class_z1 = min(u.own_z1 + 1u, u.dims.z);
     var counts = vec3<u32>(0u);
-    if (n < u.class_points && k < class_z1) {
+    var skip = false;
+    if (n < u.class_points && k < class_z1 && u.sparse != 0u) {
+        let r = n % layer;
+        skip = !near_reached_brick(r % u.dims.x, r / u.dims.x, k);
+    }
+    if (n < u.class_points && k < class_z1 && !skip) {
         let r = n % layer;
         let i = r % u.dims.x;
         let j = r / u.dims.x;
@@ -85,6 +114,7 @@ fn main(
         classes[n] = case_id | (edges << 8u) | (tris << 12u) | (is_active << 16u);
         counts = vec3<u32>(verts, tris, is_active);
     } else if (n < u.class_points) {
+        // Above the slab, or far from every atom (sparse bricks): outside, no edges.
         classes[n] = 0u;
     }
     sh[lid] = counts;

@@ -10,6 +10,8 @@
 const C_SLAB_VERTEX_BASE: u32 = 3u;
 const C_SLAB_TRIANGLE_BASE: u32 = 4u;
 const C_SLAB_OWNED_VERTICES: u32 = 5u;
+const C_SCAN_ACTIVE: u32 = 6u;
+const C_SCAN_VERTICES: u32 = 7u;
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::compact`): the Rust side
 // builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
@@ -26,6 +28,18 @@ const C_SLAB_OWNED_VERTICES: u32 = 5u;
 @group(0) @binding(7) var<storage, read_write> active_cells: array<vec2<u32>>;
 
 var<workgroup> sh: array<vec3<u32>, 256>;
+var<workgroup> block_empty: u32;
+
+// Vertices plus active cells of `block` (from the scanned block sums; the last block's end is
+// the scan total).
+fn block_load(block: u32) -> u32 {
+    let blocks = (u.class_points + 255u) / 256u;
+    var end = vec2<u32>(counters[C_SCAN_VERTICES], counters[C_SCAN_ACTIVE]);
+    if (block + 1u < blocks) {
+        end = vec2<u32>(block_vertices[block + 1u], block_active[block + 1u]);
+    }
+    return (end.x - block_vertices[block]) + (end.y - block_active[block]);
+}
 
 @compute @workgroup_size(256)
 fn main(
@@ -35,6 +49,18 @@ fn main(
 ) {
     let block = wg.x + wg.y * nwg.x;
     let n = block * 256u + lid;
+    // A block without vertices or active cells (most of them: empty space, or far from every
+    // atom on sparse bricks) writes nothing, unless it holds the point where the slab's owned
+    // vertices end; the whole workgroup leaves at once, before its scan.
+    if (lid == 0u) {
+        let owned_end = u.dims.x * u.dims.y * (u.own_z1 - u.own_z0);
+        let holds_end = u.has_extra_layer != 0u && owned_end / 256u == block;
+        block_empty = select(0u, 1u, block * 256u < u.class_points && !holds_end
+            && block_load(block) == 0u);
+    }
+    if (workgroupUniformLoad(&block_empty) != 0u) {
+        return;
+    }
     var word = 0u;
     if (n < u.class_points) {
         word = classes[n];

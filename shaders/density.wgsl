@@ -5,6 +5,10 @@
 // src/gpu/density.rs. Output: density[v] and colour[3v..3v+3] (sum of w * colour, not yet
 // divided by I) for local voxel
 // v = i + nx * (j + ny * (k - dens_z0)).
+// Two entry points run the same gather (so a voxel gets the same bits from either): `main` over
+// every voxel of the slab, and `bricks` over the sparse bricks some atom reaches (one workgroup
+// of 64 threads per BRICK^3 brick, dispatched indirectly from the list of shaders/bricks.wgsl;
+// the caller zeroes the volumes first, which is what the dense pass computes elsewhere).
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
@@ -26,6 +30,11 @@ const RUN: u32 = 8u;
 @group(0) @binding(4) var<storage, read> cell_end: array<u32>;
 @group(0) @binding(5) var<storage, read_write> density: array<f32>;
 @group(0) @binding(6) var<storage, read_write> colour: array<f32>;
+// Word 0: number of listed bricks n; words 1..=n: brick ids (x fastest; shaders/bricks.wgsl).
+@group(0) @binding(7) var<storage, read> active_bricks: array<u32>;
+
+// Samples per brick edge (crate::gpu::plan::BRICK; one run of RUN voxels spans a brick row).
+const BRICK: u32 = 8u;
 
 fn cell_coord(x: f32, o: f32, n: u32) -> u32 {
     return u32(clamp(i32(floor((x - o) / u.cell_size)), 0, i32(n) - 1));
@@ -33,9 +42,34 @@ fn cell_coord(x: f32, o: f32, n: u32) -> u32 {
 
 @compute @workgroup_size(4, 4, 4)
 fn main(@builtin(global_invocation_id) g: vec3<u32>) {
-    let i0 = g.x * RUN;
-    let j = g.y;
-    let kl = g.z;
+    gather(g.x * RUN, g.y, g.z);
+}
+
+@compute @workgroup_size(64)
+fn bricks(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let a = wg.x + wg.y * nwg.x;
+    if (a >= active_bricks[0]) {
+        return;
+    }
+    let b = active_bricks[1u + a];
+    let bx = b % u.brick_dims.x;
+    let by = (b / u.brick_dims.x) % u.brick_dims.y;
+    let bz = b / (u.brick_dims.x * u.brick_dims.y);
+    let j = by * BRICK + lid % BRICK;
+    let k = bz * BRICK + lid / BRICK;
+    // Bricks outside this slab's density layers belong to another slab's pass.
+    if (k < u.dens_z0) {
+        return;
+    }
+    gather(bx * BRICK, j, k - u.dens_z0);
+}
+
+// RUN voxels from (i0, j, dens_z0 + kl) along x; nothing outside the slab.
+fn gather(i0: u32, j: u32, kl: u32) {
     if (i0 >= u.dims.x || j >= u.dims.y || kl >= u.dens_layers) {
         return;
     }

@@ -1,7 +1,7 @@
 // Shared by the slab stages (density, classify, compact, emit): the per-slab uniform. The Rust
 // side prepends this file to each of those shaders (src/gpu/shaders.rs), so it is written once.
 
-// Twin of crate::gpu::types::SlabUniform (112 bytes).
+// Twin of crate::gpu::types::SlabUniform (128 bytes).
 struct SlabUniform {
     origin: vec3<f32>,
     spacing: f32,
@@ -21,4 +21,6 @@ struct SlabUniform {
     has_extra_layer: u32,
     centre: vec3<f32>,
     atom_count: u32,
+    brick_dims: vec3<u32>,
+    sparse: u32,
 }

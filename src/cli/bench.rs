@@ -1,6 +1,7 @@
 //! `mdsurf bench`: times each stage (read, upload, bin, density, Marching Cubes) as medians over
 //! repeats, per backend, on the bundled demo, on a file given, and on synthetic tiled systems
-//! (`--synthetic N`) and hollow shells (`--synthetic-shell N`, also on the dense CPU engine),
+//! (`--synthetic N`) and hollow shells (`--synthetic-shell N`, also on the dense CPU engine and
+//! the dense GPU path),
 //! and prints an aligned table (optionally a CSV too); `--table1` runs the
 //! GPU engine's reproduction of the paper's Table 1. Speed claims of the project are measured
 //! here, never in tests.
@@ -37,7 +38,7 @@ pub struct BenchArgs {
     pub synthetic: Vec<usize>,
     /// Also (or only) time N particles on hollow spherical shells (a capsid: 6 layers from
     /// 60 Å out, radii and colours from TOP or the demo), mostly empty space inside the box;
-    /// the CPU engine is timed with sparse bricks and dense (repeatable).
+    /// each engine (CPU and GPU) is timed with sparse bricks and dense (repeatable).
     #[arg(long, value_name = "N", value_parser = parse_count)]
     pub synthetic_shell: Vec<usize>,
     /// Run the GPU engine's reproduction of the paper's Table 1 (its sizes and spacings,
@@ -134,8 +135,8 @@ pub struct BenchResult {
     /// GPU objects (buffers, bind groups, textures) the engine created per frame after the
     /// first one (GPU engine only; 0 in steady state).
     pub gpu_objects_per_frame: Option<f64>,
-    /// Bricks of the grid that atoms reach and the surface crosses (sparse CPU engine only;
-    /// of the last timed frame).
+    /// Bricks of the grid that atoms reach and the surface crosses (sparse engines only; of
+    /// the last timed frame; the GPU marches every reached brick, so its two counts agree).
     pub bricks: Option<mdsurf::surface::BrickStats>,
 }
 
@@ -187,10 +188,30 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 results.push(base);
                 continue;
             }
-            let sparse_ms =
-                (dense_too && matches!(engine, BenchEngine::Cpu(_))).then_some(r.compute_wall_ms);
+            let sparse_ms = dense_too.then_some(r.compute_wall_ms);
             results.push(r);
-            if let Some(sparse_ms) = sparse_ms {
+            if let (Some(sparse_ms), BenchEngine::Gpu(gpu)) = (sparse_ms, &mut *engine) {
+                // The same GPU engine on the dense path (every voxel sampled and classified).
+                eprintln!("timing {label} on the dense gpu path ...");
+                let sparse_opts = gpu.options();
+                gpu.set_options(mdsurf::gpu::EngineOptions {
+                    sparse_bricks: false,
+                    ..sparse_opts
+                });
+                let dense = time_case(&mut source, engine, &params, &args);
+                if let BenchEngine::Gpu(gpu) = &mut *engine {
+                    gpu.set_options(sparse_opts);
+                }
+                let mut d = dense.map_err(|e| anyhow!("{label} on dense gpu: {e:#}"))?;
+                d.case = format!("{label} dense");
+                refine_notes.push(format!(
+                    "{label} on gpu: sparse bricks {sparse_ms:.1} ms per frame, dense {:.1} ms \
+                     ({:.1}x)",
+                    d.compute_wall_ms,
+                    d.compute_wall_ms / sparse_ms.max(1e-9)
+                ));
+                results.push(d);
+            } else if let Some(sparse_ms) = sparse_ms {
                 eprintln!("timing {label} on the dense cpu engine ...");
                 let mut dense = BenchEngine::Cpu(CpuEngine::dense());
                 dense.engine().set_vertices(mode);
@@ -387,7 +408,7 @@ fn time_case(
         peak_rss: peak_rss_bytes(),
         bricks: match engine {
             BenchEngine::Cpu(e) => e.brick_stats(),
-            BenchEngine::Gpu(_) => None,
+            BenchEngine::Gpu(e) => e.brick_stats(),
         },
         gpu_objects_per_frame: gpu_objects(engine)
             .zip(objects_after_first)

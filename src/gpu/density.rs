@@ -1,7 +1,9 @@
 //! Density and colour stage (the paper's t_d): `shaders/density.wgsl` gathers, for every voxel of
 //! a slab, the Gaussians of the atoms in the neighbouring bin cells, eight voxels along x per
 //! thread. Density and colour are fused in one pass; pipeline variants skip the colour volume
-//! (no colours) or the density write (a colour-only change keeps the density as it is).
+//! (no colours) or the density write (a colour-only change keeps the density as it is). Each
+//! variant has a dense entry point (every voxel of the slab) and a sparse one (the bricks
+//! [`super::bricks`] listed, dispatched indirectly; the frame zeroes the volumes first).
 
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Layout, module};
@@ -22,12 +24,14 @@ pub enum DensityMode {
     ColourOnly,
 }
 
-/// The density kernels (three variants on one layout) and their cached bind group.
+/// The density kernels (three variants, dense and sparse, on one layout) and their cached bind
+/// group.
 #[derive(Debug)]
 pub struct DensityStage {
-    with_colour: Kernel,
-    plain: Kernel,
-    colour_only: Kernel,
+    /// Dense entry points: with colour, plain, colour only.
+    dense: [Kernel; 3],
+    /// Sparse-brick entry points, in the same order.
+    sparse: [Kernel; 3],
     bind: Bound,
 }
 
@@ -36,32 +40,30 @@ impl DensityStage {
     pub fn new(ctx: &GpuContext) -> DensityStage {
         let m = module(&ctx.device, "density.wgsl", super::shaders::DENSITY);
         let layout = Layout::new(ctx, "density", b::ALL);
+        let variants: [&[(&str, f64)]; 3] = [
+            &[("WITH_COLOUR", 1.0)],
+            &[("WITH_COLOUR", 0.0)],
+            &[("WITH_COLOUR", 1.0), ("WRITE_DENSITY", 0.0)],
+        ];
         DensityStage {
-            with_colour: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 1.0)], &layout),
-            plain: Kernel::new(ctx, &m, "main", &[("WITH_COLOUR", 0.0)], &layout),
-            colour_only: Kernel::new(
-                ctx,
-                &m,
-                "main",
-                &[("WITH_COLOUR", 1.0), ("WRITE_DENSITY", 0.0)],
-                &layout,
-            ),
+            dense: variants.map(|c| Kernel::new(ctx, &m, "main", c, &layout)),
+            sparse: variants.map(|c| Kernel::new(ctx, &m, "bricks", c, &layout)),
             bind: Bound::default(),
         }
     }
 
-    fn kernel(&self, mode: DensityMode) -> &Kernel {
+    fn variant(mode: DensityMode) -> usize {
         match mode {
-            DensityMode::Plain => &self.plain,
-            DensityMode::WithColour => &self.with_colour,
-            DensityMode::ColourOnly => &self.colour_only,
+            DensityMode::WithColour => 0,
+            DensityMode::Plain => 1,
+            DensityMode::ColourOnly => 2,
         }
     }
 
     /// Refreshes the bind group (every variant and slab shares it; the slab uniform is bound
     /// at a dynamic offset).
     pub fn prepare(&mut self, ctx: &GpuContext, bufs: &Buffers) {
-        self.plain.bind(
+        self.dense[0].bind(
             ctx,
             &mut self.bind,
             &[
@@ -72,6 +74,7 @@ impl DensityStage {
                 (b::CELL_END, &bufs.cell_end.buffer),
                 (b::DENSITY, &bufs.density.buffer),
                 (b::COLOUR, &bufs.colour.buffer),
+                (b::ACTIVE_BRICKS, &bufs.active_bricks.buffer),
             ],
         );
     }
@@ -87,11 +90,24 @@ impl DensityStage {
         mode: DensityMode,
     ) {
         let runs = dims[0].div_ceil(RUN);
-        self.kernel(mode).dispatch(
+        self.dense[Self::variant(mode)].dispatch(
             pass,
             &self.bind,
             &[offset],
             [runs.div_ceil(4), dims[1].div_ceil(4), layers.div_ceil(4)],
         );
+    }
+
+    /// Records the gather over the reached bricks of the slab whose uniform is at `offset`
+    /// (one workgroup per listed brick; indirect, with the arguments of [`super::bricks`]).
+    /// The caller cleared the slab's volumes this mode writes.
+    pub fn record_sparse(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        offset: u32,
+        args: &wgpu::Buffer,
+        mode: DensityMode,
+    ) {
+        self.sparse[Self::variant(mode)].dispatch_indirect(pass, &self.bind, &[offset], args);
     }
 }

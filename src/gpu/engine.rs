@@ -174,6 +174,23 @@ impl GpuEngine {
         self.buffers.bytes()
     }
 
+    /// Sparse bricks of the last frame whose counters arrived: bricks covering the grid and
+    /// bricks some atom reaches. Both the occupied and the active count are the reached bricks:
+    /// the GPU samples and classifies every reached brick (it does not skip those whose
+    /// samples all lie on one side of I). None on the dense path or before the first counters.
+    pub fn brick_stats(&self) -> Option<crate::surface::BrickStats> {
+        let plan = self.state.plan.as_ref()?;
+        let stats = self.latest?;
+        self.options
+            .sparse_bricks
+            .then(|| crate::surface::BrickStats {
+                brick_size: super::plan::BRICK,
+                bricks: plan.brick_count(),
+                occupied: stats.reached_bricks as u64,
+                active: stats.reached_bricks as u64,
+            })
+    }
+
     /// The GPU-resident surface of the last submitted frame (for the renderer), with its
     /// counters once they have arrived. Frames alternate between two output sets, so these
     /// buffers keep this frame's mesh while the next frame is computed; the frame after that
@@ -350,8 +367,15 @@ impl GpuEngine {
         }
         let set = st.output_set;
         self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);
-        self.stages
-            .prepare(&self.ctx, &mut self.buffers, &plan, params, n, work);
+        self.stages.prepare(
+            &self.ctx,
+            &mut self.buffers,
+            &plan,
+            params,
+            n,
+            work,
+            self.options.sparse_bricks,
+        );
         let mut rec = Recorder::new(&self.ctx, wall_clock && !self.timer.enabled());
         self.stages
             .record(
@@ -400,12 +424,27 @@ impl GpuEngine {
 
     fn take_arrived(&mut self) -> Result<Option<FrameStats>, GpuError> {
         let arrived = self.readbacks.collect(&self.timer)?;
+        let (cap_v, cap_t) = self.buffers.mesh_capacity();
         for s in &arrived {
             let h = self.options.headroom.max(1.0) as f64;
-            let want = |c: u32| (c as f64 * h).ceil() as u64 + 64;
+            // Grow (to the count plus headroom) only past 90 % of the capacity, so counts that
+            // wander a little from frame to frame settle instead of growing the buffers at
+            // each new maximum.
+            let want = |c: u32, cap: u32| {
+                (c as f64 > 0.9 * cap as f64).then(|| (c as f64 * h).ceil() as u64 + 64)
+            };
+            let (v, t) = (want(s.vertex_count, cap_v), want(s.triangle_count, cap_t));
             let m = &mut self.state.mesh_want;
-            m.0 = m.0.max(want(s.vertex_count));
-            m.1 = m.1.max(want(s.triangle_count));
+            if *m == (0, 0) && (v.is_some() || t.is_some()) {
+                // Leaving the first estimate: keep what the buffers already hold.
+                *m = (cap_v as u64, cap_t as u64);
+            }
+            if let Some(v) = v {
+                m.0 = m.0.max(v);
+            }
+            if let Some(t) = t {
+                m.1 = m.1.max(t);
+            }
         }
         if let Some(last) = arrived.last() {
             self.latest = Some(*last);

@@ -1,6 +1,7 @@
-//! Recording one frame's compute work (DESIGN section 3, steps 2 to 5): binning, then per z-slab
-//! the density pass and the Marching Cubes pass (classify, three scans, compaction, emission and,
-//! with refined vertices, refinement),
+//! Recording one frame's compute work (DESIGN section 3, steps 2 to 5): binning and, on sparse
+//! bricks, the list of reached bricks ([`super::bricks`]), then per z-slab the density pass (over
+//! the reached bricks after zeroing the volumes, or over every voxel) and the Marching Cubes
+//! pass (classify, three scans, compaction, emission and, with refined vertices, refinement),
 //! then the end-of-frame bookkeeping, area/volume reduction and indirect draw arguments. Which
 //! stages run depends on what changed ([`Work`]). Called by [`super::engine::GpuEngine`].
 
@@ -8,6 +9,7 @@ use std::time::Instant;
 
 use super::GpuError;
 use super::bin::Binner;
+use super::bricks::BrickStage;
 use super::context::GpuContext;
 use super::density::{DensityMode, DensityStage};
 use super::mc::{Classify, Compact, Emit, Refine};
@@ -36,6 +38,7 @@ pub enum Work {
 pub struct Stages {
     scanner: Scanner,
     binner: Binner,
+    bricks: BrickStage,
     density: DensityStage,
     classify: Classify,
     compact: Compact,
@@ -46,6 +49,8 @@ pub struct Stages {
     block_scans: [ScanPlan; 3],
     slab_values: Vec<SlabUniform>,
     max_groups: u32,
+    /// The prepared frame runs on sparse bricks.
+    sparse: bool,
 }
 
 /// Encoder plus optional wall-clock timing: without timestamp queries a blocking frame submits
@@ -98,12 +103,13 @@ impl<'a> Recorder<'a> {
     }
 }
 
-/// The uniform of one slab.
+/// The uniform of one slab (`sparse`: the frame runs on sparse bricks).
 pub fn slab_uniform(
     plan: &FramePlan,
     params: &SurfaceParams,
     slab: &Slab,
     atoms: u64,
+    sparse: bool,
 ) -> SlabUniform {
     let g = &plan.grid;
     SlabUniform {
@@ -125,6 +131,8 @@ pub fn slab_uniform(
         has_extra_layer: u32::from(slab.own_z1 < g.dims[2]),
         centre: grid_centre(plan).to_array(),
         atom_count: atoms as u32,
+        brick_dims: plan.brick_dims,
+        sparse: u32::from(sparse),
     }
 }
 
@@ -140,6 +148,7 @@ impl Stages {
         Stages {
             scanner: Scanner::new(ctx, max_groups),
             binner: Binner::new(ctx, max_groups),
+            bricks: BrickStage::new(ctx, max_groups),
             density: DensityStage::new(ctx),
             classify: Classify::new(ctx),
             compact: Compact::new(ctx),
@@ -149,13 +158,16 @@ impl Stages {
             block_scans: Default::default(),
             slab_values: Vec::new(),
             max_groups,
+            sparse: false,
         }
     }
 
     /// Prepares a frame after the buffers were sized: writes every uniform in place (the slab
     /// uniforms into one buffer at dynamic offsets) and rebuilds only the bind groups whose
     /// buffers were replaced, those of every output set together (so the first frame builds
-    /// both). Creates no GPU object in steady state.
+    /// both). Creates no GPU object in steady state. `sparse`: density and classification run
+    /// on the sparse bricks the atoms reach.
+    #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
         ctx: &GpuContext,
@@ -164,18 +176,24 @@ impl Stages {
         params: &SurfaceParams,
         atoms: u64,
         work: Work,
+        sparse: bool,
     ) {
+        self.sparse = sparse;
         self.slab_values.clear();
         self.slab_values.extend(
             plan.slabs
                 .iter()
-                .map(|s| slab_uniform(plan, params, s, atoms)),
+                .map(|s| slab_uniform(plan, params, s, atoms, sparse)),
         );
         b.slab_uniforms.write(ctx, &self.slab_values);
         let b = &*b;
         if work != Work::Mc {
             self.binner
                 .prepare(ctx, &self.scanner, b, plan, atoms, params.radius_scale);
+            if sparse {
+                self.bricks
+                    .prepare(ctx, &self.scanner, b, plan, params.cutoff());
+            }
         }
         let blocks = plan.class_blocks();
         for (i, slot) in [C_SCAN_VERTICES, C_SCAN_TRIANGLES, C_SCAN_ACTIVE]
@@ -224,7 +242,13 @@ impl Stages {
         if work != Work::Mc {
             let ts = timer.pass(Stage::Bin);
             self.binner.record(rec.encoder(), &self.scanner, b, ts);
+            if self.sparse {
+                self.bricks.record(rec.encoder(), &self.scanner);
+            }
             rec.end_stage(Stage::Bin)?;
+        }
+        if self.sparse {
+            BrickStage::record_count(rec.encoder(), b);
         }
         let mode = match (work, colour) {
             (Work::Mc, _) => None,
@@ -236,6 +260,19 @@ impl Stages {
         for (i, slab) in plan.slabs.iter().enumerate() {
             let offset = b.slab_uniforms.offset(i);
             if let Some(mode) = mode {
+                if self.sparse {
+                    // Unreached bricks keep these zeros: what the dense pass computes there.
+                    let voxels = plan.grid.dims[0] as u64
+                        * plan.grid.dims[1] as u64
+                        * slab.dens_layers as u64;
+                    let enc = rec.encoder();
+                    if mode != DensityMode::ColourOnly {
+                        enc.clear_buffer(&b.density.buffer, 0, Some(voxels * 4));
+                    }
+                    if mode != DensityMode::Plain {
+                        enc.clear_buffer(&b.colour.buffer, 0, Some(voxels * 12));
+                    }
+                }
                 let ts = timer.pass(Stage::Density);
                 let mut pass = rec
                     .encoder()
@@ -243,8 +280,13 @@ impl Stages {
                         label: Some("density"),
                         timestamp_writes: ts,
                     });
-                self.density
-                    .record(&mut pass, offset, plan.grid.dims, slab.dens_layers, mode);
+                if self.sparse {
+                    self.density
+                        .record_sparse(&mut pass, offset, &b.brick_args, mode);
+                } else {
+                    self.density
+                        .record(&mut pass, offset, plan.grid.dims, slab.dens_layers, mode);
+                }
                 drop(pass);
                 rec.end_stage(Stage::Density)?;
             }

@@ -123,6 +123,8 @@ pub mod density {
     pub const DENSITY: Slot = slot(5, "density", ReadWrite);
     /// Slab colour volume.
     pub const COLOUR: Slot = slot(6, "colour", ReadWrite);
+    /// The list of reached sparse bricks (count first; `shaders/bricks.wgsl`).
+    pub const ACTIVE_BRICKS: Slot = slot(7, "active_bricks", Read);
     /// Every binding (the layout).
     pub const ALL: &[Slot] = &[
         U,
@@ -132,6 +134,7 @@ pub mod density {
         CELL_END,
         DENSITY,
         COLOUR,
+        ACTIVE_BRICKS,
     ];
 }
 
@@ -152,6 +155,8 @@ pub mod classify {
     pub const BLOCK_TRIANGLES: Slot = slot(5, "block_triangles", ReadWrite);
     /// Active cells per block.
     pub const BLOCK_ACTIVE: Slot = slot(6, "block_active", ReadWrite);
+    /// Per sparse brick: reached by some atom (`shaders/bricks.wgsl`).
+    pub const BRICK_FLAGS: Slot = slot(7, "brick_flags", Read);
     /// Every binding (the layout).
     pub const ALL: &[Slot] = &[
         U,
@@ -161,6 +166,52 @@ pub mod classify {
         BLOCK_VERTICES,
         BLOCK_TRIANGLES,
         BLOCK_ACTIVE,
+        BRICK_FLAGS,
+    ];
+}
+
+/// `shaders/bricks.wgsl` (sparse bricks).
+pub mod bricks {
+    use super::*;
+    /// [`crate::gpu::types::BrickUniform`].
+    pub const U: Slot = slot(0, "u", Uniform);
+    /// Sorted atoms.
+    pub const SORTED_ATOMS: Slot = slot(1, "sorted_atoms", Read);
+    /// First slot per cell.
+    pub const CELL_START: Slot = slot(2, "cell_start", Read);
+    /// One past the last slot per cell.
+    pub const CELL_END: Slot = slot(3, "cell_end", Read);
+    /// Per brick: reached by some atom.
+    pub const BRICK_FLAGS: Slot = slot(4, "brick_flags", ReadWrite);
+    /// Per brick: the flag, scanned in place into list slots.
+    pub const BRICK_SCAN: Slot = slot(5, "brick_scan", ReadWrite);
+    /// Count, then the reached bricks' ids.
+    pub const ACTIVE_BRICKS: Slot = slot(6, "active_bricks", ReadWrite);
+    /// Indirect dispatch arguments and the scan total.
+    pub const BRICK_ARGS: Slot = slot(7, "brick_args", ReadWrite);
+    /// Layout of `mark`.
+    pub const MARK: &[Slot] = &[
+        U,
+        SORTED_ATOMS,
+        CELL_START,
+        CELL_END,
+        BRICK_FLAGS,
+        BRICK_SCAN,
+    ];
+    /// Layout of `compact`.
+    pub const COMPACT: &[Slot] = &[U, BRICK_FLAGS, BRICK_SCAN, ACTIVE_BRICKS];
+    /// Layout of `args`.
+    pub const ARGS: &[Slot] = &[U, ACTIVE_BRICKS, BRICK_ARGS];
+    /// Every binding of the file.
+    pub const ALL: &[Slot] = &[
+        U,
+        SORTED_ATOMS,
+        CELL_START,
+        CELL_END,
+        BRICK_FLAGS,
+        BRICK_SCAN,
+        ACTIVE_BRICKS,
+        BRICK_ARGS,
     ];
 }
 
@@ -313,6 +364,7 @@ pub mod measure {
 pub const SHADERS: &[(&str, &[Slot])] = &[
     ("bin.wgsl", bin::ALL),
     ("scan.wgsl", scan::ALL),
+    ("bricks.wgsl", bricks::ALL),
     ("density.wgsl", density::ALL),
     ("classify.wgsl", classify::ALL),
     ("compact.wgsl", compact::ALL),

@@ -55,6 +55,7 @@ impl Classify {
                 (cl::BLOCK_VERTICES, &b.block_sums[0].buffer),
                 (cl::BLOCK_TRIANGLES, &b.block_sums[1].buffer),
                 (cl::BLOCK_ACTIVE, &b.block_sums[2].buffer),
+                (cl::BRICK_FLAGS, &b.brick_flags.buffer),
             ],
         );
     }

@@ -1,6 +1,7 @@
 //! The GPU surface engine: the whole per-frame surface computed in wgpu compute shaders
 //! (DESIGN section 3). Atoms are uploaded ([`engine`]), binned into cells by counting sort
-//! ([`bin`], [`scan`]), the density and colour volumes gathered per voxel ([`density`]), and the
+//! ([`bin`], [`scan`]), the sparse bricks the atoms reach listed ([`bricks`]), the density and
+//! colour volumes gathered per voxel of those bricks ([`density`]), and the
 //! surface extracted by Marching Cubes ([`mc`]: classify, compact, emit) and measured
 //! ([`measure`]). [`frame`] records a frame's passes, [`plan`] sizes it (cells, z-slabs),
 //! [`timing`] reads timestamp queries, [`output`] brings counters back asynchronously.
@@ -15,6 +16,7 @@
 //! `shaders/`, one file per stage.
 
 pub mod bin;
+pub mod bricks;
 pub mod context;
 pub mod density;
 pub mod engine;

@@ -1,5 +1,5 @@
 //! The caller-facing knobs and reports of [`super::GpuEngine`]: engine options (slab cap, memory
-//! budget, mesh capacity, headroom), what changed since the previous frame, and what a submitted
+//! budget, mesh capacity, headroom, sparse bricks), what changed since the previous frame, and what a submitted
 //! frame did.
 
 use super::GpuContext;
@@ -18,6 +18,10 @@ pub struct EngineOptions {
     pub initial_mesh_capacity: Option<(u32, u32)>,
     /// Factor by which the mesh buffers exceed the last frame's counts when they grow.
     pub headroom: f32,
+    /// Sample and classify only the bricks of [`super::plan::BRICK`]^3 samples that some atom
+    /// reaches ([`super::bricks`]; default). False: every voxel of the grid (the dense path,
+    /// kept to compare with). Both give the same mesh.
+    pub sparse_bricks: bool,
 }
 
 impl EngineOptions {
@@ -27,6 +31,7 @@ impl EngineOptions {
             volume_budget: (ctx.limits.max_buffer_size / 4).clamp(64 << 20, 4 << 30),
             initial_mesh_capacity: None,
             headroom: 1.25,
+            sparse_bricks: true,
         }
     }
 }

@@ -31,6 +31,8 @@ pub struct FrameStats {
     pub volume: f64,
     /// GPU timestamp times per stage in ms (all 0 without timestamp queries; upload is wall-clock).
     pub timings: StageTimings,
+    /// Sparse bricks some atom reaches (sampled and classified); 0 on the dense path.
+    pub reached_bricks: u32,
 }
 
 /// The surface as it lives on the GPU, for the renderer: draw with
@@ -170,6 +172,7 @@ impl Readbacks {
                     area: c.area as f64,
                     volume: c.volume as f64,
                     timings: timer.stage_ms(&slot.passes, &ticks),
+                    reached_bricks: c.reached_bricks,
                 }
             };
             slot.buffer.unmap();

@@ -1,6 +1,7 @@
 //! Sizing one frame before anything is dispatched: the bin cell grid, the z-slabs the density and
 //! Marching Cubes run in (so no buffer exceeds the device's binding limit or the memory budget),
-//! and the bytes that costs. Pure arithmetic, tested without a GPU.
+//! the sparse bricks of [`BRICK`]^3 samples, and the bytes that costs. Pure arithmetic, tested
+//! without a GPU.
 
 use crate::surface::{GridSpec, SurfaceParams};
 
@@ -8,6 +9,11 @@ use super::GpuError;
 
 /// Bytes per voxel of a slab: density 4, colour 12, class word 4, vertex base 4, active cell 8.
 pub const BYTES_PER_VOXEL: u64 = 32;
+/// Samples per sparse-brick edge (`BRICK` in `shaders/bricks.wgsl`, `density.wgsl` and
+/// `classify.wgsl`); one density thread's run of [`super::density::RUN`] voxels spans a brick row.
+pub const BRICK: u32 = 8;
+const _: () = assert!(BRICK == super::density::RUN);
+
 /// Bytes per atom: positions 12, radius 4, packed colour 8, sorted atom 16, sorted colour 8.
 pub const BYTES_PER_ATOM: u64 = 48;
 
@@ -42,6 +48,9 @@ pub struct FramePlan {
     pub class_layers: u32,
     /// Largest density layer count of any slab.
     pub dens_layers: u32,
+    /// Sparse bricks of [`BRICK`]^3 samples along x, y, z, covering the whole grid (the last
+    /// brick along an axis may stick out of it).
+    pub brick_dims: [u32; 3],
 }
 
 impl FramePlan {
@@ -58,6 +67,11 @@ impl FramePlan {
     /// Voxels held in the density buffer.
     pub fn slab_voxels(&self) -> u64 {
         self.grid.dims[0] as u64 * self.grid.dims[1] as u64 * self.dens_layers as u64
+    }
+
+    /// Number of sparse bricks covering the grid.
+    pub fn brick_count(&self) -> u64 {
+        self.brick_dims.iter().map(|&d| d as u64).product()
     }
 
     /// Workgroups of 256 points in classification.
@@ -141,6 +155,7 @@ pub fn plan_frame(
         slabs,
         class_layers: (own + 1).min(nz),
         dens_layers,
+        brick_dims: grid.dims.map(|d| d.div_ceil(BRICK)),
     })
 }
 
@@ -192,6 +207,8 @@ mod tests {
         let one = plan_frame(grid([100, 100, 100]), &p, 1.5, 1 << 40, 1 << 40, None).unwrap();
         assert_eq!(one.slabs.len(), 1);
         assert_eq!(one.slabs[0].dens_layers, 100);
+        assert_eq!(one.brick_dims, [13, 13, 13]);
+        assert_eq!(one.brick_count(), 13 * 13 * 13);
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! The engine's GPU buffers: per-atom inputs and sorted copies, bin cells, per-slab volumes,
-//! Marching Cubes scratch, counters, the per-slab uniforms and two sets of output mesh buffers
+//! the sparse-brick flags and list, Marching Cubes scratch, counters, the per-slab uniforms and two sets of output mesh buffers
 //! ([`OutputSet`]: frames alternate between them, so the surface the renderer draws is never
 //! overwritten by the frame computed after it). Each grows
 //! (never shrinks) to what a frame needs, the grid-sized ones with an eighth to spare so that a
@@ -88,6 +88,15 @@ pub struct Buffers {
     pub active: Grow,
     /// Block sums of vertices, triangles, active cells.
     pub block_sums: [Grow; 3],
+    /// Per sparse brick: 1 when some atom reaches it (u32).
+    pub brick_flags: Grow,
+    /// Per sparse brick: the flag, scanned into list slots (u32).
+    pub brick_scan: Grow,
+    /// Count of reached bricks, then their ids (u32; `shaders/bricks.wgsl`).
+    pub active_bricks: Grow,
+    /// Indirect dispatch arguments of the sparse density pass (3 u32) and the reached-brick
+    /// count (word 3).
+    pub brick_args: wgpu::Buffer,
     /// The two output sets; frame after frame the engine writes the other one.
     pub outputs: [OutputSet; OUTPUT_SETS],
     /// Frame counters ([`GpuCounters`]).
@@ -207,8 +216,9 @@ impl Buffers {
             sorted_colours: Grow::new(device, "sorted colours", U::empty()),
             cell_start: Grow::new(device, "cell start", U::COPY_DST | U::COPY_SRC),
             cell_end: Grow::new(device, "cell end", U::empty()),
-            density: Grow::new(device, "density", U::COPY_SRC),
-            colour: Grow::new(device, "colour volume", U::COPY_SRC),
+            // COPY_DST: the sparse path clears the volumes before filling the reached bricks.
+            density: Grow::new(device, "density", copy),
+            colour: Grow::new(device, "colour volume", copy),
             classes: Grow::new(device, "classes", U::COPY_SRC),
             vertex_base: Grow::new(device, "vertex base", U::empty()),
             active: Grow::new(device, "active cells", U::empty()),
@@ -217,6 +227,10 @@ impl Buffers {
                 Grow::new(device, "block triangles", U::empty()),
                 Grow::new(device, "block active", U::empty()),
             ],
+            brick_flags: Grow::new(device, "brick flags", U::empty()),
+            brick_scan: Grow::new(device, "brick scan", U::empty()),
+            active_bricks: Grow::new(device, "active bricks", U::empty()),
+            brick_args: storage(device, "brick dispatch args", 16, U::INDIRECT | U::COPY_SRC),
             outputs: [OutputSet::new(device), OutputSet::new(device)],
             counters: storage(device, "counters", size_of::<GpuCounters>() as u64, copy),
             dispatch_args: storage(device, "emit dispatch args", 16, U::INDIRECT),
@@ -255,6 +269,14 @@ impl Buffers {
         for b in &mut self.block_sums {
             b.ensure_slack(device, plan.class_blocks() * 4);
         }
+        // Replacements get room for one more brick per axis: a box that breathes across a
+        // multiple of 8 samples adds a whole brick layer, more than the usual eighth to spare.
+        let bricks = plan.brick_count();
+        let roomy: u64 = plan.brick_dims.iter().map(|&d| d as u64 + 1).product();
+        self.brick_flags.grow(device, bricks * 4, roomy * 4);
+        self.brick_scan.grow(device, bricks * 4, roomy * 4);
+        self.active_bricks
+            .grow(device, (bricks + 1) * 4, (roomy + 1) * 4);
     }
 
     /// Grows the mesh buffers of every output set to hold `vertices` and `triangles` (all
@@ -290,9 +312,13 @@ impl Buffers {
             &self.classes,
             &self.vertex_base,
             &self.active,
+            &self.brick_flags,
+            &self.brick_scan,
+            &self.active_bricks,
         ];
         let fixed = [
             &self.counters,
+            &self.brick_args,
             &self.dispatch_args,
             &self.partials,
             &self.mc_tables,

@@ -7,6 +7,8 @@
 pub const BIN: &str = include_str!("../../shaders/bin.wgsl");
 /// Multi-level exclusive prefix sums (`shaders/scan.wgsl`).
 pub const SCAN: &str = include_str!("../../shaders/scan.wgsl");
+/// Sparse bricks: mark, compact, indirect arguments (`shaders/bricks.wgsl`).
+pub const BRICKS: &str = include_str!("../../shaders/bricks.wgsl");
 /// Density and colour gather (`shaders/density.wgsl` after the slab uniform).
 pub const DENSITY: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
@@ -39,6 +41,7 @@ pub const MEASURE: &str = include_str!("../../shaders/measure.wgsl");
 pub const ALL: &[(&str, &str)] = &[
     ("bin.wgsl", BIN),
     ("scan.wgsl", SCAN),
+    ("bricks.wgsl", BRICKS),
     ("density.wgsl", DENSITY),
     ("classify.wgsl", CLASSIFY),
     ("compact.wgsl", COMPACT),

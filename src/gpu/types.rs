@@ -78,8 +78,44 @@ pub struct SlabUniform {
     pub centre: [f32; 3],
     /// Number of atoms.
     pub atom_count: u32,
+    /// Bricks of [`crate::gpu::plan::BRICK`]^3 samples along x, y, z (covering the whole grid).
+    pub brick_dims: [u32; 3],
+    /// 1 when the frame runs on sparse bricks: the density pass covers only the bricks some
+    /// atom reaches (the rest stays zeroed) and classification skips points far from them.
+    pub sparse: u32,
 }
-const _: () = assert!(std::mem::size_of::<SlabUniform>() == 112);
+const _: () = assert!(std::mem::size_of::<SlabUniform>() == 128);
+
+/// Parameters of the sparse-brick pass. Twin: `BrickUniform` in `shaders/bricks.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct BrickUniform {
+    /// Grid origin in Å.
+    pub origin: [f32; 3],
+    /// Grid spacing H in Å.
+    pub spacing: f32,
+    /// Whole-grid samples along x, y, z.
+    pub dims: [u32; 3],
+    /// Bricks covering the grid.
+    pub brick_count: u32,
+    /// Bricks along x, y, z.
+    pub brick_dims: [u32; 3],
+    /// Device limit on workgroups per dispatch dimension.
+    pub max_groups: u32,
+    /// Bin cell origin in Å.
+    pub cell_origin: [f32; 3],
+    /// Bin cell edge in Å.
+    pub cell_size: f32,
+    /// Bin cells along x, y, z.
+    pub cell_dims: [u32; 3],
+    /// Cutoff q in units of alpha.
+    pub cutoff: f32,
+    /// Largest cutoff distance q * R * max(r) in Å.
+    pub max_cut: f32,
+    /// Padding to 16 bytes.
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(std::mem::size_of::<BrickUniform>() == 96);
 
 /// Reduction and bookkeeping parameters. Twin: `MeasureUniform` in `shaders/measure.wgsl`.
 #[repr(C)]
@@ -125,8 +161,11 @@ pub struct GpuCounters {
     pub triangle_capacity: u32,
     /// Active cells over all slabs.
     pub active_total: u32,
+    /// Bricks some atom reaches (sparse bricks; 0 on the dense path). Copied in each frame
+    /// from the sparse-brick pass's count ([`crate::gpu::bricks`]).
+    pub reached_bricks: u32,
     /// Padding to 64 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 const _: () = assert!(std::mem::size_of::<GpuCounters>() == 64);
 
@@ -134,6 +173,8 @@ const _: () = assert!(std::mem::size_of::<GpuCounters>() == 64);
 pub(crate) const C_SCAN_ACTIVE: u32 = 6;
 pub(crate) const C_SCAN_VERTICES: u32 = 7;
 pub(crate) const C_SCAN_TRIANGLES: u32 = 8;
+/// Word index of [`GpuCounters::reached_bricks`].
+pub(crate) const C_REACHED_BRICKS: u32 = 14;
 
 /// One output vertex. Twin: the 9-float records written by `write_vertex` in `shaders/emit.wgsl`.
 /// Vertex buffer layout for the renderer: stride 36 bytes; position `Float32x3` at offset 0 (Å),

@@ -56,3 +56,4 @@ mod surface_real;
 mod surface_refine;
 mod surface_ses;
 mod transform;
+mod gpu_sparse;
