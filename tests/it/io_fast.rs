@@ -65,8 +65,14 @@ fn every_structure_in_tests_data_reads_the_same_both_ways() {
     fast.sort();
     assert_eq!(
         fast,
-        ["1hpv.pdb", "adk_open.pdb"],
-        "the PDB files take the fast path"
+        [
+            "1hpv.pdb",
+            "1hvr.pdb",
+            "5a7u.pdb",
+            "adk_closed.pdb",
+            "adk_open.pdb"
+        ],
+        "the plain PDB files take the fast path (compressed ones go to chemfiles)"
     );
 }
 
