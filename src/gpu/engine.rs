@@ -20,8 +20,8 @@ use super::timing::Timer;
 use super::types::{GpuCounters, pack_colour};
 use super::{GpuError, inputs};
 use crate::surface::{
-    AtomSet, GridSpec, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput, SurfaceParams,
-    VertexMode,
+    AtomSet, GridSpec, Mesh, MeshCounts, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
+    SurfaceParams, VertexMode,
 };
 
 #[derive(Debug, Default)]
@@ -56,6 +56,9 @@ pub struct GpuEngine {
     staging: std::sync::Mutex<Staging>,
     /// Vertex placement (refined: `shaders/refine.wgsl` after emission, curved measurement).
     vertices: VertexMode,
+    /// True when [`SurfaceEngine::compute`] reports area, volume and counts without reading
+    /// the mesh back (see [`SurfaceEngine::set_keep_mesh`]).
+    measure_only: bool,
 }
 
 impl std::fmt::Debug for GpuEngine {
@@ -125,6 +128,7 @@ impl GpuEngine {
             init_error: None,
             staging: Default::default(),
             vertices: VertexMode::default(),
+            measure_only: false,
             ctx,
         };
         (engine, scope_error.or(table_error))
@@ -584,6 +588,10 @@ impl SurfaceEngine for GpuEngine {
         "gpu"
     }
 
+    fn set_keep_mesh(&mut self, keep: bool) {
+        self.measure_only = !keep;
+    }
+
     fn set_vertices(&mut self, mode: VertexMode) {
         self.vertices = mode;
     }
@@ -599,14 +607,23 @@ impl SurfaceEngine for GpuEngine {
     ) -> Result<SurfaceOutput, SurfaceError> {
         let changes = self.state.fingerprints.update(atoms);
         let stats = self.run_blocking(atoms, params, changes)?;
-        let mesh = self.read_mesh(&stats)?;
+        // Area and volume come from the GPU's reductions; the mesh is read back only if kept.
+        let (mesh, counts_without_mesh) = if self.measure_only {
+            let counts = MeshCounts {
+                vertices: stats.vertex_count as usize,
+                triangles: stats.triangle_count as usize,
+            };
+            (Mesh::default(), Some(counts))
+        } else {
+            (self.read_mesh(&stats)?, None)
+        };
         Ok(SurfaceOutput {
             grid: self.surface().grid,
             mesh,
             area: stats.area,
             volume: stats.volume,
             timings: stats.timings,
-            counts_without_mesh: None,
+            counts_without_mesh,
         })
     }
 }

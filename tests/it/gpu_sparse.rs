@@ -256,3 +256,23 @@ fn sparse_frames_create_no_gpu_objects() {
         "output sets do not alternate: {sets:?}"
     );
 }
+
+/// `surface --stats` without `-o`: an engine told not to keep the mesh reports the same area and
+/// volume (the GPU's own reductions) and the mesh's counts, with no mesh read back.
+#[test]
+fn measuring_without_the_mesh_reports_the_kept_meshs_figures() {
+    let Some(mut engine) = engine() else {
+        return;
+    };
+    let atoms = load_pdb("1hpv.pdb");
+    let p = params(1.0);
+    let kept = engine.compute(&atoms.set(), &p).expect("kept mesh");
+    engine.set_keep_mesh(false);
+    let measured = engine.compute(&atoms.set(), &p).expect("measured only");
+    assert!(kept.mesh.triangle_count() > 1000 && kept.counts_without_mesh.is_none());
+    assert!(measured.mesh.indices.is_empty() && measured.mesh.positions.is_empty());
+    assert_eq!(measured.triangle_count(), kept.mesh.triangle_count());
+    assert_eq!(measured.vertex_count(), kept.mesh.vertex_count());
+    assert_eq!(measured.area.to_bits(), kept.area.to_bits(), "area");
+    assert_eq!(measured.volume.to_bits(), kept.volume.to_bits(), "volume");
+}
