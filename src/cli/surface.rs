@@ -116,11 +116,11 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let topology = system.trajectory.topology();
     let choice = args
         .scene
-        .representations(state, &topology, &first, &params, &options, args.quiet)?;
+        .representations(state, topology, &first, &params, &options, args.quiet)?;
     let files = system.frames_path.display().to_string();
     let mut layers = bind_layers(
         &choice.reps,
-        &topology,
+        topology,
         &first,
         &options.radius_overrides,
         &files,
@@ -236,7 +236,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                 let t1 = Instant::now();
                 let rep = layer.rep().clone();
                 let lf = layer
-                    .frame(&topology, &frame)
+                    .frame(topology, &frame)
                     .map_err(|e| anyhow!("{files}: frame {index}: {e}"))?;
                 let surf = if lf.positions.is_empty() {
                     // A per-frame selection (within ...) that picks nothing in this frame.

@@ -306,7 +306,7 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         };
         out.masses.push(if mass.is_finite() { mass } else { 0.0 });
         out.charges.push(atom.charge() as f32);
-        out.elements.push(element.to_string());
+        out.elements.push(element);
         out.types.push(kind);
         out.names.push(name);
     }

@@ -27,12 +27,12 @@ fn system() -> (Topology, Frame) {
         if i > 0 && atoms[i - 1].3 != *resid {
             residue += 1;
         }
-        top.names.push(name.to_string());
-        top.elements.push(element.to_string());
-        top.residue_names.push(resname.to_string());
+        top.names.push(name);
+        top.elements.push(element);
+        top.residue_names.push(resname);
         top.residue_ids.push(*resid);
         top.residue_index.push(residue);
-        top.chains.push(chain.to_string());
+        top.chains.push(chain);
         top.masses.push(i as f32);
         top.b_factors.push(10.0 * i as f32);
     }
