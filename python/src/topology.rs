@@ -52,12 +52,12 @@ fn topology_radii<'py>(
     let n = names.len();
     let elements = per_atom(elements, "elements", n)?
         .into_iter()
-        .map(|e| elements::canonical_symbol(&e).unwrap_or("").to_string())
+        .map(|e| elements::canonical_symbol(&e).unwrap_or(""))
         .collect();
     let mut topology = Topology {
-        residue_names: per_atom(resnames, "resnames", n)?,
+        residue_names: per_atom(resnames, "resnames", n)?.into(),
         elements,
-        names,
+        names: names.into(),
         ..Topology::default()
     };
     topology.complete_elements_and_radii();
