@@ -12,33 +12,19 @@
 //! adapter exists, else the CPU engine (a software adapter such as lavapipe is slower than the
 //! CPU engine).
 
-use std::str::FromStr;
 use std::sync::{Arc, Mutex, PoisonError};
 
-use mdsurf::gpu::GpuEngine;
+use mdsurf::gpu::{Backend, GpuEngine};
 use mdsurf::surface::{CpuEngine, SurfaceEngine, VertexMode};
 use rayon::ThreadPool;
 
-/// The `backend=` argument.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Backend {
-    /// The multi-threaded CPU reference engine.
-    Cpu,
-    /// The wgpu compute engine, even on a software adapter.
-    Gpu,
-    /// The GPU on a hardware adapter, else the CPU.
-    Auto,
-}
-
-impl FromStr for Backend {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.to_ascii_lowercase().as_str() {
-            "cpu" => Ok(Backend::Cpu),
-            "gpu" => Ok(Backend::Gpu),
-            "auto" => Ok(Backend::Auto),
-            _ => Err(format!("unknown backend '{s}' (expected cpu, gpu or auto)")),
-        }
+/// The `backend=` argument: the CLI's [`Backend`] (`cpu`, `gpu` or `auto`, any case).
+pub fn parse_backend(s: &str) -> Result<Backend, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "cpu" => Ok(Backend::Cpu),
+        "gpu" => Ok(Backend::Gpu),
+        "auto" => Ok(Backend::Auto),
+        _ => Err(format!("unknown backend '{s}' (expected cpu, gpu or auto)")),
     }
 }
 

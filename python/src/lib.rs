@@ -17,7 +17,8 @@ use numpy::{PyArray1, PyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
-use engines::Backend;
+use engines::parse_backend;
+use mdsurf::gpu::Backend;
 
 /// The exception for an engine error: bad input is a `ValueError`, a grid that does not fit a
 /// `MemoryError`, anything else (the GPU) a `RuntimeError`.
@@ -45,7 +46,7 @@ fn settings(
     vertices: &str,
 ) -> PyResult<(SurfaceParams, Backend, VertexMode)> {
     let quality: Quality = quality.parse().map_err(PyValueError::new_err)?;
-    let backend: Backend = backend.parse().map_err(PyValueError::new_err)?;
+    let backend = parse_backend(backend).map_err(PyValueError::new_err)?;
     let vertices: VertexMode = vertices.parse().map_err(PyValueError::new_err)?;
     let params = SurfaceParams {
         spacing,
@@ -243,7 +244,7 @@ fn measure<'py>(
 /// See `mdsurf.engine_info`.
 #[pyfunction]
 fn engine_info(py: Python<'_>, backend: &str) -> PyResult<String> {
-    let backend: Backend = backend.parse().map_err(PyValueError::new_err)?;
+    let backend = parse_backend(backend).map_err(PyValueError::new_err)?;
     py.detach(|| engines::describe(backend))
         .map(|(_, text)| text)
         .map_err(PyRuntimeError::new_err)
