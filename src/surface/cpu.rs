@@ -152,8 +152,11 @@ impl SurfaceEngine for CpuEngine {
         let grid = self.plan(atoms, params)?;
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
 
-        let with_colour = atoms.colours.is_some();
         let refined = self.vertices == VertexMode::Refined;
+        // A surface that is only measured (not refined, see below) needs no vertex colours;
+        // they do not move the vertices.
+        let measured_only = self.measure_only && !refined;
+        let with_colour = atoms.colours.is_some() && !measured_only;
         let field;
         let (bin_ms, density_ms, t) = if self.dense {
             let t = Instant::now();
@@ -188,7 +191,7 @@ impl SurfaceEngine for CpuEngine {
             (bin_ms, density_ms, t)
         };
         // Refined vertices are measured on the assembled mesh (curvature needs its edges).
-        let (mesh, area, enclosed, counts_without_mesh) = if self.measure_only && field.is_none() {
+        let (mesh, area, enclosed, counts_without_mesh) = if measured_only {
             let m = self.mc.measure();
             let counts = MeshCounts {
                 vertices: m.vertices,
