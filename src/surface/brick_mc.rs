@@ -20,9 +20,9 @@ use super::Mesh;
 use super::analytic::AnalyticField;
 use super::bricks::{BRICK, BrickVolume};
 use super::marching_cubes::{
-    ALL_ONE, FOREIGN, McScratch, SlabMesh, edge_refs, merge, push_cell_triangles, word,
+    ALL_ONE, FOREIGN, McScratch, SlabMesh, VertexData, edge_refs, merge, push_cell_triangles, word,
 };
-use super::mc_vertex::edge_geometry_refined;
+use super::mc_vertex::{edge_geometry_refined, edge_position};
 use super::tables::McTables;
 
 /// The isosurface of `vol` at the isovalue it was prepared for, reusing `scratch`.
@@ -37,7 +37,7 @@ pub fn extract_bricks_refined(
     field: Option<&AnalyticField>,
     scratch: &mut McScratch,
 ) -> Mesh {
-    march_bricks(vol, field, scratch);
+    march_bricks(vol, field, VertexData::Full, scratch);
     merge(&mut scratch.slabs)
 }
 
@@ -46,6 +46,7 @@ pub fn extract_bricks_refined(
 pub(super) fn march_bricks(
     vol: &BrickVolume,
     field: Option<&AnalyticField>,
+    data: VertexData,
     scratch: &mut McScratch,
 ) {
     let [nx, ny, nz] = vol.grid.dims.map(|d| d as usize);
@@ -62,6 +63,7 @@ pub(super) fn march_bricks(
         vol,
         iso: vol.iso,
         field,
+        data,
         tables: McTables::get(),
     };
     scratch.slabs.resize_with(slabs, SlabMesh::default);
@@ -76,6 +78,7 @@ struct Ctx<'a> {
     vol: &'a BrickVolume,
     iso: f32,
     field: Option<&'a AnalyticField>,
+    data: VertexData,
     tables: &'static McTables,
 }
 
@@ -272,6 +275,16 @@ impl Ctx<'_> {
                         map[p * 3 + axis] = count;
                         count += 1;
                         if let Some(m) = emit.as_deref_mut() {
+                            if self.data == VertexData::PositionsOnly && self.field.is_none() {
+                                let mut b = [i, j, k];
+                                b[axis] += 1;
+                                let va = self.vol.get(i, j, k);
+                                let vb = self.vol.get(b[0], b[1], b[2]);
+                                let (position, _) =
+                                    edge_position(grid, va, vb, self.iso, [i, j, k], axis);
+                                m.positions.push(position);
+                                continue;
+                            }
                             let value = |q: [usize; 3]| self.vol.get(q[0], q[1], q[2]);
                             let (position, normal, _) = edge_geometry_refined(
                                 grid,

@@ -9,7 +9,7 @@ use super::analytic::AnalyticField;
 use super::bin::{bin_atoms, bin_atoms_overlapping};
 use super::brick_mc::march_bricks;
 use super::bricks::{self, BrickScratch, BrickStats, BrickVolume};
-use super::marching_cubes::{McScratch, march_dense};
+use super::marching_cubes::{McScratch, VertexData, march_dense};
 use super::{
     AtomSet, DensityVolume, GridSpec, Mesh, MeshCounts, StageTimings, SurfaceEngine, SurfaceError,
     SurfaceOutput, SurfaceParams, VertexMode, available_memory_bytes, curved, density,
@@ -157,6 +157,12 @@ impl SurfaceEngine for CpuEngine {
         // they do not move the vertices.
         let measured_only = self.measure_only && !refined;
         let with_colour = atoms.colours.is_some() && !measured_only;
+        // Nor normals: area and volume read positions only.
+        let data = if measured_only {
+            VertexData::PositionsOnly
+        } else {
+            VertexData::Full
+        };
         let field;
         let (bin_ms, density_ms, t) = if self.dense {
             let t = Instant::now();
@@ -169,7 +175,7 @@ impl SurfaceEngine for CpuEngine {
             field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
             drop(bins);
             let iso = params.isovalue;
-            march_dense(&grid, &self.volume, iso, field.as_ref(), &mut self.mc);
+            march_dense(&grid, &self.volume, iso, field.as_ref(), data, &mut self.mc);
             self.last_bricks = None;
             (bin_ms, density_ms, t)
         } else {
@@ -186,7 +192,7 @@ impl SurfaceEngine for CpuEngine {
             let t = Instant::now();
             field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
             drop(bins);
-            march_bricks(&self.bricks, field.as_ref(), &mut self.mc);
+            march_bricks(&self.bricks, field.as_ref(), data, &mut self.mc);
             self.last_bricks = Some(self.bricks.stats());
             (bin_ms, density_ms, t)
         };

@@ -19,7 +19,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::analytic::AnalyticField;
-use super::mc_vertex::edge_vertex_refined;
+use super::mc_vertex::{edge_position, edge_vertex_refined};
 use super::tables::{EDGE_CORNERS, McTables, corner_offset, edge_axis};
 use super::{DensityVolume, GridSpec, Mesh};
 
@@ -63,6 +63,17 @@ pub fn extract(grid: &GridSpec, density: &DensityVolume, iso: f32) -> Mesh {
     extract_with(grid, density, iso, &mut McScratch::default())
 }
 
+/// What Marching Cubes records per vertex.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum VertexData {
+    /// Position, normal and colour: a mesh to draw or write.
+    Full,
+    /// Position only (no normal, no colour): enough for area, volume and counts
+    /// ([`measure_slabs`]), for surfaces that are only measured. Positions are the same bits
+    /// as in [`VertexData::Full`].
+    PositionsOnly,
+}
+
 /// Working memory of [`extract_with`] (the per-plane buffers of each slab), kept between calls
 /// so that repeated extractions (one per frame) do not allocate them again.
 #[derive(Default)]
@@ -90,7 +101,7 @@ pub fn extract_refined(
     field: Option<&AnalyticField>,
     scratch: &mut McScratch,
 ) -> Mesh {
-    march_dense(grid, density, iso, field, scratch);
+    march_dense(grid, density, iso, field, VertexData::Full, scratch);
     merge(&mut scratch.slabs)
 }
 
@@ -101,6 +112,7 @@ pub(super) fn march_dense(
     density: &DensityVolume,
     iso: f32,
     field: Option<&AnalyticField>,
+    data: VertexData,
     scratch: &mut McScratch,
 ) {
     let [nx, ny, nz] = grid.dims.map(|d| d as usize);
@@ -122,6 +134,7 @@ pub(super) fn march_dense(
         density,
         iso,
         field,
+        data,
         tables: McTables::get(),
     };
     scratch.slabs.resize_with(slabs, SlabMesh::default);
@@ -150,6 +163,7 @@ struct Ctx<'a> {
     density: &'a DensityVolume,
     iso: f32,
     field: Option<&'a AnalyticField>,
+    data: VertexData,
     tables: &'static McTables,
 }
 
@@ -279,6 +293,15 @@ impl PlaneSource for Ctx<'_> {
                     map[p * 3 + axis] = count;
                     count += 1;
                     if let Some(m) = emit.as_deref_mut() {
+                        if self.data == VertexData::PositionsOnly && self.field.is_none() {
+                            let v = &self.density.values;
+                            let at = k * nx * ny + p;
+                            let (va, vb) = (v[at], v[at + [1, nx, nx * ny][axis]]);
+                            let (position, _) =
+                                edge_position(self.grid, va, vb, self.iso, [i, j, k], axis);
+                            m.positions.push(position);
+                            continue;
+                        }
                         let vert = edge_vertex_refined(
                             self.grid,
                             self.density,

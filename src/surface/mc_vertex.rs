@@ -97,10 +97,7 @@ pub fn edge_geometry(
     let mut b = a;
     b[axis] += 1;
     let (va, vb) = (value(a), value(b));
-    let t = edge_t(va, vb, iso);
-    let pa = point(grid, a);
-    let pb = point(grid, b);
-    let position = pa + t * (pb - pa);
+    let (position, t) = edge_position(grid, va, vb, iso, a, axis);
     let ga = gradient_with(grid, &value, a);
     let gb = gradient_with(grid, &value, b);
     let g = -(ga + t * (gb - ga));
@@ -112,6 +109,26 @@ pub fn edge_geometry(
         d
     };
     (position, normal, t)
+}
+
+/// Position (Å) and interpolation parameter `t` of the vertex on the edge from sample `a`
+/// (density `va`) to `a + e_axis` (density `vb`): the position [`edge_geometry`] gives, without
+/// its normal. Surfaces that are only measured need no more.
+#[inline]
+pub fn edge_position(
+    grid: &GridSpec,
+    va: f32,
+    vb: f32,
+    iso: f32,
+    a: [usize; 3],
+    axis: usize,
+) -> (Vec3, f32) {
+    let mut b = a;
+    b[axis] += 1;
+    let t = edge_t(va, vb, iso);
+    let pa = point(grid, a);
+    let pb = point(grid, b);
+    (pa + t * (pb - pa), t)
 }
 
 /// [`edge_geometry`], or with `field` the refined vertex: the position where the exact Gaussian
