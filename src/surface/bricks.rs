@@ -117,7 +117,8 @@ pub struct BrickScratch {
 #[derive(Default)]
 struct LayerScratch {
     vals: Vec<f32>,
-    cols: Vec<[f32; 3]>,
+    /// Colour sums, one plane per channel (see [`super::density::ColourPlanes`]).
+    cols: [Vec<f32>; 3],
 }
 
 impl BrickVolume {
@@ -329,12 +330,19 @@ impl LayerCtx<'_> {
         if s.vals.len() < temp {
             s.vals = vec![0.0; temp];
         }
-        if self.with_colour && s.cols.len() < temp {
-            s.cols = vec![[0.0; 3]; temp];
+        if self.with_colour && s.cols[0].len() < temp {
+            s.cols = [(); 3].map(|_| vec![0.0; temp]);
         }
         let LayerScratch { vals, cols } = s;
         let vals = &mut vals[..plane * np];
-        let mut cols = self.with_colour.then(|| &mut cols[..plane * np]);
+        let [r, g, b] = cols;
+        let mut cols = self.with_colour.then(|| {
+            [
+                &mut r[..plane * np],
+                &mut g[..plane * np],
+                &mut b[..plane * np],
+            ]
+        });
 
         // Zero the brick columns within one brick of an occupied brick (of a layer or the next,
         // whose first plane closes the layer's footprints): they hold every sample that gets a
@@ -362,8 +370,8 @@ impl LayerCtx<'_> {
                     for j in bj * BRICK..(bj * BRICK + BRICK).min(ny) {
                         let r = kk * plane + j * nx;
                         vals[r + i0..r + i1].fill(0.0);
-                        if let Some(c) = cols.as_deref_mut() {
-                            c[r + i0..r + i1].as_flattened_mut().fill(0.0);
+                        for c in cols.iter_mut().flatten() {
+                            c[r + i0..r + i1].fill(0.0);
                         }
                     }
                 }
@@ -378,13 +386,16 @@ impl LayerCtx<'_> {
             z0 as u32,
             z1,
             vals,
-            cols.as_deref_mut(),
+            cols.as_mut()
+                .map(|[r, g, b]| [&mut **r, &mut **g, &mut **b]),
         );
         for (((g, layer), dst), near) in layers.iter_mut().enumerate().zip(dsts).zip(&nears) {
             let base = g * BRICK * plane;
             let np = (BRICK + 1).min(np - g * BRICK);
             let vals = &vals[base..base + np * plane];
-            let cols = cols.as_deref().map(|c| &c[base..base + np * plane]);
+            let cols = cols
+                .as_ref()
+                .map(|c| [0, 1, 2].map(|n| &c[n][base..base + np * plane]));
             self.finish(bk0 + g, np, vals, cols, near, layer, dst);
         }
     }
@@ -397,7 +408,7 @@ impl LayerCtx<'_> {
         bk: usize,
         np: usize,
         vals: &[f32],
-        cols: Option<&[[f32; 3]]>,
+        cols: Option<[&[f32]; 3]>,
         near: &[bool],
         layer: &mut Layer,
         dst: &mut [f32],
@@ -543,8 +554,8 @@ impl LayerCtx<'_> {
                                 continue;
                             }
                             let t_edge = edge_t(vals[p], vals[p + step], iso);
-                            let ca = cols[p].map(|v| v * self.inv_iso);
-                            let cb = cols[p + step].map(|v| v * self.inv_iso);
+                            let ca = [0, 1, 2].map(|n| cols[n][p] * self.inv_iso);
+                            let cb = [0, 1, 2].map(|n| cols[n][p + step] * self.inv_iso);
                             layer.colours.push(lerp_colour(ca, cb, t_edge));
                         }
                     }

@@ -105,10 +105,13 @@ pub fn compute_binned_into(
             .enumerate()
             .for_each(|(s, (vals, cols))| {
                 vals.fill(0.0);
-                cols.fill([0.0; 3]);
-                fill_slab(bins, grid, s, vals, Some(&mut *cols));
-                for c in cols.iter_mut() {
-                    *c = c.map(|v| v * inv_iso);
+                // The kernel sums each channel in its own plane (vectorised), then the
+                // channels are interleaved and scaled by 1/I.
+                let mut planes = [(); 3].map(|_| vec![0.0f32; vals.len()]);
+                let [r, g, b] = &mut planes;
+                fill_slab(bins, grid, s, vals, Some([r, g, b]));
+                for (i, c) in cols.iter_mut().enumerate() {
+                    *c = [planes[0][i], planes[1][i], planes[2][i]].map(|v| v * inv_iso);
                 }
             }),
     }
@@ -177,15 +180,20 @@ fn fill_slab(
     grid: &GridSpec,
     s: usize,
     vals: &mut [f32],
-    cols: Option<&mut [[f32; 3]]>,
+    cols: Option<ColourPlanes<'_>>,
 ) {
     let z0 = s as u32 * bins.slab_planes;
     let z1 = (z0 + bins.slab_planes).min(grid.dims[2]) - 1;
     fill_planes(&bins.atoms, bins.slab(s), grid, z0, z1, vals, cols);
 }
 
+/// Colour sums of a run of samples, one plane per channel (red, green, blue; laid out as the
+/// density samples), so that the row kernel adds each channel with vector instructions.
+pub(crate) type ColourPlanes<'a> = [&'a mut [f32]; 3];
+
 /// Adds the atoms `list` (indices into `atoms`, ascending) to the samples of grid planes
-/// `z0..=z1`: `vals` (and `cols` when colouring) hold those planes, plane `z0` first, x fastest.
+/// `z0..=z1`: `vals` (and `cols` when colouring, each channel `w_i colour_i` summed in its own
+/// plane) hold those planes, plane `z0` first, x fastest.
 /// Every sample's terms are added in list order, so any list holding the atoms that reach a
 /// sample, in canonical order, gives that sample the same bits. Only samples inside an atom's
 /// [`sample_range`] box get a non-zero term (others may get `+0.0` added, which changes nothing).
@@ -196,7 +204,7 @@ pub(crate) fn fill_planes(
     z0: u32,
     z1: u32,
     vals: &mut [f32],
-    cols: Option<&mut [[f32; 3]]>,
+    cols: Option<ColourPlanes<'_>>,
 ) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
@@ -219,7 +227,7 @@ fn fill_planes_avx2(
     z0: u32,
     z1: u32,
     vals: &mut [f32],
-    cols: Option<&mut [[f32; 3]]>,
+    cols: Option<ColourPlanes<'_>>,
 ) {
     fill_planes_body(atoms, list, grid, z0, z1, vals, cols);
 }
@@ -233,7 +241,7 @@ fn fill_planes_body(
     z0: u32,
     z1: u32,
     vals: &mut [f32],
-    mut cols: Option<&mut [[f32; 3]]>,
+    mut cols: Option<ColourPlanes<'_>>,
 ) {
     let [nx, ny, nz] = grid.dims;
     let (o, h) = (grid.origin, grid.spacing);
@@ -285,13 +293,15 @@ fn fill_planes_body(
                         w[l] = if pass { lanes.e[l] * eyz } else { 0.0 };
                         out[l] += w[l];
                     }
-                    if let Some(cols) = cols.as_deref_mut() {
-                        let c = atom.colour;
-                        let n = tx.d2.len();
-                        for (v, &w) in cols[row0..row0 + n].iter_mut().zip(&w[..n]) {
-                            v[0] += w * c[0];
-                            v[1] += w * c[1];
-                            v[2] += w * c[2];
+                    if let Some(planes) = cols.as_mut() {
+                        for (plane, &c) in planes.iter_mut().zip(&atom.colour) {
+                            if let Ok(out) =
+                                <&mut [f32; LANES]>::try_from(&mut plane[row0..row0 + LANES])
+                            {
+                                for l in 0..LANES {
+                                    out[l] += w[l] * c;
+                                }
+                            }
                         }
                     }
                     continue;
@@ -314,14 +324,12 @@ fn fill_planes_body(
                 for (v, &ex) in out.iter_mut().zip(exs) {
                     *v += ex * eyz;
                 }
-                if let Some(cols) = cols.as_deref_mut() {
-                    let c = atom.colour;
-                    let out = &mut cols[row..row + exs.len()];
-                    for (v, &ex) in out.iter_mut().zip(exs) {
-                        let w = ex * eyz;
-                        v[0] += w * c[0];
-                        v[1] += w * c[1];
-                        v[2] += w * c[2];
+                if let Some(planes) = cols.as_mut() {
+                    for (plane, &c) in planes.iter_mut().zip(&atom.colour) {
+                        let out = &mut plane[row..row + exs.len()];
+                        for (v, &ex) in out.iter_mut().zip(exs) {
+                            *v += ex * eyz * c;
+                        }
                     }
                 }
             }
@@ -366,14 +374,34 @@ mod tests {
             let n = grid.voxel_count() as usize;
             let list: Vec<u32> = (0..bins.atoms.len() as u32).collect();
             let z1 = grid.dims[2] - 1;
-            let (mut v1, mut c1) = (vec![0.0f32; n], vec![[0.0f32; 3]; n]);
-            let (mut v2, mut c2) = (vec![0.0f32; n], vec![[0.0f32; 3]; n]);
-            fill_planes(&bins.atoms, &list, &grid, 0, z1, &mut v1, Some(&mut c1));
-            fill_planes_body(&bins.atoms, &list, &grid, 0, z1, &mut v2, Some(&mut c2));
+            let (mut v1, mut c1) = (vec![0.0f32; n], [(); 3].map(|_| vec![0.0f32; n]));
+            let (mut v2, mut c2) = (vec![0.0f32; n], [(); 3].map(|_| vec![0.0f32; n]));
+            let [r1, g1, b1] = &mut c1;
+            fill_planes(
+                &bins.atoms,
+                &list,
+                &grid,
+                0,
+                z1,
+                &mut v1,
+                Some([r1, g1, b1]),
+            );
+            let [r2, g2, b2] = &mut c2;
+            fill_planes_body(
+                &bins.atoms,
+                &list,
+                &grid,
+                0,
+                z1,
+                &mut v2,
+                Some([r2, g2, b2]),
+            );
             assert!(v1.iter().any(|&v| v > 1.0), "no overlap at H = {spacing}");
             let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&v1), bits(&v2), "density at H = {spacing}");
-            assert_eq!(bits(c1.as_flattened()), bits(c2.as_flattened()));
+            for (a, b) in c1.iter().zip(&c2) {
+                assert_eq!(bits(a), bits(b), "colour at H = {spacing}");
+            }
         }
     }
 }
