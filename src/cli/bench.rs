@@ -3,7 +3,8 @@
 //! (`--synthetic N`) and hollow shells (`--synthetic-shell N`, also on the dense CPU engine and
 //! the dense GPU path),
 //! and prints an aligned table (optionally a CSV too); `--table1` runs the
-//! GPU engine's reproduction of the paper's Table 1. Speed claims of the project are measured
+//! GPU engine's reproduction of the paper's Table 1 (`--table1 --plan-only`: its GPU memory per
+//! row, sized without a device). Speed claims of the project are measured
 //! here, never in tests.
 
 use std::path::PathBuf;
@@ -45,6 +46,11 @@ pub struct BenchArgs {
     /// R = 1, I = 0.5) and print it beside the paper's figures.
     #[arg(long)]
     pub table1: bool,
+    /// With --table1: print each row's GPU memory without a GPU instead of timing it: the
+    /// engine's buffers for the row's synthetic system and grid under the limits of an 80 GB
+    /// NVIDIA GPU, the mesh sized from the CPU engine's surface (which it computes per row).
+    #[arg(long, requires = "table1")]
+    pub plan_only: bool,
     /// With --table1: skip the rows with more atoms than N (quick checks, small GPUs).
     #[arg(long, value_name = "N", value_parser = parse_count)]
     pub max_atoms: Option<usize>,
@@ -136,8 +142,11 @@ pub struct BenchResult {
     /// first one (GPU engine only; 0 in steady state).
     pub gpu_objects_per_frame: Option<f64>,
     /// Bricks of the grid that atoms reach and the surface crosses (sparse engines only; of
-    /// the last timed frame; the GPU marches every reached brick, so its two counts agree).
+    /// the last timed frame).
     pub bricks: Option<mdsurf::surface::BrickStats>,
+    /// True when `bricks.active` was counted (CPU engine). The GPU engine marches every
+    /// reached brick and does not count the crossed ones, so its table cell is "-".
+    pub bricks_active_counted: bool,
 }
 
 /// Runs `mdsurf bench`.
@@ -240,9 +249,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// Runs the GPU engine's Table 1 reproduction (tiling TOP or the demo) and prints its table.
+/// Runs the GPU engine's Table 1 reproduction (tiling TOP or the demo) and prints its table;
+/// with `--plan-only` prints each row's GPU memory, sized without a device.
 fn print_table1(args: &BenchArgs) -> Result<()> {
-    if args.backend == BenchBackend::Cpu {
+    if args.backend == BenchBackend::Cpu && !args.plan_only {
         bail!("--table1 times the GPU engine; use --backend gpu or all");
     }
     let (top, traj) = match &args.top {
@@ -257,8 +267,12 @@ fn print_table1(args: &BenchArgs) -> Result<()> {
         max_atoms: args.max_atoms,
         colours: !args.no_color,
     };
-    let text = mdsurf::gpu::table1::table1(&top, traj.as_deref(), &opts)
-        .map_err(|e| anyhow!("--table1: {e}"))?;
+    let text = if args.plan_only {
+        mdsurf::gpu::table1::table1_plan(&top, traj.as_deref(), &opts)
+    } else {
+        mdsurf::gpu::table1::table1(&top, traj.as_deref(), &opts)
+    }
+    .map_err(|e| anyhow!("--table1: {e}"))?;
     println!("{text}");
     Ok(())
 }
@@ -410,6 +424,7 @@ fn time_case(
             BenchEngine::Cpu(e) => e.brick_stats(),
             BenchEngine::Gpu(e) => e.brick_stats(),
         },
+        bricks_active_counted: matches!(engine, BenchEngine::Cpu(_)),
         gpu_objects_per_frame: gpu_objects(engine)
             .zip(objects_after_first)
             .map(|(now, first)| now.saturating_sub(first) as f64 / (total as f64 - 1.0).max(1.0)),

@@ -1,5 +1,7 @@
 //! The result table of `mdsurf bench`: one row per case and engine with per-stage medians (ms),
 //! frames per second and peak memory, as aligned text for the terminal and as CSV.
+//! `bricks_active_%` is "-" on the GPU engine: it marches every brick some atom reaches
+//! (`bricks_occupied_%`) and does not count the bricks the surface crosses.
 
 use super::bench::BenchResult;
 
@@ -65,6 +67,7 @@ impl Table {
                         .map(|b| format!("{:.1}", 100.0 * b.occupied_fraction()))
                         .unwrap_or_else(|| "-".into()),
                     r.bricks
+                        .filter(|_| r.bricks_active_counted)
                         .map(|b| format!("{:.1}", 100.0 * b.active_fraction()))
                         .unwrap_or_else(|| "-".into()),
                 ]
@@ -163,6 +166,43 @@ mod tests {
         let csv = t.to_csv();
         assert!(csv.contains("\"synthetic 10, tiled\",cpu,5547,1,60x70x80,12345"));
         assert_eq!(csv.lines().count(), 3);
+    }
+
+    #[test]
+    fn uncounted_active_bricks_print_a_dash() {
+        let bricks = mdsurf::surface::BrickStats {
+            brick_size: 8,
+            bricks: 200,
+            occupied: 50,
+            active: 50,
+        };
+        let gpu = BenchResult {
+            backend: "gpu".into(),
+            bricks: Some(bricks),
+            bricks_active_counted: false,
+            ..result("demo")
+        };
+        let cpu = BenchResult {
+            backend: "cpu".into(),
+            bricks: Some(mdsurf::surface::BrickStats {
+                active: 20,
+                ..bricks
+            }),
+            bricks_active_counted: true,
+            ..result("demo")
+        };
+        let csv = Table::from_results(&[gpu, cpu]).to_csv();
+        let last_two = |l: &str| {
+            let f: Vec<&str> = l.split(',').collect();
+            f[f.len() - 2..].join(" ")
+        };
+        let tails: Vec<String> = csv.lines().map(last_two).collect();
+        // bricks_occupied_% then bricks_active_%: the GPU's active share is not a count.
+        assert_eq!(
+            tails,
+            ["bricks_occupied_% bricks_active_%", "25.0 -", "25.0 10.0"],
+            "{csv}"
+        );
     }
 
     #[test]

@@ -209,11 +209,14 @@ impl GpuContext {
         }
     }
 
+    /// The limits that size the engine's buffers ([`super::plan::DeviceLimits`]).
+    pub fn device_limits(&self) -> super::plan::DeviceLimits {
+        super::plan::DeviceLimits::of(&self.limits)
+    }
+
     /// Largest single storage binding in bytes.
     pub fn max_binding(&self) -> u64 {
-        self.limits
-            .max_storage_buffer_binding_size
-            .min(self.limits.max_buffer_size)
+        self.device_limits().max_binding()
     }
 
     /// Runs `f` inside validation and out-of-memory error scopes, so a GPU error becomes a

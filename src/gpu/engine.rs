@@ -14,7 +14,9 @@ use super::context::GpuObjects;
 use super::frame::{Recorder, Stages, Work};
 pub use super::options::{Changes, EngineOptions, FrameInfo};
 use super::output::{FrameStats, GpuSurface, Readbacks, Staging};
-use super::plan::{FramePlan, plan_frame};
+use super::plan::{
+    BufferPlan, FramePlan, MeshCapacity, first_mesh_want, grown_mesh_want, plan_frame,
+};
 use super::resources::Buffers;
 use super::timing::Timer;
 use super::types::{GpuCounters, pack_colour};
@@ -315,20 +317,22 @@ impl GpuEngine {
             }
             .into());
         }
-        let replaced = self.buffers.ensure_atoms(d, n);
-        self.buffers.ensure_plan(d, &plan, colour);
         let (want_v, want_t) = if st.mesh_want == (0, 0) {
             self.options
                 .initial_mesh_capacity
                 .map(|(v, t)| (v as u64, t as u64))
-                .unwrap_or_else(|| estimate_mesh(&plan))
+                .unwrap_or_else(|| first_mesh_want(&plan))
         } else {
             st.mesh_want
         };
         st.mesh_want = (want_v, want_t);
-        let cap_v = want_v.min(self.ctx.max_binding() / 36);
-        let cap_t = want_t.min(self.ctx.max_binding() / 12);
-        self.buffers.ensure_mesh(d, cap_v, cap_t);
+        let mesh = MeshCapacity::clipped((want_v, want_t), self.ctx.max_binding());
+        // Every buffer size comes from the plan's byte count, so `gpu_bytes` and the
+        // device-free estimate (`BufferPlan::fresh_memory`) cannot drift apart.
+        let sizes = BufferPlan::new(&plan, n, colour, mesh, &self.ctx.device_limits());
+        let replaced = self.buffers.ensure_atoms(d, &sizes);
+        self.buffers.ensure_plan(d, &sizes);
+        self.buffers.ensure_mesh(d, &sizes);
         let q = &self.ctx.queue;
         if changes.positions || replaced {
             q.write_buffer(
@@ -430,13 +434,11 @@ impl GpuEngine {
         let arrived = self.readbacks.collect(&self.timer)?;
         let (cap_v, cap_t) = self.buffers.mesh_capacity();
         for s in &arrived {
-            let h = self.options.headroom.max(1.0) as f64;
             // Grow (to the count plus headroom) only past 90 % of the capacity, so counts that
             // wander a little from frame to frame settle instead of growing the buffers at
             // each new maximum.
-            let want = |c: u32, cap: u32| {
-                (c as f64 > 0.9 * cap as f64).then(|| (c as f64 * h).ceil() as u64 + 64)
-            };
+            let want =
+                |c: u32, cap: u32| grown_mesh_want(c as u64, cap as u64, self.options.headroom);
             let (v, t) = (want(s.vertex_count, cap_v), want(s.triangle_count, cap_t));
             let m = &mut self.state.mesh_want;
             if *m == (0, 0) && (v.is_some() || t.is_some()) {
@@ -574,13 +576,6 @@ fn overflowing() -> SurfaceError {
         "the mesh kept overflowing its buffers after {MAX_SUBMITS} attempts"
     ))
     .into()
-}
-
-/// A first guess of the mesh size: a surface through about an eighth of the grid's layers.
-fn estimate_mesh(plan: &FramePlan) -> (u64, u64) {
-    let [nx, ny, nz] = plan.grid.dims.map(|d| d as u64);
-    let v = (nx * ny + ny * nz + nx * nz) * 2 + plan.grid.voxel_count() / 16;
-    (v.max(4096), 2 * v.max(4096))
 }
 
 impl SurfaceEngine for GpuEngine {

@@ -2,10 +2,18 @@
 //! Marching Cubes run in (so no buffer exceeds the device's binding limit or the memory budget),
 //! the sparse bricks of [`BRICK`]^3 samples, and the bytes that costs. Pure arithmetic, tested
 //! without a GPU.
+//!
+//! The bytes are computed in one place, [`BufferPlan`]: the engine's buffers
+//! ([`super::resources::Buffers`]) are grown to exactly its sizes, and
+//! [`BufferPlan::fresh_memory`] adds up what a fresh engine holds after a frame, so the GPU
+//! memory of a frame is known without a device (`mdsurf bench --table1 --plan-only`) and
+//! cannot drift from what the engine allocates (`tests/it/gpu_plan_memory.rs` checks both
+//! against [`super::GpuEngine::gpu_bytes`]).
 
 use crate::surface::{GridSpec, SurfaceParams};
 
 use super::GpuError;
+use super::types::{DrawIndexedArgs, GpuCounters, GpuVertex, McTablesUniform, SlabUniform};
 
 /// Bytes per voxel of a slab: density 4, colour 12, class word 4, vertex base 4, active cell 8.
 pub const BYTES_PER_VOXEL: u64 = 32;
@@ -159,6 +167,352 @@ pub fn plan_frame(
     })
 }
 
+/// Bytes of one output vertex ([`GpuVertex`]: position, normal, colour).
+pub const BYTES_PER_VERTEX: u64 = size_of::<GpuVertex>() as u64;
+/// Bytes of one output triangle (three u32 indices).
+pub const BYTES_PER_TRIANGLE: u64 = 12;
+/// Bytes of the area/volume partial sums (256 workgroups, two f32 each).
+pub const PARTIALS_BYTES: u64 = 256 * 8;
+/// Bytes of an indirect dispatch buffer (3 u32 arguments plus one spare word).
+pub const DISPATCH_ARGS_BYTES: u64 = 16;
+/// The engine's default mesh headroom: grown mesh buffers hold this many times the counts
+/// that made them grow (`EngineOptions::headroom`; the plan-memory test checks they agree).
+pub const DEFAULT_HEADROOM: f32 = 1.25;
+
+/// The device limits that size the engine's buffers, in bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeviceLimits {
+    /// `max_storage_buffer_binding_size`.
+    pub max_storage_binding: u64,
+    /// `max_buffer_size`.
+    pub max_buffer_size: u64,
+    /// `min_uniform_buffer_offset_alignment` (the stride of the per-slab uniforms).
+    pub uniform_alignment: u64,
+}
+
+impl DeviceLimits {
+    /// What wgpu 30 reports on an 80 GB NVIDIA GPU (A100/H100) under Vulkan, the limits
+    /// `mdsurf bench --table1 --plan-only` sizes for: storage bindings capped by wgpu at
+    /// 2^31 - 1 bytes (NVIDIA's own `maxStorageBufferRange` is 2^32 - 1), buffers of far more
+    /// than 16 GiB (so the volume budget takes its 4 GiB cap, the largest it can be), and
+    /// uniform offsets aligned to 256 bytes (WebGPU's largest; NVIDIA needs 64, which only
+    /// shrinks the few-KB slab uniforms).
+    pub const NVIDIA_80GB: DeviceLimits = DeviceLimits {
+        max_storage_binding: (1 << 31) - 1,
+        max_buffer_size: 1 << 52,
+        uniform_alignment: 256,
+    };
+
+    /// The limits a device was created with.
+    pub fn of(limits: &wgpu::Limits) -> DeviceLimits {
+        DeviceLimits {
+            max_storage_binding: limits.max_storage_buffer_binding_size,
+            max_buffer_size: limits.max_buffer_size,
+            uniform_alignment: limits.min_uniform_buffer_offset_alignment as u64,
+        }
+    }
+
+    /// Largest single storage binding in bytes.
+    pub fn max_binding(&self) -> u64 {
+        self.max_storage_binding.min(self.max_buffer_size)
+    }
+
+    /// The engine's default budget for the per-voxel slab buffers in bytes: a quarter of the
+    /// largest buffer, within 64 MiB..4 GiB (`EngineOptions::volume_budget`; the plan-memory
+    /// test checks they agree).
+    pub fn volume_budget(&self) -> u64 {
+        (self.max_buffer_size / 4).clamp(64 << 20, 4 << 30)
+    }
+
+    /// Bytes between two slabs' uniforms (a [`SlabUniform`] rounded up to the alignment).
+    pub fn slab_uniform_stride(&self) -> u64 {
+        (size_of::<SlabUniform>() as u64).next_multiple_of(self.uniform_alignment.max(16))
+    }
+}
+
+/// Bytes a storage buffer asked for `bytes` is created with: wgpu wants a multiple of 4, and
+/// the engine never makes one under 16.
+pub fn storage_bytes(bytes: u64) -> u64 {
+    bytes.max(16).next_multiple_of(4)
+}
+
+/// `bytes` plus an eighth to spare, within the largest binding (never less than `bytes`).
+pub fn with_slack(bytes: u64, max_binding: u64) -> u64 {
+    (bytes + bytes / 8).min(max_binding).max(bytes)
+}
+
+/// Bytes the slab uniform buffer is replaced with when `slabs` uniforms of `stride` bytes do
+/// not fit: a quarter more slabs to spare.
+pub fn slab_uniform_replacement(slabs: u64, stride: u64) -> u64 {
+    (stride * slabs.max(1) + (slabs / 4) * stride).next_multiple_of(16)
+}
+
+/// What one growing buffer needs for a frame, in bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Need {
+    /// Bytes the frame uses; a smaller buffer is replaced.
+    pub bytes: u64,
+    /// Bytes the replacement asks for (`bytes` plus any room to spare).
+    pub replace_with: u64,
+}
+
+impl Need {
+    /// Exactly `bytes`.
+    pub fn exact(bytes: u64) -> Need {
+        Need {
+            bytes,
+            replace_with: bytes,
+        }
+    }
+
+    /// `bytes`, replaced with an eighth to spare ([`with_slack`]).
+    pub fn slack(bytes: u64, max_binding: u64) -> Need {
+        Need {
+            bytes,
+            replace_with: with_slack(bytes, max_binding),
+        }
+    }
+
+    /// Bytes the buffer holds in a fresh engine (every growing buffer starts at 16 bytes)
+    /// after a frame with this need.
+    pub fn fresh(&self) -> u64 {
+        if self.bytes <= 16 {
+            16
+        } else {
+            storage_bytes(self.replace_with)
+        }
+    }
+}
+
+/// Vertex and triangle capacity of each output set's mesh buffers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MeshCapacity {
+    /// Vertices.
+    pub vertices: u64,
+    /// Triangles.
+    pub triangles: u64,
+}
+
+impl MeshCapacity {
+    /// The capacity `want` asks for, within the largest binding (vertices of
+    /// [`BYTES_PER_VERTEX`], triangles of [`BYTES_PER_TRIANGLE`]).
+    pub fn clipped(want: (u64, u64), max_binding: u64) -> MeshCapacity {
+        MeshCapacity {
+            vertices: want.0.min(max_binding / BYTES_PER_VERTEX),
+            triangles: want.1.min(max_binding / BYTES_PER_TRIANGLE),
+        }
+    }
+
+    /// The most the mesh buffers can ever hold: each one the largest binding. An upper bound
+    /// for any surface.
+    pub fn largest(max_binding: u64) -> MeshCapacity {
+        Self::clipped((u64::MAX, u64::MAX), max_binding)
+    }
+
+    /// The capacity a fresh engine settles at for a surface of `counts` (vertices, triangles)
+    /// when its first frame asked for `first_want` ([`first_mesh_want`] unless the caller set
+    /// `EngineOptions::initial_mesh_capacity`): grown by [`grown_mesh_want`] when a count
+    /// passes 90 % of the first capacity. One growth settles, since the grown capacity holds
+    /// more than the count over 0.9.
+    pub fn settled(
+        first_want: (u64, u64),
+        counts: (u64, u64),
+        headroom: f32,
+        max_binding: u64,
+    ) -> MeshCapacity {
+        let first = Self::clipped(first_want, max_binding);
+        let v = grown_mesh_want(counts.0, first.vertices, headroom);
+        let t = grown_mesh_want(counts.1, first.triangles, headroom);
+        if v.is_none() && t.is_none() {
+            return first;
+        }
+        let grown = (
+            first_want.0.max(v.unwrap_or(0)),
+            first_want.1.max(t.unwrap_or(0)),
+        );
+        Self::clipped(grown, max_binding)
+    }
+}
+
+/// The engine's first guess of the mesh size (vertices, triangles) before any frame was
+/// counted: a surface through about an eighth of the grid's layers.
+pub fn first_mesh_want(plan: &FramePlan) -> (u64, u64) {
+    let [nx, ny, nz] = plan.grid.dims.map(|d| d as u64);
+    let v = (nx * ny + ny * nz + nx * nz) * 2 + plan.grid.voxel_count() / 16;
+    (v.max(4096), 2 * v.max(4096))
+}
+
+/// The mesh buffers' growth rule: when `count` passes 90 % of `capacity`, they should hold
+/// `count` times `headroom` (at least 1) plus 64; None while the count is below that mark, so
+/// counts that wander a little from frame to frame settle.
+pub fn grown_mesh_want(count: u64, capacity: u64, headroom: f32) -> Option<u64> {
+    let h = headroom.max(1.0) as f64;
+    (count as f64 > 0.9 * capacity as f64).then(|| (count as f64 * h).ceil() as u64 + 64)
+}
+
+/// Every buffer of the engine sized for one frame (see the module docs): the growing ones as
+/// [`Need`]s, the fixed ones in bytes. [`super::resources::Buffers`] grows to it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BufferPlan {
+    /// Positions, 12 bytes per atom.
+    pub positions: Need,
+    /// Radii, 4 bytes per atom.
+    pub radii: Need,
+    /// Packed colours, 8 bytes per atom.
+    pub colours: Need,
+    /// Sorted atoms, 16 bytes per atom.
+    pub sorted_atoms: Need,
+    /// Sorted packed colours, 8 bytes per atom.
+    pub sorted_colours: Need,
+    /// First slot per bin cell (u32).
+    pub cell_start: Need,
+    /// One past the last slot per bin cell (u32).
+    pub cell_end: Need,
+    /// Slab density, 4 bytes per voxel.
+    pub density: Need,
+    /// Slab colour, 12 bytes per voxel (none without colours).
+    pub colour: Need,
+    /// Class words, 4 bytes per classified point.
+    pub classes: Need,
+    /// Vertex base, 4 bytes per classified point.
+    pub vertex_base: Need,
+    /// Active cells, 8 bytes per classified point.
+    pub active: Need,
+    /// Each of the three block-sum arrays, 4 bytes per classification block.
+    pub block_sums: Need,
+    /// Reached flag per sparse brick (u32).
+    pub brick_flags: Need,
+    /// Scanned flags per sparse brick (u32).
+    pub brick_scan: Need,
+    /// Reached-brick count and list (u32).
+    pub active_bricks: Need,
+    /// Output vertices of one output set.
+    pub vertices: Need,
+    /// Output indices of one output set.
+    pub indices: Need,
+    /// Bytes of the per-slab uniform buffer of a fresh engine.
+    pub slab_uniforms: u64,
+}
+
+impl BufferPlan {
+    /// The buffers of a frame of `atoms` atoms on `plan` (with the colour volume when
+    /// `with_colour`) and mesh buffers of `mesh` capacity, on a device with `limits`.
+    pub fn new(
+        plan: &FramePlan,
+        atoms: u64,
+        with_colour: bool,
+        mesh: MeshCapacity,
+        limits: &DeviceLimits,
+    ) -> BufferPlan {
+        let max_binding = limits.max_binding();
+        let slack = |bytes| Need::slack(bytes, max_binding);
+        let cells = plan.cell_count();
+        let voxels = plan.slab_voxels();
+        let points = plan.class_points();
+        // Brick buffers are replaced with room for one more brick per axis: a box that
+        // breathes across a multiple of 8 samples adds a whole brick layer, more than the
+        // usual eighth to spare.
+        let bricks = plan.brick_count();
+        let roomy: u64 = plan.brick_dims.iter().map(|&d| d as u64 + 1).product();
+        let brick_need = |extra: u64| Need {
+            bytes: (bricks + extra) * 4,
+            replace_with: (roomy + extra) * 4,
+        };
+        let stride = limits.slab_uniform_stride();
+        let slabs = plan.slabs.len() as u64;
+        let slab_uniforms = if slabs <= 1 {
+            stride
+        } else {
+            slab_uniform_replacement(slabs, stride)
+        };
+        BufferPlan {
+            positions: Need::exact(atoms * 12),
+            radii: Need::exact(atoms * 4),
+            colours: Need::exact(atoms * 8),
+            sorted_atoms: Need::exact(atoms * 16),
+            sorted_colours: Need::exact(atoms * 8),
+            cell_start: slack(cells * 4),
+            cell_end: slack(cells * 4),
+            density: slack(voxels * 4),
+            colour: if with_colour {
+                slack(voxels * 12)
+            } else {
+                Need::default()
+            },
+            classes: slack(points * 4),
+            vertex_base: slack(points * 4),
+            active: slack(points * 8),
+            block_sums: slack(plan.class_blocks() * 4),
+            brick_flags: brick_need(0),
+            brick_scan: brick_need(0),
+            active_bricks: brick_need(1),
+            vertices: Need::exact(mesh.vertices * BYTES_PER_VERTEX),
+            indices: Need::exact(mesh.triangles * BYTES_PER_TRIANGLE),
+            slab_uniforms,
+        }
+    }
+
+    /// GPU memory a fresh engine holds after a frame with these needs (what
+    /// [`super::GpuEngine::gpu_bytes`] reports), by group.
+    pub fn fresh_memory(&self) -> GpuMemory {
+        let sum = |needs: &[Need]| needs.iter().map(Need::fresh).sum::<u64>();
+        let output_set = self.vertices.fresh()
+            + self.indices.fresh()
+            + storage_bytes(size_of::<DrawIndexedArgs>() as u64);
+        GpuMemory {
+            atoms: sum(&[
+                self.positions,
+                self.radii,
+                self.colours,
+                self.sorted_atoms,
+                self.sorted_colours,
+            ]),
+            cells: sum(&[self.cell_start, self.cell_end]),
+            volumes: sum(&[
+                self.density,
+                self.colour,
+                self.classes,
+                self.vertex_base,
+                self.active,
+            ]) + 3 * self.block_sums.fresh(),
+            bricks: sum(&[self.brick_flags, self.brick_scan, self.active_bricks]),
+            mesh: super::resources::OUTPUT_SETS as u64 * output_set,
+            fixed: storage_bytes(size_of::<GpuCounters>() as u64)
+                + 2 * DISPATCH_ARGS_BYTES
+                + PARTIALS_BYTES
+                + (size_of::<McTablesUniform>() as u64).next_multiple_of(4)
+                + self.slab_uniforms,
+        }
+    }
+}
+
+/// GPU memory of the engine's buffers by group, in bytes. Not counted (as in
+/// [`super::GpuEngine::gpu_bytes`]): the prefix sums' block totals (4 bytes per 1024 scanned
+/// elements), stage uniforms, timestamp and counter readback buffers (about 150 KB) and the
+/// staging buffer of a mesh readback.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct GpuMemory {
+    /// Per-atom inputs and their sorted copies.
+    pub atoms: u64,
+    /// Bin cell ranges.
+    pub cells: u64,
+    /// Per-slab volumes: density, colour, class words, vertex bases, active cells, block sums.
+    pub volumes: u64,
+    /// Sparse-brick flags and list.
+    pub bricks: u64,
+    /// Both output sets' vertices, indices and draw arguments.
+    pub mesh: u64,
+    /// Counters, dispatch arguments, partial sums, Marching Cubes tables, slab uniforms.
+    pub fixed: u64,
+}
+
+impl GpuMemory {
+    /// All groups together.
+    pub fn total(&self) -> u64 {
+        self.atoms + self.cells + self.volumes + self.bricks + self.mesh + self.fixed
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,5 +573,88 @@ mod tests {
         for a in 0..3 {
             assert!(plan.cell_dims[a] as f32 * plan.cell_size >= (plan.grid.dims[a] - 1) as f32);
         }
+    }
+
+    #[test]
+    fn fresh_buffers_round_like_wgpu_and_start_at_16_bytes() {
+        assert_eq!(Need::exact(0).fresh(), 16);
+        assert_eq!(Need::exact(10).fresh(), 16);
+        assert_eq!(Need::exact(18).fresh(), 20);
+        let slack = Need::slack(800, 1 << 30);
+        assert_eq!(
+            (slack.bytes, slack.replace_with, slack.fresh()),
+            (800, 900, 900)
+        );
+        // The slack never passes the largest binding, nor drops below the need.
+        assert_eq!(Need::slack(800, 850).replace_with, 850);
+        assert_eq!(Need::slack(800, 100).replace_with, 800);
+    }
+
+    #[test]
+    fn mesh_grows_past_90_percent_and_then_holds() {
+        let plan = plan_frame(
+            grid([40, 40, 40]),
+            &SurfaceParams::default(),
+            1.5,
+            1 << 30,
+            1 << 30,
+            None,
+        )
+        .unwrap();
+        let first = first_mesh_want(&plan);
+        let big = 1 << 40;
+        // Counts well under the first guess keep it.
+        let calm = MeshCapacity::settled(first, (first.0 / 2, first.1 / 2), 1.25, big);
+        assert_eq!((calm.vertices, calm.triangles), first);
+        // A triangle count past 90 % grows the triangles only, to hold the count with room.
+        let t = first.1 * 95 / 100;
+        let grown = MeshCapacity::settled(first, (10, t), 1.25, big);
+        assert_eq!(grown.vertices, first.0);
+        assert!(grown.triangles > t && grown.triangles as f64 > t as f64 / 0.9);
+        assert!(grown_mesh_want(t, grown.triangles, 1.25).is_none());
+        // Never past the largest binding.
+        let small = 1 << 20;
+        let clipped = MeshCapacity::settled(first, (u32::MAX as u64, u32::MAX as u64), 1.25, small);
+        assert_eq!(clipped, MeshCapacity::largest(small));
+        assert!(clipped.vertices * BYTES_PER_VERTEX <= small);
+        assert!(clipped.triangles * BYTES_PER_TRIANGLE <= small);
+    }
+
+    #[test]
+    fn buffer_plan_adds_up_per_atom_and_per_mesh_element() {
+        let limits = DeviceLimits::NVIDIA_80GB;
+        let plan = plan_frame(
+            grid([60, 50, 40]),
+            &SurfaceParams::default(),
+            1.5,
+            limits.max_binding(),
+            limits.volume_budget(),
+            None,
+        )
+        .unwrap();
+        let mesh = MeshCapacity {
+            vertices: 1000,
+            triangles: 2000,
+        };
+        let m = |atoms, mesh| BufferPlan::new(&plan, atoms, true, mesh, &limits).fresh_memory();
+        let (a, b) = (m(10_000, mesh), m(11_000, mesh));
+        assert_eq!(b.atoms - a.atoms, 1000 * BYTES_PER_ATOM);
+        assert_eq!(b.total() - a.total(), 1000 * BYTES_PER_ATOM);
+        let more = MeshCapacity {
+            vertices: 1100,
+            triangles: 2100,
+        };
+        let c = m(10_000, more);
+        let per_set = 100 * BYTES_PER_VERTEX + 100 * BYTES_PER_TRIANGLE;
+        assert_eq!(
+            c.mesh - a.mesh,
+            super::super::resources::OUTPUT_SETS as u64 * per_set
+        );
+        // Without colours the colour volume stays at its initial 16 bytes.
+        let grey = BufferPlan::new(&plan, 10_000, false, mesh, &limits).fresh_memory();
+        assert_eq!(
+            a.volumes - grey.volumes,
+            with_slack(plan.slab_voxels() * 12, limits.max_binding()) - 16
+        );
     }
 }

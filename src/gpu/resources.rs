@@ -3,15 +3,15 @@
 //! ([`OutputSet`]: frames alternate between them, so the surface the renderer draws is never
 //! overwritten by the frame computed after it). Each grows
 //! (never shrinks) to what a frame needs, the grid-sized ones with an eighth to spare so that a
-//! trajectory whose box breathes a little does not replace them every frame; see
-//! [`super::plan`] for the byte counts per voxel and per atom. A replaced buffer invalidates
-//! the cached bind groups that bound it ([`super::kernel::Bound`]).
+//! trajectory whose box breathes a little does not replace them every frame. Every size comes
+//! from [`super::plan::BufferPlan`], which also adds up the bytes without a device. A replaced
+//! buffer invalidates the cached bind groups that bound it ([`super::kernel::Bound`]).
 
 use super::GpuError;
 use super::context::GpuContext;
 use super::kernel::{storage, uniform};
-use super::plan::FramePlan;
-use super::types::{DrawIndexedArgs, GpuCounters, GpuVertex, McTablesUniform, SlabUniform};
+use super::plan::{self, BufferPlan, Need};
+use super::types::{DrawIndexedArgs, GpuCounters, McTablesUniform, SlabUniform};
 use crate::surface::McTables;
 
 /// A buffer that is replaced by a bigger one when a frame needs more.
@@ -35,21 +35,23 @@ impl Grow {
 
     /// Ensures at least `bytes`; returns true when the buffer was replaced (contents lost).
     pub fn ensure(&mut self, ctx: &GpuContext, bytes: u64) -> bool {
-        self.grow(ctx, bytes, bytes)
+        self.ensure_need(ctx, Need::exact(bytes))
     }
 
     /// Like [`Grow::ensure`], but a replacement gets an eighth more than `bytes` (within the
     /// device's largest binding), so sizes that vary a little from frame to frame settle.
     pub fn ensure_slack(&mut self, ctx: &GpuContext, bytes: u64) -> bool {
-        let slack = (bytes + bytes / 8).min(ctx.max_binding()).max(bytes);
-        self.grow(ctx, bytes, slack)
+        self.ensure_need(ctx, Need::slack(bytes, ctx.max_binding()))
     }
 
-    fn grow(&mut self, ctx: &GpuContext, bytes: u64, new_size: u64) -> bool {
-        if self.buffer.size() >= bytes {
+    /// Replaces the buffer with one of `need.replace_with` bytes (as [`plan::storage_bytes`]
+    /// rounds it) when it holds fewer than `need.bytes`; true when it was replaced.
+    pub fn ensure_need(&mut self, ctx: &GpuContext, need: Need) -> bool {
+        if self.buffer.size() >= need.bytes {
             return false;
         }
-        self.buffer = storage(ctx, self.label, new_size, self.usage);
+        let size = plan::storage_bytes(need.replace_with);
+        self.buffer = storage(ctx, self.label, size, self.usage);
         true
     }
 
@@ -118,7 +120,7 @@ pub const OUTPUT_SETS: usize = 2;
 /// keeps [`OUTPUT_SETS`] of them, grown together, and writes a different one each frame.
 #[derive(Debug)]
 pub struct OutputSet {
-    /// Output vertices ([`GpuVertex`]).
+    /// Output vertices ([`super::types::GpuVertex`]).
     pub vertices: Grow,
     /// Output indices (u32, 3 per triangle).
     pub indices: Grow,
@@ -159,8 +161,7 @@ pub struct SlabUniforms {
 
 impl SlabUniforms {
     fn new(ctx: &GpuContext) -> SlabUniforms {
-        let align = ctx.limits.min_uniform_buffer_offset_alignment.max(16) as u64;
-        let stride = (size_of::<SlabUniform>() as u64).next_multiple_of(align);
+        let stride = ctx.device_limits().slab_uniform_stride();
         SlabUniforms {
             buffer: super::kernel::uniform_buffer(ctx, "slab uniforms", stride),
             stride,
@@ -172,7 +173,7 @@ impl SlabUniforms {
     pub fn write(&mut self, ctx: &GpuContext, slabs: &[SlabUniform]) {
         let need = self.stride * slabs.len().max(1) as u64;
         if self.buffer.size() < need {
-            let size = need + (slabs.len() as u64 / 4) * self.stride;
+            let size = plan::slab_uniform_replacement(slabs.len() as u64, self.stride);
             self.buffer = super::kernel::uniform_buffer(ctx, "slab uniforms", size);
         }
         self.bytes.clear();
@@ -230,70 +231,76 @@ impl Buffers {
             brick_flags: Grow::new(device, "brick flags", U::empty()),
             brick_scan: Grow::new(device, "brick scan", U::empty()),
             active_bricks: Grow::new(device, "active bricks", U::empty()),
-            brick_args: storage(device, "brick dispatch args", 16, U::INDIRECT | U::COPY_SRC),
+            brick_args: storage(
+                device,
+                "brick dispatch args",
+                plan::DISPATCH_ARGS_BYTES,
+                U::INDIRECT | U::COPY_SRC,
+            ),
             outputs: [OutputSet::new(device), OutputSet::new(device)],
             counters: storage(device, "counters", size_of::<GpuCounters>() as u64, copy),
-            dispatch_args: storage(device, "emit dispatch args", 16, U::INDIRECT),
-            partials: storage(device, "area/volume partials", 256 * 8, U::empty()),
+            dispatch_args: storage(
+                device,
+                "emit dispatch args",
+                plan::DISPATCH_ARGS_BYTES,
+                U::INDIRECT,
+            ),
+            partials: storage(
+                device,
+                "area/volume partials",
+                plan::PARTIALS_BYTES,
+                U::empty(),
+            ),
             mc_tables: uniform(device, "mc tables", &*mc_tables),
             slab_uniforms: SlabUniforms::new(ctx),
         };
         (buffers, error)
     }
 
-    /// Grows the per-atom buffers for `atoms`; true when any was replaced.
-    pub fn ensure_atoms(&mut self, device: &GpuContext, atoms: u64) -> bool {
+    /// Grows the per-atom buffers to `sizes`; true when any input buffer was replaced.
+    pub fn ensure_atoms(&mut self, device: &GpuContext, sizes: &BufferPlan) -> bool {
         let mut replaced = false;
-        replaced |= self.positions.ensure(device, atoms * 12);
-        replaced |= self.radii.ensure(device, atoms * 4);
-        replaced |= self.colours.ensure(device, atoms * 8);
-        self.sorted_atoms.ensure(device, atoms * 16);
-        self.sorted_colours.ensure(device, atoms * 8);
+        replaced |= self.positions.ensure_need(device, sizes.positions);
+        replaced |= self.radii.ensure_need(device, sizes.radii);
+        replaced |= self.colours.ensure_need(device, sizes.colours);
+        self.sorted_atoms.ensure_need(device, sizes.sorted_atoms);
+        self.sorted_colours
+            .ensure_need(device, sizes.sorted_colours);
         replaced
     }
 
-    /// Grows the cell and slab buffers for `plan` (colour volume only when `with_colour`).
-    pub fn ensure_plan(&mut self, device: &GpuContext, plan: &FramePlan, with_colour: bool) {
-        let cells = plan.cell_count();
-        self.cell_start.ensure_slack(device, cells * 4);
-        self.cell_end.ensure_slack(device, cells * 4);
-        let voxels = plan.slab_voxels();
-        self.density.ensure_slack(device, voxels * 4);
-        if with_colour {
-            self.colour.ensure_slack(device, voxels * 12);
-        }
-        let points = plan.class_points();
-        self.classes.ensure_slack(device, points * 4);
-        self.vertex_base.ensure_slack(device, points * 4);
-        self.active.ensure_slack(device, points * 8);
+    /// Grows the cell, slab and brick buffers to `sizes` (the colour volume needs nothing
+    /// without colours).
+    pub fn ensure_plan(&mut self, device: &GpuContext, sizes: &BufferPlan) {
+        self.cell_start.ensure_need(device, sizes.cell_start);
+        self.cell_end.ensure_need(device, sizes.cell_end);
+        self.density.ensure_need(device, sizes.density);
+        self.colour.ensure_need(device, sizes.colour);
+        self.classes.ensure_need(device, sizes.classes);
+        self.vertex_base.ensure_need(device, sizes.vertex_base);
+        self.active.ensure_need(device, sizes.active);
         for b in &mut self.block_sums {
-            b.ensure_slack(device, plan.class_blocks() * 4);
+            b.ensure_need(device, sizes.block_sums);
         }
-        // Replacements get room for one more brick per axis: a box that breathes across a
-        // multiple of 8 samples adds a whole brick layer, more than the usual eighth to spare.
-        let bricks = plan.brick_count();
-        let roomy: u64 = plan.brick_dims.iter().map(|&d| d as u64 + 1).product();
-        self.brick_flags.grow(device, bricks * 4, roomy * 4);
-        self.brick_scan.grow(device, bricks * 4, roomy * 4);
-        self.active_bricks
-            .grow(device, (bricks + 1) * 4, (roomy + 1) * 4);
+        self.brick_flags.ensure_need(device, sizes.brick_flags);
+        self.brick_scan.ensure_need(device, sizes.brick_scan);
+        self.active_bricks.ensure_need(device, sizes.active_bricks);
     }
 
-    /// Grows the mesh buffers of every output set to hold `vertices` and `triangles` (all
-    /// sets together, so the sets always have the same capacity).
-    pub fn ensure_mesh(&mut self, device: &GpuContext, vertices: u64, triangles: u64) {
+    /// Grows the mesh buffers of every output set to `sizes` (all sets together, so the sets
+    /// always have the same capacity).
+    pub fn ensure_mesh(&mut self, device: &GpuContext, sizes: &BufferPlan) {
         for set in &mut self.outputs {
-            set.vertices
-                .ensure(device, vertices * size_of::<GpuVertex>() as u64);
-            set.indices.ensure(device, triangles * 12);
+            set.vertices.ensure_need(device, sizes.vertices);
+            set.indices.ensure_need(device, sizes.indices);
         }
     }
 
     /// Vertex and triangle capacity of the mesh buffers (the same in every output set).
     pub fn mesh_capacity(&self) -> (u32, u32) {
         let set = &self.outputs[0];
-        let v = set.vertices.size() / size_of::<GpuVertex>() as u64;
-        let t = set.indices.size() / 12;
+        let v = set.vertices.size() / plan::BYTES_PER_VERTEX;
+        let t = set.indices.size() / plan::BYTES_PER_TRIANGLE;
         (v.min(u32::MAX as u64) as u32, t.min(u32::MAX as u64) as u32)
     }
 

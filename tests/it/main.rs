@@ -25,6 +25,7 @@ mod export_gltf_anim;
 mod gpu_double_buffer;
 mod gpu_frames;
 mod gpu_parity;
+mod gpu_plan_memory;
 mod gpu_refine;
 mod gpu_sparse;
 mod gpu_stages;
