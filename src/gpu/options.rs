@@ -28,9 +28,9 @@ impl EngineOptions {
     pub(crate) fn defaults(ctx: &GpuContext) -> EngineOptions {
         EngineOptions {
             max_slab_layers: None,
-            volume_budget: (ctx.limits.max_buffer_size / 4).clamp(64 << 20, 4 << 30),
+            volume_budget: ctx.device_limits().volume_budget(),
             initial_mesh_capacity: None,
-            headroom: 1.25,
+            headroom: super::plan::DEFAULT_HEADROOM,
             sparse_bricks: true,
         }
     }

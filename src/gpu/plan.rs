@@ -176,7 +176,7 @@ pub const PARTIALS_BYTES: u64 = 256 * 8;
 /// Bytes of an indirect dispatch buffer (3 u32 arguments plus one spare word).
 pub const DISPATCH_ARGS_BYTES: u64 = 16;
 /// The engine's default mesh headroom: grown mesh buffers hold this many times the counts
-/// that made them grow (`EngineOptions::headroom`; the plan-memory test checks they agree).
+/// that made them grow (the default of `EngineOptions::headroom`).
 pub const DEFAULT_HEADROOM: f32 = 1.25;
 
 /// The device limits that size the engine's buffers, in bytes.
@@ -218,8 +218,7 @@ impl DeviceLimits {
     }
 
     /// The engine's default budget for the per-voxel slab buffers in bytes: a quarter of the
-    /// largest buffer, within 64 MiB..4 GiB (`EngineOptions::volume_budget`; the plan-memory
-    /// test checks they agree).
+    /// largest buffer, within 64 MiB..4 GiB (the default of `EngineOptions::volume_budget`).
     pub fn volume_budget(&self) -> u64 {
         (self.max_buffer_size / 4).clamp(64 << 20, 4 << 30)
     }
