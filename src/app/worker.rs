@@ -295,6 +295,16 @@ fn gpu_engine_of<'a>(
     }
 }
 
+/// Tells each GPU engine behind a surface of `c` (about to be sent to the window) that its
+/// output set is now on screen, so that no later frame writes it, even one that fails.
+fn hold_shown_sets(engine: &mut Engine, cache: &mut Cache, c: &Computed) {
+    for layer in c.layers.iter().filter(|l| l.gpu_surface.is_some()) {
+        if let Some(e) = gpu_engine_of(engine, cache, layer.id) {
+            e.hold_output_set();
+        }
+    }
+}
+
 type Slot = Arc<(Mutex<Option<Request>>, Condvar)>;
 
 /// How many replies the window has taken, so the worker knows when an output set is no longer
@@ -527,7 +537,10 @@ fn run(
             channel.wait_taken(&stop);
         }
         let reply = match compute(&mut engine, &mut cache, &request) {
-            Ok(c) => Reply::Done(Box::new(c)),
+            Ok(c) => {
+                hold_shown_sets(&mut engine, &mut cache, &c);
+                Reply::Done(Box::new(c))
+            }
             Err(message) => Reply::Failed {
                 generation,
                 frame,

@@ -41,6 +41,8 @@ struct State {
     /// True when the last submitted frame overflowed: nobody draws its output set, so the next
     /// frame (its rerun) writes the same set instead of the one the renderer may be drawing.
     rewrite_set: bool,
+    /// Output set the caller shows ([`GpuEngine::hold_output_set`]); no frame writes it.
+    held_set: Option<usize>,
 }
 
 /// The GPU surface engine (see the module docs).
@@ -166,6 +168,14 @@ impl GpuEngine {
     /// except that the rerun of an overflowed frame writes the same set again.
     pub fn output_set(&self) -> usize {
         self.state.output_set
+    }
+
+    /// Marks the output set of the last submitted frame as the one the caller shows: later
+    /// frames write the other set until this is called again, even when a frame in between
+    /// is never shown (it failed, or the caller dropped it). Without calls, frames simply
+    /// alternate.
+    pub fn hold_output_set(&mut self) {
+        self.state.held_set = Some(self.state.output_set);
     }
 
     /// GPU objects (buffers, bind groups, textures, query sets) the engine has created so far,
@@ -372,6 +382,11 @@ impl GpuEngine {
         let st = &mut self.state;
         if !std::mem::take(&mut st.rewrite_set) {
             st.output_set = (st.output_set + 1) % super::resources::OUTPUT_SETS;
+            // After a frame that was never shown (it failed, or the caller dropped it), the
+            // next set in turn may be the one on screen: take the other.
+            if st.held_set == Some(st.output_set) {
+                st.output_set = (st.output_set + 1) % super::resources::OUTPUT_SETS;
+            }
         }
         let set = st.output_set;
         self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);

@@ -1,7 +1,8 @@
 //! Double-buffered GPU outputs: the [`mdsurf::gpu::GpuSurface`] of frame A (the one the
 //! renderer draws) still holds A's mesh after frame B was computed, frames alternate between two
 //! output sets, an overflowed frame's rerun writes the same set again (never the one on
-//! screen), and a surface's counters belong to its own frame.
+//! screen), a set the caller holds is never written while it is held, and a surface's counters
+//! belong to its own frame.
 
 use crate::gpu_support::*;
 use mdsurf::gpu::engine::EngineOptions;
@@ -134,4 +135,36 @@ fn an_overflow_rerun_keeps_the_set_on_screen() {
     );
     assert_eq!(mesh_of(&engine, &surface_a, &stats_a), mesh_a);
     assert!(mesh_of(&engine, &surface_b, &stats_b).is_closed());
+}
+
+/// The viewer holds the set it shows; a frame in between that is never shown (it failed, or was
+/// dropped) must not make the next frame write the held set, as plain alternation would.
+#[test]
+fn a_held_set_survives_a_frame_that_was_never_shown() {
+    let Some(mut engine) = engine() else { return };
+    let (a, b) = systems();
+    let (surface_a, stats_a, sets_a) = frame(&mut engine, &a);
+    engine.hold_output_set();
+    let mesh_a = mesh_of(&engine, &surface_a, &stats_a);
+
+    // B is computed but never shown (no hold), then C comes.
+    let (_, _, sets_b) = frame(&mut engine, &b);
+    assert_ne!(sets_b.last(), sets_a.last());
+    let (surface_c, stats_c, sets_c) = frame(&mut engine, &b);
+    assert_ne!(
+        sets_c.last(),
+        sets_a.last(),
+        "C wrote the held set (plain alternation would)"
+    );
+    assert_eq!(
+        mesh_of(&engine, &surface_a, &stats_a),
+        mesh_a,
+        "the held set's mesh changed"
+    );
+    assert!(mesh_of(&engine, &surface_c, &stats_c).is_closed());
+
+    // Once C is held, the next frame alternates back into A's old set.
+    engine.hold_output_set();
+    let (_, _, sets_d) = frame(&mut engine, &a);
+    assert_eq!(sets_d.last(), sets_a.last());
 }
