@@ -13,6 +13,11 @@
 //! also gives the usual one-line errors. Bytes that are not ASCII never panic: in PDB columns
 //! each becomes `?` (as [`super::prepare`] does for chemfiles), in XYZ names invalid UTF-8 is read
 //! as Latin-1.
+//!
+//! Large files are cut into pieces of whole lines ([`line_pieces`]) parsed in parallel; what
+//! carries state from line to line (residues, TER and CONECT records in PDB files) is then
+//! applied piece after piece, in file order, so the result is the same for any number of
+//! threads.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -64,6 +69,129 @@ pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
         rest = next;
         Some(line.strip_suffix(b"\r").unwrap_or(line))
     })
+}
+
+/// Bytes per piece when a file's lines are split for parsing in parallel ([`line_pieces`]).
+pub(crate) const PIECE_BYTES: usize = 1 << 19;
+
+/// `bytes` cut into runs of whole lines of about `size` bytes each (every piece but the last
+/// ends just after a `\n`), so that [`lines`] of the pieces, one after the other, are the
+/// lines of `bytes`. Pieces are parsed in parallel and their results joined in order; where
+/// the cuts fall depends on the bytes only, never on the number of threads.
+pub(crate) fn line_pieces(bytes: &[u8], size: usize) -> Vec<&[u8]> {
+    let mut pieces = Vec::with_capacity(bytes.len() / size.max(1) + 1);
+    let mut rest = bytes;
+    while !rest.is_empty() {
+        let cut = if rest.len() <= size {
+            rest.len()
+        } else {
+            memchr::memchr(b'\n', &rest[size..]).map_or(rest.len(), |k| size + k + 1)
+        };
+        let (piece, tail) = rest.split_at(cut);
+        pieces.push(piece);
+        rest = tail;
+    }
+    pieces
+}
+
+/// The number of lines [`lines`] finds in `bytes`.
+pub(crate) fn line_count(bytes: &[u8]) -> usize {
+    let breaks = memchr::memchr_iter(b'\n', bytes).count();
+    breaks + usize::from(bytes.last().is_some_and(|&b| b != b'\n'))
+}
+
+/// The bytes of `bytes` after its first `count` lines (as [`lines`] counts them); empty when
+/// it has fewer.
+pub(crate) fn skip_lines(bytes: &[u8], count: usize) -> &[u8] {
+    let mut rest = bytes;
+    for _ in 0..count {
+        rest = match memchr::memchr(b'\n', rest) {
+            Some(i) => &rest[i + 1..],
+            None => &rest[rest.len()..],
+        };
+    }
+    rest
+}
+
+/// A hasher for short byte strings and small integers (the multiply-rotate hash of rustc's
+/// `FxHasher`): much faster than the default SipHash, and these tables hold file contents
+/// whose order never depends on hashing, so its lack of DoS resistance does not matter.
+#[derive(Default, Clone, Copy)]
+pub(crate) struct QuickHasher(u64);
+
+impl std::hash::Hasher for QuickHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
+        }
+    }
+
+    fn write_u64(&mut self, word: u64) {
+        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn write_u8(&mut self, b: u8) {
+        self.write_u64(u64::from(b));
+    }
+
+    fn write_u32(&mut self, v: u32) {
+        self.write_u64(u64::from(v));
+    }
+
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// A `HashMap` hashed with [`QuickHasher`].
+pub(crate) type QuickMap<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<QuickHasher>>;
+
+/// Distinct values in the order they were first seen, and each item's index among them: one
+/// piece's names, interned while it is parsed (see [`line_pieces`]).
+pub(crate) struct LocalValues<K> {
+    /// Index into `values` of each item.
+    pub ids: Vec<u32>,
+    /// The distinct values, first seen first.
+    pub values: Vec<K>,
+    lookup: QuickMap<K, u32>,
+}
+
+impl<K: std::hash::Hash + Eq + Copy> LocalValues<K> {
+    /// An empty list with room for `n` items.
+    pub(crate) fn with_capacity(n: usize) -> Self {
+        LocalValues {
+            ids: Vec::with_capacity(n),
+            values: Vec::new(),
+            lookup: QuickMap::default(),
+        }
+    }
+
+    /// Appends an item with value `value`.
+    pub(crate) fn push(&mut self, value: K) {
+        // Neighbours often share a value: no lookup then.
+        if let Some(&last) = self.ids.last()
+            && self.values[last as usize] == value
+        {
+            self.ids.push(last);
+            return;
+        }
+        let next = self.values.len() as u32;
+        let id = *self.lookup.entry(value).or_insert(next);
+        if id == next {
+            self.values.push(value);
+        }
+        self.ids.push(id);
+    }
 }
 
 /// chemfiles' whitespace (`is_ascii_whitespace`: space, tab, CR, LF, form feed).
@@ -118,6 +246,10 @@ pub(crate) fn free_text(s: &[u8]) -> String {
 /// ties (see the `io_fast` tests).
 pub(crate) fn parse_f64(input: &[u8]) -> Option<f64> {
     let text = trim(input);
+    // Plain decimals (nearly every number in a file) are parsed in one pass.
+    if let Some(value) = parse_plain_decimal(text) {
+        return Some(value);
+    }
     let (mut digits, mut exponent_at) = (0usize, None);
     for (k, &b) in text.iter().enumerate() {
         match b {
@@ -131,6 +263,54 @@ pub(crate) fn parse_f64(input: &[u8]) -> Option<f64> {
         return None;
     }
     std::str::from_utf8(text).ok()?.parse().ok()
+}
+
+/// `s.parse::<f64>()` (Rust's own rules: `inf`, `nan` and exponents allowed), with the common
+/// plain decimals taken by [`parse_plain_decimal`]'s fast path.
+pub(crate) fn parse_f64_std(s: &str) -> Option<f64> {
+    parse_plain_decimal(s.as_bytes()).or_else(|| s.parse().ok())
+}
+
+/// Powers of ten that are exact in f64 (10^0 to 10^22).
+const EXACT_POWERS_OF_TEN: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// The fast path of decimal parsing: an optional sign, digits, and an optional `.` with more
+/// digits (at least one digit in all, no exponent, no whitespace), whose digits as an integer
+/// `m` are below 2^53 and that has at most 22 decimals: then `m` and `10^decimals` are exact
+/// f64 and one IEEE division gives the correctly rounded value, the very number Rust's parser
+/// returns (this is its own fast path). `None` for every other text, which the caller parses
+/// the slow way.
+pub(crate) fn parse_plain_decimal(s: &[u8]) -> Option<f64> {
+    let (negative, body) = match s.first()? {
+        b'-' => (true, &s[1..]),
+        b'+' => (false, &s[1..]),
+        _ => (false, s),
+    };
+    let mut mantissa: u64 = 0;
+    let (mut digits, mut decimals) = (0usize, 0usize);
+    let mut seen_point = false;
+    for &b in body {
+        match b {
+            b'0'..=b'9' => {
+                if digits == 19 {
+                    return None; // could overflow u64
+                }
+                mantissa = mantissa * 10 + u64::from(b - b'0');
+                digits += 1;
+                decimals += usize::from(seen_point);
+            }
+            b'.' if !seen_point => seen_point = true,
+            _ => return None,
+        }
+    }
+    if digits == 0 || mantissa >= 1 << 53 || decimals >= EXACT_POWERS_OF_TEN.len() {
+        return None;
+    }
+    let value = mantissa as f64 / EXACT_POWERS_OF_TEN[decimals];
+    Some(if negative { -value } else { value })
 }
 
 /// chemfiles' `parse<int64_t>`: whitespace, sign, digits, whitespace (an empty run of digits
@@ -283,6 +463,62 @@ mod tests {
         assert_eq!(parse_i64(b"1 2"), None);
         assert_eq!(parse_u64(b" 12\r"), Some(12));
         assert_eq!(parse_u64(b"-1"), None);
+    }
+
+    #[test]
+    fn the_decimal_fast_path_gives_what_rusts_parser_gives() {
+        let texts = [
+            "0",
+            "-0",
+            "-0.000",
+            "+1.5",
+            "1.",
+            ".5",
+            "12.345",
+            "-999.999",
+            "0.1",
+            "0.3",
+            "123456789.123456",
+            "9007199254740991",
+            "9007199254740993",
+            "1.0000000000000000000001",
+            "0.0000000000000000000001",
+            "17.000",
+            "-3.396",
+            "18.732",
+            "4.160000",
+            "99999.99999",
+        ];
+        for text in texts {
+            let want: f64 = text.parse().expect(text);
+            match parse_plain_decimal(text.as_bytes()) {
+                Some(got) => assert_eq!(got.to_bits(), want.to_bits(), "{text}"),
+                None => assert!(
+                    text.bytes().filter(u8::is_ascii_digit).count() > 15,
+                    "{text} should take the fast path"
+                ),
+            }
+            assert_eq!(parse_f64_std(text).map(f64::to_bits), Some(want.to_bits()));
+        }
+        // A deterministic sweep of three-decimal coordinates, as PDB and XYZ files write them.
+        let mut x: u64 = 12345;
+        for _ in 0..100_000 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let text = format!("{}.{:03}", (x >> 40) as i64 % 2000 - 1000, (x >> 20) % 1000);
+            let want: f64 = text.parse().expect("number");
+            assert_eq!(
+                parse_plain_decimal(text.as_bytes()).map(f64::to_bits),
+                Some(want.to_bits()),
+                "{text}"
+            );
+        }
+        for other in [
+            "1e3", "inf", "nan", "1.2.3", "--1", "", "-", ".", " 1", "1 ",
+        ] {
+            assert_eq!(parse_plain_decimal(other.as_bytes()), None, "{other}");
+        }
     }
 
     #[test]

@@ -7,11 +7,12 @@
 //! ([`super::pdb_templates`]) and peptide/nucleic links as chemfiles makes them. Positions in Å.
 
 use std::borrow::Cow;
-use std::collections::HashMap;
+
+use rayon::prelude::*;
 
 use super::fast::{
-    FastRead, TypeTable, cols, columns_text, decode_hybrid36, empty_topology, lines, parse_f64,
-    to_vec3, trim,
+    FastRead, LocalValues, PIECE_BYTES, QuickMap, TypeTable, cols, columns_text, decode_hybrid36,
+    empty_topology, line_pieces, lines, parse_f64, parse_f64_std, to_vec3, trim,
 };
 use super::pdb_templates::{NAMES, RESIDUES};
 use crate::model::elements::canonical_symbol;
@@ -33,11 +34,13 @@ struct Residue {
 }
 
 /// Per-atom values read from the columns the wwPDB enrichment reads.
+#[derive(Clone, Copy)]
 struct Columns {
     b_factor: f32,
     occupancy: f32,
     serial: Option<i64>,
-    /// Chain column (22), trimmed: an id in [`Reader::column_chains`].
+    /// Chain column (22), trimmed: an id in [`Reader::column_chains`] (set when the atom
+    /// joins the reader; [`ParsedAtom::chain_code`] until then).
     chain: u32,
     element: Option<&'static str>,
 }
@@ -105,7 +108,11 @@ struct Reader {
     residue_of: Vec<u32>,
     residues: Vec<Residue>,
     segment: Vec<Residue>,
-    segment_index: HashMap<ResKey, usize>,
+    segment_index: QuickMap<ResKey, usize>,
+    /// The residue key and slot in `segment` of the last atom (neighbours share residues).
+    last_residue: Option<(ResKey, usize)>,
+    /// Id in `column_chains` of each [`ParsedAtom::chain_code`] seen so far.
+    chain_ids: Vec<Option<u32>>,
     offsets: Vec<i64>,
     bonds: Vec<[u32; 2]>,
     cell: Option<([f64; 3], [f64; 3])>,
@@ -114,46 +121,318 @@ struct Reader {
 /// Reads a PDB file's only frame, or `None` when chemfiles should read it (see
 /// [`super::fast`]).
 pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
+    read_in_pieces(bytes, PIECE_BYTES)
+}
+
+/// [`read`], with the lines parsed in pieces of about `piece_bytes` bytes.
+fn read_in_pieces(bytes: &[u8], piece_bytes: usize) -> Option<FastRead> {
     if frame_count(bytes) != 1 {
         return None;
     }
-    let mut r = Reader::default();
+    // The lines are parsed in parallel, piece by piece; the records that carry state (atoms
+    // joining residues, TER, CONECT, END) are then applied in file order, as chemfiles reads.
+    let pieces: Vec<Piece> = line_pieces(bytes, piece_bytes)
+        .par_iter()
+        .map(|piece| parse_piece(piece))
+        .collect();
+    let mut r = Reader {
+        chain_ids: vec![None; CHAIN_CODES],
+        ..Reader::default()
+    };
     let mut atoms_seen = false;
-    let mut it = lines(bytes).peekable();
-    while let Some(line) = it.next() {
-        if line.starts_with(b"ATOM") || line.starts_with(b"HETATM") {
-            atoms_seen = true;
-        }
-        match record(line) {
-            Record::Cryst1 => r.cryst1(line)?,
-            Record::Atom => r.atom(line)?,
-            // A CONECT record before any atom is dropped (as `prepare` drops it for chemfiles).
-            Record::Conect if atoms_seen => r.conect(line)?,
-            Record::Ter => {
-                if line.len() >= 12
-                    && let Some(serial) = decode_hybrid36(5, cols(line, 6, 11))
-                    && serial != 0
-                {
-                    if serial < 0 {
-                        return None;
+    'file: for piece in &pieces {
+        // Global ids of the piece's distinct (name, element column) pairs.
+        let key_ids: Vec<(u32, u32)> = piece
+            .keys
+            .values
+            .iter()
+            .map(|k| (r.names.intern(k.name()), r.kinds.intern(k.kind())))
+            .collect();
+        let mut atoms = piece.atoms.iter().zip(&piece.keys.ids);
+        for event in &piece.events {
+            match *event {
+                Event::Atom => {
+                    atoms_seen = true;
+                    let (atom, &local) = atoms.next()?;
+                    r.atom(atom, key_ids[local as usize]);
+                }
+                Event::BadAtom => return None,
+                Event::AtomsSeen => atoms_seen = true,
+                Event::Cryst1(line) => r.cryst1(line)?,
+                // A CONECT record before any atom is dropped (as `prepare` drops it for
+                // chemfiles).
+                Event::Conect(line) => {
+                    if atoms_seen {
+                        r.conect(line)?;
                     }
-                    r.offsets.push(serial);
                 }
-                r.chain_ended();
-            }
-            Record::EndModel => {
-                if it.peek().is_some_and(|next| record(next) == Record::End) {
-                    continue;
+                Event::Ter(line) => {
+                    if line.len() >= 12
+                        && let Some(serial) = decode_hybrid36(5, cols(line, 6, 11))
+                        && serial != 0
+                    {
+                        if serial < 0 {
+                            return None;
+                        }
+                        r.offsets.push(serial);
+                    }
+                    r.chain_ended();
                 }
-                break;
+                Event::EndModel(line) => {
+                    let start = line.as_ptr() as usize - bytes.as_ptr() as usize;
+                    let rest = super::fast::skip_lines(&bytes[start..], 1);
+                    if lines(rest)
+                        .next()
+                        .is_some_and(|next| record(next) == Record::End)
+                    {
+                        continue;
+                    }
+                    break 'file;
+                }
+                Event::End => break 'file,
             }
-            Record::End => break,
-            Record::Conect | Record::Other => {}
         }
     }
     r.chain_ended();
     r.link_standard_residues()?;
-    r.finish(bytes)
+    r.finish(&pieces)
+}
+
+/// Number of [`ParsedAtom::chain_code`]s: one per byte value, and one for an empty column.
+const CHAIN_CODES: usize = 257;
+
+/// An atom name (columns 13-16) and element column (77-78), trimmed, each byte that is not
+/// ASCII made `?`: the pair that decides an atom's name, type, element, mass and charge.
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+struct NameKey {
+    name: [u8; 4],
+    name_len: u8,
+    kind: [u8; 2],
+    kind_len: u8,
+}
+
+impl NameKey {
+    fn new(name: &[u8], kind: &[u8]) -> NameKey {
+        let mut key = NameKey {
+            name: [0; 4],
+            name_len: name.len().min(4) as u8,
+            kind: [0; 2],
+            kind_len: kind.len().min(2) as u8,
+        };
+        for (d, &b) in key.name.iter_mut().zip(name) {
+            *d = if b.is_ascii() { b } else { b'?' };
+        }
+        for (d, &b) in key.kind.iter_mut().zip(kind) {
+            *d = if b.is_ascii() { b } else { b'?' };
+        }
+        key
+    }
+
+    fn name(&self) -> &str {
+        std::str::from_utf8(&self.name[..self.name_len as usize]).unwrap_or_default()
+    }
+
+    fn kind(&self) -> &str {
+        std::str::from_utf8(&self.kind[..self.kind_len as usize]).unwrap_or_default()
+    }
+}
+
+/// What an ATOM/HETATM line holds, parsed on its own (no state needed).
+struct ParsedAtom<'a> {
+    line: &'a [u8],
+    /// Whether the line reaches the element columns (77-78).
+    kind_given: bool,
+    /// Position in Å.
+    position: [f64; 3],
+    columns: Columns,
+    /// The chain column (22) as [`enrich_columns`] reads it: its byte, or 256 when blank.
+    chain_code: u16,
+    /// chemfiles' residue key, when the residue number parses.
+    residue: Option<ResKey>,
+}
+
+/// The lines of one piece that matter, in order.
+enum Event<'a> {
+    /// The next of [`Piece::atoms`].
+    Atom,
+    /// An ATOM/HETATM record chemfiles refuses.
+    BadAtom,
+    /// Another line starting with `ATOM` or `HETATM`.
+    AtomsSeen,
+    Cryst1(&'a [u8]),
+    Conect(&'a [u8]),
+    Ter(&'a [u8]),
+    End,
+    EndModel(&'a [u8]),
+}
+
+/// A line as [`super::conect`] reads CONECT records: it sees every line of the file (not
+/// only the first model's) and classifies them by their first six bytes, trimmed.
+enum ConectLine<'a> {
+    /// An ATOM/HETATM record and its serial number, when it has one.
+    Atom(Option<i64>),
+    /// An ENDMDL record.
+    EndModel,
+    /// A CONECT record.
+    Conect(&'a [u8]),
+}
+
+/// A serial-number field as [`super::conect`] parses one.
+fn conect_number(field: Option<&[u8]>) -> Option<i64> {
+    std::str::from_utf8(field?).ok()?.trim().parse().ok()
+}
+
+/// [`ConectLine`] of `line`, if it is one.
+fn conect_line(line: &[u8]) -> Option<ConectLine<'_>> {
+    let record = line.get(..6).unwrap_or(line);
+    match record.trim_ascii_end() {
+        b"ATOM" | b"HETATM" => Some(ConectLine::Atom(conect_number(line.get(6..11)))),
+        b"ENDMDL" => Some(ConectLine::EndModel),
+        b"CONECT" => Some(ConectLine::Conect(line)),
+        _ => None,
+    }
+}
+
+/// What [`super::conect::apply_conect_bytes`] does, from the pieces' [`ConectLine`]s: the
+/// bonds of every atom a CONECT record names become the ones the records list (serials mapped
+/// to atoms through the ATOM/HETATM records of the first model, as far as read when the
+/// record comes). Nothing changes when the file has no such bond or its first model has
+/// another atom count than `top`. `top.bonds` must be sorted pairs `[low, high]` without
+/// repeats; they stay so.
+fn apply_conect(pieces: &[Piece], top: &mut Topology) {
+    let mut serials: QuickMap<i64, u32> = QuickMap::default();
+    let mut atoms = 0u32;
+    let mut model_done = false;
+    let mut conect: Vec<[u32; 2]> = Vec::new();
+    for line in pieces.iter().flat_map(|p| &p.conect) {
+        match *line {
+            ConectLine::Atom(serial) if !model_done => {
+                if let Some(serial) = serial {
+                    serials.entry(serial).or_insert(atoms);
+                }
+                atoms += 1;
+            }
+            ConectLine::Atom(_) => {}
+            ConectLine::EndModel => model_done = true,
+            ConectLine::Conect(line) => {
+                let field = |k: usize| -> Option<u32> {
+                    serials
+                        .get(&conect_number(line.get(6 + 5 * k..11 + 5 * k))?)
+                        .copied()
+                };
+                let Some(a) = field(0) else { continue };
+                for b in (1..5).filter_map(field) {
+                    if a != b {
+                        conect.push([a.min(b), a.max(b)]);
+                    }
+                }
+            }
+        }
+    }
+    if conect.is_empty() || atoms as usize != top.len() {
+        return;
+    }
+    let mut named = vec![false; top.len()];
+    for &[a, b] in &conect {
+        named[a as usize] = true;
+        named[b as usize] = true;
+    }
+    let mut bonds: Vec<[u32; 2]> = top
+        .bonds
+        .iter()
+        .copied()
+        .filter(|&[a, b]| !named[a as usize] && !named[b as usize])
+        .collect();
+    bonds.extend(conect);
+    bonds.sort_unstable();
+    bonds.dedup();
+    top.bonds = bonds;
+}
+
+/// One piece of the file, parsed.
+struct Piece<'a> {
+    events: Vec<Event<'a>>,
+    /// The lines CONECT records are resolved with.
+    conect: Vec<ConectLine<'a>>,
+    atoms: Vec<ParsedAtom<'a>>,
+    /// The name key of each of `atoms`.
+    keys: LocalValues<NameKey>,
+}
+
+/// Parses every line of `piece` that matters (see [`Event`]).
+fn parse_piece(piece: &[u8]) -> Piece<'_> {
+    let mut out = Piece {
+        events: Vec::new(),
+        conect: Vec::new(),
+        atoms: Vec::with_capacity(piece.len() / 81 + 1),
+        keys: LocalValues::with_capacity(piece.len() / 81 + 1),
+    };
+    for line in lines(piece) {
+        if let Some(c) = conect_line(line) {
+            out.conect.push(c);
+        }
+        let event = match record(line) {
+            Record::Atom => match parse_atom(line) {
+                Some((atom, key)) => {
+                    out.atoms.push(atom);
+                    out.keys.push(key);
+                    Event::Atom
+                }
+                None => Event::BadAtom,
+            },
+            Record::Cryst1 => Event::Cryst1(line),
+            Record::Conect => Event::Conect(line),
+            Record::Ter => Event::Ter(line),
+            Record::End => Event::End,
+            Record::EndModel => Event::EndModel(line),
+            Record::Other if line.starts_with(b"ATOM") || line.starts_with(b"HETATM") => {
+                Event::AtomsSeen
+            }
+            Record::Other => continue,
+        };
+        out.events.push(event);
+    }
+    out
+}
+
+/// An ATOM/HETATM line as chemfiles reads it; `None` where chemfiles refuses the file.
+fn parse_atom(line: &[u8]) -> Option<(ParsedAtom<'_>, NameKey)> {
+    if line.len() < 54 {
+        return None;
+    }
+    let kind_given = line.len() >= 78;
+    let kind: &[u8] = if kind_given {
+        trim(cols(line, 76, 78))
+    } else {
+        b""
+    };
+    let key = NameKey::new(trim(cols(line, 12, 16)), kind);
+    let p = |a: usize| parse_f64(cols(line, a, a + 8));
+    let position = [p(30)?, p(38)?, p(46)?];
+    let (columns, chain) = enrich_columns(line);
+    let chain_code = match chain.as_bytes() {
+        [] => 256,
+        [b] => u16::from(*b),
+        _ => return None, // one column cannot hold more
+    };
+    let residue = decode_hybrid36(4, cols(line, 22, 26)).map(|id| {
+        let ascii = |b: u8| if b.is_ascii() { b } else { b'?' };
+        let resname = trim(cols(line, 17, 20));
+        let mut padded = [0u8; 3];
+        for (d, &s) in padded.iter_mut().zip(resname) {
+            *d = ascii(s);
+        }
+        (ascii(line[21]), id, ascii(line[26]), padded)
+    });
+    let atom = ParsedAtom {
+        line,
+        kind_given,
+        position,
+        columns,
+        chain_code,
+        residue,
+    };
+    Some((atom, key))
 }
 
 impl Reader {
@@ -168,69 +447,69 @@ impl Reader {
         Some(())
     }
 
-    fn atom(&mut self, line: &[u8]) -> Option<()> {
-        if line.len() < 54 {
-            return None;
-        }
+    /// An atom joins: its name and element column are `names` and `kinds` ids.
+    fn atom(&mut self, atom: &ParsedAtom, (name, kind): (u32, u32)) {
+        let line = atom.line;
         if self.offsets.is_empty() {
             let first = decode_hybrid36(5, cols(line, 6, 11)).unwrap_or(1);
             self.offsets.push(if first <= 0 { 0 } else { first - 1 });
         }
-        let name = columns_text(trim(cols(line, 12, 16)));
-        let kind_given = line.len() >= 78;
-        let kind = if kind_given {
-            columns_text(trim(cols(line, 76, 78)))
-        } else {
-            String::new()
-        };
-        let p = |a: usize| parse_f64(cols(line, a, a + 8));
-        let position = [p(30)?, p(38)?, p(46)?];
-        let atom = self.names.len() as u32;
-        self.names.push(name);
-        self.kinds.push(kind);
-        self.kind_given.push(kind_given);
-        self.positions.push(position);
-        let columns = enrich_columns(line, &mut self.column_chains);
-        self.columns.push(columns);
-        self.residue_of.push(u32::MAX);
-        let Some(id) = decode_hybrid36(4, cols(line, 22, 26)) else {
-            return Some(()); // no residue
-        };
-        let ascii = |b: u8| if b.is_ascii() { b } else { b'?' };
-        let chain = ascii(line[21]);
-        let icode = ascii(line[26]);
-        let resname = trim(cols(line, 17, 20));
-        let mut padded = [0u8; 3];
-        for (d, &s) in padded.iter_mut().zip(resname) {
-            *d = ascii(s);
-        }
-        let key = (chain, id, icode, padded);
-        let slot = match self.segment_index.get(&key) {
-            Some(&slot) => slot,
+        let index = self.names.len() as u32;
+        self.names.push_id(name);
+        self.kinds.push_id(kind);
+        self.kind_given.push(atom.kind_given);
+        self.positions.push(atom.position);
+        let code = usize::from(atom.chain_code);
+        let chain = match self.chain_ids[code] {
+            Some(id) => id,
             None => {
-                let chain_text = columns_text(&[chain]);
-                let segment = if line.len() > 72 {
-                    columns_text(trim(cols(line, 72, 76)))
-                } else {
-                    String::new()
+                let text = match u8::try_from(code) {
+                    Ok(b) => char::from(b).to_string(),
+                    Err(_) => String::new(),
                 };
-                let chain = match chain_text.trim() {
-                    "" => segment.trim().to_string(),
-                    c => c.to_string(),
-                };
-                self.segment.push(Residue {
-                    key,
-                    name: columns_text(resname),
-                    chain,
-                    segment: segment.trim().to_string(),
-                    atoms: Vec::new(),
-                });
-                self.segment_index.insert(key, self.segment.len() - 1);
-                self.segment.len() - 1
+                let id = self.column_chains.intern(&text);
+                self.chain_ids[code] = Some(id);
+                id
             }
         };
-        self.segment[slot].atoms.push(atom);
-        Some(())
+        self.columns.push(Columns {
+            chain,
+            ..atom.columns
+        });
+        self.residue_of.push(u32::MAX);
+        let Some(key) = atom.residue else {
+            return; // no residue
+        };
+        let slot = match self.last_residue {
+            Some((last, slot)) if last == key => slot,
+            _ => match self.segment_index.get(&key) {
+                Some(&slot) => slot,
+                None => {
+                    let (chain, _, _, _) = key;
+                    let chain_text = columns_text(&[chain]);
+                    let segment = if line.len() > 72 {
+                        columns_text(trim(cols(line, 72, 76)))
+                    } else {
+                        String::new()
+                    };
+                    let chain = match chain_text.trim() {
+                        "" => segment.trim().to_string(),
+                        c => c.to_string(),
+                    };
+                    self.segment.push(Residue {
+                        key,
+                        name: columns_text(trim(cols(line, 17, 20))),
+                        chain,
+                        segment: segment.trim().to_string(),
+                        atoms: Vec::new(),
+                    });
+                    self.segment_index.insert(key, self.segment.len() - 1);
+                    self.segment.len() - 1
+                }
+            },
+        };
+        self.last_residue = Some((key, slot));
+        self.segment[slot].atoms.push(index);
     }
 
     /// chemfiles' `read_CONECT`: serials map to atoms through the first serial and the TER
@@ -266,6 +545,7 @@ impl Reader {
     fn chain_ended(&mut self) {
         let mut segment = std::mem::take(&mut self.segment);
         self.segment_index.clear();
+        self.last_residue = None;
         segment.sort_by_key(|r| r.key);
         for residue in segment {
             let index = self.residues.len() as u32;
@@ -276,30 +556,48 @@ impl Reader {
         }
     }
 
-    /// chemfiles' `link_standard_residue_bonds`; `None` where chemfiles would fail.
+    /// chemfiles' `link_standard_residue_bonds`; `None` where chemfiles would fail. Atom names
+    /// are compared as ids: those of [`Reader::names`], and ids past them for template names
+    /// no atom has.
     fn link_standard_residues(&mut self) -> Option<()> {
+        const SPECIAL: [&str; 6] = ["N", "C", "O3'", "P", "HO5'", "O5'"];
+        let absent = self.names.distinct().0.len() as u32;
+        let id_of = |name: &str| -> u32 {
+            self.names
+                .find(name)
+                .unwrap_or_else(|| match NAMES.iter().position(|n| *n == name) {
+                    Some(k) => absent + k as u32,
+                    None => {
+                        let k = SPECIAL.iter().position(|n| *n == name).unwrap_or(0);
+                        absent + (NAMES.len() + k) as u32
+                    }
+                })
+        };
+        let template: Vec<u32> = NAMES.iter().map(|n| id_of(n)).collect();
+        let [n_id, c_id, o3_id, p_id, ho5_id, o5_id] = SPECIAL.map(id_of);
         let mut link_peptide = false;
         let mut link_nucleic = false;
         let mut previous_id = 0i64;
         let mut previous_link = 0u32;
         let mut bonds = Vec::new();
+        let mut by_name: Vec<(u32, u32)> = Vec::new();
         for residue in &self.residues {
             let Ok(t) = RESIDUES.binary_search_by(|(n, _)| n.cmp(&residue.name.as_str())) else {
                 continue;
             };
-            let mut by_name: Vec<(&str, u32)> = Vec::with_capacity(residue.atoms.len());
+            by_name.clear();
             for &a in &residue.atoms {
-                let name = &self.names[a as usize];
+                let name = self.names.id(a as usize);
                 match by_name.iter_mut().find(|(n, _)| *n == name) {
                     Some(slot) => slot.1 = a,
                     None => by_name.push((name, a)),
                 }
             }
-            let find = |by_name: &[(&str, u32)], name: &str| {
+            let find = |by_name: &[(u32, u32)], name: u32| {
                 by_name.iter().find(|(n, _)| *n == name).map(|&(_, a)| a)
             };
             let id = residue.key.1;
-            let nitrogen = find(&by_name, "N");
+            let nitrogen = find(&by_name, n_id);
             if link_peptide
                 && let Some(n) = nitrogen
                 && id == previous_id + 1
@@ -307,13 +605,13 @@ impl Reader {
                 link_peptide = false;
                 bonds.push([previous_link, n]);
             }
-            if let Some(c) = find(&by_name, "C") {
+            if let Some(c) = find(&by_name, c_id) {
                 link_peptide = true;
                 previous_link = c;
                 previous_id = id;
             }
-            let o3 = find(&by_name, "O3'");
-            if link_nucleic && find(&by_name, "P").is_some() && id == previous_id + 1 {
+            let o3 = find(&by_name, o3_id);
+            if link_nucleic && find(&by_name, p_id).is_some() && id == previous_id + 1 {
                 link_nucleic = false;
                 // chemfiles links the previous O3' to this residue's O3' (and reads past its
                 // map when there is none).
@@ -324,12 +622,12 @@ impl Reader {
                 previous_link = o;
                 previous_id = id;
             }
-            if let Some(h) = find(&by_name, "HO5'") {
+            if let Some(h) = find(&by_name, ho5_id) {
                 // `map["O5'"]` inserts atom 0 when the residue has no O5'.
-                let o5 = match find(&by_name, "O5'") {
+                let o5 = match find(&by_name, o5_id) {
                     Some(o) => o,
                     None => {
-                        by_name.push(("O5'", 0));
+                        by_name.push((o5_id, 0));
                         0
                     }
                 };
@@ -337,8 +635,8 @@ impl Reader {
             }
             for &(a, b) in RESIDUES[t].1 {
                 let (Some(a), Some(b)) = (
-                    find(&by_name, NAMES[a as usize]),
-                    find(&by_name, NAMES[b as usize]),
+                    find(&by_name, template[a as usize]),
+                    find(&by_name, template[b as usize]),
                 ) else {
                     continue;
                 };
@@ -353,14 +651,14 @@ impl Reader {
     }
 
     /// The topology and frame as the chemfiles path leaves them after enrichment and CONECT.
-    fn finish(self, bytes: &[u8]) -> Option<FastRead> {
+    fn finish(self, pieces: &[Piece]) -> Option<FastRead> {
         let n = self.names.len();
         let mut top = empty_topology(n);
         let mut table = TypeTable::default();
         // Name, type, element, mass and charge follow from the (name, type) pair: worked out
         // once per distinct pair.
         type Derived = (u32, u32, u32, f32, f32);
-        let mut derived: HashMap<(u32, u32), Derived> = HashMap::new();
+        let mut derived: QuickMap<(u32, u32), Derived> = QuickMap::default();
         for i in 0..n {
             let given = self.kind_given[i];
             let key = (
@@ -401,12 +699,15 @@ impl Reader {
             top.names.push_id(name);
         }
         for residue in &self.residues {
+            let name = top.residue_names.intern(&residue.name);
+            let chain = top.chains.intern(&residue.chain);
+            let segment = top.segments.intern(&residue.segment);
             for &a in &residue.atoms {
                 let a = a as usize;
-                top.residue_names.set(a, &residue.name);
+                top.residue_names.set_id(a, name);
                 top.residue_ids[a] = residue.key.1;
-                top.chains.set(a, &residue.chain);
-                top.segments.set(a, &residue.segment);
+                top.chains.set_id(a, chain);
+                top.segments.set_id(a, segment);
             }
         }
         super::chem::number_residue_runs(&mut top, &self.residue_of);
@@ -419,7 +720,7 @@ impl Reader {
         bonds.dedup();
         top.bonds = bonds;
         apply_enrichment(&mut top, &self.columns, &self.column_chains);
-        super::conect::apply_conect_bytes(bytes, &mut top);
+        apply_conect(pieces, &mut top);
         let cell = match self.cell {
             Some((lengths, angles)) => {
                 let cell = super::quiet::silenced(|| {
@@ -451,16 +752,18 @@ fn field(line: &[u8], a: usize, b: usize) -> Cow<'_, str> {
     }
 }
 
-/// The wwPDB columns of an ATOM/HETATM line, parsed as [`super::wwpdb`] parses them.
-fn enrich_columns(line: &[u8], chains: &mut Labels) -> Columns {
-    let number = |a: usize, b: usize| field(line, a, b).parse::<f64>().ok();
-    Columns {
+/// The wwPDB columns of an ATOM/HETATM line, parsed as [`super::wwpdb`] parses them, and the
+/// chain column as it reads it (the id in [`Columns::chain`] is left 0).
+fn enrich_columns(line: &[u8]) -> (Columns, Cow<'_, str>) {
+    let number = |a: usize, b: usize| parse_f64_std(&field(line, a, b));
+    let columns = Columns {
         b_factor: number(60, 66).unwrap_or(0.0) as f32,
         occupancy: number(54, 60).unwrap_or(1.0) as f32,
         serial: field(line, 6, 11).parse().ok(),
-        chain: chains.intern(&field(line, 21, 22)),
+        chain: 0,
         element: canonical_symbol(&field(line, 76, 78)),
-    }
+    };
+    (columns, field(line, 21, 22))
 }
 
 /// What [`super::wwpdb::enrich`] copies: B-factors, occupancies, serials, and chains and
@@ -492,6 +795,28 @@ mod tests {
         assert_eq!(frame_count(b"ATOM\n"), 1);
         assert_eq!(frame_count(b"MODEL 1\nENDMDL\nEND\n"), 1);
         assert_eq!(frame_count(b"MODEL 1\nENDMDL\nMODEL 2\nENDMDL\nEND\n"), 2);
+    }
+
+    #[test]
+    fn pieces_of_any_size_read_the_same() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+        for name in ["1hpv.pdb", "1hvr.pdb", "5a7u.pdb", "adk_open.pdb"] {
+            let bytes = std::fs::read(dir.join(name)).expect("test file");
+            let whole = read_in_pieces(&bytes, usize::MAX).expect("whole");
+            assert!(!whole.topology.bonds.is_empty(), "{name}");
+            for size in [1, 81, 4000] {
+                let cut = read_in_pieces(&bytes, size).expect("pieces");
+                assert!(
+                    cut.topology == whole.topology,
+                    "{name}: pieces of {size} bytes"
+                );
+                assert_eq!(cut.frame, whole.frame, "{name}: pieces of {size} bytes");
+            }
+        }
+        // A model ended by ENDMDL then END, split between the two.
+        let text = b"ATOM      1  CA  ALA A   1       1.000   2.000   3.000  1.00  0.00           C\nENDMDL\nEND\n";
+        let cut = read_in_pieces(text, 1).expect("pieces");
+        assert_eq!(cut.topology.len(), 1);
     }
 
     #[test]

@@ -4,12 +4,28 @@
 //! residues, bonds or box, each atom's charge from chemfiles' table. Extended XYZ (a comment with
 //! `Properties=species:S:1:pos:R:3`) and files with more than one frame go to chemfiles.
 
-use super::fast::{FastRead, TypeTable, empty_topology, free_text, is_space, lines, parse_f64};
-use super::fast::{parse_u64, to_vec3, trim};
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::fast::{FastRead, LocalValues, PIECE_BYTES, TypeTable, empty_topology, free_text};
+use super::fast::{is_space, line_count, line_pieces, lines, parse_f64, parse_u64, skip_lines};
+use super::fast::{to_vec3, trim};
 use crate::model::{Frame, Labels};
 
-/// Reads an XYZ file's only frame, or `None` when chemfiles should read it.
+/// The atom lines of one piece of the file: positions (Å) and names.
+struct Piece<'a> {
+    positions: Vec<Vec3>,
+    names: LocalValues<&'a [u8]>,
+}
+
+/// Reads an XYZ file's only frame, or `None` when chemfiles should read it. The atom lines
+/// are parsed in parallel, in pieces of whole lines ([`line_pieces`]) joined in order.
 pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
+    read_in_pieces(bytes, PIECE_BYTES)
+}
+
+/// [`read`], with the atom lines parsed in pieces of about `piece_bytes` bytes.
+fn read_in_pieces(bytes: &[u8], piece_bytes: usize) -> Option<FastRead> {
     let mut it = lines(bytes);
     let n = usize::try_from(parse_u64(it.next()?)?).ok()?;
     let comment = it.next()?;
@@ -20,39 +36,61 @@ pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
     if bytes.len() / 8 < n {
         return None;
     }
+    let body = skip_lines(bytes, 2);
+    let pieces = line_pieces(body, piece_bytes);
+    // The first line of each piece, counted from the first atom line.
+    let counts: Vec<usize> = pieces.par_iter().map(|p| line_count(p)).collect();
+    let mut first = Vec::with_capacity(pieces.len());
+    let mut total = 0usize;
+    for &c in &counts {
+        first.push(total);
+        total += c;
+    }
+    if total < n {
+        return None; // the file ends before its last atom
+    }
+    let parsed: Vec<Piece> = pieces
+        .par_iter()
+        .zip(&first)
+        .filter(|&(_, &f)| f < n)
+        .map(|(piece, &f)| parse_piece(piece, n - f))
+        .collect::<Option<_>>()?;
     let mut top = empty_topology(n);
     let mut positions = Vec::with_capacity(n);
     let mut table = TypeTable::default();
-    let mut last: Option<(&[u8], usize)> = None;
-    for _ in 0..n {
-        let line = it.next()?;
-        let mut tokens = line.split(|&b| is_space(b)).filter(|t| !t.is_empty());
-        let name = tokens.next()?;
-        let x = parse_f64(tokens.next()?)?;
-        let y = parse_f64(tokens.next()?)?;
-        let z = parse_f64(tokens.next()?)?;
-        positions.push(to_vec3([x, y, z]));
-        // Most neighbours share a name: reuse the previous atom's strings and charge.
-        match last {
-            Some((prev, i)) if prev == name => {
-                top.names.push_like(i);
-                top.charges.push(top.charges[i]);
-            }
-            _ => {
+    // The pieces' distinct names, in order, become the topology's (first seen first).
+    let mut charge_of: Vec<f32> = Vec::new();
+    for piece in &parsed {
+        let global: Vec<u32> = piece
+            .names
+            .values
+            .iter()
+            .map(|name| {
                 let text = free_text(name);
-                let (_, charge) = table.get(&text);
-                top.names.push(text);
-                top.charges.push(charge);
-                last = Some((name, top.names.len() - 1));
-            }
+                let id = top.names.intern(&text);
+                if id as usize == charge_of.len() {
+                    charge_of.push(table.get(&text).1);
+                }
+                id
+            })
+            .collect();
+        for &local in &piece.names.ids {
+            let id = global[local as usize];
+            top.names.push_id(id);
+            top.charges.push(charge_of[id as usize]);
         }
+        positions.extend_from_slice(&piece.positions);
     }
     // Names are the types; no element (guessed later from the name) and no mass.
     top.types = top.names.clone();
     top.elements = Labels::filled("", n);
     top.masses = vec![0.0; n];
     // chemfiles counts another frame unless the next line is blank (or there is none).
-    if it.next().is_some_and(|line| !trim(line).is_empty()) {
+    let after = skip_lines(body, n);
+    if lines(after)
+        .next()
+        .is_some_and(|line| !trim(line).is_empty())
+    {
         return None;
     }
     let no_residue = vec![u32::MAX; n];
@@ -68,9 +106,54 @@ pub(crate) fn read(bytes: &[u8]) -> Option<FastRead> {
     })
 }
 
+/// The first `limit` lines of `piece` (or all of them), each `NAME X Y Z ...`; `None` when one
+/// does not parse.
+fn parse_piece(piece: &[u8], limit: usize) -> Option<Piece<'_>> {
+    let count = line_count(piece).min(limit);
+    let mut positions = Vec::with_capacity(count);
+    let mut names = LocalValues::with_capacity(count);
+    for line in lines(piece).take(count) {
+        let mut tokens = line.split(|&b| is_space(b)).filter(|t| !t.is_empty());
+        let name = tokens.next()?;
+        let x = parse_f64(tokens.next()?)?;
+        let y = parse_f64(tokens.next()?)?;
+        let z = parse_f64(tokens.next()?)?;
+        positions.push(to_vec3([x, y, z]));
+        names.push(name);
+    }
+    Some(Piece { positions, names })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pieces_of_any_size_read_the_same() {
+        let mut text = String::from("40\nnames repeat, some are new in later pieces\n");
+        for i in 0..40 {
+            let name = ["C", "H", "H", "O", "N", "Ca\u{e9}"][i % 6];
+            let name = if i == 33 { "Zn" } else { name };
+            text += &format!("{name} {}.125 -{}.5 {}\r\n", i, i * 2, i % 7);
+        }
+        text += "\n";
+        let whole = read_in_pieces(text.as_bytes(), usize::MAX).expect("whole");
+        for size in [1, 10, 64, 300] {
+            let cut = read_in_pieces(text.as_bytes(), size).expect("pieces");
+            assert!(cut.topology == whole.topology, "pieces of {size} bytes");
+            assert_eq!(cut.frame, whole.frame, "pieces of {size} bytes");
+            let (names, _) = cut.topology.names.distinct();
+            let names: Vec<&str> = names.iter().map(|n| &**n).collect();
+            assert_eq!(names, ["C", "H", "O", "N", "Ca\u{e9}", "Zn"]);
+        }
+        let short = &text[..text.len() - 40];
+        assert!(read_in_pieces(short.as_bytes(), 64).is_none(), "short");
+        let extra = format!("{}O 1 2 3\n", &text[..text.len() - 1]);
+        assert!(
+            read_in_pieces(extra.as_bytes(), 64).is_none(),
+            "a second frame"
+        );
+    }
 
     #[test]
     fn plain_single_frames_only() {

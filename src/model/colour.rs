@@ -167,16 +167,22 @@ impl ColorScheme {
     pub fn atom_colours(&self, topology: &Topology) -> Vec<[f32; 3]> {
         let n = topology.len();
         match self {
-            ColorScheme::Element => (0..n)
-                .map(|i| element_colour(&topology.elements[i], &topology.names[i]))
-                .collect(),
+            ColorScheme::Element => element_colours(topology),
             ColorScheme::Chain => chain_colours(&topology.chains),
-            ColorScheme::ResidueType => (0..n)
-                .map(|i| {
-                    let residue = topology.residue_names.get(i).unwrap_or("");
-                    residue_type_colour(residue_class(residue))
-                })
-                .collect(),
+            ColorScheme::ResidueType => {
+                // Once per distinct residue name; atoms past the names have the empty one.
+                let (names, ids) = topology.residue_names.distinct();
+                let colour_of: Vec<[f32; 3]> = names
+                    .iter()
+                    .map(|r| residue_type_colour(residue_class(r)))
+                    .collect();
+                (0..n)
+                    .map(|i| match ids.get(i) {
+                        Some(&id) => colour_of[id as usize],
+                        None => residue_type_colour(residue_class("")),
+                    })
+                    .collect()
+            }
             ColorScheme::ResidueIndex => {
                 let last = topology.residue_count().saturating_sub(1).max(1) as f32;
                 let t = |i: usize| {
@@ -301,6 +307,26 @@ fn palette(k: usize) -> [f32; 3] {
 }
 
 /// CPK-like element colour; particles without element get a palette colour from their name.
+/// [`element_colour`] of every atom, worked out once per distinct element (and, for atoms
+/// without one, per distinct name).
+fn element_colours(topology: &Topology) -> Vec<[f32; 3]> {
+    let (elements, element_ids) = topology.elements.distinct();
+    let (names, name_ids) = topology.names.distinct();
+    let by_element: Vec<Option<[f32; 3]>> = elements
+        .iter()
+        .map(|e| (!e.is_empty()).then(|| element_colour(e, "")))
+        .collect();
+    let mut by_name: Vec<Option<[f32; 3]>> = vec![None; names.len()];
+    (0..topology.len())
+        .map(|i| {
+            by_element[element_ids[i] as usize].unwrap_or_else(|| {
+                let name = name_ids[i] as usize;
+                *by_name[name].get_or_insert_with(|| element_colour("", &names[name]))
+            })
+        })
+        .collect()
+}
+
 fn element_colour(element: &str, name: &str) -> [f32; 3] {
     match element {
         "C" => rgb(144, 144, 144),

@@ -56,6 +56,12 @@ impl Labels {
         id
     }
 
+    /// The index of `value` in the table of distinct strings, if some atom holds it (or held
+    /// it: values are never removed).
+    pub fn find(&self, value: &str) -> Option<u32> {
+        self.lookup.get(value).copied()
+    }
+
     /// Appends one atom's value.
     pub fn push(&mut self, value: impl AsRef<str>) {
         let id = self.intern(value.as_ref());

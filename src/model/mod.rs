@@ -108,19 +108,24 @@ impl Topology {
             }
             return;
         }
-        // Guesses and table lookups are made once per distinct name, residue or element.
-        let mut guesses: std::collections::HashMap<(u32, u32), u32> = Default::default();
-        let mut radius_of: std::collections::HashMap<u32, (f32, f32)> = Default::default();
+        // Guesses and table lookups are made once per distinct name, residue or element,
+        // found through tables indexed by the labels' ids (no hashing per atom).
+        let mut guesses = PairTable::new(
+            self.names.distinct().0.len(),
+            self.residue_names.distinct().0.len() + 1,
+        );
+        let mut radius_of: Vec<Option<(f32, f32)>> = Vec::new();
+        let empty = self.elements.find("");
         for i in 0..n {
-            if self.elements[i].is_empty() {
+            if Some(self.elements.id(i)) == empty {
                 let residue_id = if i < self.residue_names.len() {
                     self.residue_names.id(i)
                 } else {
                     u32::MAX
                 };
                 let key = (self.names.id(i), residue_id);
-                let element = match guesses.get(&key) {
-                    Some(&id) => id,
+                let element = match guesses.get(key) {
+                    Some(id) => id,
                     None => {
                         let residue = self.residue_names.get(i).unwrap_or("");
                         let guess = elements::guess_element(&self.names[i], residue);
@@ -131,7 +136,11 @@ impl Topology {
                 };
                 self.elements.set_id(i, element);
             }
-            let (radius, mass) = *radius_of.entry(self.elements.id(i)).or_insert_with(|| {
+            let e = self.elements.id(i) as usize;
+            if radius_of.len() <= e {
+                radius_of.resize(e + 1, None);
+            }
+            let (radius, mass) = *radius_of[e].get_or_insert_with(|| {
                 let e = &self.elements[i];
                 (elements::element_radius(e), elements::element_mass(e))
             });
@@ -187,4 +196,55 @@ pub struct Frame {
     pub positions: Vec<Vec3>,
     /// Periodic box edge vectors in Å (rows a, b, c), when the file has a box.
     pub cell: Option<[Vec3; 3]>,
+}
+
+/// A map from pairs of label ids (`first < rows`; `second < columns`, or `u32::MAX` for the
+/// last column) to an id: a dense table when it is small, else a hash map.
+enum PairTable {
+    Dense { columns: usize, cells: Vec<u32> },
+    Sparse(std::collections::HashMap<(u32, u32), u32>),
+}
+
+impl PairTable {
+    /// Cells above which the table is a hash map (16 MB of `u32`).
+    const MAX_DENSE: usize = 1 << 22;
+
+    fn new(rows: usize, columns: usize) -> PairTable {
+        match rows.checked_mul(columns) {
+            Some(cells) if cells <= Self::MAX_DENSE => PairTable::Dense {
+                columns,
+                cells: vec![u32::MAX; cells],
+            },
+            _ => PairTable::Sparse(Default::default()),
+        }
+    }
+
+    /// The cell of `(row, column)` in the dense table (`u32::MAX` is the last column).
+    fn cell(columns: usize, (row, column): (u32, u32)) -> usize {
+        let column = if column == u32::MAX {
+            columns - 1
+        } else {
+            column as usize
+        };
+        row as usize * columns + column
+    }
+
+    fn get(&self, key: (u32, u32)) -> Option<u32> {
+        match self {
+            PairTable::Dense { columns, cells } => {
+                let v = cells[Self::cell(*columns, key)];
+                (v != u32::MAX).then_some(v)
+            }
+            PairTable::Sparse(map) => map.get(&key).copied(),
+        }
+    }
+
+    fn insert(&mut self, key: (u32, u32), value: u32) {
+        match self {
+            PairTable::Dense { columns, cells } => cells[Self::cell(*columns, key)] = value,
+            PairTable::Sparse(map) => {
+                map.insert(key, value);
+            }
+        }
+    }
 }

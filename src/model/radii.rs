@@ -81,7 +81,11 @@ impl RadiusOverrides {
 
     /// The topology's radii (Å) with the overrides applied.
     pub fn apply(&self, topology: &Topology) -> Vec<f32> {
-        (0..topology.len())
+        let n = topology.len();
+        if self.0.is_empty() && topology.radii.len() >= n {
+            return topology.radii[..n].to_vec(); // nothing to override
+        }
+        (0..n)
             .map(|i| {
                 let element = topology.elements.get(i).unwrap_or("");
                 self.radius_for(&topology.names[i], element).unwrap_or(

@@ -77,7 +77,6 @@ impl Macro {
     /// Whether each atom of `topology` belongs to this class.
     pub(crate) fn mask(self, topology: &Topology) -> Vec<bool> {
         let n = topology.len();
-        let residue = |i: usize| topology.residue_names.get(i).unwrap_or("");
         let name = |i: usize| &topology.names[i];
         let element = |i: usize| topology.elements.get(i).unwrap_or("");
         let by_residue = |test: fn(&str) -> bool| per_residue_name(topology, test);
@@ -105,12 +104,7 @@ impl Macro {
             }
             Macro::Hydrogen => (0..n).map(|i| element(i) == "H").collect(),
             Macro::Heavy | Macro::NoH => (0..n).map(|i| element(i) != "H").collect(),
-            Macro::Ligand => (0..n)
-                .map(|i| {
-                    let r = residue(i);
-                    !(is_amino_acid(r) || is_nucleic(r) || is_water(r) || is_ion(r) || is_lipid(r))
-                })
-                .collect(),
+            Macro::Ligand => by_residue(is_ligand),
         }
     }
 }
@@ -123,6 +117,11 @@ fn per_residue_name(topology: &Topology, test: fn(&str) -> bool) -> Vec<bool> {
     // Atoms past the end of the residue names have the empty name.
     mask.resize(topology.len(), test(""));
     mask
+}
+
+/// Residue names in none of the classes protein, nucleic, water, ion, lipid.
+fn is_ligand(r: &str) -> bool {
+    !(is_amino_acid(r) || is_nucleic(r) || is_water(r) || is_ion(r) || is_lipid(r))
 }
 
 /// Nucleotide names, with AMBER's 5'/3' terminal marks (`DA5`, `RU3`) allowed.
