@@ -5,49 +5,76 @@
 //! bonds of every atom that a CONECT record names become exactly the ones the records list
 //! (template bonds of standard residues, which touch no such atom, stay as chemfiles made them).
 
-use std::collections::{HashMap, HashSet};
+use super::fast::QuickMap;
 use std::path::Path;
 
 use crate::model::Topology;
 
-/// The bonds the CONECT records of `text` list, as sorted pairs of 0-based atom indices, and
-/// the number of atoms of the first model (`None` when the text has no CONECT record).
-/// Bytes that are not ASCII never form a number.
-fn conect_bonds(text: &[u8]) -> Option<(HashSet<[u32; 2]>, usize)> {
-    let number = |field: Option<&[u8]>| -> Option<i64> {
-        std::str::from_utf8(field?).ok()?.trim().parse().ok()
-    };
-    let mut serials: HashMap<i64, u32> = HashMap::new();
-    let mut atoms = 0u32;
-    let mut model_done = false;
-    let mut bonds = HashSet::new();
-    for line in super::fast::lines(text) {
+/// A line of a PDB file as the CONECT pass reads it: every line of the file (not only the first
+/// model's), classified by its first six bytes, trimmed.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum ConectLine<'a> {
+    /// An ATOM/HETATM record and its serial number, when it has one.
+    Atom(Option<i64>),
+    /// An ENDMDL record.
+    EndModel,
+    /// A CONECT record (the whole line).
+    Conect(&'a [u8]),
+}
+
+impl ConectLine<'_> {
+    /// The [`ConectLine`] of `line`, or `None` for a record this pass ignores.
+    pub(crate) fn of(line: &[u8]) -> Option<ConectLine<'_>> {
         let record = line.get(..6).unwrap_or(line);
         match record.trim_ascii_end() {
-            b"ATOM" | b"HETATM" if !model_done => {
-                if let Some(serial) = number(line.get(6..11)) {
-                    serials.entry(serial).or_insert(atoms);
+            b"ATOM" | b"HETATM" => Some(ConectLine::Atom(serial(line.get(6..11)))),
+            b"ENDMDL" => Some(ConectLine::EndModel),
+            b"CONECT" => Some(ConectLine::Conect(line)),
+            _ => None,
+        }
+    }
+}
+
+/// A serial-number field (whitespace around digits); bytes that are not ASCII never form a
+/// number.
+fn serial(field: Option<&[u8]>) -> Option<i64> {
+    std::str::from_utf8(field?).ok()?.trim().parse().ok()
+}
+
+/// The bonds the CONECT records among `lines` list, as sorted pairs of 0-based atom indices
+/// (repeats possible), and the number of atoms of the first model. Serials map to atoms through
+/// the ATOM/HETATM records of the first model read so far.
+fn conect_bonds<'a>(lines: impl IntoIterator<Item = ConectLine<'a>>) -> (Vec<[u32; 2]>, usize) {
+    let mut serials: QuickMap<i64, u32> = QuickMap::default();
+    let mut atoms = 0u32;
+    let mut model_done = false;
+    let mut bonds = Vec::new();
+    for line in lines {
+        match line {
+            ConectLine::Atom(number) if !model_done => {
+                if let Some(number) = number {
+                    serials.entry(number).or_insert(atoms);
                 }
                 atoms += 1;
             }
-            b"ENDMDL" => model_done = true,
-            b"CONECT" => {
+            ConectLine::Atom(_) => {}
+            ConectLine::EndModel => model_done = true,
+            ConectLine::Conect(line) => {
                 let field = |k: usize| -> Option<u32> {
                     serials
-                        .get(&number(line.get(6 + 5 * k..11 + 5 * k))?)
+                        .get(&serial(line.get(6 + 5 * k..11 + 5 * k))?)
                         .copied()
                 };
                 let Some(a) = field(0) else { continue };
                 for b in (1..5).filter_map(field) {
                     if a != b {
-                        bonds.insert([a.min(b), a.max(b)]);
+                        bonds.push([a.min(b), a.max(b)]);
                     }
                 }
             }
-            _ => {}
         }
     }
-    (!bonds.is_empty()).then_some((bonds, atoms as usize))
+    (bonds, atoms as usize)
 }
 
 /// Replaces the bonds of every atom named in `path`'s CONECT records by the bonds those records
@@ -55,28 +82,40 @@ fn conect_bonds(text: &[u8]) -> Option<(HashSet<[u32; 2]>, usize)> {
 /// model has another atom count than `topology`.
 pub(crate) fn apply_conect(path: &Path, topology: &mut Topology) {
     if let Ok(bytes) = std::fs::read(path) {
-        apply_conect_bytes(&bytes, topology);
+        resolve(
+            super::fast::lines(&bytes).filter_map(ConectLine::of),
+            topology,
+        );
     }
 }
 
-/// [`apply_conect`] on the bytes of a PDB file already in memory.
-pub(crate) fn apply_conect_bytes(text: &[u8], topology: &mut Topology) {
-    let Some((conect, atoms)) = conect_bonds(text) else {
-        return;
-    };
-    if atoms != topology.len() {
+/// [`apply_conect`] on the classified lines of a PDB file, in file order. The bonds end up as
+/// sorted pairs `[low, high]` without repeats.
+pub(crate) fn resolve<'a>(
+    lines: impl IntoIterator<Item = ConectLine<'a>>,
+    topology: &mut Topology,
+) {
+    let (conect, atoms) = conect_bonds(lines);
+    if conect.is_empty() || atoms != topology.len() {
         return;
     }
-    let named: HashSet<u32> = conect.iter().flatten().copied().collect();
-    let mut kept: HashSet<[u32; 2]> = topology
+    let mut named = vec![false; topology.len()];
+    for &[a, b] in &conect {
+        named[a as usize] = true;
+        named[b as usize] = true;
+    }
+    let mut bonds: Vec<[u32; 2]> = topology
         .bonds
         .iter()
         .map(|&[a, b]| [a.min(b), a.max(b)])
-        .filter(|[a, b]| !named.contains(a) && !named.contains(b))
+        .filter(|&[a, b]| {
+            !named.get(a as usize).copied().unwrap_or(false)
+                && !named.get(b as usize).copied().unwrap_or(false)
+        })
         .collect();
-    kept.extend(conect);
-    let mut bonds: Vec<[u32; 2]> = kept.into_iter().collect();
+    bonds.extend(conect);
     bonds.sort_unstable();
+    bonds.dedup();
     topology.bonds = bonds;
 }
 
@@ -95,8 +134,9 @@ CONECT    3    4                                                    1XYZ  12
 CONECT    4    3
 END
 ";
-        let (bonds, atoms) = conect_bonds(text.as_bytes()).expect("bonds");
+        let lines = crate::io::fast::lines(text.as_bytes()).filter_map(ConectLine::of);
+        let (bonds, atoms) = conect_bonds(lines);
         assert_eq!(atoms, 3);
-        assert_eq!(bonds, HashSet::from([[1, 2]]));
+        assert_eq!(bonds, [[1, 2], [1, 2]]);
     }
 }

@@ -266,94 +266,11 @@ enum Event<'a> {
     EndModel(&'a [u8]),
 }
 
-/// A line as [`super::conect`] reads CONECT records: it sees every line of the file (not
-/// only the first model's) and classifies them by their first six bytes, trimmed.
-enum ConectLine<'a> {
-    /// An ATOM/HETATM record and its serial number, when it has one.
-    Atom(Option<i64>),
-    /// An ENDMDL record.
-    EndModel,
-    /// A CONECT record.
-    Conect(&'a [u8]),
-}
-
-/// A serial-number field as [`super::conect`] parses one.
-fn conect_number(field: Option<&[u8]>) -> Option<i64> {
-    std::str::from_utf8(field?).ok()?.trim().parse().ok()
-}
-
-/// [`ConectLine`] of `line`, if it is one.
-fn conect_line(line: &[u8]) -> Option<ConectLine<'_>> {
-    let record = line.get(..6).unwrap_or(line);
-    match record.trim_ascii_end() {
-        b"ATOM" | b"HETATM" => Some(ConectLine::Atom(conect_number(line.get(6..11)))),
-        b"ENDMDL" => Some(ConectLine::EndModel),
-        b"CONECT" => Some(ConectLine::Conect(line)),
-        _ => None,
-    }
-}
-
-/// What [`super::conect::apply_conect_bytes`] does, from the pieces' [`ConectLine`]s: the
-/// bonds of every atom a CONECT record names become the ones the records list (serials mapped
-/// to atoms through the ATOM/HETATM records of the first model, as far as read when the
-/// record comes). Nothing changes when the file has no such bond or its first model has
-/// another atom count than `top`. `top.bonds` must be sorted pairs `[low, high]` without
-/// repeats; they stay so.
-fn apply_conect(pieces: &[Piece], top: &mut Topology) {
-    let mut serials: QuickMap<i64, u32> = QuickMap::default();
-    let mut atoms = 0u32;
-    let mut model_done = false;
-    let mut conect: Vec<[u32; 2]> = Vec::new();
-    for line in pieces.iter().flat_map(|p| &p.conect) {
-        match *line {
-            ConectLine::Atom(serial) if !model_done => {
-                if let Some(serial) = serial {
-                    serials.entry(serial).or_insert(atoms);
-                }
-                atoms += 1;
-            }
-            ConectLine::Atom(_) => {}
-            ConectLine::EndModel => model_done = true,
-            ConectLine::Conect(line) => {
-                let field = |k: usize| -> Option<u32> {
-                    serials
-                        .get(&conect_number(line.get(6 + 5 * k..11 + 5 * k))?)
-                        .copied()
-                };
-                let Some(a) = field(0) else { continue };
-                for b in (1..5).filter_map(field) {
-                    if a != b {
-                        conect.push([a.min(b), a.max(b)]);
-                    }
-                }
-            }
-        }
-    }
-    if conect.is_empty() || atoms as usize != top.len() {
-        return;
-    }
-    let mut named = vec![false; top.len()];
-    for &[a, b] in &conect {
-        named[a as usize] = true;
-        named[b as usize] = true;
-    }
-    let mut bonds: Vec<[u32; 2]> = top
-        .bonds
-        .iter()
-        .copied()
-        .filter(|&[a, b]| !named[a as usize] && !named[b as usize])
-        .collect();
-    bonds.extend(conect);
-    bonds.sort_unstable();
-    bonds.dedup();
-    top.bonds = bonds;
-}
-
 /// One piece of the file, parsed.
 struct Piece<'a> {
     events: Vec<Event<'a>>,
     /// The lines CONECT records are resolved with.
-    conect: Vec<ConectLine<'a>>,
+    conect: Vec<super::conect::ConectLine<'a>>,
     atoms: Vec<ParsedAtom<'a>>,
     /// The name key of each of `atoms`.
     keys: LocalValues<NameKey>,
@@ -368,7 +285,7 @@ fn parse_piece(piece: &[u8]) -> Piece<'_> {
         keys: LocalValues::with_capacity(piece.len() / 81 + 1),
     };
     for line in lines(piece) {
-        if let Some(c) = conect_line(line) {
+        if let Some(c) = super::conect::ConectLine::of(line) {
             out.conect.push(c);
         }
         let event = match record(line) {
@@ -720,7 +637,10 @@ impl Reader {
         bonds.dedup();
         top.bonds = bonds;
         apply_enrichment(&mut top, &self.columns, &self.column_chains);
-        apply_conect(pieces, &mut top);
+        super::conect::resolve(
+            pieces.iter().flat_map(|p| p.conect.iter().copied()),
+            &mut top,
+        );
         let cell = match self.cell {
             Some((lengths, angles)) => {
                 let cell = super::quiet::silenced(|| {
