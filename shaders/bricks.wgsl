@@ -2,7 +2,8 @@
 // that the density pass can be dispatched over them only (indirectly). Entry points, in order:
 // mark (per brick: reached or not, from the atoms of the bin cells around it), [scan.wgsl over
 // brick_scan, total to brick_args word 3], compact (the reached bricks' ids, ascending, after the
-// count) and args (the indirect dispatch arguments). Rust side: src/gpu/bricks.rs. A brick that
+// count, and the brick slot table in the density buffer) and args (the indirect dispatch
+// arguments). Rust side: src/gpu/bricks.rs. A brick that
 // no atom reaches holds density 0 at every sample, exactly as the dense pass computes it there.
 
 // Twin of crate::gpu::types::BrickUniform (96 bytes).
@@ -42,6 +43,10 @@ const BRICK: u32 = 8u;
 @group(0) @binding(6) var<storage, read_write> active_bricks: array<u32>;
 // Indirect dispatch arguments (x, y, z workgroups) and, in word 3, the scan total n.
 @group(0) @binding(7) var<storage, read_write> brick_args: array<u32>;
+// The density buffer: compact writes the brick slot table into its first brick_count words
+// (per brick its slot, high bit set when unreached); the reached bricks' samples follow it
+// (shaders/density.wgsl).
+@group(0) @binding(8) var<storage, read_write> density: array<u32>;
 
 fn linear_id(gid: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return gid.x + gid.y * nwg.x * 64u;
@@ -104,10 +109,18 @@ fn mark(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
 @compute @workgroup_size(64)
 fn compact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     let b = linear_id(gid, nwg);
-    if (b >= u.brick_count || brick_flags[b] == 0u) {
+    if (b >= u.brick_count) {
         return;
     }
-    active_bricks[1u + brick_scan[b]] = b;
+    // The exclusive scan: a reached brick's slot, and for any brick the slots before it (so
+    // a slab finds the first slot of its first brick layer even when that brick is unreached).
+    let slot = brick_scan[b];
+    if (brick_flags[b] == 0u) {
+        density[b] = slot | 0x80000000u;
+        return;
+    }
+    density[b] = slot;
+    active_bricks[1u + slot] = b;
 }
 
 @compute @workgroup_size(1)

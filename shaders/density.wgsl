@@ -2,13 +2,15 @@
 // layer, looping over the atoms of the neighbouring bin cells once and sharing the y/z distance
 // work between its voxels (the paper's thread coarsening). Per-pair cutoff test before the
 // exponential; arithmetic mirrors the CPU reference (crate::surface density). Rust side:
-// src/gpu/density.rs. Output: density[v] and colour[3v..3v+3] (sum of w * colour, not yet
-// divided by I) for local voxel
-// v = i + nx * (j + ny * (k - dens_z0)).
+// src/gpu/density.rs. Output: density[v] (f32 bits) and colour[3c..3c+3] (sum of w * colour,
+// not yet divided by I).
 // Two entry points run the same gather (so a voxel gets the same bits from either): `main` over
-// every voxel of the slab, and `bricks` over the sparse bricks some atom reaches (one workgroup
-// of 64 threads per BRICK^3 brick, dispatched indirectly from the list of shaders/bricks.wgsl;
-// the caller zeroes the volumes first, which is what the dense pass computes elsewhere).
+// every voxel of the slab, with v = c = i + nx * (j + ny * (k - dens_z0)); and `bricks` over
+// the sparse bricks some atom reaches (one workgroup of 64 threads per BRICK^3 brick,
+// dispatched indirectly from the list of shaders/bricks.wgsl), brick-locally: the first
+// brick_count words of density are the brick slot table (shaders/bricks.wgsl), then
+// c = (slot - first slot of the slab's first brick layer) * BRICK^3 + local sample index and
+// v = brick_count + c. A slab whose bricks do not fit the buffers sets OVERFLOW_BRICKS.
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
@@ -28,10 +30,18 @@ const RUN: u32 = 8u;
 @group(0) @binding(2) var<storage, read> sorted_colours: array<vec2<u32>>;
 @group(0) @binding(3) var<storage, read> cell_start: array<u32>;
 @group(0) @binding(4) var<storage, read> cell_end: array<u32>;
-@group(0) @binding(5) var<storage, read_write> density: array<f32>;
+@group(0) @binding(5) var<storage, read_write> density: array<u32>;
 @group(0) @binding(6) var<storage, read_write> colour: array<f32>;
 // Word 0: number of listed bricks n; words 1..=n: brick ids (x fastest; shaders/bricks.wgsl).
 @group(0) @binding(7) var<storage, read> active_bricks: array<u32>;
+// Frame counters (twin of crate::gpu::types::GpuCounters), as words.
+@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
+
+// Word of the overflow bits in the counters, and the bit of crate::gpu::types::OVERFLOW_BRICKS.
+const C_OVERFLOW: u32 = 2u;
+const OVERFLOW_BRICKS: u32 = 4u;
+// Word of crate::gpu::types::GpuCounters::brick_slots: the most slots one slab used.
+const C_BRICK_SLOTS: u32 = 15u;
 
 // Samples per brick edge (crate::gpu::plan::BRICK; one run of RUN voxels spans a brick row).
 const BRICK: u32 = 8u;
@@ -42,7 +52,9 @@ fn cell_coord(x: f32, o: f32, n: u32) -> u32 {
 
 @compute @workgroup_size(4, 4, 4)
 fn main(@builtin(global_invocation_id) g: vec3<u32>) {
-    gather(g.x * RUN, g.y, g.z);
+    let i0 = g.x * RUN;
+    let base = i0 + u.dims.x * (g.y + u.dims.y * g.z);
+    gather(i0, g.y, g.z, base, base);
 }
 
 @compute @workgroup_size(64)
@@ -59,17 +71,43 @@ fn bricks(
     let bx = b % u.brick_dims.x;
     let by = (b / u.brick_dims.x) % u.brick_dims.y;
     let bz = b / (u.brick_dims.x * u.brick_dims.y);
-    let j = by * BRICK + lid % BRICK;
-    let k = bz * BRICK + lid / BRICK;
     // Bricks outside this slab's density layers belong to another slab's pass.
+    let bz0 = u.dens_z0 / BRICK;
+    let bz1 = (u.dens_z0 + u.dens_layers - 1u) / BRICK;
+    if (bz < bz0 || bz > bz1) {
+        return;
+    }
+    // The list index a is the brick's slot; slots count from the slab's first brick layer.
+    let table = u.brick_dims.x * u.brick_dims.y * u.brick_dims.z;
+    let first = density[bz0 * u.brick_dims.x * u.brick_dims.y] & 0x7fffffffu;
+    let slot = a - first;
+    var capacity = (arrayLength(&density) - table) / (BRICK * BRICK * BRICK);
+    if (WITH_COLOUR) {
+        capacity = min(capacity, arrayLength(&colour) / (3u * BRICK * BRICK * BRICK));
+    }
+    if (lid == 0u) {
+        atomicMax(&counters[C_BRICK_SLOTS], slot + 1u);
+    }
+    if (slot >= capacity) {
+        if (lid == 0u) {
+            atomicOr(&counters[C_OVERFLOW], OVERFLOW_BRICKS);
+        }
+        return;
+    }
+    let ly = lid % BRICK;
+    let lz = lid / BRICK;
+    let j = by * BRICK + ly;
+    let k = bz * BRICK + lz;
     if (k < u.dens_z0) {
         return;
     }
-    gather(bx * BRICK, j, k - u.dens_z0);
+    let c = slot * (BRICK * BRICK * BRICK) + BRICK * (ly + BRICK * lz);
+    gather(bx * BRICK, j, k - u.dens_z0, table + c, c);
 }
 
-// RUN voxels from (i0, j, dens_z0 + kl) along x; nothing outside the slab.
-fn gather(i0: u32, j: u32, kl: u32) {
+// RUN voxels from (i0, j, dens_z0 + kl) along x, into density words dbase.. and colour
+// samples cbase..; nothing outside the slab.
+fn gather(i0: u32, j: u32, kl: u32, dbase: u32, cbase: u32) {
     if (i0 >= u.dims.x || j >= u.dims.y || kl >= u.dens_layers) {
         return;
     }
@@ -130,19 +168,18 @@ fn gather(i0: u32, j: u32, kl: u32) {
             }
         }
     }
-    let base = i0 + u.dims.x * (j + u.dims.y * kl);
     for (var m = 0u; m < RUN; m++) {
         if (i0 + m < u.dims.x) {
             if (WRITE_DENSITY) {
-                density[base + m] = dens[m];
+                density[dbase + m] = bitcast<u32>(dens[m]);
             }
             if (WITH_COLOUR) {
                 // Unnormalised sum of w * colour; emit.wgsl divides by I (so an I change
                 // re-runs only Marching Cubes).
                 let c = col[m];
-                colour[3u * (base + m)] = c.x;
-                colour[3u * (base + m) + 1u] = c.y;
-                colour[3u * (base + m) + 2u] = c.z;
+                colour[3u * (cbase + m)] = c.x;
+                colour[3u * (cbase + m) + 1u] = c.y;
+                colour[3u * (cbase + m) + 2u] = c.z;
             }
         }
     }

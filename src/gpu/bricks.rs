@@ -7,9 +7,17 @@
 //! which is exactly what the dense pass computes there, and classification skips points whose
 //! neighbourhood holds no reached brick, so the mesh is the dense path's, bit for bit.
 //!
-//! What this saves is time, not memory: the density, colour and class volumes keep the dense
-//! per-slab layout (a brick-local layout would also need brick-indexed classification and
-//! scans). The flags and list add 12 bytes per brick (under 0.03 byte per sample).
+//! Memory follows the reached bricks too: `compact` also writes the brick slot table into the
+//! first words of the density buffer (per brick its slot, the exclusive scan of the flags, with
+//! the high bit set when no atom reaches it), and the density and colour samples are stored
+//! brick-locally after it, [`BRICK_SAMPLES`](super::plan::BRICK_SAMPLES) per slot, counted
+//! from the slot of the slab's first brick layer; every stage that reads samples goes through
+//! that table (an unreached brick reads as 0). The slots are sized from the reached-brick
+//! count of earlier frames and grow like the mesh buffers (the density pass sets
+//! [`OVERFLOW_BRICKS`](super::types::OVERFLOW_BRICKS) when a slab's bricks do not fit, and the
+//! engine grows them and re-runs density). The per-point classification buffers (class
+//! words, vertex bases, active cells) keep the per-slab layout. The flags and list add 12
+//! bytes per brick (under 0.03 byte per sample).
 
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Uniform, groups_1d, module};
@@ -100,6 +108,7 @@ impl BrickStage {
                 (b::BRICK_FLAGS, &bufs.brick_flags.buffer),
                 (b::BRICK_SCAN, &bufs.brick_scan.buffer),
                 (b::ACTIVE_BRICKS, &bufs.active_bricks.buffer),
+                (b::DENSITY, &bufs.density.buffer),
             ],
         );
         self.args.bind(

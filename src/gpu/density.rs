@@ -3,7 +3,7 @@
 //! thread. Density and colour are fused in one pass; pipeline variants skip the colour volume
 //! (no colours) or the density write (a colour-only change keeps the density as it is). Each
 //! variant has a dense entry point (every voxel of the slab) and a sparse one (the bricks
-//! [`super::bricks`] listed, dispatched indirectly; the frame zeroes the volumes first).
+//! [`super::bricks`] listed, dispatched indirectly, writing brick-local slots).
 
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Layout, module};
@@ -75,6 +75,7 @@ impl DensityStage {
                 (b::DENSITY, &bufs.density.buffer),
                 (b::COLOUR, &bufs.colour.buffer),
                 (b::ACTIVE_BRICKS, &bufs.active_bricks.buffer),
+                (b::COUNTERS, &bufs.counters),
             ],
         );
     }
@@ -99,8 +100,8 @@ impl DensityStage {
     }
 
     /// Records the gather over the reached bricks of the slab whose uniform is at `offset`
-    /// (one workgroup per listed brick; indirect, with the arguments of [`super::bricks`]).
-    /// The caller cleared the slab's volumes this mode writes.
+    /// (one workgroup per listed brick; indirect, with the arguments of [`super::bricks`]),
+    /// into the brick slots of the density and colour buffers.
     pub fn record_sparse(
         &self,
         pass: &mut wgpu::ComputePass<'_>,

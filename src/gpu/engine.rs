@@ -15,7 +15,8 @@ use super::frame::{Recorder, Stages, Work};
 pub use super::options::{Changes, EngineOptions, FrameInfo};
 use super::output::{FrameStats, GpuSurface, Readbacks, Staging};
 use super::plan::{
-    BufferPlan, FramePlan, MeshCapacity, first_mesh_want, grown_mesh_want, plan_frame,
+    BRICK, BRICK_SAMPLES, BufferPlan, FramePlan, MeshCapacity, first_brick_want, first_mesh_want,
+    grown_brick_want, grown_mesh_want, plan_frame,
 };
 use super::resources::Buffers;
 use super::timing::Timer;
@@ -36,6 +37,10 @@ struct State {
     bounds: Option<(Vec3, Vec3, f32)>,
     fingerprints: inputs::Fingerprints,
     mesh_want: (u64, u64),
+    /// Brick slots the sparse density and colour buffers should hold (0: not yet counted).
+    brick_want: u64,
+    /// A frame's reached bricks did not fit the brick slots: the next frame re-runs density.
+    redo_density: bool,
     /// Output set the last submitted frame wrote ([`super::resources::OUTPUT_SETS`]).
     output_set: usize,
     /// True when the last submitted frame overflowed: nobody draws its output set, so the next
@@ -308,7 +313,7 @@ impl GpuEngine {
         )
         .map_err(SurfaceError::from)?;
         let single = plan.slabs.len() == 1 && st.plan.as_ref().is_some_and(|p| p.slabs.len() == 1);
-        let work = if first || changes.positions || changes.radii || density_params || !single {
+        let mut work = if first || changes.positions || changes.radii || density_params || !single {
             Work::Full
         } else if changes.colours {
             Work::Colour
@@ -339,9 +344,32 @@ impl GpuEngine {
         let mesh = MeshCapacity::clipped((want_v, want_t), self.ctx.max_binding());
         // Every buffer size comes from the plan's byte count, so `gpu_bytes` and the
         // device-free estimate (`BufferPlan::fresh_memory`) cannot drift apart.
-        let sizes = BufferPlan::new(&plan, n, colour, mesh, &self.ctx.device_limits());
+        let sparse = self.options.sparse_bricks;
+        let brick_slots = sparse.then(|| {
+            if st.brick_want == 0 {
+                st.brick_want = self.options.initial_brick_slots.map_or_else(
+                    || first_brick_want(&plan, self.ctx.max_binding()),
+                    |s| s.max(1),
+                );
+            }
+            st.brick_want
+        });
+        let sizes = BufferPlan::new(
+            &plan,
+            n,
+            colour,
+            mesh,
+            brick_slots,
+            &self.ctx.device_limits(),
+        );
         let replaced = self.buffers.ensure_atoms(d, &sizes);
-        self.buffers.ensure_plan(d, &sizes);
+        // A replaced density or colour buffer lost its samples, and a frame whose reached
+        // bricks overflowed their slots left some unsampled: density runs again.
+        let volumes_replaced = self.buffers.ensure_plan(d, &sizes);
+        let redo = std::mem::take(&mut st.redo_density);
+        if volumes_replaced || redo {
+            work = Work::Full;
+        }
         self.buffers.ensure_mesh(d, &sizes);
         let q = &self.ctx.queue;
         if changes.positions || replaced {
@@ -390,15 +418,8 @@ impl GpuEngine {
         }
         let set = st.output_set;
         self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);
-        self.stages.prepare(
-            &self.ctx,
-            &mut self.buffers,
-            &plan,
-            params,
-            n,
-            work,
-            self.options.sparse_bricks,
-        );
+        self.stages
+            .prepare(&self.ctx, &mut self.buffers, &plan, params, n, work, sparse);
         let mut rec = Recorder::new(&self.ctx, wall_clock && !self.timer.enabled());
         self.stages
             .record(
@@ -465,6 +486,23 @@ impl GpuEngine {
             }
             if let Some(t) = t {
                 m.1 = m.1.max(t);
+            }
+            // Sparse bricks: grow the brick slots once a slab of a frame reached more bricks
+            // than they were sized for; a frame whose bricks did not fit the buffers re-runs
+            // density (an overflowed frame draws nothing; `finish` and `run_blocking` submit
+            // again).
+            if let Some(plan) = &self.state.plan
+                && self.options.sparse_bricks
+            {
+                let want = &mut self.state.brick_want;
+                if let Some(w) =
+                    grown_brick_want(plan, s.brick_slots as u64, *want, self.ctx.max_binding())
+                {
+                    *want = (*want).max(w);
+                }
+                if s.brick_overflow {
+                    self.state.redo_density = true;
+                }
             }
         }
         if let Some(last) = arrived.last() {
@@ -557,9 +595,22 @@ impl GpuEngine {
             .map_err(|_| GpuError::Readback("a readback panicked".into()))
     }
 
-    /// Test hook: the density volume of the last slab (whole grid when there was one slab).
+    /// Test hook: the density volume of the last slab (whole grid when there was one slab),
+    /// voxel `i + nx * (j + ny * (k - dens_z0))`; on sparse bricks gathered from the brick slots
+    /// (samples of unreached bricks are 0).
     pub fn read_density(&self) -> Result<Vec<f32>, GpuError> {
-        self.read_planned(&self.buffers.density.buffer, FramePlan::slab_voxels)
+        if !self.options.sparse_bricks {
+            return self.read_planned(&self.buffers.density.buffer, FramePlan::slab_voxels);
+        }
+        let Some(plan) = self.state.plan.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let words: Vec<u32> = self.staging()?.read_pod(
+            &self.ctx,
+            &self.buffers.density.buffer,
+            self.buffers.density.size() / 4,
+        )?;
+        Ok(sparse_volume(plan, &words))
     }
 
     /// Test hook: class words of the last slab (see `shaders/classify.wgsl`).
@@ -581,6 +632,39 @@ impl GpuEngine {
         let n = self.state.plan.as_ref().map(len).unwrap_or(0);
         self.staging()?.read_pod(&self.ctx, buffer, n)
     }
+}
+
+/// The density of the last slab of `plan` as a dense slab volume, from the words of the sparse
+/// density buffer: the brick slot table (slot of each reached brick, high bit set on unreached
+/// ones), then [`BRICK_SAMPLES`] samples per slot counted from the slab's first brick layer.
+fn sparse_volume(plan: &FramePlan, words: &[u32]) -> Vec<f32> {
+    let [nx, ny, _] = plan.grid.dims;
+    let [bx, by, _] = plan.brick_dims;
+    let Some(slab) = plan.slabs.last() else {
+        return Vec::new();
+    };
+    let table = plan.brick_count() as usize;
+    let word = |i: usize| words.get(i).copied().unwrap_or(0);
+    let base = word(((slab.dens_z0 / BRICK) * bx * by) as usize) & 0x7fff_ffff;
+    let mut out = Vec::with_capacity(plan.slab_voxels() as usize);
+    for kl in 0..slab.dens_layers {
+        let k = slab.dens_z0 + kl;
+        for j in 0..ny {
+            for i in 0..nx {
+                let b = i / BRICK + bx * (j / BRICK + by * (k / BRICK));
+                let t = word(b as usize);
+                let v = if t >> 31 != 0 {
+                    0.0
+                } else {
+                    let local = i % BRICK + BRICK * (j % BRICK + BRICK * (k % BRICK));
+                    let at = table as u64 + (t - base) as u64 * BRICK_SAMPLES + local as u64;
+                    f32::from_bits(word(at as usize))
+                };
+                out.push(v);
+            }
+        }
+    }
+    out
 }
 
 /// Most submits of one frame whose mesh keeps overflowing the grown buffers.

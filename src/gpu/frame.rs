@@ -1,6 +1,6 @@
 //! Recording one frame's compute work (DESIGN section 3, steps 2 to 5): binning and, on sparse
 //! bricks, the list of reached bricks ([`super::bricks`]), then per z-slab the density pass (over
-//! the reached bricks after zeroing the volumes, or over every voxel) and the Marching Cubes
+//! the reached bricks into their brick slots, or over every voxel) and the Marching Cubes
 //! pass (classify, three scans, compaction, emission and, with refined vertices, refinement),
 //! then the end-of-frame bookkeeping, area/volume reduction and indirect draw arguments. Which
 //! stages run depends on what changed ([`Work`]). Called by [`super::engine::GpuEngine`].
@@ -260,19 +260,6 @@ impl Stages {
         for (i, slab) in plan.slabs.iter().enumerate() {
             let offset = b.slab_uniforms.offset(i);
             if let Some(mode) = mode {
-                if self.sparse {
-                    // Unreached bricks keep these zeros: what the dense pass computes there.
-                    let voxels = plan.grid.dims[0] as u64
-                        * plan.grid.dims[1] as u64
-                        * slab.dens_layers as u64;
-                    let enc = rec.encoder();
-                    if mode != DensityMode::ColourOnly {
-                        enc.clear_buffer(&b.density.buffer, 0, Some(voxels * 4));
-                    }
-                    if mode != DensityMode::Plain {
-                        enc.clear_buffer(&b.colour.buffer, 0, Some(voxels * 12));
-                    }
-                }
                 let ts = timer.pass(Stage::Density);
                 let mut pass = rec
                     .encoder()

@@ -125,6 +125,9 @@ pub mod density {
     pub const COLOUR: Slot = slot(6, "colour", ReadWrite);
     /// The list of reached sparse bricks (count first; `shaders/bricks.wgsl`).
     pub const ACTIVE_BRICKS: Slot = slot(7, "active_bricks", Read);
+    /// Frame counters (the sparse pass sets an overflow bit when a slab's reached bricks do
+    /// not fit the brick slots).
+    pub const COUNTERS: Slot = slot(8, "counters", ReadWrite);
     /// Every binding (the layout).
     pub const ALL: &[Slot] = &[
         U,
@@ -135,6 +138,7 @@ pub mod density {
         DENSITY,
         COLOUR,
         ACTIVE_BRICKS,
+        COUNTERS,
     ];
 }
 
@@ -189,6 +193,8 @@ pub mod bricks {
     pub const ACTIVE_BRICKS: Slot = slot(6, "active_bricks", ReadWrite);
     /// Indirect dispatch arguments and the scan total.
     pub const BRICK_ARGS: Slot = slot(7, "brick_args", ReadWrite);
+    /// The density buffer, whose first words `compact` fills with the brick slot table.
+    pub const DENSITY: Slot = slot(8, "density", ReadWrite);
     /// Layout of `mark`.
     pub const MARK: &[Slot] = &[
         U,
@@ -199,7 +205,7 @@ pub mod bricks {
         BRICK_SCAN,
     ];
     /// Layout of `compact`.
-    pub const COMPACT: &[Slot] = &[U, BRICK_FLAGS, BRICK_SCAN, ACTIVE_BRICKS];
+    pub const COMPACT: &[Slot] = &[U, BRICK_FLAGS, BRICK_SCAN, ACTIVE_BRICKS, DENSITY];
     /// Layout of `args`.
     pub const ARGS: &[Slot] = &[U, ACTIVE_BRICKS, BRICK_ARGS];
     /// Every binding of the file.
@@ -212,6 +218,7 @@ pub mod bricks {
         BRICK_SCAN,
         ACTIVE_BRICKS,
         BRICK_ARGS,
+        DENSITY,
     ];
 }
 

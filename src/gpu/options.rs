@@ -22,6 +22,10 @@ pub struct EngineOptions {
     /// reaches ([`super::bricks`]; default). False: every voxel of the grid (the dense path,
     /// kept to compare with). Both give the same mesh.
     pub sparse_bricks: bool,
+    /// Initial brick slots of the sparse density and colour buffers (reached bricks they
+    /// hold); None estimates them from the grid ([`super::plan::first_brick_want`]). They grow
+    /// from the reached-brick count, re-running density when a frame's bricks did not fit.
+    pub initial_brick_slots: Option<u64>,
 }
 
 impl EngineOptions {
@@ -32,6 +36,7 @@ impl EngineOptions {
             initial_mesh_capacity: None,
             headroom: super::plan::DEFAULT_HEADROOM,
             sparse_bricks: true,
+            initial_brick_slots: None,
         }
     }
 }

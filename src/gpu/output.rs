@@ -33,6 +33,12 @@ pub struct FrameStats {
     pub timings: StageTimings,
     /// Sparse bricks some atom reaches (sampled and classified); 0 on the dense path.
     pub reached_bricks: u32,
+    /// True when the reached bricks did not fit the brick slots of the density and colour
+    /// buffers (then `overflow` is set too; the next frame grows them and re-runs density).
+    pub brick_overflow: bool,
+    /// Brick slots the frame's density pass needed (the most reached bricks of one slab); 0 on
+    /// the dense path and on frames that did not run density.
+    pub brick_slots: u32,
 }
 
 /// The surface as it lives on the GPU, for the renderer: draw with
@@ -173,6 +179,8 @@ impl Readbacks {
                     volume: c.volume as f64,
                     timings: timer.stage_ms(&slot.passes, &ticks),
                     reached_bricks: c.reached_bricks,
+                    brick_overflow: c.overflow & super::types::OVERFLOW_BRICKS != 0,
+                    brick_slots: c.brick_slots,
                 }
             };
             slot.buffer.unmap();

@@ -15,7 +15,8 @@ use crate::surface::{GridSpec, SurfaceParams};
 use super::GpuError;
 use super::types::{DrawIndexedArgs, GpuCounters, GpuVertex, McTablesUniform, SlabUniform};
 
-/// Bytes per voxel of a slab: density 4, colour 12, class word 4, vertex base 4, active cell 8.
+/// Bytes per voxel of a slab: density 4, colour 12, class word 4, vertex base 4, active cell 8
+/// (on sparse bricks density and colour are held per reached brick instead).
 pub const BYTES_PER_VOXEL: u64 = 32;
 /// Samples per sparse-brick edge (`BRICK` in `shaders/bricks.wgsl`, `density.wgsl` and
 /// `classify.wgsl`); one density thread's run of [`super::density::RUN`] voxels spans a brick row.
@@ -86,6 +87,176 @@ impl FramePlan {
     pub fn class_blocks(&self) -> u64 {
         self.class_points().div_ceil(256)
     }
+
+    /// Bricks the density layers of `slab` touch (whole brick layers).
+    pub fn slab_bricks(&self, slab: &Slab) -> u64 {
+        let bz0 = slab.dens_z0 / BRICK;
+        let bz1 = (slab.dens_z0 + slab.dens_layers.max(1) - 1) / BRICK;
+        (bz1 - bz0 + 1) as u64 * self.brick_dims[0] as u64 * self.brick_dims[1] as u64
+    }
+
+    /// The most brick slots one slab can use: every brick its density layers touch.
+    pub fn max_slab_bricks(&self) -> u64 {
+        self.slabs
+            .iter()
+            .map(|s| self.slab_bricks(s))
+            .max()
+            .unwrap_or(1)
+    }
+}
+
+/// Samples per sparse brick ([`BRICK`]^3).
+pub const BRICK_SAMPLES: u64 = (BRICK * BRICK * BRICK) as u64;
+
+/// The most brick slots the largest binding allows (the colour slots, 12 bytes per sample,
+/// and the density table plus slots).
+pub fn brick_slot_limit(plan: &FramePlan, max_binding: u64) -> u64 {
+    let roomy: u64 = plan.brick_dims.iter().map(|&d| d as u64 + 1).product();
+    let by_colour = max_binding / (12 * BRICK_SAMPLES);
+    let by_density = (max_binding / 4).saturating_sub(roomy) / BRICK_SAMPLES;
+    by_colour.min(by_density).max(1)
+}
+
+/// The engine's first guess of the brick slots a sparse frame needs, before any frame counted
+/// its reached bricks: a quarter of the grid's bricks (rounded up to a multiple of 64), no
+/// more than a slab can use, within [`brick_slot_limit`]. A frame reaching more overflows
+/// once and re-runs in grown slots.
+pub fn first_brick_want(plan: &FramePlan, max_binding: u64) -> u64 {
+    (plan.brick_count() / 4)
+        .next_multiple_of(64)
+        .min(plan.max_slab_bricks())
+        .clamp(1, brick_slot_limit(plan, max_binding))
+}
+
+/// The brick slots the buffers grow to when a frame's slabs needed `slots` (the most reached
+/// bricks of one slab) and the buffers held `capacity` slots (None when they suffice): the
+/// need with an eighth to spare, rounded up to a multiple of 64 bricks, within
+/// [`brick_slot_limit`].
+pub fn grown_brick_want(
+    plan: &FramePlan,
+    slots: u64,
+    capacity: u64,
+    max_binding: u64,
+) -> Option<u64> {
+    let need = slots.min(plan.max_slab_bricks());
+    (need > capacity).then(|| {
+        (need + need / 8)
+            .next_multiple_of(64)
+            .min(brick_slot_limit(plan, max_binding))
+    })
+}
+
+/// The brick slots a fresh engine settles at for a frame on `plan` whose slabs need `slots`
+/// (the most reached bricks of one slab: [`ReachedBricks::slab_need`]): the first guess,
+/// grown once when the need passes it.
+pub fn settled_brick_slots(plan: &FramePlan, slots: u64, max_binding: u64) -> u64 {
+    let first = first_brick_want(plan, max_binding);
+    grown_brick_want(plan, slots, first, max_binding).unwrap_or(first)
+}
+
+/// The most brick slots the engine can hold on `plan`: grown for a slab whose every brick is
+/// reached.
+pub fn largest_brick_slots(plan: &FramePlan, max_binding: u64) -> u64 {
+    settled_brick_slots(plan, plan.max_slab_bricks(), max_binding)
+}
+
+/// Reached sparse bricks per brick layer (z), counted on the host.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReachedBricks {
+    /// Reached bricks of each brick layer, bottom to top.
+    pub layers: Vec<u64>,
+}
+
+impl ReachedBricks {
+    /// All reached bricks ([`super::output::FrameStats::reached_bricks`]).
+    pub fn total(&self) -> u64 {
+        self.layers.iter().sum()
+    }
+
+    /// The most reached bricks the density layers of one slab of `plan` touch: the brick
+    /// slots the frame needs ([`super::output::FrameStats::brick_slots`]).
+    pub fn slab_need(&self, plan: &FramePlan) -> u64 {
+        plan.slabs
+            .iter()
+            .map(|s| {
+                let bz0 = (s.dens_z0 / BRICK) as usize;
+                let bz1 = ((s.dens_z0 + s.dens_layers.max(1) - 1) / BRICK) as usize;
+                self.layers[bz0..=bz1.min(self.layers.len() - 1)]
+                    .iter()
+                    .sum::<u64>()
+            })
+            .max()
+            .unwrap_or(0)
+    }
+}
+
+/// The bricks `shaders/bricks.wgsl` marks as reached for atoms at `positions` (Å) of radii
+/// `radii` (Å) on `plan`, counted on the host with the shader's f32 arithmetic (`mark`: the
+/// atoms of the bin cells around each brick, the same slack), per brick layer: what the
+/// engine's counters report, so the brick slots are known without a device.
+pub fn count_reached_bricks(
+    plan: &FramePlan,
+    positions: &[glam::Vec3],
+    radii: &[f32],
+    radius_scale: f32,
+    cutoff: f32,
+) -> ReachedBricks {
+    let g = &plan.grid;
+    let o = g.origin;
+    let cd = plan.cell_dims;
+    let cell_coord = |x: f32, o: f32, n: u32| -> u32 {
+        (((x - o) / plan.cell_size).floor() as i32).clamp(0, n as i32 - 1) as u32
+    };
+    let cell_index = |c: [u32; 3]| (c[0] + cd[0] * (c[1] + cd[1] * c[2])) as usize;
+    let mut cells: Vec<Vec<(glam::Vec3, f32)>> = vec![Vec::new(); plan.cell_count() as usize];
+    for (p, &r) in positions.iter().zip(radii) {
+        let c = [
+            cell_coord(p.x, o.x, cd[0]),
+            cell_coord(p.y, o.y, cd[1]),
+            cell_coord(p.z, o.z, cd[2]),
+        ];
+        cells[cell_index(c)].push((*p, r * radius_scale));
+    }
+    let reach = plan.max_cut * 1.0001 + 1e-4;
+    let [bx, by, bz] = plan.brick_dims;
+    let mut reached = vec![0; bz as usize];
+    for k in 0..bz {
+        for j in 0..by {
+            for i in 0..bx {
+                let corner = |add: u32| {
+                    glam::Vec3::new(
+                        o.x + g.spacing * (i * BRICK + add) as f32,
+                        o.y + g.spacing * (j * BRICK + add) as f32,
+                        o.z + g.spacing * (k * BRICK + add) as f32,
+                    )
+                };
+                let (lo, hi) = (corner(0), corner(BRICK - 1));
+                let c0 = [
+                    cell_coord(lo.x - reach, o.x, cd[0]),
+                    cell_coord(lo.y - reach, o.y, cd[1]),
+                    cell_coord(lo.z - reach, o.z, cd[2]),
+                ];
+                let c1 = [
+                    cell_coord(hi.x + reach, o.x, cd[0]),
+                    cell_coord(hi.y + reach, o.y, cd[1]),
+                    cell_coord(hi.z + reach, o.z, cd[2]),
+                ];
+                let hit = (c0[2]..=c1[2]).any(|cz| {
+                    (c0[1]..=c1[1]).any(|cy| {
+                        (c0[0]..=c1[0]).any(|cx| {
+                            cells[cell_index([cx, cy, cz])].iter().any(|&(a, w)| {
+                                let d = (lo - a).max(a - hi).max(glam::Vec3::ZERO);
+                                let c = cutoff * w * 1.001 + 1e-3;
+                                d.x * d.x + d.y * d.y + d.z * d.z < c * c
+                            })
+                        })
+                    })
+                });
+                reached[k as usize] += u64::from(hit);
+            }
+        }
+    }
+    ReachedBricks { layers: reached }
 }
 
 /// Plans a frame on `grid` for atoms of largest radius `max_radius` (Å). `max_binding` is the
@@ -367,9 +538,11 @@ pub struct BufferPlan {
     pub cell_start: Need,
     /// One past the last slot per bin cell (u32).
     pub cell_end: Need,
-    /// Slab density, 4 bytes per voxel.
+    /// Slab density, 4 bytes per voxel; on sparse bricks the brick slot table (4 bytes per
+    /// brick) and 4 bytes per sample of each brick slot.
     pub density: Need,
-    /// Slab colour, 12 bytes per voxel (none without colours).
+    /// Slab colour, 12 bytes per voxel, or per sample of each brick slot (none without
+    /// colours).
     pub colour: Need,
     /// Class words, 4 bytes per classified point.
     pub classes: Need,
@@ -395,12 +568,15 @@ pub struct BufferPlan {
 
 impl BufferPlan {
     /// The buffers of a frame of `atoms` atoms on `plan` (with the colour volume when
-    /// `with_colour`) and mesh buffers of `mesh` capacity, on a device with `limits`.
+    /// `with_colour`) and mesh buffers of `mesh` capacity, on a device with `limits`;
+    /// `brick_slots`: on sparse bricks, the reached bricks the density and colour buffers hold
+    /// (None: the dense per-slab volumes).
     pub fn new(
         plan: &FramePlan,
         atoms: u64,
         with_colour: bool,
         mesh: MeshCapacity,
+        brick_slots: Option<u64>,
         limits: &DeviceLimits,
     ) -> BufferPlan {
         let max_binding = limits.max_binding();
@@ -432,11 +608,19 @@ impl BufferPlan {
             sorted_colours: Need::exact(atoms * 8),
             cell_start: slack(cells * 4),
             cell_end: slack(cells * 4),
-            density: slack(voxels * 4),
-            colour: if with_colour {
-                slack(voxels * 12)
-            } else {
-                Need::default()
+            density: match brick_slots {
+                // The slot table (room for a brick more per axis, as the brick buffers) and
+                // the slots themselves (the grown count already has room to spare).
+                Some(slots) => Need {
+                    bytes: (bricks + slots * BRICK_SAMPLES) * 4,
+                    replace_with: (roomy + slots * BRICK_SAMPLES) * 4,
+                },
+                None => slack(voxels * 4),
+            },
+            colour: match (with_colour, brick_slots) {
+                (false, _) => Need::default(),
+                (true, Some(slots)) => Need::exact(slots * BRICK_SAMPLES * 12),
+                (true, None) => slack(voxels * 12),
             },
             classes: slack(points * 4),
             vertex_base: slack(points * 4),
@@ -635,7 +819,8 @@ mod tests {
             vertices: 1000,
             triangles: 2000,
         };
-        let m = |atoms, mesh| BufferPlan::new(&plan, atoms, true, mesh, &limits).fresh_memory();
+        let m =
+            |atoms, mesh| BufferPlan::new(&plan, atoms, true, mesh, None, &limits).fresh_memory();
         let (a, b) = (m(10_000, mesh), m(11_000, mesh));
         assert_eq!(b.atoms - a.atoms, 1000 * BYTES_PER_ATOM);
         assert_eq!(b.total() - a.total(), 1000 * BYTES_PER_ATOM);
@@ -650,7 +835,7 @@ mod tests {
             super::super::resources::OUTPUT_SETS as u64 * per_set
         );
         // Without colours the colour volume stays at its initial 16 bytes.
-        let grey = BufferPlan::new(&plan, 10_000, false, mesh, &limits).fresh_memory();
+        let grey = BufferPlan::new(&plan, 10_000, false, mesh, None, &limits).fresh_memory();
         assert_eq!(
             a.volumes - grey.volumes,
             with_slack(plan.slab_voxels() * 12, limits.max_binding()) - 16

@@ -217,7 +217,8 @@ impl Buffers {
             sorted_colours: Grow::new(device, "sorted colours", U::empty()),
             cell_start: Grow::new(device, "cell start", U::COPY_DST | U::COPY_SRC),
             cell_end: Grow::new(device, "cell end", U::empty()),
-            // COPY_DST: the sparse path clears the volumes before filling the reached bricks.
+            // Dense per-slab volumes, or on sparse bricks the brick slot table and the reached
+            // bricks' samples (`shaders/bricks.wgsl`, `shaders/density.wgsl`).
             density: Grow::new(device, "density", copy),
             colour: Grow::new(device, "colour volume", copy),
             classes: Grow::new(device, "classes", U::COPY_SRC),
@@ -270,12 +271,12 @@ impl Buffers {
     }
 
     /// Grows the cell, slab and brick buffers to `sizes` (the colour volume needs nothing
-    /// without colours).
-    pub fn ensure_plan(&mut self, device: &GpuContext, sizes: &BufferPlan) {
+    /// without colours); true when the density or colour buffer was replaced (its samples lost).
+    pub fn ensure_plan(&mut self, device: &GpuContext, sizes: &BufferPlan) -> bool {
         self.cell_start.ensure_need(device, sizes.cell_start);
         self.cell_end.ensure_need(device, sizes.cell_end);
-        self.density.ensure_need(device, sizes.density);
-        self.colour.ensure_need(device, sizes.colour);
+        let mut volumes = self.density.ensure_need(device, sizes.density);
+        volumes |= self.colour.ensure_need(device, sizes.colour);
         self.classes.ensure_need(device, sizes.classes);
         self.vertex_base.ensure_need(device, sizes.vertex_base);
         self.active.ensure_need(device, sizes.active);
@@ -285,6 +286,7 @@ impl Buffers {
         self.brick_flags.ensure_need(device, sizes.brick_flags);
         self.brick_scan.ensure_need(device, sizes.brick_scan);
         self.active_bricks.ensure_need(device, sizes.active_bricks);
+        volumes
     }
 
     /// Grows the mesh buffers of every output set to `sizes` (all sets together, so the sets

@@ -17,8 +17,8 @@ use glam::Vec3;
 
 use super::engine::{Changes, GpuEngine};
 use super::plan::{
-    BufferPlan, DEFAULT_HEADROOM, DeviceLimits, GpuMemory, MeshCapacity, first_mesh_want,
-    plan_frame,
+    BufferPlan, DEFAULT_HEADROOM, DeviceLimits, GpuMemory, MeshCapacity, count_reached_bricks,
+    first_mesh_want, largest_brick_slots, plan_frame, settled_brick_slots,
 };
 use super::{GpuContext, GpuError};
 #[cfg(feature = "app")]
@@ -474,22 +474,39 @@ pub fn plan_rows(
                 .into(),
             ));
         }
-        let counts = match sizing {
+        let (counts, bricks) = match sizing {
             MeshSizing::CpuSurface => {
                 let mut cpu = CpuEngine::new();
                 cpu.set_keep_mesh(false);
                 let out = cpu.compute(&atoms, &params).map_err(fail)?;
-                Some((out.vertex_count() as u64, out.triangle_count() as u64))
+                let bricks = count_reached_bricks(
+                    &plan,
+                    atoms.positions,
+                    atoms.radii,
+                    params.radius_scale,
+                    params.cutoff(),
+                );
+                let counts = (out.vertex_count() as u64, out.triangle_count() as u64);
+                (Some(counts), Some(bricks.slab_need(&plan)))
             }
-            MeshSizing::Largest => None,
+            MeshSizing::Largest => (None, None),
         };
         let largest = MeshCapacity::largest(max_binding);
         let mesh = counts.map_or(largest, |c| {
             MeshCapacity::settled(first_mesh_want(&plan), c, DEFAULT_HEADROOM, max_binding)
         });
         let with_colour = atoms.colours.is_some();
-        let memory = BufferPlan::new(&plan, n, with_colour, mesh, limits).fresh_memory();
-        let bound = BufferPlan::new(&plan, n, with_colour, largest, limits).fresh_memory();
+        // The engine runs on sparse bricks: its brick slots settle at the reached count (the
+        // bricks its mark pass reaches, counted on the host), or hold every brick a slab can
+        // use for the bound.
+        let largest_slots = largest_brick_slots(&plan, max_binding);
+        let slots = bricks.map_or(largest_slots, |reached| {
+            settled_brick_slots(&plan, reached, max_binding)
+        });
+        let memory =
+            BufferPlan::new(&plan, n, with_colour, mesh, Some(slots), limits).fresh_memory();
+        let bound = BufferPlan::new(&plan, n, with_colour, largest, Some(largest_slots), limits)
+            .fresh_memory();
         rows.push(PlannedRow {
             paper: *paper,
             atoms: system.len(),

@@ -137,7 +137,8 @@ pub struct GpuCounters {
     pub vertex_count: u32,
     /// Triangles of the surface (may exceed `triangle_capacity`).
     pub triangle_count: u32,
-    /// Bit 0: vertex buffer too small; bit 1: index buffer too small.
+    /// Bit 0: vertex buffer too small; bit 1: index buffer too small; bit 2
+    /// ([`OVERFLOW_BRICKS`]): the reached bricks did not fit the brick slots.
     pub overflow: u32,
     /// Internal: first vertex id of the current slab.
     pub slab_vertex_base: u32,
@@ -164,8 +165,9 @@ pub struct GpuCounters {
     /// Bricks some atom reaches (sparse bricks; 0 on the dense path). Copied in each frame
     /// from the sparse-brick pass's count ([`crate::gpu::bricks`]).
     pub reached_bricks: u32,
-    /// Padding to 64 bytes.
-    pub _pad: u32,
+    /// Sparse bricks: the most brick slots one slab used (its reached bricks), written by the
+    /// density pass (0 on frames that do not run it, and on the dense path).
+    pub brick_slots: u32,
 }
 const _: () = assert!(std::mem::size_of::<GpuCounters>() == 64);
 
@@ -173,6 +175,9 @@ const _: () = assert!(std::mem::size_of::<GpuCounters>() == 64);
 pub(crate) const C_SCAN_ACTIVE: u32 = 6;
 pub(crate) const C_SCAN_VERTICES: u32 = 7;
 pub(crate) const C_SCAN_TRIANGLES: u32 = 8;
+/// Bit of [`GpuCounters::overflow`]: the reached bricks of a slab did not fit the brick slots
+/// (`OVERFLOW_BRICKS` in `shaders/density.wgsl`).
+pub const OVERFLOW_BRICKS: u32 = 4;
 /// Word index of [`GpuCounters::reached_bricks`].
 pub(crate) const C_REACHED_BRICKS: u32 = 14;
 

@@ -9,7 +9,8 @@ use std::path::Path;
 
 use mdsurf::gpu::engine::{Changes, EngineOptions};
 use mdsurf::gpu::plan::{
-    BYTES_PER_ATOM, BufferPlan, DEFAULT_HEADROOM, DeviceLimits, MeshCapacity, first_mesh_want,
+    BYTES_PER_ATOM, BufferPlan, DEFAULT_HEADROOM, DeviceLimits, MeshCapacity, count_reached_bricks,
+    first_mesh_want, settled_brick_slots,
 };
 use mdsurf::gpu::table1::{
     GPU_80GB, MeshSizing, PAPER_ROWS, PaperRow, Structure, Table1Options, plan_rows, run_rows,
@@ -46,7 +47,7 @@ fn estimate_matches(
     assert_eq!(defaults.headroom, DEFAULT_HEADROOM);
     let opts = options(defaults);
     engine.set_options(opts);
-    engine
+    let full = engine
         .run_blocking(atoms, params, Changes::ALL)
         .expect("frame");
     let stats = engine
@@ -62,7 +63,26 @@ fn estimate_matches(
     let mesh = MeshCapacity::settled(first, counts, opts.headroom, limits.max_binding());
     let n = atoms.positions.len() as u64;
     let with_colour = atoms.colours.is_some();
-    let memory = BufferPlan::new(&plan, n, with_colour, mesh, &limits).fresh_memory();
+    // On sparse bricks the density and colour buffers hold the reached bricks' slots; the host
+    // counts the bricks the GPU reaches.
+    let host = count_reached_bricks(
+        &plan,
+        atoms.positions,
+        atoms.radii,
+        params.radius_scale,
+        params.cutoff(),
+    );
+    let slots = opts.sparse_bricks.then(|| {
+        assert_eq!(host.total(), stats.reached_bricks as u64, "reached bricks");
+        // The density pass (of the full frame) reports the slots it needed.
+        assert_eq!(
+            host.slab_need(&plan),
+            full.brick_slots as u64,
+            "brick slots"
+        );
+        settled_brick_slots(&plan, host.slab_need(&plan), limits.max_binding())
+    });
+    let memory = BufferPlan::new(&plan, n, with_colour, mesh, slots, &limits).fresh_memory();
     assert_eq!(memory.total(), engine.gpu_bytes(), "{memory:?}");
     assert!(memory.atoms >= n * BYTES_PER_ATOM && memory.mesh > 0 && memory.volumes > 0);
     plan.slabs.len()

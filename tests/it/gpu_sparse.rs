@@ -204,6 +204,62 @@ fn sparse_partial_frames_match_dense() {
     assert_same_mesh("recoloured", &s.mesh, &d.mesh);
 }
 
+/// Density and colour live in brick slots sized from the reached bricks: an engine whose slots
+/// start far too small overflows its first frame (nothing drawn), grows them from the reached
+/// count and re-runs density, and then gives the dense path's mesh exactly, in one pass and
+/// through slabs; a fresh sparse engine holds less GPU memory than a dense one on a shell.
+#[test]
+fn sparse_brick_slots_grow_after_an_overflow() {
+    for (what, atoms, p, slabs) in [
+        ("shell 6k H=1.5", shell(6_000, 2), params(1.5), None),
+        (
+            "1hpv H=1.5 slabs",
+            load_pdb("1hpv.pdb"),
+            params(1.5),
+            Some(6),
+        ),
+    ] {
+        let Some(mut dense) = engine() else {
+            return;
+        };
+        set_mode(&mut dense, false, slabs);
+        let d = dense.compute(&atoms.set(), &p).expect("dense frame");
+        let Some(mut sparse) = engine() else {
+            return;
+        };
+        sparse.set_options(EngineOptions {
+            max_slab_layers: slabs,
+            initial_brick_slots: Some(2),
+            ..sparse.options()
+        });
+        let info = sparse
+            .submit(&atoms.set(), &p, Changes::ALL)
+            .expect("submit");
+        let first = sparse.wait_stats(info.frame).expect("first counters");
+        assert!(
+            first.overflow && first.brick_overflow && first.reached_bricks > 2,
+            "{what}: {first:?}"
+        );
+        let stats = sparse.finish(info.frame, &atoms.set(), &p).expect("finish");
+        assert!(!stats.overflow, "{what}: {stats:?}");
+        assert_eq!(
+            sparse.last_frame().map(|f| f.work),
+            Some(mdsurf::gpu::Work::Full),
+            "{what}: the rerun did not re-run density"
+        );
+        let mesh = sparse.read_mesh(&stats).expect("mesh");
+        assert_same_mesh(what, &mesh, &d.mesh);
+        if slabs.is_none() {
+            assert!(
+                sparse.gpu_bytes() < dense.gpu_bytes(),
+                "{what}: sparse {} bytes, dense {}",
+                sparse.gpu_bytes(),
+                dense.gpu_bytes()
+            );
+        }
+    }
+}
+
 /// Steady state on sparse bricks: moving atoms (new positions, the same count and grid) create
 /// no GPU object once the buffers fit, blocking or submitted; submitted frames alternate
 /// between the output sets. Counted from the second frame: the first frame's counters may grow
