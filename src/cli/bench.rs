@@ -51,6 +51,10 @@ pub struct BenchArgs {
     /// NVIDIA GPU, the mesh sized from the CPU engine's surface (which it computes per row).
     #[arg(long, requires = "table1")]
     pub plan_only: bool,
+    /// With --plan-only: every mesh buffer at its largest binding instead of the CPU surface's
+    /// counts (an upper bound for any surface; no surface is computed, so it takes seconds).
+    #[arg(long, requires = "plan_only")]
+    pub mesh_bound: bool,
     /// With --table1: skip the rows with more atoms than N (quick checks, small GPUs).
     #[arg(long, value_name = "N", value_parser = parse_count)]
     pub max_atoms: Option<usize>,
@@ -268,7 +272,12 @@ fn print_table1(args: &BenchArgs) -> Result<()> {
         colours: !args.no_color,
     };
     let text = if args.plan_only {
-        mdsurf::gpu::table1::table1_plan(&top, traj.as_deref(), &opts)
+        let sizing = if args.mesh_bound {
+            mdsurf::gpu::table1::MeshSizing::Largest
+        } else {
+            mdsurf::gpu::table1::MeshSizing::CpuSurface
+        };
+        mdsurf::gpu::table1::table1_plan(&top, traj.as_deref(), &opts, sizing)
     } else {
         mdsurf::gpu::table1::table1(&top, traj.as_deref(), &opts)
     }

@@ -525,10 +525,17 @@ pub fn plan_rows(
 /// buffers at their largest, and whether that bound fits [`GPU_80GB`].
 pub fn format_plan(rows: &[PlannedRow], limits: &DeviceLimits, device: &str) -> String {
     let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+    let mesh = if rows.iter().any(|r| r.counts.is_some()) {
+        format!(
+            "mesh buffers from the CPU surface's counts under the engine's growth rule \
+             (headroom {DEFAULT_HEADROOM})"
+        )
+    } else {
+        "mesh buffers at the largest binding (no surface computed)".to_string()
+    };
     let mut s = format!(
         "Table 1 GPU memory without a device, for {device}: largest storage binding {} bytes, \
-         largest buffer {} bytes, volume budget {} bytes; mesh buffers from the CPU surface's \
-         counts under the engine's growth rule (headroom {DEFAULT_HEADROOM}), two output sets; \
+         largest buffer {} bytes, volume budget {} bytes; {mesh}, two output sets; \
          MiB = 2^20 bytes; bound = mesh buffers at the largest binding\n",
         limits.max_binding(),
         limits.max_buffer_size,
@@ -586,24 +593,19 @@ pub fn format_plan(rows: &[PlannedRow], limits: &DeviceLimits, device: &str) -> 
 }
 
 /// Tiles the first frame of `top` (+ `traj`) and sizes each row's GPU memory for an 80 GB
-/// NVIDIA GPU ([`DeviceLimits::NVIDIA_80GB`]) without a device; the mesh from the CPU
-/// surface's counts.
+/// NVIDIA GPU ([`DeviceLimits::NVIDIA_80GB`]) without a device; the mesh as `sizing` says.
 #[cfg(feature = "app")]
 pub fn table1_plan(
     top: &Path,
     traj: Option<&Path>,
     opts: &Table1Options,
+    sizing: MeshSizing,
 ) -> Result<String, Table1Error> {
     let structure = Structure::from_file(top, traj)?;
     let limits = DeviceLimits::NVIDIA_80GB;
-    let rows = plan_rows(
-        &structure,
-        &PAPER_ROWS,
-        opts,
-        &limits,
-        MeshSizing::CpuSurface,
-        |line| eprintln!("{line}"),
-    )?;
+    let rows = plan_rows(&structure, &PAPER_ROWS, opts, &limits, sizing, |line| {
+        eprintln!("{line}")
+    })?;
     Ok(format_plan(
         &rows,
         &limits,

@@ -182,37 +182,45 @@ fn gpu_table1_plan_equals_the_engine_on_a_small_row() {
 }
 
 /// No GPU needed: the paper's largest row, 22.8M atoms at H = 4, sized under the limits wgpu
-/// reports on an 80 GB NVIDIA GPU with every mesh buffer at its largest (an upper bound for
-/// any surface; the CPU surface takes too long for a test), fits 80 GB.
+/// reports on an 80 GB NVIDIA GPU with every mesh buffer at its largest (`--mesh-bound`: an
+/// upper bound for any surface; the CPU surface takes too long for a test), fits 80 GB. Run
+/// through the binary, so that the test process never holds 22.8M atoms (children inherit
+/// its peak memory in `wait4`, which `io_mutants` reads).
 #[test]
 fn gpu_table1_largest_row_fits_80_gb() {
-    let demo = structure("assets/md_1u19.gro");
-    let row = PAPER_ROWS
-        .iter()
-        .find(|r| r.atoms == 22_800_000 && r.spacing == 4.0)
-        .expect("the paper's largest row");
-    let limits = DeviceLimits::NVIDIA_80GB;
-    let planned = plan_rows(
-        &demo,
-        std::slice::from_ref(row),
-        &Table1Options::default(),
-        &limits,
-        MeshSizing::Largest,
-        |_| {},
-    )
-    .expect("plan");
-    let p = &planned[0];
-    assert_eq!(p.atoms, 22_800_000);
-    assert_eq!(p.memory, p.bound);
-    assert!(p.memory.atoms >= 22_800_000 * BYTES_PER_ATOM);
-    let voxels: u64 = p.grid.iter().map(|&d| d as u64).product();
-    assert!(voxels > 1_000_000, "{:?}", p.grid);
-    assert!(
-        p.bound.total() <= GPU_80GB,
-        "{} bytes > 80 GB: {:?}",
-        p.bound.total(),
-        p.bound
-    );
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "bench",
+        "--table1",
+        "--plan-only",
+        "--mesh-bound",
+        "--backend",
+        "cpu",
+    ];
+    let run = crate::cli_common::mdsurf(dir.path(), &args);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let row: Vec<&str> = run
+        .stdout
+        .lines()
+        .map(|l| l.split_whitespace().collect::<Vec<_>>())
+        .find(|r| r.first() == Some(&"22800000"))
+        .unwrap_or_else(|| panic!("no 22.8M row in {}", run.stdout));
+    // atoms H grid slabs vertices triangles | atoms cells volumes bricks mesh fixed |
+    // total bound fits
+    assert_eq!(row.len(), 17, "{row:?}");
+    assert_eq!(row[1], "4.0");
+    let voxels: u64 = row[2]
+        .split('x')
+        .map(|d| d.parse::<u64>().unwrap())
+        .product();
+    assert!(voxels > 1_000_000, "{row:?}");
+    let mib = |s: &str| s.parse::<f64>().unwrap();
+    let atoms_mib = (22_800_000 * BYTES_PER_ATOM) as f64 / (1u64 << 20) as f64;
+    assert!(mib(row[7]) >= atoms_mib.floor(), "{row:?}");
+    assert_eq!(row[14], row[15], "with --mesh-bound the total is the bound");
+    let limit_mib = GPU_80GB as f64 / (1u64 << 20) as f64;
+    assert!(mib(row[15]) <= limit_mib, "{} MiB > 80 GB", row[15]);
+    assert_eq!(row[16], "yes");
 }
 
 /// No GPU needed: `mdsurf bench --table1 --plan-only` prints the library's sizing of each row
