@@ -72,41 +72,6 @@ fn col(p: vec3<u32>) -> vec3<f32> {
     return vec3<f32>(colour[v], colour[v + 1u], colour[v + 2u]);
 }
 
-// The density word of grid point (i, j, k) (global k, within the slab's density layers). Dense:
-// the slab volume. Sparse bricks (u.sparse != 0): the first brick_count words are the brick slot
-// table (shaders/bricks.wgsl: slot per brick, high bit set when unreached), then BRICK^3
-// samples per slot, counted from the slot of the slab's first brick layer
-// (shaders/density.wgsl); an unreached brick reads as 0, as the dense pass computes it.
-fn dens_at(i: u32, j: u32, k: u32) -> f32 {
-    if (u.sparse == 0u) {
-        return bitcast<f32>(density[i + u.dims.x * (j + u.dims.y * (k - u.dens_z0))]);
-    }
-    let s = sample_slot(i, j, k);
-    if (s == NO_SAMPLE) {
-        return 0.0;
-    }
-    return bitcast<f32>(density[u.brick_dims.x * u.brick_dims.y * u.brick_dims.z + s]);
-}
-
-const NO_SAMPLE: u32 = 0xffffffffu;
-
-// On sparse bricks: the brick-local sample index of grid point (i, j, k) (counted from the
-// slab's first slot; density word brick_count + index, colour sample index), or NO_SAMPLE
-// when no atom reaches its brick.
-fn sample_slot(i: u32, j: u32, k: u32) -> u32 {
-    let bd = u.brick_dims;
-    let t = density[i / BRICK_EDGE + bd.x * (j / BRICK_EDGE + bd.y * (k / BRICK_EDGE))];
-    if ((t >> 31u) != 0u) {
-        return NO_SAMPLE;
-    }
-    let first = density[(u.dens_z0 / BRICK_EDGE) * bd.x * bd.y] & 0x7fffffffu;
-    let local = i % BRICK_EDGE + BRICK_EDGE * (j % BRICK_EDGE + BRICK_EDGE * (k % BRICK_EDGE));
-    return (t - first) * (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) + local;
-}
-
-// Samples per sparse-brick edge (crate::gpu::plan::BRICK).
-const BRICK_EDGE: u32 = 8u;
-
 
 // -grad rho at grid point p by central differences (one-sided at the grid boundary), in
 // density units per sample; only its direction is used.

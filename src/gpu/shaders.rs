@@ -14,9 +14,11 @@ pub const DENSITY: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
     include_str!("../../shaders/density.wgsl")
 );
-/// Marching Cubes cell classification (`shaders/classify.wgsl` after the slab uniform).
+/// Marching Cubes cell classification (`shaders/classify.wgsl` after the slab uniform and the
+/// shared sample reads, `shaders/brick_samples.wgsl`).
 pub const CLASSIFY: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
+    include_str!("../../shaders/brick_samples.wgsl"),
     include_str!("../../shaders/classify.wgsl")
 );
 /// Marching Cubes compaction of active cells (`shaders/compact.wgsl` after the slab uniform).
@@ -24,14 +26,18 @@ pub const COMPACT: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
     include_str!("../../shaders/compact.wgsl")
 );
-/// Marching Cubes vertex and triangle emission (`shaders/emit.wgsl` after the slab uniform).
+/// Marching Cubes vertex and triangle emission (`shaders/emit.wgsl` after the slab uniform and
+/// `shaders/brick_samples.wgsl`).
 pub const EMIT: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
+    include_str!("../../shaders/brick_samples.wgsl"),
     include_str!("../../shaders/emit.wgsl")
 );
-/// Refined vertices on the exact Gaussian sum (`shaders/refine.wgsl` after the slab uniform).
+/// Refined vertices on the exact Gaussian sum (`shaders/refine.wgsl` after the slab uniform and
+/// `shaders/brick_samples.wgsl`).
 pub const REFINE: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
+    include_str!("../../shaders/brick_samples.wgsl"),
     include_str!("../../shaders/refine.wgsl")
 );
 /// Area, volume and indirect draw arguments (`shaders/measure.wgsl`).

@@ -181,6 +181,21 @@ fn gpu_table1_plan_equals_the_engine_on_a_small_row() {
     assert!(p.bound.total() >= p.memory.total());
 }
 
+/// The table rows (whitespace-separated fields) `mdsurf bench --table1 --plan-only --backend
+/// cpu EXTRA...` prints; the command must succeed.
+fn plan_only_rows(extra: &[&str]) -> Vec<Vec<String>> {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec!["bench", "--table1", "--plan-only", "--backend", "cpu"];
+    args.extend_from_slice(extra);
+    let run = crate::cli_common::mdsurf(dir.path(), &args);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    run.stdout
+        .lines()
+        .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| l.split_whitespace().map(str::to_string).collect())
+        .collect()
+}
+
 /// No GPU needed: the paper's largest row, 22.8M atoms at H = 4, sized under the limits wgpu
 /// reports on an 80 GB NVIDIA GPU with every mesh buffer at its largest (`--mesh-bound`: an
 /// upper bound for any surface; the CPU surface takes too long for a test), fits 80 GB. Run
@@ -188,23 +203,11 @@ fn gpu_table1_plan_equals_the_engine_on_a_small_row() {
 /// its peak memory in `wait4`, which `io_mutants` reads).
 #[test]
 fn gpu_table1_largest_row_fits_80_gb() {
-    let dir = tempfile::tempdir().unwrap();
-    let args = [
-        "bench",
-        "--table1",
-        "--plan-only",
-        "--mesh-bound",
-        "--backend",
-        "cpu",
-    ];
-    let run = crate::cli_common::mdsurf(dir.path(), &args);
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let row: Vec<&str> = run
-        .stdout
-        .lines()
-        .map(|l| l.split_whitespace().collect::<Vec<_>>())
-        .find(|r| r.first() == Some(&"22800000"))
-        .unwrap_or_else(|| panic!("no 22.8M row in {}", run.stdout));
+    let rows = plan_only_rows(&["--mesh-bound"]);
+    let row = rows
+        .iter()
+        .find(|r| r.first().map(String::as_str) == Some("22800000"))
+        .unwrap_or_else(|| panic!("no 22.8M row in {rows:?}"));
     // atoms H grid slabs vertices triangles | atoms cells volumes bricks mesh fixed |
     // total bound fits
     assert_eq!(row.len(), 17, "{row:?}");
@@ -214,12 +217,12 @@ fn gpu_table1_largest_row_fits_80_gb() {
         .map(|d| d.parse::<u64>().unwrap())
         .product();
     assert!(voxels > 1_000_000, "{row:?}");
-    let mib = |s: &str| s.parse::<f64>().unwrap();
+    let mib = |s: &String| s.parse::<f64>().unwrap();
     let atoms_mib = (22_800_000 * BYTES_PER_ATOM) as f64 / (1u64 << 20) as f64;
-    assert!(mib(row[7]) >= atoms_mib.floor(), "{row:?}");
+    assert!(mib(&row[7]) >= atoms_mib.floor(), "{row:?}");
     assert_eq!(row[14], row[15], "with --mesh-bound the total is the bound");
     let limit_mib = GPU_80GB as f64 / (1u64 << 20) as f64;
-    assert!(mib(row[15]) <= limit_mib, "{} MiB > 80 GB", row[15]);
+    assert!(mib(&row[15]) <= limit_mib, "{} MiB > 80 GB", row[15]);
     assert_eq!(row[16], "yes");
 }
 
@@ -227,28 +230,11 @@ fn gpu_table1_largest_row_fits_80_gb() {
 /// (here the smallest, on the bundled demo's first trajectory frame, as the command tiles it).
 #[test]
 fn gpu_table1_plan_only_command_prints_the_plan() {
-    let dir = tempfile::tempdir().unwrap();
-    let args = [
-        "bench",
-        "--table1",
-        "--plan-only",
-        "--max-atoms",
-        "150k",
-        "--backend",
-        "cpu",
-    ];
-    let run = crate::cli_common::mdsurf(dir.path(), &args);
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let rows: Vec<Vec<&str>> = run
-        .stdout
-        .lines()
-        .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
-        .map(|l| l.split_whitespace().collect())
-        .collect();
-    assert_eq!(rows.len(), 1, "{}", run.stdout);
+    let rows = plan_only_rows(&["--max-atoms", "150k"]);
+    assert_eq!(rows.len(), 1, "{rows:?}");
     let row = &rows[0];
     assert_eq!(row[0], "147976");
-    assert_eq!(row.last(), Some(&"yes"));
+    assert_eq!(row.last().map(String::as_str), Some("yes"));
 
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let demo = Structure::from_file(
@@ -271,12 +257,12 @@ fn gpu_table1_plan_only_command_prints_the_plan() {
     assert_eq!(
         total_and_bound,
         [mib(p.memory.total()), mib(p.bound.total())],
-        "{}",
-        run.stdout
+        "{row:?}"
     );
     let counts = p.counts.expect("CPU counts");
     assert_eq!(row[4..6], [counts.0.to_string(), counts.1.to_string()]);
 
+    let dir = tempfile::tempdir().unwrap();
     let alone = crate::cli_common::mdsurf(dir.path(), &["bench", "--plan-only"]);
     assert_eq!(alone.code, 2, "{}", alone.stderr);
 }
