@@ -106,15 +106,27 @@ pub fn compute_binned_into(
             .for_each(|(s, (vals, cols))| {
                 vals.fill(0.0);
                 // The kernel sums each channel in its own plane (vectorised), then the
-                // channels are interleaved and scaled by 1/I.
-                let mut planes = [(); 3].map(|_| vec![0.0f32; vals.len()]);
-                let [r, g, b] = &mut planes;
-                fill_slab(bins, grid, s, vals, Some([r, g, b]));
-                for (i, c) in cols.iter_mut().enumerate() {
-                    *c = [planes[0][i], planes[1][i], planes[2][i]].map(|v| v * inv_iso);
-                }
+                // channels are interleaved and scaled by 1/I. The planes are the thread's
+                // own, kept from slab to slab and frame to frame.
+                COLOUR_PLANES.with_borrow_mut(|planes| {
+                    for plane in planes.iter_mut() {
+                        plane.clear();
+                        plane.resize(vals.len(), 0.0);
+                    }
+                    let [r, g, b] = planes;
+                    fill_slab(bins, grid, s, vals, Some([r, g, b]));
+                    for (i, c) in cols.iter_mut().enumerate() {
+                        *c = [planes[0][i], planes[1][i], planes[2][i]].map(|v| v * inv_iso);
+                    }
+                })
             }),
     }
+}
+
+thread_local! {
+    /// One thread's colour sums of a dense slab, one plane per channel (see
+    /// [`compute_binned_into`]).
+    static COLOUR_PLANES: std::cell::RefCell<[Vec<f32>; 3]> = std::cell::RefCell::default();
 }
 
 /// Per-axis samples an atom reaches: first index, squared distances (Å²) and exponentials.

@@ -16,15 +16,10 @@ use mdsurf::gpu::table1::{
     GPU_80GB, MeshSizing, PAPER_ROWS, PaperRow, Structure, Table1Options, plan_rows, run_rows,
 };
 use mdsurf::gpu::{GpuContext, GpuEngine};
+
+use crate::gpu_support::context;
 use mdsurf::surface::{AtomSet, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
-
-fn context() -> Option<GpuContext> {
-    match GpuContext::headless_or_skip() {
-        Ok(ctx) => ctx,
-        Err(e) => panic!("REQUIRE_GPU=1 but no GPU adapter: {e}"),
-    }
-}
 
 fn structure(path: &str) -> Structure {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);

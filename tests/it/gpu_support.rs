@@ -10,15 +10,18 @@ use mdsurf::gpu::{GpuContext, GpuEngine, tolerance as tol};
 use mdsurf::surface::tables::{EDGE_CORNERS, McTables, corner_offset};
 use mdsurf::surface::{AtomSet, GridSpec, Mesh, SurfaceParams};
 
-/// The engine, or None (with a note) when there is no adapter and REQUIRE_GPU is not 1.
-pub fn engine() -> Option<GpuEngine> {
+/// The headless GPU context; `None` (test skipped) only without `REQUIRE_GPU=1`, a panic with
+/// it when no adapter is found.
+pub fn context() -> Option<GpuContext> {
     match GpuContext::headless_or_skip() {
-        Ok(Some(ctx)) => {
-            Some(GpuEngine::with_context(ctx).expect("GPU engine on a working adapter"))
-        }
-        Ok(None) => None,
+        Ok(ctx) => ctx,
         Err(e) => panic!("REQUIRE_GPU=1 but no GPU adapter: {e}"),
     }
+}
+
+/// The engine, or None (with a note) when there is no adapter and REQUIRE_GPU is not 1.
+pub fn engine() -> Option<GpuEngine> {
+    context().map(|ctx| GpuEngine::with_context(ctx).expect("GPU engine on a working adapter"))
 }
 
 /// Owned atoms for tests.

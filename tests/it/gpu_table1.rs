@@ -4,15 +4,12 @@
 
 use std::path::Path;
 
-use mdsurf::gpu::GpuContext;
 use mdsurf::gpu::table1::{PaperRow, Structure, Table1Options, format, run_rows};
 
 #[test]
 fn small_row_runs_and_formats() {
-    let ctx = match GpuContext::headless_or_skip() {
-        Ok(Some(ctx)) => ctx,
-        Ok(None) => return,
-        Err(e) => panic!("REQUIRE_GPU=1 but no GPU adapter: {e}"),
+    let Some(ctx) = crate::gpu_support::context() else {
+        return;
     };
     let top = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/md_1u19.gro");
     let structure = Structure::from_file(&top, None).expect("demo structure");
