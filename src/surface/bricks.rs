@@ -237,8 +237,17 @@ impl BrickVolume {
             }
         }
         layer_start.push(count as usize);
-        // Every stored sample is overwritten below, so only a grown tail is zeroed.
-        self.data.resize(count as usize * BRICK_SAMPLES, 0.0);
+        // Every stored sample is overwritten below, so only a grown tail is zeroed. A store that
+        // must grow is allocated anew, zeroed by the allocator (fresh pages from the system): the
+        // worker threads then fault its pages in while they fill their layers, instead of this
+        // thread zeroing it all first (a million atoms: over 100 MB).
+        let samples = count as usize * BRICK_SAMPLES;
+        if samples > self.data.capacity() {
+            self.data = Vec::new();
+            self.data = vec![0.0; samples];
+        } else {
+            self.data.resize(samples, 0.0);
+        }
 
         let mut chunks: Vec<&mut [f32]> = Vec::with_capacity(bz);
         let mut rest = &mut self.data[..];

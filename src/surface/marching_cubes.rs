@@ -374,7 +374,7 @@ pub struct MeshMeasure {
 /// (no mesh written), this saves the merged copy of the mesh (a third of the peak memory of a
 /// million-atom frame) and the time to build it.
 pub(super) fn measure_slabs(parts: &[SlabMesh]) -> MeshMeasure {
-    use super::mesh::{MEASURE_CHUNK_TRIANGLES, signed_volume, triangle_area};
+    use super::mesh::{MEASURE_CHUNK_TRIANGLES, accumulate_area_volume};
     // First global triangle of each slab, plus the total at the end.
     let mut starts = Vec::with_capacity(parts.len() + 1);
     let mut total = 0usize;
@@ -410,10 +410,7 @@ pub(super) fn measure_slabs(parts: &[SlabMesh]) -> MeshMeasure {
                 }
                 let stop = end.min(starts[s + 1]);
                 let local = &parts[s].indices[3 * (t - starts[s])..3 * (stop - starts[s])];
-                sums = local.chunks_exact(3).fold(sums, |(a, v), tri| {
-                    let [p, q, r] = [tri[0], tri[1], tri[2]].map(|i| position(s, i));
-                    (a + triangle_area(p, q, r), v + signed_volume(p, q, r))
-                });
+                sums = accumulate_area_volume(sums, local, |i| position(s, i));
                 t = stop;
             }
             sums
