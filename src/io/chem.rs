@@ -12,6 +12,7 @@ use super::prepare::prepare;
 use super::{IoError, dcd, quiet, warnings};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
+use crate::surface::scan::first_failing;
 
 /// Picoseconds per AKMA time unit (CHARMM and NAMD write DCD time steps in AKMA units).
 const PS_PER_AKMA: f64 = 0.048_888_21;
@@ -221,17 +222,14 @@ pub(crate) fn check_positions(
     index: usize,
     positions: &[Vec3],
 ) -> Result<(), IoError> {
-    if let Some(atom) = positions.iter().position(|p| !p.is_finite()) {
+    if let Some(atom) = first_failing(positions, |p| p.is_finite()) {
         return Err(IoError::NonFiniteCoordinate {
             path: path.to_path_buf(),
             frame: index,
             atom,
         });
     }
-    if let Some(atom) = positions
-        .iter()
-        .position(|p| p.abs().max_element() > MAX_COORDINATE)
-    {
+    if let Some(atom) = first_failing(positions, |p| p.abs().max_element() <= MAX_COORDINATE) {
         return Err(IoError::AbsurdCoordinate {
             path: path.to_path_buf(),
             frame: index,

@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::scan::first_failing;
 use super::{GridSpec, Mesh, SurfaceError, SurfaceParams, VertexMode};
 
 /// The particles one surface is built from. All slices have the same length.
@@ -50,10 +51,10 @@ impl AtomSet<'_> {
                 got: c.len(),
             });
         }
-        if let Some(atom) = self.positions.iter().position(|p| !p.is_finite()) {
+        if let Some(atom) = first_failing(self.positions, |p| p.is_finite()) {
             return Err(SurfaceError::NonFiniteCoordinate { atom });
         }
-        if let Some(atom) = self.radii.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+        if let Some(atom) = first_failing(self.radii, |r| r.is_finite() && *r > 0.0) {
             return Err(SurfaceError::InvalidRadius {
                 atom,
                 radius: self.radii[atom],
@@ -61,7 +62,7 @@ impl AtomSet<'_> {
         }
         if let Some(atom) = self
             .colours
-            .and_then(|c| c.iter().position(|c| !c.iter().all(|v| v.is_finite())))
+            .and_then(|c| first_failing(c, |c| c.iter().all(|v| v.is_finite())))
         {
             return Err(SurfaceError::NonFiniteColour { atom });
         }

@@ -3,7 +3,9 @@
 //! is below I on the whole boundary and every surface is closed.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
+use super::scan::first_failing;
 use super::{SurfaceError, SurfaceParams};
 
 /// A regular grid of sample points, x varying fastest.
@@ -30,22 +32,24 @@ impl GridSpec {
         if positions.is_empty() {
             return Err(SurfaceError::EmptySystem);
         }
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for (i, p) in positions.iter().enumerate() {
-            if !p.is_finite() {
-                return Err(SurfaceError::NonFiniteCoordinate { atom: i });
-            }
-            lo = lo.min(*p);
-            hi = hi.max(*p);
+        if let Some(atom) = first_failing(positions, |p| p.is_finite()) {
+            return Err(SurfaceError::NonFiniteCoordinate { atom });
         }
-        let mut max_radius = 0.0f32;
-        for (i, &r) in radii.iter().enumerate() {
-            if !(r.is_finite() && r > 0.0) {
-                return Err(SurfaceError::InvalidRadius { atom: i, radius: r });
-            }
-            max_radius = max_radius.max(r);
+        if let Some(atom) = first_failing(radii, |r| r.is_finite() && *r > 0.0) {
+            return Err(SurfaceError::InvalidRadius {
+                atom,
+                radius: radii[atom],
+            });
         }
+        let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        let (lo, hi) = positions
+            .par_chunks(1 << 14)
+            .map(|c| c.iter().fold(far, |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+            .reduce(|| far, |(a, b), (c, d)| (a.min(c), b.max(d)));
+        let max_radius = radii
+            .par_chunks(1 << 14)
+            .map(|c| c.iter().fold(0.0f32, |m, &r| m.max(r)))
+            .reduce(|| 0.0, f32::max);
         let h = params.spacing;
         let pad = params.cutoff() * params.radius_scale * max_radius + h;
         let origin = lo - Vec3::splat(pad);

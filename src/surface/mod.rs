@@ -17,6 +17,7 @@ pub mod mesh;
 pub mod params;
 pub mod periodic;
 pub mod preset;
+pub mod scan;
 pub mod tables;
 
 pub use analytic::VertexMode;
