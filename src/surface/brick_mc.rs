@@ -234,7 +234,6 @@ impl Ctx<'_> {
         cursor: &mut ColourCursor,
     ) {
         let [nx, ny, _] = self.vol.grid.dims.map(|d| d as usize);
-        let grid = &self.vol.grid;
         let mut count = emit.as_ref().map_or(0, |m| m.positions.len()) as u32;
         if emit.is_some() && cursor.layer != k / BRICK {
             *cursor = ColourCursor {
@@ -243,6 +242,13 @@ impl Ctx<'_> {
             };
         }
         let colours = self.vol.layer_colours(k / BRICK);
+        let mut add = |i: usize, j: usize, axis: usize, count: &mut u32| {
+            map[(j * nx + i) * 3 + axis] = *count;
+            *count += 1;
+            if let Some(m) = emit.as_deref_mut() {
+                self.emit_vertex([i, j, k], axis, m, colours, cursor);
+            }
+        };
         for j in 0..ny {
             let r = j * nx;
             for &bi in self.row(k, j) {
@@ -252,13 +258,20 @@ impl Ctx<'_> {
                     && j + 1 < ny
                     && let Some(u) = up
                 {
+                    // Interior brick row: the crossed edges of its 8 points as bits (byte
+                    // `n` for point `i0 + n`, bit 0/1/2 for its x/y/z edge), visited in
+                    // increasing order: point by point, x then y then z, as below.
                     let w = word(a, r + i0);
                     let x = w ^ word(a, r + i0 + 1);
                     let y = w ^ word(a, r + nx + i0);
                     let z = w ^ word(u, r + i0);
-                    if x | y | z == 0 {
-                        continue;
+                    let mut bits = x | y << 1 | z << 2;
+                    while bits != 0 {
+                        let b = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        add(i0 + b / 8, j, b % 8, &mut count);
                     }
+                    continue;
                 }
                 for i in i0..i1 {
                     let p = r + i;
@@ -269,45 +282,48 @@ impl Ctx<'_> {
                         up.is_some_and(|u| u[p] != f),
                     ];
                     for (axis, &c) in crossed.iter().enumerate() {
-                        if !c {
-                            continue;
-                        }
-                        map[p * 3 + axis] = count;
-                        count += 1;
-                        if let Some(m) = emit.as_deref_mut() {
-                            if self.data == VertexData::PositionsOnly && self.field.is_none() {
-                                let mut b = [i, j, k];
-                                b[axis] += 1;
-                                let va = self.vol.get(i, j, k);
-                                let vb = self.vol.get(b[0], b[1], b[2]);
-                                let (position, _) =
-                                    edge_position(grid, va, vb, self.iso, [i, j, k], axis);
-                                m.positions.push(position);
-                                continue;
-                            }
-                            let value = |q: [usize; 3]| self.vol.get(q[0], q[1], q[2]);
-                            let (position, normal, _) = edge_geometry_refined(
-                                grid,
-                                value,
-                                self.iso,
-                                [i, j, k],
-                                axis,
-                                self.field,
-                            );
-                            m.positions.push(position);
-                            m.normals.push(normal);
-                            let colour = if self.vol.with_colour {
-                                let c = colours[cursor.next];
-                                cursor.next += 1;
-                                c
-                            } else {
-                                [1.0; 3]
-                            };
-                            m.colours.push(colour);
+                        if c {
+                            add(i, j, axis, &mut count);
                         }
                     }
                 }
             }
         }
+    }
+
+    /// Appends the vertex on the crossed edge from point `ijk` along `axis` to `m` (position,
+    /// and normal and colour unless only positions are wanted).
+    fn emit_vertex(
+        &self,
+        ijk: [usize; 3],
+        axis: usize,
+        m: &mut SlabMesh,
+        colours: &[[f32; 3]],
+        cursor: &mut ColourCursor,
+    ) {
+        let grid = &self.vol.grid;
+        let [i, j, k] = ijk;
+        if self.data == VertexData::PositionsOnly && self.field.is_none() {
+            let mut b = ijk;
+            b[axis] += 1;
+            let va = self.vol.get(i, j, k);
+            let vb = self.vol.get(b[0], b[1], b[2]);
+            let (position, _) = edge_position(grid, va, vb, self.iso, ijk, axis);
+            m.positions.push(position);
+            return;
+        }
+        let value = |q: [usize; 3]| self.vol.get(q[0], q[1], q[2]);
+        let (position, normal, _) =
+            edge_geometry_refined(grid, value, self.iso, ijk, axis, self.field);
+        m.positions.push(position);
+        m.normals.push(normal);
+        let colour = if self.vol.with_colour {
+            let c = colours[cursor.next];
+            cursor.next += 1;
+            c
+        } else {
+            [1.0; 3]
+        };
+        m.colours.push(colour);
     }
 }
