@@ -20,7 +20,7 @@ use super::Mesh;
 use super::analytic::AnalyticField;
 use super::bricks::{BRICK, BrickVolume};
 use super::marching_cubes::{
-    ALL_ONE, FOREIGN, McScratch, SlabMesh, VertexData, edge_refs, merge, push_cell_triangles, word,
+    FOREIGN, McScratch, SlabMesh, VertexData, edge_refs, merge, push_cell_triangles, word,
 };
 use super::mc_vertex::{edge_geometry_refined, edge_position};
 use super::tables::McTables;
@@ -181,18 +181,32 @@ impl Ctx<'_> {
                     let i0 = bi as usize * BRICK;
                     let i1 = (i0 + BRICK).min(nx - 1);
                     if i0 + 9 <= nx && i1 == i0 + BRICK {
-                        let ws = [r + i0, r + i0 + 1, r + nx + i0, r + nx + i0 + 1];
-                        let (mut or, mut and) = (0u64, u64::MAX);
-                        for q in ws {
-                            for f in [a, b] {
-                                let w = word(f, q);
-                                or |= w;
-                                and &= w;
+                        // Interior brick row: the cases of its 8 cells as the bytes of one
+                        // word (corner flags are 0 or 1, so the shifted words never carry
+                        // into the next byte), visited in order, skipping cells entirely
+                        // inside or outside.
+                        let columns = |q: usize| {
+                            word(a, q)
+                                | word(a, q + nx) << 2
+                                | word(b, q) << 4
+                                | word(b, q + nx) << 6
+                        };
+                        let cases = columns(r + i0) | columns(r + i0 + 1) << 1;
+                        for (n, case) in cases.to_le_bytes().into_iter().enumerate() {
+                            if case == 0 || case == 255 {
+                                continue;
                             }
+                            push_cell_triangles(
+                                self.tables,
+                                case,
+                                r + i0 + n,
+                                &edge_ref,
+                                [&cur, &next],
+                                flag,
+                                &mut out.indices,
+                            );
                         }
-                        if or == 0 || and == ALL_ONE {
-                            continue;
-                        }
+                        continue;
                     }
                     let mut left = column(i0);
                     for i in i0..i1 {
