@@ -56,29 +56,54 @@ fn read_in_pieces(bytes: &[u8], piece_bytes: usize) -> Option<FastRead> {
         .map(|(piece, &f)| parse_piece(piece, n - f))
         .collect::<Option<_>>()?;
     let mut top = empty_topology(n);
-    let mut positions = Vec::with_capacity(n);
     let mut table = TypeTable::default();
-    // The pieces' distinct names, in order, become the topology's (first seen first).
+    // The pieces' distinct names, in order, become the topology's (first seen first); each
+    // piece's atoms then take their global name ids and charges in parallel.
     let mut charge_of: Vec<f32> = Vec::new();
+    let globals: Vec<Vec<u32>> = parsed
+        .iter()
+        .map(|piece| {
+            piece
+                .names
+                .values
+                .iter()
+                .map(|name| {
+                    let text = free_text(name);
+                    let id = top.names.intern(&text);
+                    if id as usize == charge_of.len() {
+                        charge_of.push(table.get(&text).1);
+                    }
+                    id
+                })
+                .collect()
+        })
+        .collect();
+    if parsed.iter().map(|p| p.positions.len()).sum::<usize>() != n {
+        return None;
+    }
+    let mut ids = vec![0u32; n];
+    let mut charges = vec![0.0f32; n];
+    let mut targets = Vec::with_capacity(parsed.len());
+    let (mut ids_rest, mut charges_rest) = (&mut ids[..], &mut charges[..]);
     for piece in &parsed {
-        let global: Vec<u32> = piece
-            .names
-            .values
-            .iter()
-            .map(|name| {
-                let text = free_text(name);
-                let id = top.names.intern(&text);
-                if id as usize == charge_of.len() {
-                    charge_of.push(table.get(&text).1);
-                }
-                id
-            })
-            .collect();
-        for &local in &piece.names.ids {
-            let id = global[local as usize];
-            top.names.push_id(id);
-            top.charges.push(charge_of[id as usize]);
-        }
+        let len = piece.positions.len();
+        let (ids_head, ids_tail) = ids_rest.split_at_mut(len);
+        let (charges_head, charges_tail) = charges_rest.split_at_mut(len);
+        targets.push((ids_head, charges_head));
+        (ids_rest, charges_rest) = (ids_tail, charges_tail);
+    }
+    targets.into_par_iter().zip(&parsed).zip(&globals).for_each(
+        |(((ids, charges), piece), global)| {
+            for ((id, charge), &local) in ids.iter_mut().zip(charges).zip(&piece.names.ids) {
+                *id = global[local as usize];
+                *charge = charge_of[*id as usize];
+            }
+        },
+    );
+    top.names.extend_ids(&ids);
+    top.charges = charges;
+    let mut positions = Vec::with_capacity(n);
+    for piece in &parsed {
         positions.extend_from_slice(&piece.positions);
     }
     // Names are the types; no element (guessed later from the name) and no mass.

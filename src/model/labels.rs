@@ -77,6 +77,16 @@ impl Labels {
         self.ids.push(id);
     }
 
+    /// Appends atoms whose values are the distinct strings `ids` (from [`Labels::intern`]).
+    pub fn extend_ids(&mut self, ids: &[u32]) {
+        let known = self.values.len() as u32;
+        assert!(
+            ids.iter().all(|&id| id < known),
+            "label id out of range ({known} values)"
+        );
+        self.ids.extend_from_slice(ids);
+    }
+
     /// Appends one atom with the value of atom `i` (no lookup: for runs of equal values).
     pub fn push_like(&mut self, i: usize) {
         self.ids.push(self.ids[i]);
