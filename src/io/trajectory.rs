@@ -171,7 +171,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     }
     trajectory.mark_truncated_stream()?;
     // A count mismatch is reported at once, not at the first frame the user asks for.
-    trajectory.read_frame(0)?;
+    trajectory.check_first_frame()?;
     trajectory.probe_tail();
     trajectory.check_dcd_size();
     Ok(trajectory)
@@ -229,6 +229,12 @@ impl Trajectory {
             });
         }
         let frame = self.lock().read_frame(index)?;
+        self.check_fits(&frame, index)?;
+        Ok(frame)
+    }
+
+    /// Fails unless `frame` (frame `index`) has one position per topology atom.
+    fn check_fits(&self, frame: &Frame, index: usize) -> Result<(), IoError> {
         if frame.positions.len() != self.topology.len() {
             return Err(IoError::AtomCountMismatch {
                 topology: self.topology_path.clone(),
@@ -238,7 +244,17 @@ impl Trajectory {
                 frame: index,
             });
         }
-        Ok(frame)
+        Ok(())
+    }
+
+    /// What [`Trajectory::read_frame`]`(0)` checks, without handing the frame out: a frame
+    /// held in memory (a single-frame file read at open) is checked in place, not copied.
+    fn check_first_frame(&self) -> Result<(), IoError> {
+        if let FrameSource::Memory { path, frame, .. } = &*self.lock() {
+            check_positions(path, 0, &frame.positions)?;
+            return self.check_fits(frame, 0);
+        }
+        self.read_frame(0).map(drop)
     }
 
     /// Reads frames `start..end` (clamped to the readable frames) one after the other, calling
