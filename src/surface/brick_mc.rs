@@ -56,7 +56,9 @@ pub(super) fn march_bricks(
     }
     let layers = nz - 1;
     let threads = rayon::current_num_threads().max(1);
-    let bricks_per_slab = (vol.bdims[2] / (8 * threads)).clamp(1, 8);
+    // About eight slabs per thread, but at least two brick layers each: a slab starts by
+    // flagging and numbering two planes, which on small grids costs as much as marching one.
+    let bricks_per_slab = (vol.bdims[2] / (8 * threads)).clamp(2, 8);
     let planes = bricks_per_slab * BRICK;
     let slabs = layers.div_ceil(planes);
     let ctx = Ctx {

@@ -45,13 +45,14 @@ const EMPTY: u32 = u32::MAX;
 
 /// Grid planes per atom slab for [`BrickVolume::compute`]: a whole number of brick layers,
 /// computed in one pass (fewer passes over each atom and fewer shared planes), as many as keep
-/// a thread's scratch (16 bytes per sample) near 32 MB and leave four groups per thread.
+/// a thread's scratch (16 bytes per sample) near 32 MB and leave two groups per thread (fewer
+/// passes over each atom on small grids, where each atom spans more than one brick layer).
 pub fn slab_planes(grid: &GridSpec) -> u32 {
     let [nx, ny, nz] = grid.dims.map(|d| d as usize);
     let layer_bytes = (nx * ny * BRICK * 16).max(1);
     let threads = rayon::current_num_threads().max(1);
     let by_memory = (32 << 20) / layer_bytes;
-    let by_balance = nz.div_ceil(BRICK) / (4 * threads);
+    let by_balance = nz.div_ceil(BRICK) / (2 * threads);
     (by_memory.min(by_balance).clamp(1, 4) * BRICK) as u32
 }
 
