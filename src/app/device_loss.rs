@@ -87,7 +87,26 @@ impl DeviceWatch {
         }
         self.lost()
     }
+
+    /// [`DeviceWatch::lost_after_poll`], first waiting up to `timeout` for the work submitted
+    /// to the device: a device destroyed while work is in flight reports its loss only once
+    /// that work has ended, which on a busy machine can come after the panic the loss caused.
+    pub fn lost_after_wait(&self, timeout: std::time::Duration) -> Option<String> {
+        if let Some(reason) = self.lost() {
+            return Some(reason);
+        }
+        if let Some(device) = self.device.lock().ok().and_then(|d| d.clone()) {
+            let _ = device.poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(timeout),
+            });
+        }
+        self.lost_after_poll()
+    }
 }
+
+/// How long a panicking window waits for its device to report a loss.
+const LOSS_REPORT_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
 
 /// What a reopened window restores.
 #[derive(Debug, Clone)]
@@ -175,10 +194,11 @@ pub fn run_guarded<T>(watch: &DeviceWatch, window: impl FnOnce() -> T) -> Option
     let previous: Arc<PanicHook> = Arc::from(std::panic::take_hook());
     let (hook, quiet) = (previous.clone(), watch.clone());
     std::panic::set_hook(Box::new(move |info| {
-        // Polling here is what delivers the loss report in time. wgpu itself no longer panics
-        // (its error handler is replaced in `attach`), so the panics that reach this hook come
-        // from egui-wgpu's own checks, outside wgpu's locks.
-        if quiet.lost_after_poll().is_none() {
+        // Polling here (waiting briefly for the work in flight) is what delivers the loss
+        // report in time. wgpu itself no longer panics (its error handler is replaced in
+        // `attach`), so the panics that reach this hook come from egui-wgpu's own checks,
+        // outside wgpu's locks.
+        if quiet.lost_after_wait(LOSS_REPORT_WAIT).is_none() {
             hook(info);
         }
     }));
@@ -187,7 +207,7 @@ pub fn run_guarded<T>(watch: &DeviceWatch, window: impl FnOnce() -> T) -> Option
     std::panic::set_hook(Box::new(move |info| previous(info)));
     match outcome {
         Ok(value) => Some(value),
-        Err(_) if watch.lost_after_poll().is_some() => None,
+        Err(_) if watch.lost_after_wait(LOSS_REPORT_WAIT).is_some() => None,
         Err(panic) => std::panic::resume_unwind(panic),
     }
 }
