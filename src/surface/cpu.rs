@@ -149,6 +149,23 @@ impl SurfaceEngine for CpuEngine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
     ) -> Result<SurfaceOutput, SurfaceError> {
+        // Called from outside the thread pool, the whole frame runs on one of its threads: its
+        // dozen parallel stages then start from inside the pool instead of each waking the
+        // pool from outside and putting the caller to sleep until it finishes.
+        if rayon::current_thread_index().is_none() {
+            return rayon::scope(|_| self.compute_in_pool(atoms, params));
+        }
+        self.compute_in_pool(atoms, params)
+    }
+}
+
+impl CpuEngine {
+    /// [`SurfaceEngine::compute`], run on a thread of the pool.
+    fn compute_in_pool(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+    ) -> Result<SurfaceOutput, SurfaceError> {
         let grid = self.plan(atoms, params)?;
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
 
