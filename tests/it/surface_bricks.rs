@@ -10,7 +10,7 @@ use mdsurf::io;
 use mdsurf::model::ColorScheme;
 use mdsurf::surface::{
     AtomSet, BrickStats, CpuEngine, MeshCounts, Quality, SurfaceEngine, SurfaceOutput,
-    SurfaceParams,
+    SurfaceParams, VertexMode,
 };
 
 use crate::data_support::data;
@@ -64,14 +64,17 @@ fn both(atoms: &AtomSet<'_>, params: &SurfaceParams) -> (SurfaceOutput, SurfaceO
     let dense = CpuEngine::dense()
         .compute(atoms, params)
         .expect("dense surface");
-    let mut engine = CpuEngine::new();
+    let mut engine = CpuEngine::bricks();
     let sparse = engine.compute(atoms, params).expect("sparse surface");
     let stats = engine.brick_stats().expect("sparse engine reports bricks");
     assert_eq!(
         dense.counts_without_mesh, None,
         "the mesh is kept by default"
     );
-    for (name, mut measurer) in [("dense", CpuEngine::dense()), ("sparse", CpuEngine::new())] {
+    for (name, mut measurer) in [
+        ("dense", CpuEngine::dense()),
+        ("sparse", CpuEngine::bricks()),
+    ] {
         measurer.set_keep_mesh(false);
         let m = measurer.compute(atoms, params).expect("measured surface");
         assert!(
@@ -126,6 +129,64 @@ fn sparse_equals_dense_on_adk() {
 #[test]
 fn sparse_equals_dense_on_1hpv() {
     check_file("1hpv.pdb", None, &SurfaceParams::default());
+}
+
+/// Refined vertices (on the exact Gaussian sum) come out the same on both paths too.
+#[test]
+fn sparse_equals_dense_with_refined_vertices() {
+    let (pos, radii, colours) = load("1hpv.pdb", None);
+    let atoms = AtomSet {
+        positions: &pos,
+        radii: &radii,
+        colours: Some(&colours),
+    };
+    let params = SurfaceParams {
+        spacing: 1.5,
+        ..SurfaceParams::default()
+    };
+    let refined = |engine: CpuEngine| {
+        engine
+            .with_vertices(VertexMode::Refined)
+            .compute(&atoms, &params)
+            .expect("refined surface")
+    };
+    let dense = refined(CpuEngine::dense());
+    let sparse = refined(CpuEngine::bricks());
+    assert!(sparse.mesh.triangle_count() > 1000, "tiny mesh");
+    assert_same("1hpv refined", &dense, &sparse);
+}
+
+/// The default engine takes the dense path on small grids and bricks on large ones, with the
+/// same results as either.
+#[test]
+fn the_default_engine_picks_dense_for_small_grids_only() {
+    let (pos, radii, colours) = load("1hpv.pdb", None);
+    let atoms = AtomSet {
+        positions: &pos,
+        radii: &radii,
+        colours: Some(&colours),
+    };
+    for (spacing, dense_expected) in [(1.0, true), (0.5, false)] {
+        let params = SurfaceParams {
+            spacing,
+            ..SurfaceParams::default()
+        };
+        let mut engine = CpuEngine::new();
+        let out = engine.compute(&atoms, &params).expect("surface");
+        let samples: u64 = out.grid.dims.iter().map(|&d| u64::from(d)).product();
+        assert_eq!(
+            samples <= mdsurf::surface::cpu::DENSE_MAX_SAMPLES,
+            dense_expected,
+            "H = {spacing}: {samples} samples"
+        );
+        assert_eq!(
+            engine.brick_stats().is_none(),
+            dense_expected,
+            "H = {spacing}: bricks used on {samples} samples"
+        );
+        let reference = CpuEngine::dense().compute(&atoms, &params).expect("dense");
+        assert_same("default engine", &reference, &out);
+    }
 }
 
 #[test]
@@ -231,7 +292,7 @@ fn one_engine_reused_across_systems_matches_fresh_dense_results() {
         .map(|p| *p + Vec3::new(0.37, -1.1, 2.9))
         .collect();
     let params = SurfaceParams::default();
-    let mut engine = CpuEngine::new();
+    let mut engine = CpuEngine::bricks();
     let systems: [System<'_>; 4] = [
         (&pos, &radii, &colours),
         (&spos, &sradii, &scolours),
@@ -264,7 +325,11 @@ fn sparse_result_does_not_depend_on_thread_count() {
             .num_threads(threads)
             .build()
             .expect("pool")
-            .install(|| CpuEngine::new().compute(&atoms, &params).expect("sparse"))
+            .install(|| {
+                CpuEngine::bricks()
+                    .compute(&atoms, &params)
+                    .expect("sparse")
+            })
     };
     let one = run(1);
     for threads in [3, 7] {
