@@ -83,7 +83,7 @@ impl CpuEngine {
     }
 
     /// An engine on the dense reference path: full density and colour volumes, every cell
-    /// marched. Gives the same mesh as the default sparse engine; kept for tests and comparison.
+    /// marched. Gives the same mesh as the sparse bricks; what the default engine uses on small grids.
     pub fn dense() -> CpuEngine {
         CpuEngine {
             dense: true,
