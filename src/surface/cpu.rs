@@ -83,7 +83,8 @@ impl CpuEngine {
     }
 
     /// An engine on the dense reference path: full density and colour volumes, every cell
-    /// marched. Gives the same mesh as the sparse bricks; what the default engine uses on small grids.
+    /// marched. Gives the same mesh as the sparse bricks; the default engine takes it on small
+    /// grids only.
     pub fn dense() -> CpuEngine {
         CpuEngine {
             dense: true,
