@@ -101,13 +101,19 @@ fn both(atoms: &AtomSet<'_>, params: &SurfaceParams) -> (SurfaceOutput, SurfaceO
     (dense, sparse, stats)
 }
 
+/// The atoms of [`load`]'s result, with their colours.
+fn coloured_atoms(loaded: &(Vec<Vec3>, Vec<f32>, Vec<[f32; 3]>)) -> AtomSet<'_> {
+    let (positions, radii, colours) = loaded;
+    AtomSet {
+        positions,
+        radii,
+        colours: Some(colours),
+    }
+}
+
 fn check_file(top: &str, traj: Option<&str>, params: &SurfaceParams) -> BrickStats {
-    let (pos, radii, colours) = load(top, traj);
-    let atoms = AtomSet {
-        positions: &pos,
-        radii: &radii,
-        colours: Some(&colours),
-    };
+    let loaded = load(top, traj);
+    let atoms = coloured_atoms(&loaded);
     let (dense, sparse, stats) = both(&atoms, params);
     assert!(sparse.mesh.is_closed(), "{top}: sparse mesh not closed");
     assert!(sparse.mesh.triangle_count() > 1000, "{top}: tiny mesh");
@@ -134,12 +140,8 @@ fn sparse_equals_dense_on_1hpv() {
 /// Refined vertices (on the exact Gaussian sum) come out the same on both paths too.
 #[test]
 fn sparse_equals_dense_with_refined_vertices() {
-    let (pos, radii, colours) = load("1hpv.pdb", None);
-    let atoms = AtomSet {
-        positions: &pos,
-        radii: &radii,
-        colours: Some(&colours),
-    };
+    let loaded = load("1hpv.pdb", None);
+    let atoms = coloured_atoms(&loaded);
     let params = SurfaceParams {
         spacing: 1.5,
         ..SurfaceParams::default()
@@ -160,12 +162,8 @@ fn sparse_equals_dense_with_refined_vertices() {
 /// same results as either.
 #[test]
 fn the_default_engine_picks_dense_for_small_grids_only() {
-    let (pos, radii, colours) = load("1hpv.pdb", None);
-    let atoms = AtomSet {
-        positions: &pos,
-        radii: &radii,
-        colours: Some(&colours),
-    };
+    let loaded = load("1hpv.pdb", None);
+    let atoms = coloured_atoms(&loaded);
     for (spacing, dense_expected) in [(1.0, true), (0.5, false)] {
         let params = SurfaceParams {
             spacing,
@@ -313,12 +311,8 @@ fn one_engine_reused_across_systems_matches_fresh_dense_results() {
 
 #[test]
 fn sparse_result_does_not_depend_on_thread_count() {
-    let (pos, radii, colours) = load("1hpv.pdb", None);
-    let atoms = AtomSet {
-        positions: &pos,
-        radii: &radii,
-        colours: Some(&colours),
-    };
+    let loaded = load("1hpv.pdb", None);
+    let atoms = coloured_atoms(&loaded);
     let params = SurfaceParams::default();
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
