@@ -132,10 +132,9 @@ fn canonical_order_bucketed(
     drop(keyed);
     drop(fill);
 
-    let colour_of = |i: usize| atoms.colours.map_or([1.0; 3], |c| c[i]);
     let tie = |a: usize, b: usize| -> Ordering {
         let (pa, pb) = (atoms.positions[a], atoms.positions[b]);
-        let (ca, cb) = (colour_of(a), colour_of(b));
+        let (ca, cb) = (atoms.colour(a), atoms.colour(b));
         pa.x.total_cmp(&pb.x)
             .then(pa.y.total_cmp(&pb.y))
             .then(pa.z.total_cmp(&pb.z))
@@ -202,7 +201,6 @@ pub fn bin_atoms_overlapping(
     let nz = grid.dims[2];
     let (o, h) = (grid.origin, grid.spacing);
     let q = params.cutoff();
-    let colour_of = |i: usize| atoms.colours.map_or([1.0; 3], |c| c[i]);
 
     let order = canonical_order(atoms, grid);
 
@@ -218,7 +216,7 @@ pub fn bin_atoms_overlapping(
                 k: 0.5 / (alpha * alpha),
                 cut,
                 cut2: cut * cut,
-                colour: colour_of(i),
+                colour: atoms.colour(i),
             }
         })
         .collect();

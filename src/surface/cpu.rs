@@ -110,9 +110,7 @@ impl CpuEngine {
 
     /// True when this engine computes `grid` on the dense path.
     fn dense_for(&self, grid: &GridSpec) -> bool {
-        self.dense
-            || (!self.always_bricks
-                && grid.dims.map(u64::from).iter().product::<u64>() <= DENSE_MAX_SAMPLES)
+        self.dense || (!self.always_bricks && grid.voxel_count() <= DENSE_MAX_SAMPLES)
     }
 
     /// This engine with vertices placed as `mode` says.

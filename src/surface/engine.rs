@@ -28,6 +28,11 @@ impl AtomSet<'_> {
         self.positions.is_empty()
     }
 
+    /// Linear RGB colour of atom `i` (white when the set has no colours).
+    pub fn colour(&self, i: usize) -> [f32; 3] {
+        self.colours.map_or([1.0; 3], |c| c[i])
+    }
+
     /// Checks the atoms: at least one, equal slice lengths, finite coordinates (Å), positive
     /// finite radii (Å) and finite colours.
     pub fn validate(&self) -> Result<(), SurfaceError> {

@@ -171,7 +171,7 @@ fn the_default_engine_picks_dense_for_small_grids_only() {
         };
         let mut engine = CpuEngine::new();
         let out = engine.compute(&atoms, &params).expect("surface");
-        let samples: u64 = out.grid.dims.iter().map(|&d| u64::from(d)).product();
+        let samples = out.grid.voxel_count();
         assert_eq!(
             samples <= mdsurf::surface::cpu::DENSE_MAX_SAMPLES,
             dense_expected,

@@ -121,7 +121,6 @@ pub fn bin_images(atoms: &AtomSet<'_>, params: &SurfaceParams, grid: &PeriodicGr
     let q = params.cutoff();
     let l = grid.extent();
     let h = grid.spacing;
-    let colour_of = |i: usize| atoms.colours.map_or([1.0; 3], |c| c[i]);
     let mut images: Vec<Image> = atoms
         .positions
         .par_iter()
@@ -141,7 +140,7 @@ pub fn bin_images(atoms: &AtomSet<'_>, params: &SurfaceParams, grid: &PeriodicGr
                 k: 0.5 / (alpha * alpha),
                 cut,
                 cut2: cut * cut,
-                colour: colour_of(i),
+                colour: atoms.colour(i),
             };
             let xs: Vec<f32> = shifts(w.x, cut, l.x, h.x).collect();
             let ys: Vec<f32> = shifts(w.y, cut, l.y, h.y).collect();
