@@ -2,7 +2,8 @@
 // byte of the cell based there, which of its own x/y/z edges the surface crosses, and its
 // triangle count; per workgroup of 256 points the sums of vertices, triangles and active cells,
 // which scan.wgsl then prefix-sums. Rust side: src/gpu/mc.rs (Classify).
-// Class word: case | crossed own edges << 8 | triangles << 12 | active << 16.
+// Class word: case | crossed own edges << 8 | triangles << 12 | active << 16, stored at the
+// point's entry (shaders/class_entries.wgsl).
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
@@ -34,6 +35,26 @@ fn table_word(i: u32) -> u32 {
 @group(0) @binding(6) var<storage, read_write> block_active: array<u32>;
 // Per BRICK^3 brick: 1 when some atom reaches it (shaders/bricks.wgsl); read when u.sparse != 0.
 @group(0) @binding(7) var<storage, read> brick_flags: array<u32>;
+// Twin of crate::gpu::types::GpuCounters, as words: on sparse classes, an entry past the class
+// buffers sets OVERFLOW_BRICKS and raises brick_slots, so the engine grows them (with the brick
+// slots) and runs the frame again.
+@group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
+const C_OVERFLOW: u32 = 2u;
+const OVERFLOW_BRICKS: u32 = 4u;
+const C_BRICK_SLOTS: u32 = 15u;
+
+// Stores the class word of point p (entry e); false when its brick slot lies past the class
+// buffers (flagged for the engine).
+fn store_class(e: u32, word: u32) -> bool {
+    if (e >= arrayLength(&classes)) {
+        let slots = e / (CLASS_APRON * CLASS_APRON * CLASS_APRON) + 1u;
+        atomicMax(&counters[C_BRICK_SLOTS], slots);
+        atomicOr(&counters[C_OVERFLOW], OVERFLOW_BRICKS);
+        return false;
+    }
+    classes[e] = word;
+    return true;
+}
 
 // Samples per brick edge (crate::gpu::plan::BRICK).
 const BRICK: u32 = 8u;
@@ -112,10 +133,13 @@ fn main(
         if (k < u.own_z1 && (verts > 0u || tris > 0u)) {
             is_active = 1u;
         }
-        classes[n] = case_id | (edges << 8u) | (tris << 12u) | (is_active << 16u);
-        counts = vec3<u32>(verts, tris, is_active);
-    } else if (n < u.class_points) {
-        // Above the slab, or far from every atom (sparse bricks): outside, no edges.
+        let word = case_id | (edges << 8u) | (tris << 12u) | (is_active << 16u);
+        if (store_class(class_entry(vec3<u32>(i, j, k)), word)) {
+            counts = vec3<u32>(verts, tris, is_active);
+        }
+    } else if (n < u.class_points && !sparse_classes()) {
+        // Above the slab, or far from every atom (sparse bricks): outside, no edges. (Sparse
+        // classes hold no entry for such points: compact.wgsl reads them as 0.)
         classes[n] = 0u;
     }
     sh[lid] = counts;

@@ -22,10 +22,26 @@ const C_SCAN_VERTICES: u32 = 7u;
 @group(0) @binding(3) var<storage, read> block_triangles: array<u32>;
 @group(0) @binding(4) var<storage, read> block_active: array<u32>;
 @group(0) @binding(5) var<storage, read_write> counters: array<u32>;
-// Global id of the first vertex on each point's crossed edges (valid where it has any).
+// Global id of the first vertex on each point's crossed edges (valid where it has any), at the
+// point's class entry.
 @group(0) @binding(6) var<storage, read_write> vertex_base: array<u32>;
-// Active cells: (local point index, global id of its first triangle).
+// Active cells: (local class point index, global id of its first triangle).
 @group(0) @binding(7) var<storage, read_write> active_cells: array<vec2<u32>>;
+// Density words: only the brick slot table is read (sparse classes, class_entries.wgsl).
+@group(0) @binding(8) var<storage, read> density: array<u32>;
+
+// The class word of local class point n, and its entry (NO_ENTRY when it has none: word 0).
+fn class_word(n: u32) -> vec2<u32> {
+    let p = class_point(n);
+    if (n >= u.class_points || p.z >= min(u.own_z1 + 1u, u.dims.z)) {
+        return vec2<u32>(0u, NO_ENTRY);
+    }
+    let e = class_entry(p);
+    if (e >= arrayLength(&classes)) {
+        return vec2<u32>(0u, NO_ENTRY);
+    }
+    return vec2<u32>(classes[e], e);
+}
 
 var<workgroup> sh: array<vec3<u32>, 256>;
 var<workgroup> block_empty: u32;
@@ -61,10 +77,8 @@ fn main(
     if (workgroupUniformLoad(&block_empty) != 0u) {
         return;
     }
-    var word = 0u;
-    if (n < u.class_points) {
-        word = classes[n];
-    }
+    let at = class_word(n);
+    let word = at.x;
     let own = vec3<u32>(countOneBits((word >> 8u) & 7u), (word >> 12u) & 15u, (word >> 16u) & 1u);
     sh[lid] = own;
     workgroupBarrier();
@@ -83,7 +97,7 @@ fn main(
     }
     let slab_vertices = block_vertices[block] + excl.x;
     if (own.x > 0u) {
-        vertex_base[n] = counters[C_SLAB_VERTEX_BASE] + slab_vertices;
+        vertex_base[at.y] = counters[C_SLAB_VERTEX_BASE] + slab_vertices;
     }
     if (own.z > 0u) {
         let tri = counters[C_SLAB_TRIANGLE_BASE] + block_triangles[block] + excl.y;

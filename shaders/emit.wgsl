@@ -136,16 +136,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         return;
     }
     let cell = active_cells[a];
-    let n = cell.x;
-    let layer = u.dims.x * u.dims.y;
-    let r = n % layer;
-    let p = vec3<u32>(r % u.dims.x, r / u.dims.x, u.own_z0 + n / layer);
-    let word = classes[n];
+    let p = class_point(cell.x);
+    let e0 = class_entry(p);
+    let word = classes[e0];
     let edges = (word >> 8u) & 7u;
     let vcap = atomicLoad(&counters[C_VERTEX_CAPACITY]);
     let tcap = atomicLoad(&counters[C_TRIANGLE_CAPACITY]);
     if (edges != 0u) {
-        var id = vertex_base[n];
+        var id = vertex_base[e0];
         for (var axis = 0u; axis < 3u; axis++) {
             if ((edges & (1u << axis)) != 0u) {
                 if (id < vcap) {
@@ -170,7 +168,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             let e = table_word(MC_TRI_BASE + 3u * t + v);
             let c = EDGE_CORNER0[e];
             let axis = e / 4u;
-            let q = n + (c & 1u) + u.dims.x * (((c >> 1u) & 1u) + u.dims.y * ((c >> 2u) & 1u));
+            let q = class_entry(p + vec3<u32>(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u));
             let qe = (classes[q] >> 8u) & 7u;
             indices[3u * tri + v] = vertex_base[q] + countOneBits(qe & ((1u << axis) - 1u));
         }

@@ -196,13 +196,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if (a >= counters[C_SCAN_ACTIVE]) {
         return;
     }
-    let n = active_cells[a].x;
-    let layer = u.dims.x * u.dims.y;
-    let r = n % layer;
-    let p = vec3<u32>(r % u.dims.x, r / u.dims.x, u.own_z0 + n / layer);
-    let edges = (classes[n] >> 8u) & 7u;
+    let p = class_point(active_cells[a].x);
+    let e = class_entry(p);
+    let edges = (classes[e] >> 8u) & 7u;
     let vcap = counters[C_VERTEX_CAPACITY];
-    var id = vertex_base[n];
+    var id = vertex_base[e];
     for (var axis = 0u; axis < 3u; axis++) {
         if ((edges & (1u << axis)) != 0u) {
             if (id < vcap) {

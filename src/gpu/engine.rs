@@ -15,8 +15,8 @@ use super::frame::{Recorder, Stages, Work};
 pub use super::options::{Changes, EngineOptions, FrameInfo};
 use super::output::{FrameStats, GpuSurface, Readbacks, Staging};
 use super::plan::{
-    BRICK, BRICK_SAMPLES, BufferPlan, FramePlan, MeshCapacity, first_brick_want, first_mesh_want,
-    grown_brick_want, grown_mesh_want, plan_frame,
+    BRICK, BRICK_SAMPLES, BufferPlan, CLASS_ENTRIES_PER_SLOT, FramePlan, MeshCapacity,
+    first_brick_want, first_mesh_want, grown_brick_want, grown_mesh_want, plan_frame,
 };
 use super::resources::Buffers;
 use super::timing::Timer;
@@ -41,6 +41,8 @@ struct State {
     brick_want: u64,
     /// A frame's reached bricks did not fit the brick slots: the next frame re-runs density.
     redo_density: bool,
+    /// The last frame held its class entries per brick slot ([`super::plan::ClassEntries`]).
+    sparse_classes: bool,
     /// Output set the last submitted frame wrote ([`super::resources::OUTPUT_SETS`]).
     output_set: usize,
     /// True when the last submitted frame overflowed: nobody draws its output set, so the next
@@ -193,6 +195,12 @@ impl GpuEngine {
     /// Bytes of GPU memory the engine's buffers hold.
     pub fn gpu_bytes(&self) -> u64 {
         self.buffers.bytes()
+    }
+
+    /// True when the last submitted frame held its class words, vertex bases and active cells
+    /// per brick slot ([`super::plan::ClassEntries`]) instead of per point of its slab.
+    pub fn sparse_classes(&self) -> bool {
+        self.state.sparse_classes
     }
 
     /// Sparse bricks of the last frame whose counters arrived: bricks covering the grid and
@@ -418,8 +426,17 @@ impl GpuEngine {
         }
         let set = st.output_set;
         self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);
-        self.stages
-            .prepare(&self.ctx, &mut self.buffers, &plan, params, n, work, sparse);
+        self.stages.prepare(
+            &self.ctx,
+            &mut self.buffers,
+            &plan,
+            params,
+            n,
+            work,
+            sparse,
+            sizes.class_entries.sparse,
+        );
+        self.state.sparse_classes = sizes.class_entries.sparse;
         let mut rec = Recorder::new(&self.ctx, wall_clock && !self.timer.enabled());
         self.stages
             .record(
@@ -613,9 +630,25 @@ impl GpuEngine {
         Ok(sparse_volume(plan, &words))
     }
 
-    /// Test hook: class words of the last slab (see `shaders/classify.wgsl`).
+    /// Test hook: class words of the last slab (see `shaders/classify.wgsl`), point
+    /// `i + nx * (j + ny * (k - own_z0))`; on sparse classes gathered from the brick slots'
+    /// entries (points without an entry are 0).
     pub fn read_classes(&self) -> Result<Vec<u32>, GpuError> {
-        self.read_planned(&self.buffers.classes.buffer, FramePlan::class_points)
+        if !self.state.sparse_classes {
+            return self.read_planned(&self.buffers.classes.buffer, FramePlan::class_points);
+        }
+        let Some(plan) = self.state.plan.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let mut staging = self.staging()?;
+        let table: Vec<u32> =
+            staging.read_pod(&self.ctx, &self.buffers.density.buffer, plan.brick_count())?;
+        let entries: Vec<u32> = staging.read_pod(
+            &self.ctx,
+            &self.buffers.classes.buffer,
+            self.buffers.classes.size() / 4,
+        )?;
+        Ok(sparse_classes(plan, &table, &entries))
     }
 
     /// Test hook: first slot of every bin cell after the scan.
@@ -661,6 +694,59 @@ fn sparse_volume(plan: &FramePlan, words: &[u32]) -> Vec<f32> {
                     f32::from_bits(word(at as usize))
                 };
                 out.push(v);
+            }
+        }
+    }
+    out
+}
+
+/// The class words of the last slab of `plan` per classified point, from the brick slot table
+/// (`table`) and the class entries of sparse classes: the host twin of `class_entry` in
+/// `shaders/class_entries.wgsl`.
+fn sparse_classes(plan: &FramePlan, table: &[u32], entries: &[u32]) -> Vec<u32> {
+    let [nx, ny, nz] = plan.grid.dims;
+    let [bx, by, _] = plan.brick_dims;
+    let Some(slab) = plan.slabs.last() else {
+        return Vec::new();
+    };
+    let slot = |b: [u32; 3]| {
+        table
+            .get((b[0] + bx * (b[1] + by * b[2])) as usize)
+            .copied()
+    };
+    let first = slot([0, 0, slab.dens_z0 / BRICK]).unwrap_or(0) & 0x7fff_ffff;
+    let apron = BRICK + 1;
+    let entry = |p: [u32; 3]| -> Option<usize> {
+        let up =
+            [0, 1, 2].map(|a| u32::from(p[a] % BRICK == BRICK - 1 && p[a] + 1 < [nx, ny, nz][a]));
+        for dz in 0..=up[2] {
+            for dy in 0..=up[1] {
+                for dx in 0..=up[0] {
+                    let d = [dx, dy, dz];
+                    let t = slot([0, 1, 2].map(|a| p[a] / BRICK + d[a]))?;
+                    if t >> 31 == 0 {
+                        let l = [0, 1, 2].map(|a| p[a] % BRICK + 1 - BRICK * d[a]);
+                        let local = l[0] + apron * (l[1] + apron * l[2]);
+                        return Some(
+                            ((t - first) as u64 * CLASS_ENTRIES_PER_SLOT + local as u64) as usize,
+                        );
+                    }
+                }
+            }
+        }
+        None
+    };
+    let class_z1 = (slab.own_z1 + 1).min(nz);
+    let mut out = Vec::with_capacity(plan.class_points() as usize);
+    for kl in 0..plan.class_layers {
+        let k = slab.own_z0 + kl;
+        for j in 0..ny {
+            for i in 0..nx {
+                let word = (k < class_z1)
+                    .then(|| entry([i, j, k]))
+                    .flatten()
+                    .and_then(|e| entries.get(e).copied());
+                out.push(word.unwrap_or(0));
             }
         }
     }

@@ -103,13 +103,15 @@ impl<'a> Recorder<'a> {
     }
 }
 
-/// The uniform of one slab (`sparse`: the frame runs on sparse bricks).
+/// The uniform of one slab (`sparse`: the frame runs on sparse bricks; `sparse_classes`: its
+/// class entries are held per brick slot, [`super::plan::ClassEntries`]).
 pub fn slab_uniform(
     plan: &FramePlan,
     params: &SurfaceParams,
     slab: &Slab,
     atoms: u64,
     sparse: bool,
+    sparse_classes: bool,
 ) -> SlabUniform {
     let g = &plan.grid;
     SlabUniform {
@@ -132,7 +134,7 @@ pub fn slab_uniform(
         centre: grid_centre(plan).to_array(),
         atom_count: atoms as u32,
         brick_dims: plan.brick_dims,
-        sparse: u32::from(sparse),
+        sparse: u32::from(sparse) | (u32::from(sparse && sparse_classes) << 1),
     }
 }
 
@@ -166,7 +168,8 @@ impl Stages {
     /// uniforms into one buffer at dynamic offsets) and rebuilds only the bind groups whose
     /// buffers were replaced, those of every output set together (so the first frame builds
     /// both). Creates no GPU object in steady state. `sparse`: density and classification run
-    /// on the sparse bricks the atoms reach.
+    /// on the sparse bricks the atoms reach; `sparse_classes`: the class entries are held per
+    /// brick slot (as the buffers were sized, [`super::plan::BufferPlan::class_entries`]).
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
@@ -177,13 +180,14 @@ impl Stages {
         atoms: u64,
         work: Work,
         sparse: bool,
+        sparse_classes: bool,
     ) {
         self.sparse = sparse;
         self.slab_values.clear();
         self.slab_values.extend(
             plan.slabs
                 .iter()
-                .map(|s| slab_uniform(plan, params, s, atoms, sparse)),
+                .map(|s| slab_uniform(plan, params, s, atoms, sparse, sparse_classes)),
         );
         b.slab_uniforms.write(ctx, &self.slab_values);
         let b = &*b;

@@ -161,6 +161,8 @@ pub mod classify {
     pub const BLOCK_ACTIVE: Slot = slot(6, "block_active", ReadWrite);
     /// Per sparse brick: reached by some atom (`shaders/bricks.wgsl`).
     pub const BRICK_FLAGS: Slot = slot(7, "brick_flags", Read);
+    /// Frame counters (sparse classes flag a class entry past the buffers).
+    pub const COUNTERS: Slot = slot(8, "counters", ReadWrite);
     /// Every binding (the layout).
     pub const ALL: &[Slot] = &[
         U,
@@ -171,6 +173,7 @@ pub mod classify {
         BLOCK_TRIANGLES,
         BLOCK_ACTIVE,
         BRICK_FLAGS,
+        COUNTERS,
     ];
 }
 
@@ -241,6 +244,8 @@ pub mod compact {
     pub const VERTEX_BASE: Slot = slot(6, "vertex_base", ReadWrite);
     /// Active cells.
     pub const ACTIVE: Slot = slot(7, "active_cells", ReadWrite);
+    /// Slab density (its brick slot table locates sparse class entries).
+    pub const DENSITY: Slot = slot(8, "density", Read);
     /// Every binding (the layout).
     pub const ALL: &[Slot] = &[
         U,
@@ -251,6 +256,7 @@ pub mod compact {
         COUNTERS,
         VERTEX_BASE,
         ACTIVE,
+        DENSITY,
     ];
 }
 

@@ -56,6 +56,7 @@ impl Classify {
                 (cl::BLOCK_TRIANGLES, &b.block_sums[1].buffer),
                 (cl::BLOCK_ACTIVE, &b.block_sums[2].buffer),
                 (cl::BRICK_FLAGS, &b.brick_flags.buffer),
+                (cl::COUNTERS, &b.counters),
             ],
         );
     }
@@ -97,6 +98,7 @@ impl Compact {
                 (co::COUNTERS, &b.counters),
                 (co::VERTEX_BASE, &b.vertex_base.buffer),
                 (co::ACTIVE, &b.active.buffer),
+                (co::DENSITY, &b.density.buffer),
             ],
         );
     }

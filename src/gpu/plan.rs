@@ -108,6 +108,39 @@ impl FramePlan {
 /// Samples per sparse brick ([`BRICK`]^3).
 pub const BRICK_SAMPLES: u64 = (BRICK * BRICK * BRICK) as u64;
 
+/// Class entries per brick slot on sparse classes, (`BRICK` + 1)^3 (`shaders/class_entries.wgsl`):
+/// a reached brick holds its own points' class words and vertex bases, and the points just below
+/// it in unreached bricks, whose cells reach into it.
+pub const CLASS_ENTRIES_PER_SLOT: u64 = ((BRICK + 1) * (BRICK + 1) * (BRICK + 1)) as u64;
+
+/// The class entries (class words and vertex bases) one slab needs and whether they are held
+/// per brick slot (`sparse`): on sparse bricks with `brick_slots` slots, per slot when that
+/// takes fewer entries than one per classified point ([`FramePlan::class_points`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ClassEntries {
+    /// Entries of the class-word and vertex-base buffers (the active-cell list holds as many).
+    pub entries: u64,
+    /// Held per brick slot.
+    pub sparse: bool,
+}
+
+impl ClassEntries {
+    /// The layout for `plan` with `brick_slots` (None: dense volumes).
+    pub fn for_plan(plan: &FramePlan, brick_slots: Option<u64>) -> ClassEntries {
+        let points = plan.class_points();
+        match brick_slots {
+            Some(slots) if slots * CLASS_ENTRIES_PER_SLOT < points => ClassEntries {
+                entries: slots * CLASS_ENTRIES_PER_SLOT,
+                sparse: true,
+            },
+            _ => ClassEntries {
+                entries: points,
+                sparse: false,
+            },
+        }
+    }
+}
+
 /// The most brick slots the largest binding allows (the colour slots, 12 bytes per sample,
 /// and the density table plus slots).
 pub fn brick_slot_limit(plan: &FramePlan, max_binding: u64) -> u64 {
@@ -544,12 +577,14 @@ pub struct BufferPlan {
     /// Slab colour, 12 bytes per voxel, or per sample of each brick slot (none without
     /// colours).
     pub colour: Need,
-    /// Class words, 4 bytes per classified point.
+    /// Class words, 4 bytes per class entry ([`ClassEntries`]).
     pub classes: Need,
-    /// Vertex base, 4 bytes per classified point.
+    /// Vertex base, 4 bytes per class entry.
     pub vertex_base: Need,
-    /// Active cells, 8 bytes per classified point.
+    /// Active cells, 8 bytes per class entry.
     pub active: Need,
+    /// Where the class entries live (per classified point, or per brick slot).
+    pub class_entries: ClassEntries,
     /// Each of the three block-sum arrays, 4 bytes per classification block.
     pub block_sums: Need,
     /// Reached flag per sparse brick (u32).
@@ -583,7 +618,8 @@ impl BufferPlan {
         let slack = |bytes| Need::slack(bytes, max_binding);
         let cells = plan.cell_count();
         let voxels = plan.slab_voxels();
-        let points = plan.class_points();
+        let class_entries = ClassEntries::for_plan(plan, brick_slots);
+        let entries = class_entries.entries;
         // Brick buffers are replaced with room for one more brick per axis: a box that
         // breathes across a multiple of 8 samples adds a whole brick layer, more than the
         // usual eighth to spare.
@@ -622,9 +658,10 @@ impl BufferPlan {
                 (true, Some(slots)) => Need::exact(slots * BRICK_SAMPLES * 12),
                 (true, None) => slack(voxels * 12),
             },
-            classes: slack(points * 4),
-            vertex_base: slack(points * 4),
-            active: slack(points * 8),
+            classes: slack(entries * 4),
+            vertex_base: slack(entries * 4),
+            active: slack(entries * 8),
+            class_entries,
             block_sums: slack(plan.class_blocks() * 4),
             brick_flags: brick_need(0),
             brick_scan: brick_need(0),

@@ -19,11 +19,14 @@ pub const DENSITY: &str = concat!(
 pub const CLASSIFY: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
     include_str!("../../shaders/brick_samples.wgsl"),
+    include_str!("../../shaders/class_entries.wgsl"),
     include_str!("../../shaders/classify.wgsl")
 );
 /// Marching Cubes compaction of active cells (`shaders/compact.wgsl` after the slab uniform).
 pub const COMPACT: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
+    include_str!("../../shaders/brick_samples.wgsl"),
+    include_str!("../../shaders/class_entries.wgsl"),
     include_str!("../../shaders/compact.wgsl")
 );
 /// Marching Cubes vertex and triangle emission (`shaders/emit.wgsl` after the slab uniform and
@@ -31,6 +34,7 @@ pub const COMPACT: &str = concat!(
 pub const EMIT: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
     include_str!("../../shaders/brick_samples.wgsl"),
+    include_str!("../../shaders/class_entries.wgsl"),
     include_str!("../../shaders/emit.wgsl")
 );
 /// Refined vertices on the exact Gaussian sum (`shaders/refine.wgsl` after the slab uniform and
@@ -38,6 +42,7 @@ pub const EMIT: &str = concat!(
 pub const REFINE: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
     include_str!("../../shaders/brick_samples.wgsl"),
+    include_str!("../../shaders/class_entries.wgsl"),
     include_str!("../../shaders/refine.wgsl")
 );
 /// Area, volume and indirect draw arguments (`shaders/measure.wgsl`).

@@ -88,13 +88,23 @@ fn assert_cpu_close(what: &str, gpu: &SurfaceOutput, cpu: &SurfaceOutput) {
     }
 }
 
+/// What a sparse frame used: the reached fraction of bricks, and whether its class entries
+/// were held per brick slot.
+struct SparseUse {
+    fraction: f64,
+    sparse_classes: bool,
+}
+
 /// Computes `atoms` sparse (with `slabs` as the slab cap) and dense (one pass) on one engine;
-/// asserts the meshes and density volumes agree exactly and both match the CPU engine; returns
-/// the reached fraction of bricks.
-fn sparse_vs_dense(what: &str, atoms: &Atoms, p: &SurfaceParams, slabs: Option<u32>) -> f64 {
-    let Some(mut engine) = engine() else {
-        return f64::NAN;
-    };
+/// asserts the meshes and density volumes agree exactly and both match the CPU engine. None
+/// without a GPU (allowed only when the suite does not require one).
+fn sparse_vs_dense(
+    what: &str,
+    atoms: &Atoms,
+    p: &SurfaceParams,
+    slabs: Option<u32>,
+) -> Option<SparseUse> {
+    let mut engine = engine()?;
     set_mode(&mut engine, false, None);
     let dense = engine.compute(&atoms.set(), p).expect("dense frame");
     let dense_density = engine.read_density().expect("dense density");
@@ -134,25 +144,33 @@ fn sparse_vs_dense(what: &str, atoms: &Atoms, p: &SurfaceParams, slabs: Option<u
 
     let cpu = CpuEngine::new().compute(&atoms.set(), p).expect("cpu");
     assert_cpu_close(what, &sparse, &cpu);
-    bricks.occupied_fraction()
+    Some(SparseUse {
+        fraction: bricks.occupied_fraction(),
+        sparse_classes: engine.sparse_classes(),
+    })
 }
 
 #[test]
 fn sparse_matches_dense_and_cpu_on_1hpv() {
     let atoms = load_pdb("1hpv.pdb");
-    let f = sparse_vs_dense("1hpv H=1", &atoms, &params(1.0), None);
-    // A compact protein still leaves bricks of its padded box unreached.
-    assert!(f.is_nan() || f < 1.0, "reached fraction {f}");
+    if let Some(used) = sparse_vs_dense("1hpv H=1", &atoms, &params(1.0), None) {
+        // A compact protein still leaves bricks of its padded box unreached.
+        assert!(used.fraction < 1.0, "reached fraction {}", used.fraction);
+    }
 }
 
 #[test]
 fn sparse_skips_the_inside_of_a_hollow_shell() {
     let atoms = shell(12_000, 0);
-    let f = sparse_vs_dense("shell 12k H=1.5", &atoms, &params(1.5), None);
-    assert!(
-        f.is_nan() || (0.05..0.6).contains(&f),
-        "reached fraction {f}"
-    );
+    if let Some(used) = sparse_vs_dense("shell 12k H=1.5", &atoms, &params(1.5), None) {
+        assert!(
+            (0.05..0.6).contains(&used.fraction),
+            "reached fraction {}",
+            used.fraction
+        );
+        // Mostly empty: class words, vertex bases and active cells live in the brick slots.
+        assert!(used.sparse_classes, "shell classified per point");
+    }
 }
 
 #[test]
@@ -160,6 +178,16 @@ fn sparse_through_slabs_matches_dense() {
     let atoms = load_pdb("1hpv.pdb");
     // 6 owned layers per slab: slabs cut through bricks of 8 layers.
     sparse_vs_dense("1hpv H=1.5 slabs", &atoms, &params(1.5), Some(6));
+}
+
+#[test]
+fn sparse_classes_through_slabs_match_dense() {
+    let atoms = shell(12_000, 2);
+    // 48 owned layers per slab: slabs cut through bricks, and a point's class entry may sit
+    // in the apron of a brick in the next brick layer.
+    if let Some(used) = sparse_vs_dense("shell 12k H=1.5 slabs", &atoms, &params(1.5), Some(48)) {
+        assert!(used.sparse_classes, "shell slabs classified per point");
+    }
 }
 
 /// An isovalue change re-runs only Marching Cubes, on the brick flags of the last full frame;
