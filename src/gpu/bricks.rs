@@ -12,12 +12,18 @@
 //! the high bit set when no atom reaches it), and the density and colour samples are stored
 //! brick-locally after it, [`BRICK_SAMPLES`](super::plan::BRICK_SAMPLES) per slot, counted
 //! from the slot of the slab's first brick layer; every stage that reads samples goes through
-//! that table (an unreached brick reads as 0). The slots are sized from the reached-brick
-//! count of earlier frames and grow like the mesh buffers (the density pass sets
+//! that table (an unreached brick reads as 0). The per-point Marching Cubes buffers (class
+//! words, vertex bases, active cells) are held per slot too when that takes fewer entries than
+//! one per point of the slab ([`ClassEntries`](super::plan::ClassEntries),
+//! `shaders/class_entries.wgsl`): 9^3 entries per slot, the brick's own points and the points
+//! just below it in unreached bricks, the only ones of those bricks whose cells reach a reached
+//! brick. A fresh engine's first sparse frame runs binning and this pass alone, reads the
+//! slot table back and sizes the slots from the most reached bricks of one slab
+//! ([`settled_brick_slots`](super::plan::settled_brick_slots)), so its density runs once; later
+//! frames grow the slots like the mesh buffers (the density pass, or classification, sets
 //! [`OVERFLOW_BRICKS`](super::types::OVERFLOW_BRICKS) when a slab's bricks do not fit, and the
-//! engine grows them and re-runs density). The per-point classification buffers (class
-//! words, vertex bases, active cells) keep the per-slab layout. The flags and list add 12
-//! bytes per brick (under 0.03 byte per sample).
+//! engine grows them and re-runs density). The flags and list add 12 bytes per brick (under
+//! 0.03 byte per sample).
 
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Uniform, groups_1d, module};

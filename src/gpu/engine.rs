@@ -16,7 +16,8 @@ pub use super::options::{Changes, EngineOptions, FrameInfo};
 use super::output::{FrameStats, GpuSurface, Readbacks, Staging};
 use super::plan::{
     BRICK, BRICK_SAMPLES, BufferPlan, CLASS_ENTRIES_PER_SLOT, FramePlan, MeshCapacity,
-    first_brick_want, first_mesh_want, grown_brick_want, grown_mesh_want, plan_frame,
+    ReachedBricks, first_mesh_want, grown_brick_want, grown_mesh_want, plan_frame,
+    settled_brick_slots,
 };
 use super::resources::Buffers;
 use super::timing::Timer;
@@ -353,15 +354,16 @@ impl GpuEngine {
         // Every buffer size comes from the plan's byte count, so `gpu_bytes` and the
         // device-free estimate (`BufferPlan::fresh_memory`) cannot drift apart.
         let sparse = self.options.sparse_bricks;
-        let brick_slots = sparse.then(|| {
-            if st.brick_want == 0 {
-                st.brick_want = self.options.initial_brick_slots.map_or_else(
-                    || first_brick_want(&plan, self.ctx.max_binding()),
-                    |s| s.max(1),
-                );
-            }
-            st.brick_want
-        });
+        if sparse
+            && st.brick_want == 0
+            && let Some(s) = self.options.initial_brick_slots
+        {
+            st.brick_want = s.max(1);
+        }
+        // The first sparse frame counts its reached bricks before density runs
+        // (`count_brick_slots`); until then the buffers hold one slot.
+        let probing = sparse && st.brick_want == 0;
+        let brick_slots = sparse.then_some(st.brick_want.max(1));
         let sizes = BufferPlan::new(
             &plan,
             n,
@@ -411,6 +413,11 @@ impl GpuEngine {
             ..Default::default()
         };
         q.write_buffer(&self.buffers.counters, 0, bytemuck::bytes_of(&counters));
+        if probing {
+            let sparse_classes = sizes.class_entries.sparse;
+            self.state.brick_want = self.count_brick_slots(&plan, params, n, sparse_classes)?;
+            return self.submit_unscoped(atoms, params, changes, wall_clock);
+        }
         let upload_ms = start.elapsed().as_secs_f64() * 1e3;
 
         self.frame += 1;
@@ -472,6 +479,42 @@ impl GpuEngine {
         st.plan = Some(plan);
         st.last = Some(info.clone());
         Ok((info, wall))
+    }
+
+    /// The brick slots of the first sparse frame on `plan`: runs binning and the sparse-brick
+    /// pass alone, waits for them, reads the brick slot table back and sizes the slots for the
+    /// most reached bricks of one slab ([`settled_brick_slots`]), so that the frame's density
+    /// runs once, in slots that hold its bricks. Once per engine: later frames grow the slots
+    /// from their counters.
+    fn count_brick_slots(
+        &mut self,
+        plan: &FramePlan,
+        params: &SurfaceParams,
+        atoms: u64,
+        sparse_classes: bool,
+    ) -> Result<u64, SurfaceError> {
+        self.stages.prepare(
+            &self.ctx,
+            &mut self.buffers,
+            plan,
+            params,
+            atoms,
+            Work::Full,
+            true,
+            sparse_classes,
+        );
+        let mut rec = Recorder::new(&self.ctx, false);
+        self.stages.record_bricks(&mut rec, &self.buffers);
+        let (cmd, _) = rec.finish();
+        self.ctx.queue.submit([cmd]);
+        self.ctx.wait()?;
+        let table: Vec<u32> = self.staging()?.read_pod(
+            &self.ctx,
+            &self.buffers.density.buffer,
+            plan.brick_count(),
+        )?;
+        let need = ReachedBricks::from_slot_table(plan, &table).slab_need(plan);
+        Ok(settled_brick_slots(plan, need, self.ctx.max_binding()))
     }
 
     /// Non-blocking: the newest counters that have arrived since the last call, if any. Grows

@@ -227,6 +227,14 @@ impl Stages {
         self.refine.prepare(ctx, b);
     }
 
+    /// Records binning and the sparse-brick pass alone (prepared by [`Stages::prepare`] with
+    /// [`Work::Full`] on sparse bricks): the engine counts a first frame's reached bricks from
+    /// the slot table it writes before sizing the brick slots.
+    pub fn record_bricks(&self, rec: &mut Recorder<'_>, b: &Buffers) {
+        self.binner.record(rec.encoder(), &self.scanner, b, None);
+        self.bricks.record(rec.encoder(), &self.scanner);
+    }
+
     /// Records the frame prepared by [`Stages::prepare`] into `rec` (after the caller reset the
     /// counters), writing the mesh and draw arguments into output set `set`; `refined`:
     /// vertices refined on the exact Gaussian sum and area and volume curvature-corrected

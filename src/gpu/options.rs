@@ -23,8 +23,9 @@ pub struct EngineOptions {
     /// kept to compare with). Both give the same mesh.
     pub sparse_bricks: bool,
     /// Initial brick slots of the sparse density and colour buffers (reached bricks they
-    /// hold); None estimates them from the grid ([`super::plan::first_brick_want`]). They grow
-    /// from the reached-brick count, re-running density when a frame's bricks did not fit.
+    /// hold); None counts the first sparse frame's reached bricks before its density runs
+    /// ([`super::plan::settled_brick_slots`]). They grow from the reached-brick count,
+    /// re-running density when a frame's bricks did not fit.
     pub initial_brick_slots: Option<u64>,
 }
 

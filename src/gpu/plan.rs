@@ -150,17 +150,6 @@ pub fn brick_slot_limit(plan: &FramePlan, max_binding: u64) -> u64 {
     by_colour.min(by_density).max(1)
 }
 
-/// The engine's first guess of the brick slots a sparse frame needs, before any frame counted
-/// its reached bricks: a quarter of the grid's bricks (rounded up to a multiple of 64), no
-/// more than a slab can use, within [`brick_slot_limit`]. A frame reaching more overflows
-/// once and re-runs in grown slots.
-pub fn first_brick_want(plan: &FramePlan, max_binding: u64) -> u64 {
-    (plan.brick_count() / 4)
-        .next_multiple_of(64)
-        .min(plan.max_slab_bricks())
-        .clamp(1, brick_slot_limit(plan, max_binding))
-}
-
 /// The brick slots the buffers grow to when a frame's slabs needed `slots` (the most reached
 /// bricks of one slab) and the buffers held `capacity` slots (None when they suffice): the
 /// need with an eighth to spare, rounded up to a multiple of 64 bricks, within
@@ -180,11 +169,11 @@ pub fn grown_brick_want(
 }
 
 /// The brick slots a fresh engine settles at for a frame on `plan` whose slabs need `slots`
-/// (the most reached bricks of one slab: [`ReachedBricks::slab_need`]): the first guess,
-/// grown once when the need passes it.
+/// (the most reached bricks of one slab: [`ReachedBricks::slab_need`]). Its first sparse
+/// frame counts the reached bricks before density runs (a brick pass, read back once), so the
+/// slots are sized from that count as [`grown_brick_want`] grows them, and density runs once.
 pub fn settled_brick_slots(plan: &FramePlan, slots: u64, max_binding: u64) -> u64 {
-    let first = first_brick_want(plan, max_binding);
-    grown_brick_want(plan, slots, first, max_binding).unwrap_or(first)
+    grown_brick_want(plan, slots.max(1), 0, max_binding).unwrap_or(1)
 }
 
 /// The most brick slots the engine can hold on `plan`: grown for a slab whose every brick is
@@ -201,6 +190,19 @@ pub struct ReachedBricks {
 }
 
 impl ReachedBricks {
+    /// The reached bricks per layer of `plan`, from the brick slot table the sparse-brick pass
+    /// writes (`shaders/bricks.wgsl`: a word per brick, high bit set when no atom reaches it).
+    pub fn from_slot_table(plan: &FramePlan, table: &[u32]) -> ReachedBricks {
+        let layer = (plan.brick_dims[0] * plan.brick_dims[1]).max(1) as usize;
+        ReachedBricks {
+            layers: table
+                .chunks(layer)
+                .take(plan.brick_dims[2] as usize)
+                .map(|l| l.iter().filter(|&&t| t >> 31 == 0).count() as u64)
+                .collect(),
+        }
+    }
+
     /// All reached bricks ([`super::output::FrameStats::reached_bricks`]).
     pub fn total(&self) -> u64 {
         self.layers.iter().sum()
@@ -793,6 +795,35 @@ mod tests {
         for a in 0..3 {
             assert!(plan.cell_dims[a] as f32 * plan.cell_size >= (plan.grid.dims[a] - 1) as f32);
         }
+    }
+
+    #[test]
+    fn reached_bricks_are_counted_per_layer_from_the_slot_table() {
+        let p = SurfaceParams::default();
+        // 3 x 2 x 2 bricks.
+        let plan = plan_frame(grid([20, 10, 12]), &p, 1.5, 1 << 30, 1 << 30, None).unwrap();
+        assert_eq!(plan.brick_dims, [3, 2, 2]);
+        const UNREACHED: u32 = 0x8000_0000;
+        // Layer 0 reaches bricks 1, 2 and 4; layer 1 brick 9 only.
+        let reached = [1, 2, 4, 9];
+        let mut slot = 0;
+        let table: Vec<u32> = (0..12)
+            .map(|b| {
+                let t = if reached.contains(&b) {
+                    slot
+                } else {
+                    slot | UNREACHED
+                };
+                slot += u32::from(reached.contains(&b));
+                t
+            })
+            .collect();
+        let counted = ReachedBricks::from_slot_table(&plan, &table);
+        assert_eq!(counted.layers, vec![3, 1]);
+        assert_eq!(counted.total(), 4);
+        // One slab holds both layers; the slots hold the need with room, in blocks of 64.
+        assert_eq!(counted.slab_need(&plan), 4);
+        assert_eq!(settled_brick_slots(&plan, 4, 1 << 30), 64);
     }
 
     #[test]

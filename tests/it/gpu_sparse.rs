@@ -288,6 +288,50 @@ fn sparse_brick_slots_grow_after_an_overflow() {
     }
 }
 
+/// A fresh engine counts its first sparse frame's reached bricks before density runs, so that
+/// frame fits its brick slots at once (no overflow, density once), even when more than a
+/// quarter of the bricks are reached (the shell), and through slabs.
+#[test]
+fn the_first_sparse_frame_fits_its_counted_brick_slots() {
+    for (what, atoms, p, slabs) in [
+        ("shell 12k H=1.5", shell(12_000, 0), params(1.5), None),
+        (
+            "1hpv H=1.5 slabs",
+            load_pdb("1hpv.pdb"),
+            params(1.5),
+            Some(6),
+        ),
+    ] {
+        let Some(mut dense) = engine() else {
+            return;
+        };
+        set_mode(&mut dense, false, slabs);
+        let d = dense.compute(&atoms.set(), &p).expect("dense frame");
+        let Some(mut sparse) = engine() else {
+            return;
+        };
+        set_mode(&mut sparse, true, slabs);
+        let info = sparse
+            .submit(&atoms.set(), &p, Changes::ALL)
+            .expect("submit");
+        let first = sparse.wait_stats(info.frame).expect("first counters");
+        assert!(
+            !first.overflow && !first.brick_overflow,
+            "{what}: first frame overflowed: {first:?}"
+        );
+        let bricks = sparse.brick_stats().expect("brick stats");
+        if slabs.is_none() {
+            // More than the quarter of the bricks an uncounted first guess would have held.
+            assert!(
+                bricks.occupied * 4 > bricks.bricks,
+                "{what}: only {bricks:?} reached: test too weak"
+            );
+        }
+        let mesh = sparse.read_mesh(&first).expect("mesh");
+        assert_same_mesh(what, &mesh, &d.mesh);
+    }
+}
+
 /// Steady state on sparse bricks: moving atoms (new positions, the same count and grid) create
 /// no GPU object once the buffers fit, blocking or submitted; submitted frames alternate
 /// between the output sets. Counted from the second frame: the first frame's counters may grow
