@@ -19,8 +19,22 @@ fn sparse_classes() -> bool {
     return (u.sparse & 2u) != 0u;
 }
 
+// On sparse classes, the slot of the slab's first brick layer (slots count from it); 0 on
+// dense classes. A thread that looks up several entries reads it once (class_entry_from).
+fn class_first_slot() -> u32 {
+    if (!sparse_classes()) {
+        return 0u;
+    }
+    return density[(u.dens_z0 / BRICK_EDGE) * u.brick_dims.x * u.brick_dims.y] & 0x7fffffffu;
+}
+
 // The entry of grid point p (global coordinates, in the slab's class layers), or NO_ENTRY.
 fn class_entry(p: vec3<u32>) -> u32 {
+    return class_entry_from(p, class_first_slot());
+}
+
+// class_entry with the slab's first slot already read (class_first_slot).
+fn class_entry_from(p: vec3<u32>, first: u32) -> u32 {
     if (!sparse_classes()) {
         return p.x + u.dims.x * (p.y + u.dims.y * (p.z - u.own_z0));
     }
@@ -34,7 +48,6 @@ fn class_entry(p: vec3<u32>) -> u32 {
         select(0u, 1u, l.y == BRICK_EDGE - 1u && p.y + 1u < u.dims.y),
         select(0u, 1u, l.z == BRICK_EDGE - 1u && p.z + 1u < u.dims.z),
     );
-    let first = density[(u.dens_z0 / BRICK_EDGE) * bd.x * bd.y] & 0x7fffffffu;
     for (var dz = 0u; dz <= up.z; dz++) {
         for (var dy = 0u; dy <= up.y; dy++) {
             for (var dx = 0u; dx <= up.x; dx++) {

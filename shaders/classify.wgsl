@@ -97,7 +97,12 @@ fn main(
     let class_z1 = min(u.own_z1 + 1u, u.dims.z);
     var counts = vec3<u32>(0u);
     var skip = false;
-    if (n < u.class_points && k < class_z1 && u.sparse != 0u) {
+    var entry = n;
+    if (n < u.class_points && k < class_z1 && sparse_classes()) {
+        // A point has an entry exactly when its cell touches a reached brick.
+        entry = class_entry(class_point(n));
+        skip = entry == NO_ENTRY;
+    } else if (n < u.class_points && k < class_z1 && u.sparse != 0u) {
         let r = n % layer;
         skip = !near_reached_brick(r % u.dims.x, r / u.dims.x, k);
     }
@@ -134,7 +139,7 @@ fn main(
             is_active = 1u;
         }
         let word = case_id | (edges << 8u) | (tris << 12u) | (is_active << 16u);
-        if (store_class(class_entry(vec3<u32>(i, j, k)), word)) {
+        if (store_class(entry, word)) {
             counts = vec3<u32>(verts, tris, is_active);
         }
     } else if (n < u.class_points && !sparse_classes()) {

@@ -827,6 +827,30 @@ mod tests {
     }
 
     #[test]
+    fn class_entries_move_to_brick_slots_only_when_that_takes_fewer() {
+        let p = SurfaceParams::default();
+        let plan = plan_frame(grid([64, 64, 64]), &p, 1.5, 1 << 30, 1 << 30, None).unwrap();
+        let points = plan.class_points();
+        let dense = ClassEntries::for_plan(&plan, None);
+        assert_eq!((dense.entries, dense.sparse), (points, false));
+        // 64 slots of 729 entries: far fewer than 64^3 points.
+        let few = ClassEntries::for_plan(&plan, Some(64));
+        assert_eq!(
+            (few.entries, few.sparse),
+            (64 * CLASS_ENTRIES_PER_SLOT, true)
+        );
+        // Every brick reached: the slots' entries (9^3 per 8^3 points) would take more.
+        let all = ClassEntries::for_plan(&plan, Some(plan.brick_count()));
+        assert_eq!((all.entries, all.sparse), (points, false));
+        let limits = DeviceLimits::NVIDIA_80GB;
+        let mesh = MeshCapacity::default();
+        let sizes = BufferPlan::new(&plan, 100, false, mesh, Some(64), &limits);
+        assert_eq!(sizes.classes.bytes, 64 * CLASS_ENTRIES_PER_SLOT * 4);
+        assert_eq!(sizes.active.bytes, 64 * CLASS_ENTRIES_PER_SLOT * 8);
+        assert_eq!(sizes.class_entries, few);
+    }
+
+    #[test]
     fn fresh_buffers_round_like_wgpu_and_start_at_16_bytes() {
         assert_eq!(Need::exact(0).fresh(), 16);
         assert_eq!(Need::exact(10).fresh(), 16);
