@@ -266,7 +266,7 @@ impl GpuEngine {
         let mut inner = Ok(None);
         let scoped = ctx.scoped(|| {
             inner = self
-                .submit_unscoped(atoms, params, changes, wall_clock)
+                .submit_unscoped(atoms, params, changes, wall_clock, false)
                 .map(Some);
             Ok(())
         });
@@ -284,12 +284,15 @@ impl GpuEngine {
         result
     }
 
+    /// `bricks_counted`: the brick slots were just sized from this frame's count of reached
+    /// bricks (`count_brick_slots`), so it goes on to compute.
     fn submit_unscoped(
         &mut self,
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
         changes: Changes,
         wall_clock: bool,
+        bricks_counted: bool,
     ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
         let start = Instant::now();
         params.validate()?;
@@ -360,9 +363,13 @@ impl GpuEngine {
         {
             st.brick_want = s.max(1);
         }
-        // The first sparse frame counts its reached bricks before density runs
-        // (`count_brick_slots`); until then the buffers hold one slot.
-        let probing = sparse && st.brick_want == 0;
+        // The first sparse frame of a system (a new atom count, after an error or new
+        // options) counts its reached bricks before density runs (`count_brick_slots`); until
+        // the engine's first count the buffers hold one slot.
+        let probing = sparse
+            && !bricks_counted
+            && self.options.initial_brick_slots.is_none()
+            && (st.brick_want == 0 || first);
         let brick_slots = sparse.then_some(st.brick_want.max(1));
         let sizes = BufferPlan::new(
             &plan,
@@ -416,7 +423,7 @@ impl GpuEngine {
         if probing {
             let sparse_classes = sizes.class_entries.sparse;
             self.state.brick_want = self.count_brick_slots(&plan, params, n, sparse_classes)?;
-            return self.submit_unscoped(atoms, params, changes, wall_clock);
+            return self.submit_unscoped(atoms, params, changes, wall_clock, true);
         }
         let upload_ms = start.elapsed().as_secs_f64() * 1e3;
 
@@ -481,11 +488,11 @@ impl GpuEngine {
         Ok((info, wall))
     }
 
-    /// The brick slots of the first sparse frame on `plan`: runs binning and the sparse-brick
-    /// pass alone, waits for them, reads the brick slot table back and sizes the slots for the
-    /// most reached bricks of one slab ([`settled_brick_slots`]), so that the frame's density
-    /// runs once, in slots that hold its bricks. Once per engine: later frames grow the slots
-    /// from their counters.
+    /// The brick slots of a system's first sparse frame on `plan`: runs binning and the
+    /// sparse-brick pass alone, waits for them, reads the brick slot table back and sizes the
+    /// slots for the most reached bricks of one slab ([`settled_brick_slots`]), so that the
+    /// frame's density runs once, in slots that hold its bricks. Once per system (the one wait
+    /// of the viewer's worker on the device): later frames grow the slots from their counters.
     fn count_brick_slots(
         &mut self,
         plan: &FramePlan,

@@ -332,6 +332,49 @@ fn the_first_sparse_frame_fits_its_counted_brick_slots() {
     }
 }
 
+/// Opening another system (a new atom count) on the same engine counts its reached bricks
+/// again: a shell that reaches many more bricks than the small protein before it fits its
+/// brick slots on its first frame (density runs once; only a mesh overflow re-runs Marching
+/// Cubes), and gives the dense mesh.
+#[test]
+fn a_new_system_counts_its_bricks_on_its_first_frame() {
+    let Some(mut sparse) = engine() else {
+        return;
+    };
+    let p = params(1.5);
+    let small = load_pdb("1hpv.pdb");
+    sparse.compute(&small.set(), &p).expect("1hpv frame");
+    let before = sparse.brick_stats().expect("1hpv bricks").occupied;
+    let big = shell(12_000, 0);
+    let info = sparse.submit(&big.set(), &p, Changes::ALL).expect("submit");
+    let first = sparse.wait_stats(info.frame).expect("shell counters");
+    assert!(
+        first.reached_bricks as u64 > 2 * before,
+        "shell reached {} bricks, 1hpv {before}: test too weak",
+        first.reached_bricks
+    );
+    assert!(
+        !first.brick_overflow,
+        "shell's bricks overflowed their slots: {first:?}"
+    );
+    // The mesh buffers, sized for 1hpv, may overflow: then only Marching Cubes runs again.
+    let stats = sparse.finish(info.frame, &big.set(), &p).expect("finish");
+    if first.overflow {
+        assert_eq!(
+            sparse.last_frame().map(|f| f.work),
+            Some(mdsurf::gpu::Work::Mc),
+            "the mesh rerun ran density again"
+        );
+    }
+    let Some(mut dense) = engine() else {
+        return;
+    };
+    set_mode(&mut dense, false, None);
+    let d = dense.compute(&big.set(), &p).expect("dense shell");
+    let mesh = sparse.read_mesh(&stats).expect("mesh");
+    assert_same_mesh("shell after 1hpv", &mesh, &d.mesh);
+}
+
 /// Steady state on sparse bricks: moving atoms (new positions, the same count and grid) create
 /// no GPU object once the buffers fit, blocking or submitted; submitted frames alternate
 /// between the output sets. Counted from the second frame: the first frame's counters may grow
