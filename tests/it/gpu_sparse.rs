@@ -232,26 +232,51 @@ fn sparse_partial_frames_match_dense() {
     assert_same_mesh("recoloured", &s.mesh, &d.mesh);
 }
 
+/// Two cases at H = 1.5 Å: a shell of `count` atoms (frame `frame`) in one pass, and 1hpv
+/// through slabs of 6 owned layers (cutting bricks of 8 layers), as (name, atoms, parameters,
+/// slab cap).
+fn shell_and_slabbed_1hpv(
+    count: usize,
+    frame: usize,
+) -> [(String, Atoms, SurfaceParams, Option<u32>); 2] {
+    [
+        (
+            format!("shell {count} H=1.5"),
+            shell(count, frame),
+            params(1.5),
+            None,
+        ),
+        (
+            "1hpv H=1.5 slabs".to_string(),
+            load_pdb("1hpv.pdb"),
+            params(1.5),
+            Some(6),
+        ),
+    ]
+}
+
+/// A dense engine (slab cap `slabs`) and its frame of `atoms`; None without a GPU.
+fn dense_frame(
+    atoms: &Atoms,
+    p: &SurfaceParams,
+    slabs: Option<u32>,
+) -> Option<(GpuEngine, SurfaceOutput)> {
+    let mut dense = engine()?;
+    set_mode(&mut dense, false, slabs);
+    let d = dense.compute(&atoms.set(), p).expect("dense frame");
+    Some((dense, d))
+}
+
 /// Density and colour live in brick slots sized from the reached bricks: an engine whose slots
 /// start far too small overflows its first frame (nothing drawn), grows them from the reached
 /// count and re-runs density, and then gives the dense path's mesh exactly, in one pass and
 /// through slabs; a fresh sparse engine holds less GPU memory than a dense one on a shell.
 #[test]
 fn sparse_brick_slots_grow_after_an_overflow() {
-    for (what, atoms, p, slabs) in [
-        ("shell 6k H=1.5", shell(6_000, 2), params(1.5), None),
-        (
-            "1hpv H=1.5 slabs",
-            load_pdb("1hpv.pdb"),
-            params(1.5),
-            Some(6),
-        ),
-    ] {
-        let Some(mut dense) = engine() else {
+    for (what, atoms, p, slabs) in shell_and_slabbed_1hpv(6_000, 2) {
+        let Some((dense, d)) = dense_frame(&atoms, &p, slabs) else {
             return;
         };
-        set_mode(&mut dense, false, slabs);
-        let d = dense.compute(&atoms.set(), &p).expect("dense frame");
         let Some(mut sparse) = engine() else {
             return;
         };
@@ -276,7 +301,7 @@ fn sparse_brick_slots_grow_after_an_overflow() {
             "{what}: the rerun did not re-run density"
         );
         let mesh = sparse.read_mesh(&stats).expect("mesh");
-        assert_same_mesh(what, &mesh, &d.mesh);
+        assert_same_mesh(&what, &mesh, &d.mesh);
         if slabs.is_none() {
             assert!(
                 sparse.gpu_bytes() < dense.gpu_bytes(),
@@ -293,20 +318,10 @@ fn sparse_brick_slots_grow_after_an_overflow() {
 /// quarter of the bricks are reached (the shell), and through slabs.
 #[test]
 fn the_first_sparse_frame_fits_its_counted_brick_slots() {
-    for (what, atoms, p, slabs) in [
-        ("shell 12k H=1.5", shell(12_000, 0), params(1.5), None),
-        (
-            "1hpv H=1.5 slabs",
-            load_pdb("1hpv.pdb"),
-            params(1.5),
-            Some(6),
-        ),
-    ] {
-        let Some(mut dense) = engine() else {
+    for (what, atoms, p, slabs) in shell_and_slabbed_1hpv(12_000, 0) {
+        let Some((_, d)) = dense_frame(&atoms, &p, slabs) else {
             return;
         };
-        set_mode(&mut dense, false, slabs);
-        let d = dense.compute(&atoms.set(), &p).expect("dense frame");
         let Some(mut sparse) = engine() else {
             return;
         };
@@ -328,7 +343,7 @@ fn the_first_sparse_frame_fits_its_counted_brick_slots() {
             );
         }
         let mesh = sparse.read_mesh(&first).expect("mesh");
-        assert_same_mesh(what, &mesh, &d.mesh);
+        assert_same_mesh(&what, &mesh, &d.mesh);
     }
 }
 
@@ -366,11 +381,9 @@ fn a_new_system_counts_its_bricks_on_its_first_frame() {
             "the mesh rerun ran density again"
         );
     }
-    let Some(mut dense) = engine() else {
+    let Some((_, d)) = dense_frame(&big, &p, None) else {
         return;
     };
-    set_mode(&mut dense, false, None);
-    let d = dense.compute(&big.set(), &p).expect("dense shell");
     let mesh = sparse.read_mesh(&stats).expect("mesh");
     assert_same_mesh("shell after 1hpv", &mesh, &d.mesh);
 }
