@@ -114,9 +114,12 @@ pub fn compute_binned_into(
                         plane.resize(vals.len(), 0.0);
                     }
                     let [r, g, b] = planes;
-                    fill_slab(bins, grid, s, vals, Some([r, g, b]));
-                    for (i, c) in cols.iter_mut().enumerate() {
-                        *c = [planes[0][i], planes[1][i], planes[2][i]].map(|v| v * inv_iso);
+                    fill_slab(bins, grid, s, vals, Some([&mut *r, &mut *g, &mut *b]));
+                    // Zipped, so the interleaving runs without bounds checks.
+                    for (c, ((r, g), b)) in
+                        cols.iter_mut().zip(r.iter().zip(g.iter()).zip(b.iter()))
+                    {
+                        *c = [*r * inv_iso, *g * inv_iso, *b * inv_iso];
                     }
                 })
             }),
