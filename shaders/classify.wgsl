@@ -46,6 +46,10 @@ const C_BRICK_SLOTS: u32 = 15u;
 // Stores the class word of point p (entry e); false when its brick slot lies past the class
 // buffers (flagged for the engine).
 fn store_class(e: u32, word: u32) -> bool {
+    if (!sparse_classes()) {
+        classes[e] = word;
+        return true;
+    }
     if (e >= arrayLength(&classes)) {
         let slots = e / (CLASS_APRON * CLASS_APRON * CLASS_APRON) + 1u;
         atomicMax(&counters[C_BRICK_SLOTS], slots);

@@ -32,8 +32,15 @@ const C_SCAN_VERTICES: u32 = 7u;
 
 // The class word of local class point n, and its entry (NO_ENTRY when it has none: word 0).
 fn class_word(n: u32) -> vec2<u32> {
+    if (n >= u.class_points) {
+        return vec2<u32>(0u, NO_ENTRY);
+    }
+    if (!sparse_classes()) {
+        // Dense classes: classify.wgsl wrote every point, 0 above the slab.
+        return vec2<u32>(classes[n], n);
+    }
     let p = class_point(n);
-    if (n >= u.class_points || p.z >= min(u.own_z1 + 1u, u.dims.z)) {
+    if (p.z >= min(u.own_z1 + 1u, u.dims.z)) {
         return vec2<u32>(0u, NO_ENTRY);
     }
     let e = class_entry(p);

@@ -139,9 +139,6 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let p = class_point(cell.x);
     let first = class_first_slot();
     let e0 = class_entry_from(p, first);
-    // The entries of the cell's corner points, looked up once each, when an edge needs one.
-    var corner_entry = array<u32, 8>(e0, NO_ENTRY, NO_ENTRY, NO_ENTRY, NO_ENTRY, NO_ENTRY,
-        NO_ENTRY, NO_ENTRY);
     let word = classes[e0];
     let edges = (word >> 8u) & 7u;
     let vcap = atomicLoad(&counters[C_VERTEX_CAPACITY]);
@@ -172,11 +169,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
             let e = table_word(MC_TRI_BASE + 3u * t + v);
             let c = EDGE_CORNER0[e];
             let axis = e / 4u;
-            if (corner_entry[c] == NO_ENTRY) {
-                let o = vec3<u32>(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u);
-                corner_entry[c] = class_entry_from(p + o, first);
-            }
-            let q = corner_entry[c];
+            let q = class_entry_from(p + vec3<u32>(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u), first);
             let qe = (classes[q] >> 8u) & 7u;
             indices[3u * tri + v] = vertex_base[q] + countOneBits(qe & ((1u << axis) - 1u));
         }
