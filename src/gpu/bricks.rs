@@ -17,9 +17,9 @@
 //! one per point of the slab ([`ClassEntries`](super::plan::ClassEntries),
 //! `shaders/class_entries.wgsl`): 9^3 entries per slot, the brick's own points and the points
 //! just below it in unreached bricks, the only ones of those bricks whose cells reach a reached
-//! brick. The first sparse frame of a system (a fresh engine, a new atom count) runs binning
-//! and this pass alone, reads the slot table back and sizes the slots from the most reached
-//! bricks of one slab
+//! brick. The first sparse frame of a system (a fresh engine's, or a new atom count on a grid
+//! of half as many bricks again as the one last counted) runs binning and this pass alone,
+//! reads the slot table back and sizes the slots from the most reached bricks of one slab
 //! ([`settled_brick_slots`](super::plan::settled_brick_slots)), so its density runs once; later
 //! frames grow the slots like the mesh buffers (the density pass, or classification, sets
 //! [`OVERFLOW_BRICKS`](super::types::OVERFLOW_BRICKS) when a slab's bricks do not fit, and the

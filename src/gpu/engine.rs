@@ -44,6 +44,10 @@ struct State {
     redo_density: bool,
     /// The last frame held its class entries per brick slot ([`super::plan::ClassEntries`]).
     sparse_classes: bool,
+    /// Bricks of the grid on which the brick slots were last counted (`count_brick_slots`).
+    counted_on_bricks: u64,
+    /// How many frames counted their reached bricks before density.
+    brick_counts: u64,
     /// Output set the last submitted frame wrote ([`super::resources::OUTPUT_SETS`]).
     output_set: usize,
     /// True when the last submitted frame overflowed: nobody draws its output set, so the next
@@ -196,6 +200,12 @@ impl GpuEngine {
     /// Bytes of GPU memory the engine's buffers hold.
     pub fn gpu_bytes(&self) -> u64 {
         self.buffers.bytes()
+    }
+
+    /// How many frames counted their reached bricks before their density ran: a system's
+    /// first sparse frame does (see [`super::bricks`]), a frame of the same system does not.
+    pub fn brick_counts(&self) -> u64 {
+        self.state.brick_counts
     }
 
     /// True when the last submitted frame held its class words, vertex bases and active cells
@@ -363,13 +373,16 @@ impl GpuEngine {
         {
             st.brick_want = s.max(1);
         }
-        // The first sparse frame of a system (a new atom count, after an error or new
-        // options) counts its reached bricks before density runs (`count_brick_slots`); until
-        // the engine's first count the buffers hold one slot.
+        // The first sparse frame of a system counts its reached bricks before density runs
+        // (`count_brick_slots`): the engine's first, and a new system's (a new atom count on
+        // a grid of half as many bricks again as the one last counted, so a `within`
+        // selection whose atoms come and go does not wait on the device each frame). Until the
+        // engine's first count the buffers hold one slot.
+        let grown_system = first && plan.brick_count() * 2 > st.counted_on_bricks * 3;
         let probing = sparse
             && !bricks_counted
             && self.options.initial_brick_slots.is_none()
-            && (st.brick_want == 0 || first);
+            && (st.brick_want == 0 || grown_system);
         let brick_slots = sparse.then_some(st.brick_want.max(1));
         let sizes = BufferPlan::new(
             &plan,
@@ -521,6 +534,8 @@ impl GpuEngine {
             plan.brick_count(),
         )?;
         let need = ReachedBricks::from_slot_table(plan, &table).slab_need(plan);
+        self.state.counted_on_bricks = plan.brick_count();
+        self.state.brick_counts += 1;
         Ok(settled_brick_slots(plan, need, self.ctx.max_binding()))
     }
 

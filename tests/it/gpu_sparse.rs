@@ -347,8 +347,8 @@ fn the_first_sparse_frame_fits_its_counted_brick_slots() {
     }
 }
 
-/// Opening another system (a new atom count) on the same engine counts its reached bricks
-/// again: a shell that reaches many more bricks than the small protein before it fits its
+/// Opening another system (a new atom count on a much larger grid) on the same engine counts
+/// its reached bricks again, while a few atoms fewer (a `within` selection) do not: a shell that reaches many more bricks than the small protein before it fits its
 /// brick slots on its first frame (density runs once; only a mesh overflow re-runs Marching
 /// Cubes), and gives the dense mesh.
 #[test]
@@ -360,9 +360,23 @@ fn a_new_system_counts_its_bricks_on_its_first_frame() {
     let small = load_pdb("1hpv.pdb");
     sparse.compute(&small.set(), &p).expect("1hpv frame");
     let before = sparse.brick_stats().expect("1hpv bricks").occupied;
+    assert_eq!(sparse.brick_counts(), 1, "the engine's first frame counts");
+    // A few atoms fewer (as a `within` selection changes from frame to frame): the same
+    // system, no new count and no wait on the device.
+    let keep = small.radii.len() - 20;
+    let fewer = Atoms {
+        positions: small.positions[..keep].to_vec(),
+        radii: small.radii[..keep].to_vec(),
+        colours: small.colours.as_ref().map(|c| c[..keep].to_vec()),
+    };
+    sparse
+        .compute(&fewer.set(), &p)
+        .expect("1hpv less 20 atoms");
+    assert_eq!(sparse.brick_counts(), 1, "a changed atom count recounted");
     let big = shell(12_000, 0);
     let info = sparse.submit(&big.set(), &p, Changes::ALL).expect("submit");
     let first = sparse.wait_stats(info.frame).expect("shell counters");
+    assert_eq!(sparse.brick_counts(), 2, "the shell was not counted");
     assert!(
         first.reached_bricks as u64 > 2 * before,
         "shell reached {} bricks, 1hpv {before}: test too weak",
