@@ -15,9 +15,8 @@ use super::frame::{Recorder, Stages, Work};
 pub use super::options::{Changes, EngineOptions, FrameInfo};
 use super::output::{FrameStats, GpuSurface, Readbacks, Staging};
 use super::plan::{
-    BRICK, BRICK_SAMPLES, BufferPlan, CLASS_ENTRIES_PER_SLOT, FramePlan, MeshCapacity,
-    ReachedBricks, first_mesh_want, grown_brick_want, grown_mesh_want, plan_frame,
-    settled_brick_slots,
+    BRICK, BRICK_SAMPLES, BufferPlan, CLASS_ENTRIES_PER_SLOT, FramePlan, MeshCapacity, SlotTable,
+    first_mesh_want, grown_brick_want, grown_mesh_want, plan_frame, settled_brick_slots,
 };
 use super::resources::Buffers;
 use super::timing::Timer;
@@ -533,7 +532,7 @@ impl GpuEngine {
             &self.buffers.density.buffer,
             plan.brick_count(),
         )?;
-        let need = ReachedBricks::from_slot_table(plan, &table).slab_need(plan);
+        let need = SlotTable::new(plan, &table).reached().slab_need(plan);
         self.state.counted_on_bricks = plan.brick_count();
         self.state.brick_counts += 1;
         Ok(settled_brick_slots(plan, need, self.ctx.max_binding()))
@@ -733,31 +732,28 @@ impl GpuEngine {
 }
 
 /// The density of the last slab of `plan` as a dense slab volume, from the words of the sparse
-/// density buffer: the brick slot table (slot of each reached brick, high bit set on unreached
-/// ones), then [`BRICK_SAMPLES`] samples per slot counted from the slab's first brick layer.
+/// density buffer: the brick slot table ([`SlotTable`]), then [`BRICK_SAMPLES`] samples per
+/// slot counted from the slab's first brick layer.
 fn sparse_volume(plan: &FramePlan, words: &[u32]) -> Vec<f32> {
     let [nx, ny, _] = plan.grid.dims;
-    let [bx, by, _] = plan.brick_dims;
     let Some(slab) = plan.slabs.last() else {
         return Vec::new();
     };
-    let table = plan.brick_count() as usize;
-    let word = |i: usize| words.get(i).copied().unwrap_or(0);
-    let base = word(((slab.dens_z0 / BRICK) * bx * by) as usize) & 0x7fff_ffff;
+    let slots = SlotTable::new(plan, words);
+    let first = slots.first_slot(slab);
+    let samples_from = plan.brick_count();
     let mut out = Vec::with_capacity(plan.slab_voxels() as usize);
     for kl in 0..slab.dens_layers {
         let k = slab.dens_z0 + kl;
         for j in 0..ny {
             for i in 0..nx {
-                let b = i / BRICK + bx * (j / BRICK + by * (k / BRICK));
-                let t = word(b as usize);
-                let v = if t >> 31 != 0 {
-                    0.0
-                } else {
-                    let local = i % BRICK + BRICK * (j % BRICK + BRICK * (k % BRICK));
-                    let at = table as u64 + (t - base) as u64 * BRICK_SAMPLES + local as u64;
-                    f32::from_bits(word(at as usize))
-                };
+                let v = slots
+                    .slot([i / BRICK, j / BRICK, k / BRICK])
+                    .map_or(0.0, |t| {
+                        let local = i % BRICK + BRICK * (j % BRICK + BRICK * (k % BRICK));
+                        let at = samples_from + (t - first) as u64 * BRICK_SAMPLES + local as u64;
+                        f32::from_bits(words.get(at as usize).copied().unwrap_or(0))
+                    });
                 out.push(v);
             }
         }
@@ -766,47 +762,40 @@ fn sparse_volume(plan: &FramePlan, words: &[u32]) -> Vec<f32> {
 }
 
 /// The class words of the last slab of `plan` per classified point, from the brick slot table
-/// (`table`) and the class entries of sparse classes: the host twin of `class_entry` in
-/// `shaders/class_entries.wgsl`.
+/// (`table`, [`SlotTable`]) and the class entries of sparse classes: the host twin of
+/// `class_entry` in `shaders/class_entries.wgsl`.
 fn sparse_classes(plan: &FramePlan, table: &[u32], entries: &[u32]) -> Vec<u32> {
-    let [nx, ny, nz] = plan.grid.dims;
-    let [bx, by, _] = plan.brick_dims;
+    let dims = plan.grid.dims;
     let Some(slab) = plan.slabs.last() else {
         return Vec::new();
     };
-    let slot = |b: [u32; 3]| {
-        table
-            .get((b[0] + bx * (b[1] + by * b[2])) as usize)
-            .copied()
-    };
-    let first = slot([0, 0, slab.dens_z0 / BRICK]).unwrap_or(0) & 0x7fff_ffff;
+    let slots = SlotTable::new(plan, table);
+    let first = slots.first_slot(slab);
     let apron = BRICK + 1;
     let entry = |p: [u32; 3]| -> Option<usize> {
-        let up =
-            [0, 1, 2].map(|a| u32::from(p[a] % BRICK == BRICK - 1 && p[a] + 1 < [nx, ny, nz][a]));
+        // Along an axis where p is the last sample of its brick, the brick above may hold it.
+        let up = [0, 1, 2].map(|a| u32::from(p[a] % BRICK == BRICK - 1 && p[a] + 1 < dims[a]));
         for dz in 0..=up[2] {
             for dy in 0..=up[1] {
                 for dx in 0..=up[0] {
                     let d = [dx, dy, dz];
-                    let t = slot([0, 1, 2].map(|a| p[a] / BRICK + d[a]))?;
-                    if t >> 31 == 0 {
+                    if let Some(t) = slots.slot([0, 1, 2].map(|a| p[a] / BRICK + d[a])) {
                         let l = [0, 1, 2].map(|a| p[a] % BRICK + 1 - BRICK * d[a]);
                         let local = l[0] + apron * (l[1] + apron * l[2]);
-                        return Some(
-                            ((t - first) as u64 * CLASS_ENTRIES_PER_SLOT + local as u64) as usize,
-                        );
+                        let e = (t - first) as u64 * CLASS_ENTRIES_PER_SLOT + local as u64;
+                        return Some(e as usize);
                     }
                 }
             }
         }
         None
     };
-    let class_z1 = (slab.own_z1 + 1).min(nz);
+    let class_z1 = (slab.own_z1 + 1).min(dims[2]);
     let mut out = Vec::with_capacity(plan.class_points() as usize);
     for kl in 0..plan.class_layers {
         let k = slab.own_z0 + kl;
-        for j in 0..ny {
-            for i in 0..nx {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
                 let word = (k < class_z1)
                     .then(|| entry([i, j, k]))
                     .flatten()

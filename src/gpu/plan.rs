@@ -182,6 +182,58 @@ pub fn largest_brick_slots(plan: &FramePlan, max_binding: u64) -> u64 {
     settled_brick_slots(plan, plan.max_slab_bricks(), max_binding)
 }
 
+/// The brick slot table the sparse-brick pass writes into the first words of the density
+/// buffer (`shaders/bricks.wgsl`), read on the host: per brick its slot (the exclusive scan of
+/// the reached flags), with [`SlotTable::UNREACHED`] set when no atom reaches it.
+#[derive(Debug, Clone, Copy)]
+pub struct SlotTable<'a> {
+    plan: &'a FramePlan,
+    words: &'a [u32],
+}
+
+impl<'a> SlotTable<'a> {
+    /// The bit set on an unreached brick's word.
+    pub const UNREACHED: u32 = 1 << 31;
+
+    /// The table of `plan` in `words` (its first [`FramePlan::brick_count`] words are read).
+    pub fn new(plan: &'a FramePlan, words: &'a [u32]) -> SlotTable<'a> {
+        SlotTable { plan, words }
+    }
+
+    /// The slot of brick `b` (brick coordinates), None when no atom reaches it (or it lies
+    /// outside the table).
+    pub fn slot(&self, b: [u32; 3]) -> Option<u32> {
+        let [bx, by, bz] = self.plan.brick_dims;
+        if b[0] >= bx || b[1] >= by || b[2] >= bz {
+            return None;
+        }
+        let t = *self.words.get((b[0] + bx * (b[1] + by * b[2])) as usize)?;
+        (t & Self::UNREACHED == 0).then_some(t)
+    }
+
+    /// The slot the slots of `slab` count from: that of its first density brick layer (the
+    /// reached bricks before it, for an unreached brick too).
+    pub fn first_slot(&self, slab: &Slab) -> u32 {
+        let [bx, by, _] = self.plan.brick_dims;
+        let at = ((slab.dens_z0 / BRICK) * bx * by) as usize;
+        self.words.get(at).copied().unwrap_or(0) & !Self::UNREACHED
+    }
+
+    /// Reached bricks per brick layer (z), bottom to top.
+    pub fn reached(&self) -> ReachedBricks {
+        let [bx, by, bz] = self.plan.brick_dims;
+        let layer = (bx * by).max(1) as usize;
+        ReachedBricks {
+            layers: self
+                .words
+                .chunks(layer)
+                .take(bz as usize)
+                .map(|l| l.iter().filter(|&&t| t & Self::UNREACHED == 0).count() as u64)
+                .collect(),
+        }
+    }
+}
+
 /// Reached sparse bricks per brick layer (z), counted on the host.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ReachedBricks {
@@ -190,19 +242,6 @@ pub struct ReachedBricks {
 }
 
 impl ReachedBricks {
-    /// The reached bricks per layer of `plan`, from the brick slot table the sparse-brick pass
-    /// writes (`shaders/bricks.wgsl`: a word per brick, high bit set when no atom reaches it).
-    pub fn from_slot_table(plan: &FramePlan, table: &[u32]) -> ReachedBricks {
-        let layer = (plan.brick_dims[0] * plan.brick_dims[1]).max(1) as usize;
-        ReachedBricks {
-            layers: table
-                .chunks(layer)
-                .take(plan.brick_dims[2] as usize)
-                .map(|l| l.iter().filter(|&&t| t >> 31 == 0).count() as u64)
-                .collect(),
-        }
-    }
-
     /// All reached bricks ([`super::output::FrameStats::reached_bricks`]).
     pub fn total(&self) -> u64 {
         self.layers.iter().sum()
@@ -803,7 +842,7 @@ mod tests {
         // 3 x 2 x 2 bricks.
         let plan = plan_frame(grid([20, 10, 12]), &p, 1.5, 1 << 30, 1 << 30, None).unwrap();
         assert_eq!(plan.brick_dims, [3, 2, 2]);
-        const UNREACHED: u32 = 0x8000_0000;
+        const UNREACHED: u32 = SlotTable::UNREACHED;
         // Layer 0 reaches bricks 1, 2 and 4; layer 1 brick 9 only.
         let reached = [1, 2, 4, 9];
         let mut slot = 0;
@@ -818,7 +857,7 @@ mod tests {
                 t
             })
             .collect();
-        let counted = ReachedBricks::from_slot_table(&plan, &table);
+        let counted = SlotTable::new(&plan, &table).reached();
         assert_eq!(counted.layers, vec![3, 1]);
         assert_eq!(counted.total(), 4);
         // One slab holds both layers; the slots hold the need with room, in blocks of 64.

@@ -108,6 +108,7 @@ fn sparse_vs_dense(
     set_mode(&mut engine, false, None);
     let dense = engine.compute(&atoms.set(), p).expect("dense frame");
     let dense_density = engine.read_density().expect("dense density");
+    let dense_classes = engine.read_classes().expect("dense classes");
     assert!(
         engine.brick_stats().is_none(),
         "{what}: dense path reports bricks"
@@ -124,6 +125,24 @@ fn sparse_vs_dense(
             .filter(|(s, d)| s.to_bits() != d.to_bits())
             .count();
         assert_eq!(differ, 0, "{what}: density samples differ from dense");
+        // Class words, gathered back from the brick slots' entries on sparse classes: every
+        // point's word is the dense path's (0 far from every atom).
+        let sparse_classes = engine.read_classes().expect("sparse classes");
+        assert_eq!(
+            sparse_classes.len(),
+            dense_classes.len(),
+            "{what}: class points"
+        );
+        let differ = sparse_classes
+            .iter()
+            .zip(&dense_classes)
+            .filter(|(s, d)| s != d)
+            .count();
+        assert_eq!(differ, 0, "{what}: class words differ from dense");
+        assert!(
+            dense_classes.iter().any(|&w| w != 0),
+            "{what}: no class word set"
+        );
     } else {
         let slabs_run = engine.last_frame().map(|f| f.slabs).unwrap_or(0);
         assert!(slabs_run > 1, "{what}: only {slabs_run} slab");
