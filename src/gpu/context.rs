@@ -2,8 +2,8 @@
 //! tests, benchmarks) or shared with the viewer's eframe device, with the adapter's real limits
 //! and timestamp queries where the adapter has them.
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use super::GpuError;
 
@@ -80,17 +80,16 @@ impl GpuContext {
     }
 
     async fn new_headless_async() -> Result<GpuContext, GpuError> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = instance
-            .request_adapter(&wgpu::RequestAdapterOptions {
-                power_preference: wgpu::PowerPreference::HighPerformance,
-                force_fallback_adapter: false,
-                compatible_surface: None,
-                apply_limit_buckets: false,
-            })
-            .await
-            .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        // Vulkan, Metal or DX12 first; OpenGL only where none of them has an adapter. An instance
+        // that also opened OpenGL (EGL) deadlocked NVIDIA's driver when it was dropped on one
+        // thread while another thread compiled a Vulkan pipeline. `WGPU_BACKEND` still chooses.
+        let adapter = match Self::headless_adapter(wgpu::Backends::PRIMARY).await {
+            Ok(adapter) => adapter,
+            Err(_) if std::env::var_os("WGPU_BACKEND").is_none() => {
+                Self::headless_adapter(wgpu::Backends::SECONDARY).await?
+            }
+            Err(e) => return Err(e),
+        };
         let info = adapter.get_info();
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let limits = Self::wanted_limits(&adapter.limits());
@@ -106,6 +105,23 @@ impl GpuContext {
             .await
             .map_err(|e| GpuError::Device(e.to_string()))?;
         Ok(Self::from_device(device, queue, String::new()).with_adapter(&info))
+    }
+
+    /// The high-performance adapter of an instance limited to `backends` (or to what
+    /// `WGPU_BACKEND` names).
+    async fn headless_adapter(backends: wgpu::Backends) -> Result<wgpu::Adapter, GpuError> {
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
+        descriptor.backends = backends;
+        let instance = wgpu::Instance::new(descriptor.with_env());
+        instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: None,
+                apply_limit_buckets: false,
+            })
+            .await
+            .map_err(|e| GpuError::NoAdapter(e.to_string()))
     }
 
     /// The limits mdsurf asks for: the adapter's own maxima for what bounds problem size and
@@ -248,6 +264,20 @@ impl GpuContext {
             .map(|_| ())
             .map_err(|e| GpuError::Device(e.to_string()))
     }
+}
+
+/// Serialises shader compilation (shader modules, compute and render pipelines) across the
+/// whole process, whatever the device. NVIDIA's Vulkan driver (580.159 on an H100) deadlocked
+/// inside `vkCreateComputePipelines` when several threads compiled pipelines at once on their
+/// own devices (eight test threads each building an engine; every thread stopped in the
+/// driver's locks, for minutes, at 0 % GPU use). Compiling is once per engine or renderer, so
+/// holding one lock around it costs nothing per frame.
+pub fn compile_lock() -> MutexGuard<'static, ()> {
+    static COMPILING: Mutex<()> = Mutex::new(());
+    // A panic while compiling leaves no state behind the lock, so a poisoned lock is usable.
+    COMPILING
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// Joins a multi-line wgpu error into one line.

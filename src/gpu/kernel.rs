@@ -94,6 +94,7 @@ impl Kernel {
             bind_group_layouts: &[Some(&layout.bgl)],
             immediate_size: 0,
         });
+        let _compiling = super::context::compile_lock();
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
             layout: Some(&pipeline_layout),
@@ -198,6 +199,7 @@ impl Kernel {
 
 /// Compiles a WGSL source.
 pub fn module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderModule {
+    let _compiling = super::context::compile_lock();
     device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
         source: wgpu::ShaderSource::Wgsl(source.into()),

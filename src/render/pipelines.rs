@@ -127,6 +127,9 @@ fn pipeline(device: &wgpu::Device, s: PipelineSpec<'_>) -> wgpu::RenderPipeline 
 
 impl Pipelines {
     pub fn new(device: &wgpu::Device) -> Self {
+        // One renderer's shaders and pipelines compile under the engine's process-wide lock
+        // (a driver deadlocked on concurrent compiles; see `compile_lock`).
+        let _compiling = crate::gpu::context::compile_lock();
         let scene = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("render_scene.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SCENE_WGSL.into()),

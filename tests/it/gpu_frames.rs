@@ -1,7 +1,8 @@
 //! The GPU engine over several frames and under stress: a jittered multi-frame trajectory,
 //! slider changes that re-run only what they affect (I: Marching Cubes; colours: the colour
 //! pass), a grid forced through slabs (same mesh as one pass), a mesh forced to overflow (flag,
-//! no draw, grow, rerun), and very uneven bins (a dense cluster plus far-away atoms).
+//! no draw, grow, rerun), very uneven bins (a dense cluster plus far-away atoms), and engines
+//! built on several threads at once.
 
 use crate::gpu_support::*;
 use glam::Vec3;
@@ -288,4 +289,39 @@ fn a_failed_frame_does_not_leave_stale_atoms_behind() {
     );
     // Same atoms again with good parameters: they must be uploaded, not taken as unchanged.
     compare(&mut engine, "after a failed frame", &b, &p);
+}
+
+/// Engines built and run on several threads at once, each on its own device (as the parallel
+/// tests do, or a headless export beside the viewer), all finish with the same mesh. NVIDIA's
+/// Vulkan driver deadlocked when threads compiled pipelines concurrently, until
+/// `gpu::context::compile_lock` serialised shader compilation across the process.
+#[test]
+fn engines_built_on_several_threads_at_once_agree() {
+    if context().is_none() {
+        return;
+    }
+    let atoms = cluster(60, 11, 5.0);
+    let p = SurfaceParams {
+        spacing: 0.8,
+        ..Default::default()
+    };
+    let meshes: Vec<_> = std::thread::scope(|s| {
+        let threads: Vec<_> = (0..4)
+            .map(|_| {
+                s.spawn(|| {
+                    let mut engine = engine().expect("GPU engine");
+                    engine.compute(&atoms.set(), &p).expect("GPU frame").mesh
+                })
+            })
+            .collect();
+        threads
+            .into_iter()
+            .map(|t| t.join().expect("engine thread"))
+            .collect()
+    });
+    assert!(meshes[0].triangle_count() > 100, "a surface of 60 atoms");
+    for (i, mesh) in meshes.iter().enumerate().skip(1) {
+        assert_eq!(mesh.indices, meshes[0].indices, "thread {i}: triangles");
+        assert_eq!(mesh.positions, meshes[0].positions, "thread {i}: vertices");
+    }
 }

@@ -162,9 +162,13 @@ struct Outcome {
     max_rss_kib: i64,
 }
 
-/// Runs `mdsurf ARGS`, killing it after [`TIME_LIMIT`], and collects its peak memory through
-/// `wait4` (this child's own resource usage, whatever other tests run at the same time).
-#[allow(clippy::zombie_processes)] // reaped by `wait4` below, not by `Child::wait`
+/// Runs `mdsurf ARGS`, killing it after [`TIME_LIMIT`], and collects its peak memory: the
+/// high-water mark of its own address space (`VmHWM` in `/proc/PID/status`), read every 5 ms
+/// while it runs. Not `wait4`'s `ru_maxrss`: Linux carries the spawning process's peak into a
+/// child's (the child starts as a copy of, or on, the parent's memory until it execs), so a
+/// test process that once held 1 GiB (GPU tests beside this one on an NVIDIA machine) made
+/// every mutant look like 1 GiB.
+#[allow(clippy::zombie_processes)] // reaped by `waitpid` below, not by `Child::wait`
 fn run(args: &[String]) -> Outcome {
     let mut child = Command::new(env!("CARGO_BIN_EXE_mdsurf"))
         .args(args)
@@ -182,14 +186,17 @@ fn run(args: &[String]) -> Outcome {
     let pid = child.id() as libc::pid_t;
     let start = Instant::now();
     let mut timed_out = false;
-    let (status, usage) = loop {
+    let mut peak_kib = 0;
+    let status = loop {
+        if let Some(kib) = own_peak_kib(pid) {
+            peak_kib = peak_kib.max(kib);
+        }
         let mut status = 0;
         // SAFETY: plain FFI call with valid pointers to locals; `pid` is our own child, reaped
         // only here (std's `Child` is never waited on).
-        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-        let done = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
+        let done = unsafe { libc::waitpid(pid, &mut status, libc::WNOHANG) };
         if done == pid {
-            break (status, usage);
+            break status;
         }
         if !timed_out && start.elapsed() > TIME_LIMIT {
             timed_out = true;
@@ -204,8 +211,24 @@ fn run(args: &[String]) -> Outcome {
         signal: libc::WIFSIGNALED(status).then(|| libc::WTERMSIG(status)),
         stderr: reader.join().unwrap_or_default(),
         timed_out,
-        max_rss_kib: usage.ru_maxrss,
+        max_rss_kib: peak_kib,
     }
+}
+
+/// The peak resident memory (KiB) of `pid` once it runs mdsurf (before its exec the child
+/// still shows the test process's memory), or None when it cannot be read.
+fn own_peak_kib(pid: libc::pid_t) -> Option<i64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let field = |name: &str| {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix(name))
+            .map(str::trim)
+    };
+    if field("Name:")? != "mdsurf" {
+        return None;
+    }
+    field("VmHWM:")?.trim_end_matches("kB").trim().parse().ok()
 }
 
 /// Why an outcome breaks the rules, if it does.
