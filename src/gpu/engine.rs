@@ -201,6 +201,13 @@ impl GpuEngine {
         self.buffers.bytes()
     }
 
+    /// Makes the next [`SurfaceEngine::compute`] a full frame (upload, binning, density) even
+    /// when its atoms are the last frame's: `bench` repeats a single-frame file, and the CPU
+    /// engine recomputes such a frame from scratch too.
+    pub fn forget_inputs(&mut self) {
+        self.state.fingerprints = Default::default();
+    }
+
     /// How many frames counted their reached bricks before their density ran: a system's
     /// first sparse frame does (see [`super::bricks`]), a frame of the same system does not.
     pub fn brick_counts(&self) -> u64 {

@@ -2,7 +2,8 @@
 //! `--backend cpu` (issue 3 section 2: same outputs and columns on every backend; tolerances of
 //! section 3), and `--backend auto` says on stderr which engine it used. Without an adapter the
 //! test checks that `auto` falls back to the CPU and returns with a note, except under
-//! `REQUIRE_GPU=1`, where a missing adapter fails it.
+//! `REQUIRE_GPU=1`, where a missing adapter fails it. `bench --backend gpu` on a single-frame
+//! file times whole frames.
 
 use crate::cli_common::{Csv, data, mdsurf, read_ply_counts};
 
@@ -92,4 +93,34 @@ fn gpu_backend_matches_the_cpu_backend_on_1hpv() {
     let a = Csv::read(&dir.path().join(auto_csv));
     assert_eq!(a.col("triangles"), expected.col("triangles"));
     assert_eq!(a.col("volume_A3"), expected.col("volume_A3"));
+}
+
+/// `bench --backend gpu` on a single-frame file times full frames: each repeat uploads, bins
+/// and computes density again (the engine would otherwise see the same atoms and run Marching
+/// Cubes alone), so its stage columns compare with the CPU engine's.
+#[test]
+fn gpu_bench_of_a_single_frame_file_times_whole_frames() {
+    if crate::gpu_support::context().is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = data("1hpv.pdb");
+    let args = [
+        "bench",
+        &pdb,
+        "--backend",
+        "gpu",
+        "--spacing",
+        "1.5",
+        "--repeats",
+        "3",
+        "--csv",
+        "b.csv",
+    ];
+    let run = mdsurf(dir.path(), &args);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let csv = Csv::read(&dir.path().join("b.csv"));
+    assert_eq!(csv.col("atoms"), [1631.0]);
+    let (upload, density) = (csv.col("upload_ms")[0], csv.col("density_ms")[0]);
+    assert!(upload > 0.0 && density > 0.0, "{:?}", csv.rows[0]);
 }
