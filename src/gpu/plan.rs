@@ -436,15 +436,14 @@ pub struct DeviceLimits {
 }
 
 impl DeviceLimits {
-    /// What wgpu 30 reports on an 80 GB NVIDIA GPU (A100/H100) under Vulkan, the limits
-    /// `mdsurf bench --table1 --plan-only` sizes for: storage bindings capped by wgpu at
-    /// 2^31 - 1 bytes (NVIDIA's own `maxStorageBufferRange` is 2^32 - 1), buffers of far more
-    /// than 16 GiB (so the volume budget takes its 4 GiB cap, the largest it can be), and
-    /// uniform offsets aligned to 256 bytes (WebGPU's largest; NVIDIA needs 64, which only
-    /// shrinks the few-KB slab uniforms).
+    /// What wgpu 30 reported on an 80 GB NVIDIA H100 under Vulkan (driver 580.159, read by
+    /// `mdsurf bench --table1 --backend gpu` on 2026-11-24), the limits `mdsurf bench --table1
+    /// --plan-only` sizes for: storage bindings of 2^31 - 4 bytes, buffers of 4,292,870,144
+    /// bytes (just under 4 GiB, so the volume budget is a quarter of it, about 1 GiB), and
+    /// uniform offsets aligned to 256 bytes (WebGPU's default, which the engine asks for).
     pub const NVIDIA_80GB: DeviceLimits = DeviceLimits {
-        max_storage_binding: (1 << 31) - 1,
-        max_buffer_size: 1 << 52,
+        max_storage_binding: 2_147_483_644,
+        max_buffer_size: 4_292_870_144,
         uniform_alignment: 256,
     };
 

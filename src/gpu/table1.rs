@@ -6,8 +6,8 @@
 //!
 //! [`plan_rows`] sizes the same rows' GPU memory without a device (`mdsurf bench --table1
 //! --plan-only`, [`format_plan`]'s table): the same synthetic systems, grids and frame plans,
-//! under the limits of a real 80 GB NVIDIA GPU ([`DeviceLimits::NVIDIA_80GB`]), with the mesh
-//! buffers sized from the CPU engine's surface or at their largest.
+//! under the limits wgpu reported on an 80 GB NVIDIA H100 ([`DeviceLimits::NVIDIA_80GB`]),
+//! with the mesh buffers sized from the CPU engine's surface or at their largest.
 
 #[cfg(feature = "app")]
 use std::path::Path;
@@ -609,7 +609,7 @@ pub fn table1_plan(
     Ok(format_plan(
         &rows,
         &limits,
-        "an 80 GB NVIDIA GPU under Vulkan (assumed limits)",
+        "an 80 GB NVIDIA H100 under Vulkan (its limits as wgpu reported them on one)",
     ))
 }
 
@@ -623,7 +623,15 @@ pub fn table1(
     let ctx = GpuContext::new_headless()?;
     let structure = Structure::from_file(top, traj)?;
     let rows = run(&ctx, &structure, opts, |line| eprintln!("{line}"))?;
-    Ok(format(&rows, &ctx.adapter_name, ctx.timestamps))
+    let limits = ctx.device_limits();
+    Ok(format!(
+        "{}: largest storage binding {} bytes, largest buffer {} bytes, volume budget {} bytes\n{}",
+        ctx.adapter_name,
+        limits.max_binding(),
+        limits.max_buffer_size,
+        limits.volume_budget(),
+        format(&rows, &ctx.adapter_name, ctx.timestamps)
+    ))
 }
 
 #[cfg(test)]
