@@ -3,7 +3,7 @@
 //! medians that add up, and a CSV that matches the printed table. (Speed itself is reported by
 //! the benchmark, never asserted here.)
 
-use crate::cli_common::{Csv, data, mdsurf};
+use crate::cli_common::{Csv, bench_csv, data, mdsurf};
 
 /// The data rows of the aligned text table: `(case, fields after it)`; the case is matched by
 /// its known prefix since it may contain spaces.
@@ -64,8 +64,7 @@ fn bench_on_a_given_file_and_a_synthetic_system() {
     let dir = tempfile::tempdir().unwrap();
     let (pdb, dcd) = (data("adk_open.pdb"), data("adk_dims.dcd"));
     let args = [
-        "bench",
-        &pdb,
+        &*pdb,
         &dcd,
         "--synthetic",
         "12k",
@@ -75,12 +74,8 @@ fn bench_on_a_given_file_and_a_synthetic_system() {
         "2",
         "--spacing",
         "2",
-        "--csv",
-        "b.csv",
     ];
-    let run = mdsurf(dir.path(), &args);
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let csv = Csv::read(&dir.path().join("b.csv"));
+    let csv = bench_csv(dir.path(), &args);
     assert_eq!(csv.rows.len(), 2, "{:?}", csv.rows);
     assert_eq!(csv.rows[0][0], "adk_dims.dcd");
     assert!(csv.rows[1][0].starts_with("synthetic 12000"));

@@ -67,6 +67,16 @@ pub fn asset(name: &str) -> String {
     path.to_string_lossy().into_owned()
 }
 
+/// Runs `mdsurf bench ARGS --csv b.csv` in `dir`, asserts it succeeded and returns its CSV.
+pub fn bench_csv(dir: &Path, args: &[&str]) -> Csv {
+    let mut all = vec!["bench"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--csv", "b.csv"]);
+    let run = mdsurf(dir, &all);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    Csv::read(&dir.join("b.csv"))
+}
+
 /// A stats CSV: the header and one map per row.
 pub struct Csv {
     /// Column names.

@@ -5,7 +5,7 @@
 //! `REQUIRE_GPU=1`, where a missing adapter fails it. `bench --backend gpu` on a single-frame
 //! file times whole frames.
 
-use crate::cli_common::{Csv, data, mdsurf, read_ply_counts};
+use crate::cli_common::{Csv, bench_csv, data, mdsurf, read_ply_counts};
 
 #[test]
 fn gpu_backend_matches_the_cpu_backend_on_1hpv() {
@@ -106,20 +106,15 @@ fn gpu_bench_of_a_single_frame_file_times_whole_frames() {
     let dir = tempfile::tempdir().unwrap();
     let pdb = data("1hpv.pdb");
     let args = [
-        "bench",
-        &pdb,
+        &*pdb,
         "--backend",
         "gpu",
         "--spacing",
         "1.5",
         "--repeats",
         "3",
-        "--csv",
-        "b.csv",
     ];
-    let run = mdsurf(dir.path(), &args);
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let csv = Csv::read(&dir.path().join("b.csv"));
+    let csv = bench_csv(dir.path(), &args);
     assert_eq!(csv.col("atoms"), [1631.0]);
     let (upload, density) = (csv.col("upload_ms")[0], csv.col("density_ms")[0]);
     assert!(upload > 0.0 && density > 0.0, "{:?}", csv.rows[0]);
