@@ -409,9 +409,9 @@ impl GpuEngine {
         self.buffers.ensure_mesh(d, &sizes);
         let q = &self.ctx.queue;
         if changes.positions || replaced {
-            q.write_buffer(
+            inputs::write_in_parallel(
+                q,
                 &self.buffers.positions.buffer,
-                0,
                 bytemuck::cast_slice(atoms.positions),
             );
         }

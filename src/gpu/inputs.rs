@@ -1,7 +1,8 @@
 //! Host-side checks of a frame's atoms before upload: matching lengths, finite coordinates,
 //! positive radii, the bounding box (in parallel: it is the only pass over the atoms the host
-//! makes per frame), and fingerprints that tell [`super::GpuEngine`]'s blocking path what
-//! changed since its previous call.
+//! makes per frame), fingerprints that tell [`super::GpuEngine`]'s blocking path what
+//! changed since its previous call, and the copy of large per-atom arrays into wgpu's staging
+//! memory on every core ([`write_in_parallel`]).
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -9,6 +10,44 @@ use rayon::prelude::*;
 use crate::surface::{AtomSet, SurfaceError};
 
 const CHUNK: usize = 1 << 16;
+
+/// Writes `bytes` to the start of `buffer` as `Queue::write_buffer` does, but copies them into
+/// wgpu's staging memory in 1 MiB pieces on every core. One thread copying the 274 MB of
+/// positions of 22.8 M atoms took about half of a frame on an H100.
+pub fn write_in_parallel(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) {
+    write_in_pieces(queue, buffer, bytes, 1 << 20);
+}
+
+/// [`write_in_parallel`] with pieces of `piece` bytes (a test writes small pieces); arrays of
+/// at most four pieces go through `Queue::write_buffer` in one copy.
+pub fn write_in_pieces(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8], piece: usize) {
+    let piece = piece.max(1);
+    let Some(size) = wgpu::BufferSize::new(bytes.len() as u64) else {
+        return;
+    };
+    if bytes.len() <= 4 * piece {
+        return queue.write_buffer(buffer, 0, bytes);
+    }
+    // None only when the write is invalid: `write_buffer` then reports it to the error scope.
+    let Some(mut view) = queue.write_buffer_with(buffer, 0, size) else {
+        return queue.write_buffer(buffer, 0, bytes);
+    };
+    let mut whole = view.slice(..);
+    let base = SendPtr(whole.as_raw_element_ptr().as_ptr());
+    bytes.par_chunks(piece).enumerate().for_each(|(i, src)| {
+        let base = &base;
+        // SAFETY: `whole` is a write mapping of `bytes.len()` bytes held mutably for the whole
+        // loop; piece `i` covers bytes `i * piece ..` up to `bytes.len()`, so the pieces lie
+        // inside the mapping, never overlap each other, and never overlap `bytes` (host memory
+        // the caller owns).
+        unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), base.0.add(i * piece), src.len()) };
+    });
+}
+
+/// The staging memory's start, shared by the threads that copy disjoint pieces into it.
+struct SendPtr(*mut u8);
+// SAFETY: each thread writes only its own piece (see `write_in_parallel`).
+unsafe impl Sync for SendPtr {}
 
 /// Fails when the radii or colours do not match the positions, or there are no atoms.
 pub fn check_lengths(atoms: &AtomSet<'_>) -> Result<(), SurfaceError> {

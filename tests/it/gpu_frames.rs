@@ -2,13 +2,13 @@
 //! slider changes that re-run only what they affect (I: Marching Cubes; colours: the colour
 //! pass), a grid forced through slabs (same mesh as one pass), a mesh forced to overflow (flag,
 //! no draw, grow, rerun), very uneven bins (a dense cluster plus far-away atoms), and engines
-//! built on several threads at once.
+//! built on several threads at once; per-atom arrays written in parallel pieces.
 
 use crate::gpu_support::*;
 use glam::Vec3;
 use mdsurf::gpu::engine::EngineOptions;
 use mdsurf::gpu::frame::Work;
-use mdsurf::gpu::output::read_pod;
+use mdsurf::gpu::output::{read_bytes, read_pod};
 use mdsurf::gpu::{Changes, DrawIndexedArgs, GpuEngine};
 use mdsurf::surface::{SurfaceEngine, SurfaceParams};
 
@@ -323,5 +323,34 @@ fn engines_built_on_several_threads_at_once_agree() {
     for (i, mesh) in meshes.iter().enumerate().skip(1) {
         assert_eq!(mesh.indices, meshes[0].indices, "thread {i}: triangles");
         assert_eq!(mesh.positions, meshes[0].positions, "thread {i}: vertices");
+    }
+}
+
+/// Per-atom arrays are copied into wgpu's staging memory in pieces on every core
+/// (`gpu::inputs::write_in_pieces`): the buffer reads back byte for byte what was written,
+/// for pieces that divide it unevenly and for pieces as large as the whole.
+#[test]
+fn arrays_written_in_parallel_pieces_read_back_exactly() {
+    let Some(ctx) = context() else { return };
+    let bytes: Vec<u8> = (0..1_000_003u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .collect();
+    let size = bytes.len().next_multiple_of(4);
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("pieces"),
+        size: size as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let mut padded = bytes.clone();
+    padded.resize(size, 0);
+    for piece in [4096, 65_537, 1 << 20] {
+        mdsurf::gpu::inputs::write_in_pieces(&ctx.queue, &buffer, &padded, piece);
+        let back = read_bytes(&ctx.device, &ctx.queue, &buffer, 0, size as u64).expect("readback");
+        assert_eq!(back.len(), size, "piece {piece}");
+        let first_bad = back.iter().zip(&padded).position(|(a, b)| a != b);
+        assert_eq!(first_bad, None, "piece {piece}: first differing byte");
+        // Clear it so the next piece size cannot pass on this one's bytes.
+        ctx.queue.write_buffer(&buffer, 0, &vec![0u8; size]);
     }
 }
