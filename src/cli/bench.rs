@@ -378,11 +378,11 @@ fn time_case(
         BenchEngine::Cpu(_) => None,
     };
     let mut objects_after_first = None;
+    let single_frame = matches!(&*source, Source::Real(sys) if sys.len() == 1);
     for i in 0..total as usize {
         let t0 = Instant::now();
         let read_ms = read_frame(source, i, &mut positions)?;
         let t1 = Instant::now();
-        let single_frame = matches!(source, Source::Real(sys) if sys.len() == 1);
         let atoms = match source {
             Source::Real(sys) => {
                 let mut set = sys.particles.atom_set(&positions);

@@ -288,8 +288,9 @@ impl Staging {
         src: &wgpu::Buffer,
         n: u64,
     ) -> Result<Vec<T>, GpuError> {
-        let bytes = self.read(ctx, &[(src, n * size_of::<T>() as u64)])?;
-        Ok(pod_vec(&bytes[0], n))
+        self.with_mapped(ctx, &[(src, n * size_of::<T>() as u64)], |parts| {
+            pod_vec(parts[0], n)
+        })
     }
 
     /// Reads the first `vertices` vertices and `triangles` triangles of `surface` into a
@@ -317,25 +318,23 @@ impl Staging {
 /// GPU frame on an H100.
 fn mesh_of_bytes(vertex_bytes: &[u8], index_bytes: &[u8]) -> Mesh {
     use rayon::prelude::*;
-    let n = vertex_bytes.len() / size_of::<GpuVertex>();
-    let vertex = |i: usize| -> GpuVertex {
-        let at = i * size_of::<GpuVertex>();
-        bytemuck::pod_read_unaligned(&vertex_bytes[at..at + size_of::<GpuVertex>()])
+    use std::borrow::Cow;
+    // Mapped memory is aligned in practice; a copy only if it is not.
+    let verts: Cow<[GpuVertex]> = match bytemuck::try_cast_slice(vertex_bytes) {
+        Ok(verts) => Cow::Borrowed(verts),
+        Err(_) => Cow::Owned(pod_vec(
+            vertex_bytes,
+            (vertex_bytes.len() / size_of::<GpuVertex>()) as u64,
+        )),
     };
     let indices = match bytemuck::try_cast_slice::<u8, u32>(index_bytes) {
         Ok(words) => words.to_vec(),
         Err(_) => pod_vec(index_bytes, (index_bytes.len() / 4) as u64),
     };
     Mesh {
-        positions: (0..n)
-            .into_par_iter()
-            .map(|i| Vec3::from(vertex(i).position))
-            .collect(),
-        normals: (0..n)
-            .into_par_iter()
-            .map(|i| Vec3::from(vertex(i).normal))
-            .collect(),
-        colours: (0..n).into_par_iter().map(|i| vertex(i).colour).collect(),
+        positions: verts.par_iter().map(|v| Vec3::from(v.position)).collect(),
+        normals: verts.par_iter().map(|v| Vec3::from(v.normal)).collect(),
+        colours: verts.par_iter().map(|v| v.colour).collect(),
         indices,
     }
 }
@@ -346,15 +345,6 @@ fn pod_vec<T: bytemuck::Pod>(bytes: &[u8], n: u64) -> Vec<T> {
         .take(n as usize)
         .map(bytemuck::pod_read_unaligned)
         .collect()
-}
-
-fn mesh_of(verts: &[GpuVertex], indices: Vec<u32>) -> Mesh {
-    Mesh {
-        positions: verts.iter().map(|v| Vec3::from(v.position)).collect(),
-        normals: verts.iter().map(|v| Vec3::from(v.normal)).collect(),
-        colours: verts.iter().map(|v| v.colour).collect(),
-        indices,
-    }
 }
 
 /// Blocking copy of `size` bytes at `offset` of `src` (needs `COPY_SRC`) back to the host.
@@ -407,7 +397,8 @@ pub fn read_pod<T: bytemuck::Pod>(
     Ok(pod_vec(&bytes, n))
 }
 
-/// Reads the first `vertices` vertices and `triangles` triangles of a surface into a [`Mesh`].
+/// Reads the first `vertices` vertices and `triangles` triangles of a surface into a [`Mesh`]
+/// (any output set, not only the engine's current one).
 pub fn read_mesh(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -415,9 +406,10 @@ pub fn read_mesh(
     vertices: u32,
     triangles: u32,
 ) -> Result<Mesh, GpuError> {
-    let verts: Vec<GpuVertex> = read_pod(device, queue, &surface.vertices, vertices as u64)?;
-    let indices: Vec<u32> = read_pod(device, queue, &surface.indices, 3 * triangles as u64)?;
-    Ok(mesh_of(&verts, indices))
+    let v_bytes = vertices as u64 * size_of::<GpuVertex>() as u64;
+    let verts = read_bytes(device, queue, &surface.vertices, 0, v_bytes)?;
+    let indices = read_bytes(device, queue, &surface.indices, 0, 3 * triangles as u64 * 4)?;
+    Ok(mesh_of_bytes(&verts[..v_bytes as usize], &indices))
 }
 
 /// Maps `range` of `staging` for reading and waits for the device until it is mapped.
