@@ -210,10 +210,15 @@ fn params_ui(
         for preset in Preset::ALL {
             if ui
                 .button(preset.name())
-                .on_hover_text(format!("R, I and quality: {}", preset.description()))
+                .on_hover_text(format!(
+                    "R, I, quality and {} vertices: {}",
+                    preset.vertices(),
+                    preset.description()
+                ))
                 .clicked()
             {
                 *p = preset.apply(*p);
+                out.push(Command::SetVertices(preset.vertices()));
             }
         }
     });

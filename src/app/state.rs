@@ -16,7 +16,7 @@ use crate::model::{ColorScheme, ColourMap, Frame, RadiusOverrides};
 use crate::render::{Camera, Projection, RenderSettings};
 use crate::scene::defaults::default_representations;
 use crate::scene::representation::{RepStyle, Representation};
-use crate::surface::{GridSpec, SurfaceParams};
+use crate::surface::{GridSpec, SurfaceParams, VertexMode};
 
 /// Something the user asked for.
 #[derive(Debug, Clone)]
@@ -28,6 +28,9 @@ pub enum Command {
     /// New surface parameters of the selected representation (already checked against the
     /// grid limit).
     SetParams(SurfaceParams),
+    /// How the selected surface representation places its vertices (a preset's choice; the
+    /// "vertices" box edits the representation itself).
+    SetVertices(VertexMode),
     /// Bead surface (one bead per residue) on or off for the selected representation.
     SetBeads(bool),
     /// Colour scheme of the selected representation.
@@ -265,6 +268,11 @@ impl AppCore {
     pub fn apply(&mut self, cmd: Command) {
         match cmd {
             Command::SetParams(p) => self.edit_selected(|r| r.set_params(&p)),
+            Command::SetVertices(m) => self.edit_selected(|r| {
+                if r.style.is_surface() {
+                    r.vertices = m;
+                }
+            }),
             Command::SetBeads(b) => self.edit_selected(|r| {
                 if r.style.is_surface() {
                     r.style = if b {

@@ -176,7 +176,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         for engine in engines.iter_mut() {
             let name = engine.name().to_string();
             eprintln!("timing {label} on {name} ...");
-            let mode = args.params.vertices;
+            let mode = args.params.vertex_mode();
             engine.engine().set_vertices(mode);
             let mut r = time_case(&mut source, engine, &params, &args)
                 .map_err(|e| anyhow!("{label} on {name}: {e:#}"))?;

@@ -155,14 +155,16 @@ pub struct ParamArgs {
     /// Gaussian cutoff: low (2 alpha), medium (2.5), high (3), max (4).
     #[arg(long, value_name = "Q", default_value = "medium")]
     pub quality: Quality,
-    /// Named R, I and quality (H kept): `ses` = area close to the solvent-excluded surface
-    /// (probe 1.4 Å; within 3 % on the 12 proteins of tests/data/ses_reference.csv).
+    /// Named R, I, quality and vertices (H kept): `ses` = area close to the solvent-excluded
+    /// surface (probe 1.4 Å; within 3 % on the 12 proteins of tests/data/ses_reference.csv),
+    /// with refined vertices unless --vertices says otherwise.
     #[arg(long, value_name = "NAME", conflicts_with_all = ["radius_scale", "isovalue", "quality"])]
     pub preset: Option<Preset>,
     /// Vertices: `interpolated` (linear along grid edges, as the paper) or `refined` (on the
     /// exact Gaussian sum, analytic normals, area and volume that hold at any H; slower).
-    #[arg(long, value_name = "MODE", default_value = "interpolated")]
-    pub vertices: VertexMode,
+    /// Default: the preset's (refined for `ses`), else interpolated.
+    #[arg(long, value_name = "MODE")]
+    pub vertices: Option<VertexMode>,
 }
 
 impl ParamArgs {
@@ -180,6 +182,13 @@ impl ParamArgs {
         };
         params.validate()?;
         Ok(params)
+    }
+
+    /// How vertices are placed: `--vertices` when given, else the preset's, else interpolated.
+    pub fn vertex_mode(&self) -> VertexMode {
+        self.vertices
+            .or(self.preset.map(Preset::vertices))
+            .unwrap_or_default()
     }
 }
 

@@ -334,16 +334,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let mut engine = FrameEngine::new(host_backend, reader.chain(), false)?;
     if let Some(e) = in_place.as_mut().and_then(|v| v.first_mut()) {
-        e.set_vertices(args.params.vertices);
+        e.set_vertices(args.params.vertex_mode());
     }
     if let FrameEngine::Plain(e) = &mut engine {
-        e.set_vertices(args.params.vertices);
-        if e.vertices() != args.params.vertices {
+        e.set_vertices(args.params.vertex_mode());
+        if e.vertices() != args.params.vertex_mode() {
             eprintln!(
                 "note: the {} engine places vertices {}; --vertices {} needs --backend cpu",
                 e.name(),
                 e.vertices(),
-                args.params.vertices
+                args.params.vertex_mode()
             );
         }
     }
@@ -407,7 +407,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             if let Some(engines) = in_place.as_mut()
                 && !lf.positions.is_empty()
             {
-                let e = engine_of_layer(engines, k, &gpu, args.params.vertices)?;
+                let e = engine_of_layer(engines, k, &gpu, args.params.vertex_mode())?;
                 let atoms = lf.atom_set();
                 let fail =
                     |e: String| anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name);

@@ -164,13 +164,13 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if let FrameEngine::Plain(e) = &mut engine {
         // Without -o only area, volume and counts are reported: the mesh need not be built.
         e.set_keep_mesh(output.is_some());
-        e.set_vertices(args.params.vertices);
-        if e.vertices() != args.params.vertices {
+        e.set_vertices(args.params.vertex_mode());
+        if e.vertices() != args.params.vertex_mode() {
             eprintln!(
                 "note: the {} engine places vertices {}; --vertices {} needs --backend cpu",
                 e.name(),
                 e.vertices(),
-                args.params.vertices
+                args.params.vertex_mode()
             );
         }
     }
@@ -351,7 +351,7 @@ fn part_params(args: &SurfaceArgs, params: &SurfaceParams, engine: &str) -> Vec<
         ("radius_scale", params.radius_scale.to_string()),
         ("isovalue", params.isovalue.to_string()),
         ("quality", params.quality.to_string()),
-        ("vertices", args.params.vertices.to_string()),
+        ("vertices", args.params.vertex_mode().to_string()),
         ("engine", engine.to_string()),
         ("inputs", digest[..16].to_string()),
     ]

@@ -87,7 +87,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             };
             let mut rep = Representation::new("selection", expr, style);
             rep.set_params(&params);
-            rep.vertices = args.params.vertices;
+            rep.vertices = args.params.vertex_mode();
             rep.colour = particles.colours;
             rep.validate().map_err(anyhow::Error::msg)?;
             (Some(vec![rep]), None)
@@ -108,7 +108,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             args.backend.into()
         },
         params,
-        vertices: args.params.vertices,
+        vertices: args.params.vertex_mode(),
         particles,
         render,
         reps,

@@ -93,9 +93,10 @@ fn vertices_switch_puts_the_vertices_on_the_gaussian_sum() {
 }
 
 #[test]
-fn ses_preset_button_sets_r_i_and_quality_and_keeps_h() {
+fn ses_preset_button_sets_r_i_quality_and_vertices_and_keeps_h() {
     let mut h = panel_harness(loaded());
     let spacing = h.state().core.reps[0].spacing;
+    assert_eq!(h.state().core.reps[0].vertices, VertexMode::Interpolated);
     h.get_by_label(Preset::Ses.name()).click();
     h.run();
     h.run();
@@ -104,9 +105,12 @@ fn ses_preset_button_sets_r_i_and_quality_and_keeps_h() {
     let (r, i, q) = Preset::Ses.values();
     assert_eq!((rep.radius_scale, rep.isovalue, rep.quality), (r, i, q));
     assert_eq!(rep.spacing, spacing);
+    assert_eq!(rep.vertices, Preset::Ses.vertices());
+    assert_eq!(rep.vertices, VertexMode::Refined);
     assert!(s.core.wait_idle(WAIT));
     let layer = shown(&s.core);
     assert_eq!(layer.rep.isovalue, i);
+    assert_eq!(layer.rep.vertices, VertexMode::Refined);
     assert!(layer.output.mesh.triangle_count() > 0);
 }
 

@@ -289,3 +289,50 @@ fn auto_backend_falls_back_to_the_cpu_and_says_so() {
     );
     assert!(!dir.path().join("g.ply").exists());
 }
+
+/// `--preset ses` places vertices as it was fitted (refined) unless `--vertices` says otherwise:
+/// alone it reports the area of `tests/data/ses_reference.csv`'s 1hpv row (refined vertices),
+/// and `--vertices interpolated` changes the area but not the triangles.
+#[test]
+fn ses_preset_refines_vertices_unless_told_otherwise() {
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = data("1hpv.pdb");
+    let area_with = |extra: &[&str], stats: &str| {
+        let mut args = vec![
+            "surface",
+            &pdb,
+            "--select",
+            "protein",
+            "--backend",
+            "cpu",
+            "--preset",
+            "ses",
+            "--stats",
+            stats,
+        ];
+        args.extend_from_slice(extra);
+        let run = mdsurf(dir.path(), &args);
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        let csv = Csv::read(&dir.path().join(stats));
+        (csv.col("area_A2")[0], csv.col("triangles")[0])
+    };
+    let (preset, tris) = area_with(&[], "preset.csv");
+    let (refined, tris_refined) = area_with(&["--vertices", "refined"], "refined.csv");
+    let (interpolated, tris_lin) = area_with(&["--vertices", "interpolated"], "lin.csv");
+    assert_eq!(preset, refined, "the preset alone must refine");
+    assert_eq!((tris, tris), (tris_refined, tris_lin));
+    assert!(
+        (preset - interpolated).abs() > 1e-3 * preset,
+        "interpolated {interpolated} vs refined {preset}"
+    );
+    let table = fs::read_to_string(data("ses_reference.csv")).unwrap();
+    let row = table
+        .lines()
+        .find(|l| l.starts_with("1hpv,"))
+        .expect("1hpv row");
+    let listed: f64 = row.split(',').nth(6).unwrap().parse().unwrap();
+    assert!(
+        (preset / listed - 1.0).abs() < 1e-3,
+        "preset {preset} vs the table's {listed}"
+    );
+}
