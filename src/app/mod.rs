@@ -41,6 +41,8 @@ pub struct ViewOptions {
     pub params: crate::surface::SurfaceParams,
     /// Initial vertex placement of the surfaces (`--vertices`).
     pub vertices: crate::surface::VertexMode,
+    /// Initial radius set of the surfaces (`ses` with `--preset ses`).
+    pub radii: crate::surface::RadiusSet,
     /// Initial particle options (beads, colours, radius overrides).
     pub particles: crate::model::ParticleOptions,
     /// Initial look (the viewer's command line sets the stereo fields).
@@ -143,6 +145,7 @@ pub fn create_viewer(
     let mut core = AppCore::new(worker);
     core.base.set_params(&options.params);
     core.base.vertices = options.vertices;
+    core.base.radii = options.radii;
     core.base.colour = options.particles.colours;
     if options.particles.beads {
         core.base.style = crate::scene::representation::RepStyle::Beads;

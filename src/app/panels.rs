@@ -7,7 +7,7 @@ use crate::model::ColorScheme;
 use crate::render::{Background, Projection, Stereo};
 use crate::scene::representation::RepStyle;
 use crate::scene::selection::Selection;
-use crate::surface::{Preset, Quality, SurfaceParams, VertexMode};
+use crate::surface::{Preset, Quality, RadiusSet, SurfaceParams, VertexMode};
 
 /// The selected representation's edits in progress: surface parameters become the
 /// representation's only when the grid fits, and a selection only when it parses.
@@ -159,6 +159,24 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
                 "interpolated: linear along grid edges; refined: on the exact Gaussian sum, \
                  analytic normals, area and volume that hold at any H (slower)",
             );
+        egui::ComboBox::from_label("radii")
+            .selected_text(edited.radii.name())
+            .show_ui(ui, |ui| {
+                for r in RadiusSet::ALL {
+                    ui.selectable_value(&mut edited.radii, r, r.name());
+                }
+            })
+            .response
+            .on_hover_text(format!(
+                "mdsurf: the element table; ses: the SES preset's ({}); radius overrides apply \
+                 on top",
+                RadiusSet::Ses
+                    .radii()
+                    .iter()
+                    .map(|(e, r)| format!("{e} {r} Å"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
     }
     if edited != *rep {
         out.push(Command::UpdateRep(i, Box::new(edited)));
@@ -211,14 +229,15 @@ fn params_ui(
             if ui
                 .button(preset.name())
                 .on_hover_text(format!(
-                    "R, I, quality and {} vertices: {}",
+                    "R, I, quality, {} vertices and {} radii: {}",
                     preset.vertices(),
+                    preset.radius_set(),
                     preset.description()
                 ))
                 .clicked()
             {
                 *p = preset.apply(*p);
-                out.push(Command::SetVertices(preset.vertices()));
+                out.push(Command::ApplyPreset(preset));
             }
         }
     });

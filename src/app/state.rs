@@ -16,7 +16,7 @@ use crate::model::{ColorScheme, ColourMap, Frame, RadiusOverrides};
 use crate::render::{Camera, Projection, RenderSettings};
 use crate::scene::defaults::default_representations;
 use crate::scene::representation::{RepStyle, Representation};
-use crate::surface::{GridSpec, SurfaceParams, VertexMode};
+use crate::surface::{GridSpec, Preset, SurfaceParams};
 
 /// Something the user asked for.
 #[derive(Debug, Clone)]
@@ -28,9 +28,9 @@ pub enum Command {
     /// New surface parameters of the selected representation (already checked against the
     /// grid limit).
     SetParams(SurfaceParams),
-    /// How the selected surface representation places its vertices (a preset's choice; the
-    /// "vertices" box edits the representation itself).
-    SetVertices(VertexMode),
+    /// A preset's vertex placement and radii for the selected surface representation (its R, I
+    /// and quality come as [`Command::SetParams`]).
+    ApplyPreset(Preset),
     /// Bead surface (one bead per residue) on or off for the selected representation.
     SetBeads(bool),
     /// Colour scheme of the selected representation.
@@ -247,6 +247,7 @@ impl AppCore {
             || old.colour != rep.colour
             || old.params() != rep.params()
             || old.vertices != rep.vertices
+            || old.radii != rep.radii
             || old.visible != rep.visible;
         *old = rep;
         if recompute {
@@ -268,9 +269,10 @@ impl AppCore {
     pub fn apply(&mut self, cmd: Command) {
         match cmd {
             Command::SetParams(p) => self.edit_selected(|r| r.set_params(&p)),
-            Command::SetVertices(m) => self.edit_selected(|r| {
+            Command::ApplyPreset(preset) => self.edit_selected(|r| {
                 if r.style.is_surface() {
-                    r.vertices = m;
+                    r.vertices = preset.vertices();
+                    r.radii = preset.radius_set();
                 }
             }),
             Command::SetBeads(b) => self.edit_selected(|r| {

@@ -17,7 +17,9 @@ use mdsurf::model::colour_map::parse_range;
 use mdsurf::model::{
     ColorScheme, ColourMap, DataColours, Frame, ParticleOptions, Particles, RadiusOverrides,
 };
-use mdsurf::surface::{CpuEngine, Preset, Quality, SurfaceEngine, SurfaceParams, VertexMode};
+use mdsurf::surface::{
+    CpuEngine, Preset, Quality, RadiusSet, SurfaceEngine, SurfaceParams, VertexMode,
+};
 
 /// Input files and how their atoms become particles.
 #[derive(clap::Args, Debug, Clone)]
@@ -155,9 +157,10 @@ pub struct ParamArgs {
     /// Gaussian cutoff: low (2 alpha), medium (2.5), high (3), max (4).
     #[arg(long, value_name = "Q", default_value = "medium")]
     pub quality: Quality,
-    /// Named R, I, quality and vertices (H kept): `ses` = area close to the solvent-excluded
-    /// surface (probe 1.4 Å; within 3 % on the 12 proteins of tests/data/ses_reference.csv),
-    /// with refined vertices unless --vertices says otherwise.
+    /// Named R, I, quality, vertices and radii (H kept): `ses` = area close to the
+    /// solvent-excluded surface (probe 1.4 Å; within 2 % on the 12 proteins of
+    /// tests/data/ses_reference.csv): R 0.83, I 0.377, quality max, refined vertices unless
+    /// --vertices says otherwise, radii H 0.991, N 1.136, O 1.331 Å under any --radius.
     #[arg(long, value_name = "NAME", conflicts_with_all = ["radius_scale", "isovalue", "quality"])]
     pub preset: Option<Preset>,
     /// Vertices: `interpolated` (linear along grid edges, as the paper) or `refined` (on the
@@ -182,6 +185,12 @@ impl ParamArgs {
         };
         params.validate()?;
         Ok(params)
+    }
+
+    /// The radii the atoms start from: the preset's, else mdsurf's element table (`--radius`
+    /// overrides apply on top of either).
+    pub fn radius_set(&self) -> RadiusSet {
+        self.preset.map(Preset::radius_set).unwrap_or_default()
     }
 
     /// How vertices are placed: `--vertices` when given, else the preset's, else interpolated.

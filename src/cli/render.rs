@@ -280,9 +280,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let topology = system.trajectory.topology().clone();
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
     let first_frame = reader.read_frame(frames[0])?;
-    let mut choice =
-        args.scene
-            .representations(state, &topology, &first_frame, &params, &options, false)?;
+    let mut choice = args.scene.representations(
+        state,
+        &topology,
+        &first_frame,
+        (&params, args.params.radius_set()),
+        &options,
+        false,
+    )?;
     if let Some(state) = &choice.state {
         // The state file's look replaces the look flags.
         state

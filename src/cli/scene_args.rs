@@ -11,7 +11,7 @@ use mdsurf::scene::defaults::{default_representations, describe};
 use mdsurf::scene::layer::Layer;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
-use mdsurf::surface::SurfaceParams;
+use mdsurf::surface::{RadiusSet, SurfaceParams};
 
 /// Which representations a headless command computes or draws.
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -55,14 +55,15 @@ impl SceneArgs {
     }
 
     /// The representations for `topology`: from `state`, from `--select`, or the defaults
-    /// (described for stderr unless `quiet`; see [`SceneChoice::print_defaults`]). `params` and `options` are the command's surface
-    /// parameters, colours and beads, used by `--select` and the defaults.
+    /// (described for stderr unless `quiet`; see [`SceneChoice::print_defaults`]). The surface
+    /// parameters and radius set, and `options` (colours and beads), are the command's, used by
+    /// `--select` and the defaults.
     pub fn representations(
         &self,
         state: Option<StateFile>,
         topology: &Topology,
         first: &Frame,
-        params: &SurfaceParams,
+        (params, radii): (&SurfaceParams, RadiusSet),
         options: &ParticleOptions,
         quiet: bool,
     ) -> Result<SceneChoice> {
@@ -73,6 +74,7 @@ impl SceneArgs {
         };
         let mut base = Representation::new("selection", "all", style);
         base.set_params(params);
+        base.radii = radii;
         base.colour = options.colours;
         if let Some(state) = state {
             return Ok(SceneChoice {

@@ -115,9 +115,14 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let options = args.input.particles.options_for(&system.trajectory)?;
     check_colour_frames(&options, &frames)?;
     let topology = system.trajectory.topology();
-    let choice = args
-        .scene
-        .representations(state, topology, &first, &params, &options, args.quiet)?;
+    let choice = args.scene.representations(
+        state,
+        topology,
+        &first,
+        (&params, args.params.radius_set()),
+        &options,
+        args.quiet,
+    )?;
     let files = system.frames_path.display().to_string();
     let mut layers = bind_layers(
         &choice.reps,

@@ -88,6 +88,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             let mut rep = Representation::new("selection", expr, style);
             rep.set_params(&params);
             rep.vertices = args.params.vertex_mode();
+            rep.radii = args.params.radius_set();
             rep.colour = particles.colours;
             rep.validate().map_err(anyhow::Error::msg)?;
             (Some(vec![rep]), None)
@@ -109,6 +110,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         },
         params,
         vertices: args.params.vertex_mode(),
+        radii: args.params.radius_set(),
         particles,
         render,
         reps,

@@ -101,10 +101,14 @@ impl Layer {
     }
 
     /// Replaces the representation by `rep`, which must have the same selection (the binding is
-    /// kept); the particles are rebuilt on the next frame when its style or colours changed.
+    /// kept); the particles are rebuilt on the next frame when its style, colours or radii
+    /// changed.
     pub fn set_rep(&mut self, rep: Representation) {
         debug_assert_eq!(rep.selection, self.rep.selection);
-        if rep.style != self.rep.style || rep.colour != self.rep.colour {
+        if rep.style != self.rep.style
+            || rep.colour != self.rep.colour
+            || rep.radii != self.rep.radii
+        {
             self.built = None;
         }
         self.rep = rep;

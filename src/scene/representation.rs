@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::{ColorScheme, ParticleOptions, RadiusOverrides};
 use crate::render::AtomStyle;
-use crate::surface::{Quality, SurfaceParams, VertexMode};
+use crate::surface::{Quality, RadiusSet, SurfaceParams, VertexMode};
 
 use super::selection::{Selection, SelectionError};
 
@@ -127,6 +127,11 @@ pub struct Representation {
     /// analytic normals). State files written before it existed load as interpolated.
     #[serde(with = "as_text")]
     pub vertices: VertexMode,
+    /// The radii the atoms start from: `mdsurf` (the element table) or `ses` (the SES preset's);
+    /// the user's radius overrides apply on top. State files written before it existed load as
+    /// `mdsurf`.
+    #[serde(with = "as_text")]
+    pub radii: RadiusSet,
     /// Drawn (and, for surfaces, computed) when true.
     pub visible: bool,
 }
@@ -145,6 +150,7 @@ impl Default for Representation {
             isovalue: p.isovalue,
             quality: p.quality,
             vertices: VertexMode::default(),
+            radii: RadiusSet::default(),
             visible: true,
         }
     }
@@ -183,7 +189,7 @@ impl Representation {
     pub fn particle_options(&self, radius_overrides: &RadiusOverrides) -> ParticleOptions {
         ParticleOptions {
             beads: self.style == RepStyle::Beads,
-            radius_overrides: radius_overrides.clone(),
+            radius_overrides: self.radii.with_overrides(radius_overrides),
             colours: self.colour,
         }
     }

@@ -28,7 +28,7 @@ pub use engine::{AtomSet, MeshCounts, StageTimings, SurfaceEngine, SurfaceOutput
 pub use grid::{GridSpec, available_memory_bytes, estimate_grid_bytes};
 pub use mesh::Mesh;
 pub use params::{Quality, SurfaceParams};
-pub use preset::Preset;
+pub use preset::{Preset, RadiusSet};
 pub use tables::McTables;
 
 /// Why a surface could not be computed.

@@ -9,7 +9,7 @@ use mdsurf::app::AppCore;
 use mdsurf::app::worker::LayerResult;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
-use mdsurf::surface::{Preset, VertexMode};
+use mdsurf::surface::{Preset, RadiusSet, VertexMode};
 
 use crate::app_panels::{State, WAIT, loaded};
 
@@ -107,10 +107,26 @@ fn ses_preset_button_sets_r_i_quality_and_vertices_and_keeps_h() {
     assert_eq!(rep.spacing, spacing);
     assert_eq!(rep.vertices, Preset::Ses.vertices());
     assert_eq!(rep.vertices, VertexMode::Refined);
+    assert_eq!(rep.radii, Preset::Ses.radius_set());
+    assert_eq!(rep.radii, RadiusSet::Ses);
     assert!(s.core.wait_idle(WAIT));
     let layer = shown(&s.core);
     assert_eq!(layer.rep.isovalue, i);
     assert_eq!(layer.rep.vertices, VertexMode::Refined);
+    // The preset's nitrogen radius reached the computed particles.
+    let r_n = (RadiusSet::Ses.radii().iter())
+        .find(|(e, _)| *e == "N")
+        .map(|&(_, r)| r)
+        .expect("N radius");
+    let radii = &layer.particles.radii;
+    assert!(
+        radii.contains(&r_n),
+        "no atom has the preset's N radius {r_n}"
+    );
+    assert!(
+        !radii.contains(&1.4),
+        "an N atom kept the element table's 1.4 Å"
+    );
     assert!(layer.output.mesh.triangle_count() > 0);
 }
 
@@ -119,19 +135,24 @@ fn state_file_keeps_the_vertex_mode_and_old_files_load() {
     let state = StateFile::new(vec![
         Representation {
             vertices: VertexMode::Refined,
+            radii: RadiusSet::Ses,
             ..Representation::new("protein", "protein", RepStyle::Surface)
         },
         Representation::new("rest", "all", RepStyle::Surface),
     ]);
     let text = state.to_toml();
     assert!(text.contains("vertices = \"refined\""), "{text}");
+    assert!(text.contains("radii = \"ses\""), "{text}");
     let back = StateFile::parse(&text, "s.toml").expect("parse");
     assert_eq!(back, state);
     assert_eq!(back.representations[0].vertices, VertexMode::Refined);
     // A file from before the switch: no `vertices` line.
     let old: String = text
         .lines()
-        .filter(|l| !l.trim_start().starts_with("vertices"))
+        .filter(|l| {
+            let l = l.trim_start();
+            !l.starts_with("vertices") && !l.starts_with("radii")
+        })
         .map(|l| format!("{l}\n"))
         .collect();
     assert!(!old.contains("vertices"));
@@ -139,7 +160,7 @@ fn state_file_keeps_the_vertex_mode_and_old_files_load() {
     assert!(
         back.representations
             .iter()
-            .all(|r| r.vertices == VertexMode::Interpolated)
+            .all(|r| r.vertices == VertexMode::Interpolated && r.radii == RadiusSet::Mdsurf)
     );
     // A bad value is an error naming it, not a panic.
     let bad = text.replace("vertices = \"refined\"", "vertices = \"smooth\"");

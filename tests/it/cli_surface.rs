@@ -290,9 +290,10 @@ fn auto_backend_falls_back_to_the_cpu_and_says_so() {
     assert!(!dir.path().join("g.ply").exists());
 }
 
-/// `--preset ses` places vertices as it was fitted (refined) unless `--vertices` says otherwise:
-/// alone it reports the area of `tests/data/ses_reference.csv`'s 1hpv row (refined vertices),
-/// and `--vertices interpolated` changes the area but not the triangles.
+/// `--preset ses` places vertices as it was fitted (refined) and takes its radii unless
+/// `--vertices` or `--radius` say otherwise: alone it reports the area of
+/// `tests/data/ses_reference.csv`'s 1hpv row, `--vertices interpolated` changes the area but
+/// not the triangles, and the element table's N radius (`--radius N=1.4`) another area.
 #[test]
 fn ses_preset_refines_vertices_unless_told_otherwise() {
     let dir = tempfile::tempdir().unwrap();
@@ -319,6 +320,12 @@ fn ses_preset_refines_vertices_unless_told_otherwise() {
     let (preset, tris) = area_with(&[], "preset.csv");
     let (refined, tris_refined) = area_with(&["--vertices", "refined"], "refined.csv");
     let (interpolated, tris_lin) = area_with(&["--vertices", "interpolated"], "lin.csv");
+    // The user's radius beats the preset's (1.136 Å for N).
+    let (own_n, _) = area_with(&["--radius", "N=1.4"], "own_n.csv");
+    assert!(
+        (own_n - preset).abs() > 1e-3 * preset,
+        "N=1.4: {own_n} vs the preset's {preset}"
+    );
     assert_eq!(preset, refined, "the preset alone must refine");
     assert_eq!((tris, tris), (tris_refined, tris_lin));
     assert!(
