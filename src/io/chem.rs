@@ -75,6 +75,16 @@ impl ChemReader {
                 what: "no frames",
             });
         }
+        // chemfiles counts one PDB frame per END* record, and an ENDMDL only merges with an END
+        // right after it; wwPDB files put CONECT and MASTER records between the last ENDMDL and
+        // END, which made an empty last frame (a one-model NMR entry read as two frames, the
+        // second with no atoms). Such a frame is not part of the trajectory.
+        if reader.base == "PDB"
+            && reader.len > 1
+            && reader.read_raw(reader.len - 1).is_ok_and(|f| f.size() == 0)
+        {
+            reader.len -= 1;
+        }
         Ok(reader)
     }
 

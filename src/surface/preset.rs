@@ -20,8 +20,8 @@ use crate::model::{RadiusOverride, RadiusOverrides};
 pub enum Preset {
     /// R = 0.83, I = 0.377, quality max, refined vertices and [`RadiusSet::Ses`] radii: area
     /// within 2 % of the SES area of the external surface (probe 1.4 Å, Bondi radii, MSMS) on
-    /// twelve proteins of 454 to 9,466 atoms at H = 1 Å: the seven it was fitted on within
-    /// 1.96 %, the five held out within 1.85 %. Earlier presets with mdsurf's radii (R 0.83,
+    /// sixteen proteins of 454 to 9,466 atoms at H = 1 Å: the seven it was fitted on within
+    /// 1.96 %, the nine held out (four of them added after the fit) within 1.85 %. Earlier presets with mdsurf's radii (R 0.83,
     /// I 0.39, quality high: 3.0 %; R 0.77, I 0.27 against the SES with its cavities: up to
     /// 9 %) missed 2 %.
     Ses,

@@ -218,6 +218,39 @@ fn several_frames_and_extended_xyz_go_through_chemfiles() {
     }
 }
 
+/// wwPDB files end a model by ENDMDL, then CONECT and MASTER records, then END: chemfiles
+/// counts the END as one more frame, which has no atoms. One model is one frame, and two models
+/// two frames, each with its atoms (tests/data/2beg.pdb.gz is such a one-model NMR entry).
+#[test]
+fn wwpdb_models_followed_by_master_and_end_have_no_empty_last_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let atom = |x: &str| {
+        format!("ATOM      1  CA  ALA A   1     {x:>7}   2.000   3.000  1.00  0.00           C\n")
+    };
+    let tail = "CONECT    1    1\nMASTER        0    0    0    0    0    0    0    0    1    0    1    0\nEND\n";
+    let one = format!("MODEL        1\n{}ENDMDL\n{tail}", atom("1.000"));
+    let two = format!(
+        "MODEL        1\n{}ENDMDL\nMODEL        2\n{}ENDMDL\n{tail}",
+        atom("1.000"),
+        atom("1.500")
+    );
+    for (name, text, frames) in [("one.pdb", one, 1), ("two.pdb", two, 2)] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let t = io::open(&path, None).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(t.len(), frames, "{name}");
+        for i in 0..frames {
+            let f = t
+                .read_frame(i)
+                .unwrap_or_else(|e| panic!("{name} frame {i}: {e}"));
+            assert_eq!(f.positions.len(), 1, "{name} frame {i}");
+        }
+    }
+    let nmr = io::open(&data("2beg.pdb.gz"), None).expect("2beg");
+    assert_eq!(nmr.len(), 1);
+    assert_eq!(nmr.read_frame(0).expect("frame 0").positions.len(), 1855);
+}
+
 /// The error of opening `path`: one line naming the file.
 fn one_line_error(path: &Path) -> String {
     let e = io::open(path, None).expect_err("damaged").to_string();
