@@ -147,36 +147,30 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
     ui.add(egui::Slider::new(&mut edited.opacity, 0.0..=1.0).text("opacity"));
     colour_ui(ui, &mut edited.colour);
     if rep.style.is_surface() {
-        egui::ComboBox::from_label("vertices")
-            .selected_text(edited.vertices.name())
-            .show_ui(ui, |ui| {
-                for m in VertexMode::ALL {
-                    ui.selectable_value(&mut edited.vertices, m, m.name());
-                }
-            })
-            .response
-            .on_hover_text(
-                "interpolated: linear along grid edges; refined: on the exact Gaussian sum, \
-                 analytic normals, area and volume that hold at any H (slower)",
-            );
-        egui::ComboBox::from_label("radii")
-            .selected_text(edited.radii.name())
-            .show_ui(ui, |ui| {
-                for r in RadiusSet::ALL {
-                    ui.selectable_value(&mut edited.radii, r, r.name());
-                }
-            })
-            .response
-            .on_hover_text(format!(
+        named_choice(
+            ui,
+            "vertices",
+            &mut edited.vertices,
+            VertexMode::ALL,
+            VertexMode::name,
+            "interpolated: linear along grid edges; refined: on the exact Gaussian sum, analytic \
+             normals, area and volume that hold at any H (slower)",
+        );
+        let ses_radii: Vec<String> = (RadiusSet::Ses.radii().iter())
+            .map(|(e, r)| format!("{e} {r} Å"))
+            .collect();
+        named_choice(
+            ui,
+            "radii",
+            &mut edited.radii,
+            RadiusSet::ALL,
+            RadiusSet::name,
+            &format!(
                 "mdsurf: the element table; ses: the SES preset's ({}); radius overrides apply \
                  on top",
-                RadiusSet::Ses
-                    .radii()
-                    .iter()
-                    .map(|(e, r)| format!("{e} {r} Å"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
+                ses_radii.join(", ")
+            ),
+        );
     }
     if edited != *rep {
         out.push(Command::UpdateRep(i, Box::new(edited)));
@@ -189,6 +183,26 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
         }
     }
     out
+}
+
+/// A drop-down box labelled `label` choosing `value` among `all`, each shown by `name`.
+fn named_choice<T: Copy + PartialEq, const N: usize>(
+    ui: &mut egui::Ui,
+    label: &str,
+    value: &mut T,
+    all: [T; N],
+    name: fn(T) -> &'static str,
+    hover: &str,
+) {
+    egui::ComboBox::from_label(label)
+        .selected_text(name(*value))
+        .show_ui(ui, |ui| {
+            for v in all {
+                ui.selectable_value(value, v, name(v));
+            }
+        })
+        .response
+        .on_hover_text(hover);
 }
 
 /// H, R, I and quality of surface representation `i`, with its grid and the total.
