@@ -55,21 +55,7 @@ impl VertexMode {
     }
 }
 
-impl std::fmt::Display for VertexMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for VertexMode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        VertexMode::ALL
-            .into_iter()
-            .find(|m| m.name().eq_ignore_ascii_case(s))
-            .ok_or_else(|| format!("unknown vertex mode '{s}' (expected interpolated or refined)"))
-    }
-}
+super::params::display_and_parse_by_name!(VertexMode, "vertex mode", "interpolated or refined");
 
 /// How far each atom's Gaussian reaches in the analytic sum, in units of its alpha.
 pub const REFINE_REACH: f32 = 4.0;

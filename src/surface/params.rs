@@ -1,9 +1,5 @@
 //! The user's knobs for a surface: grid spacing H, radius scale R, isovalue I and quality (the
 //! Gaussian cutoff). Shared by the CPU and GPU engines and the UI.
-
-use std::fmt;
-use std::str::FromStr;
-
 use super::SurfaceError;
 
 /// How far each Gaussian reaches, in units of its width alpha.
@@ -45,21 +41,35 @@ impl Quality {
     }
 }
 
-impl fmt::Display for Quality {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
+/// `Display` (the name) and `FromStr` (any case; an unknown name is an error naming it and
+/// what was expected) for an enum of named choices with `ALL` and `name(self)`.
+macro_rules! display_and_parse_by_name {
+    ($type:ty, $what:literal, $expected:literal) => {
+        impl std::fmt::Display for $type {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
 
-impl FromStr for Quality {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Quality::ALL
-            .into_iter()
-            .find(|q| q.name().eq_ignore_ascii_case(s))
-            .ok_or_else(|| format!("unknown quality '{s}' (expected low, medium, high or max)"))
-    }
+        impl std::str::FromStr for $type {
+            type Err = String;
+            fn from_str(s: &str) -> Result<Self, Self::Err> {
+                <$type>::ALL
+                    .into_iter()
+                    .find(|v| v.name().eq_ignore_ascii_case(s))
+                    .ok_or_else(|| {
+                        format!(
+                            concat!("unknown ", $what, " '{}' (expected ", $expected, ")"),
+                            s
+                        )
+                    })
+            }
+        }
+    };
 }
+pub(crate) use display_and_parse_by_name;
+
+display_and_parse_by_name!(Quality, "quality", "low, medium, high or max");
 
 /// Parameters of one surface.
 #[derive(Debug, Clone, Copy, PartialEq)]

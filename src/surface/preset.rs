@@ -136,37 +136,9 @@ impl RadiusSet {
     }
 }
 
-impl std::fmt::Display for RadiusSet {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+super::params::display_and_parse_by_name!(RadiusSet, "radius set", "mdsurf or ses");
 
-impl std::str::FromStr for RadiusSet {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        RadiusSet::ALL
-            .into_iter()
-            .find(|r| r.name().eq_ignore_ascii_case(s))
-            .ok_or_else(|| format!("unknown radius set '{s}' (expected mdsurf or ses)"))
-    }
-}
-
-impl std::fmt::Display for Preset {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for Preset {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Preset::ALL
-            .into_iter()
-            .find(|p| p.name().eq_ignore_ascii_case(s))
-            .ok_or_else(|| format!("unknown preset '{s}' (expected ses)"))
-    }
-}
+super::params::display_and_parse_by_name!(Preset, "preset", "ses");
 
 #[cfg(test)]
 mod tests {
