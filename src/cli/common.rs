@@ -201,6 +201,18 @@ impl ParamArgs {
     }
 }
 
+/// Sets `engine` to place vertices by `mode`, saying on stderr when it places them otherwise.
+pub fn set_vertex_mode(engine: &mut dyn SurfaceEngine, mode: VertexMode) {
+    engine.set_vertices(mode);
+    if engine.vertices() != mode {
+        eprintln!(
+            "note: the {} engine places vertices {}; --vertices {mode} needs --backend cpu",
+            engine.name(),
+            engine.vertices(),
+        );
+    }
+}
+
 /// Which engine computes the surfaces.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Backend {

@@ -24,6 +24,7 @@ use mdsurf::surface::SurfaceOutput;
 use super::chunk::ChunkSpec;
 use super::common::{
     Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
+    set_vertex_mode,
 };
 use super::scene_args::{SceneArgs, bind_layers};
 use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
@@ -338,19 +339,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
         None => Backend::Cpu,
     };
     let mut engine = FrameEngine::new(host_backend, reader.chain(), false)?;
+    let vertices = args.params.vertex_mode();
     if let Some(e) = in_place.as_mut().and_then(|v| v.first_mut()) {
-        e.set_vertices(args.params.vertex_mode());
+        e.set_vertices(vertices);
     }
     if let FrameEngine::Plain(e) = &mut engine {
-        e.set_vertices(args.params.vertex_mode());
-        if e.vertices() != args.params.vertex_mode() {
-            eprintln!(
-                "note: the {} engine places vertices {}; --vertices {} needs --backend cpu",
-                e.name(),
-                e.vertices(),
-                args.params.vertex_mode()
-            );
-        }
+        set_vertex_mode(e.as_mut(), vertices);
     }
     choice.print_defaults();
     if args.transforms.any() {
@@ -412,7 +406,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             if let Some(engines) = in_place.as_mut()
                 && !lf.positions.is_empty()
             {
-                let e = engine_of_layer(engines, k, &gpu, args.params.vertex_mode())?;
+                let e = engine_of_layer(engines, k, &gpu, vertices)?;
                 let atoms = lf.atom_set();
                 let fail =
                     |e: String| anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name);

@@ -21,6 +21,7 @@ use super::chunk::ChunkSpec;
 
 use super::common::{
     Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
+    set_vertex_mode,
 };
 use super::scene_args::{SceneArgs, bind_layers};
 use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
@@ -169,15 +170,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if let FrameEngine::Plain(e) = &mut engine {
         // Without -o only area, volume and counts are reported: the mesh need not be built.
         e.set_keep_mesh(output.is_some());
-        e.set_vertices(args.params.vertex_mode());
-        if e.vertices() != args.params.vertex_mode() {
-            eprintln!(
-                "note: the {} engine places vertices {}; --vertices {} needs --backend cpu",
-                e.name(),
-                e.vertices(),
-                args.params.vertex_mode()
-            );
-        }
+        set_vertex_mode(e.as_mut(), args.params.vertex_mode());
     }
     choice.print_defaults();
     if args.transforms.any() && !args.quiet {

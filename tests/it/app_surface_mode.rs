@@ -166,4 +166,8 @@ fn state_file_keeps_the_vertex_mode_and_old_files_load() {
     let bad = text.replace("vertices = \"refined\"", "vertices = \"smooth\"");
     let e = StateFile::parse(&bad, "bad.toml").unwrap_err().to_string();
     assert!(e.contains("smooth"), "{e}");
+    let bad = text.replace("radii = \"ses\"", "radii = \"bondi\"");
+    let e = StateFile::parse(&bad, "bad.toml").unwrap_err().to_string();
+    assert!(e.contains("bondi") && e.contains("mdsurf or ses"), "{e}");
+    assert!(!e.contains('\n'), "{e}");
 }
