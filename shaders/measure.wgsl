@@ -1,5 +1,6 @@
 // Area and volume of the finished mesh by a two-level deterministic reduction (fixed number of
-// workgroups, fixed order), plus the bookkeeping kernels that run between slabs and at the end of
+// workgroups, fixed order; field_eval and field_project come from field.wgsl, prepended by
+// src/gpu/shaders.rs), plus the bookkeeping kernels that run between slabs and at the end of
 // a frame: emit dispatch arguments, slab bases, counts, overflow bits and the indirect draw
 // arguments for the renderer. Rust side: src/gpu/measure.rs.
 
@@ -19,10 +20,20 @@ const C_VERTEX_CAPACITY: u32 = 11u;
 const C_TRIANGLE_CAPACITY: u32 = 12u;
 const C_ACTIVE_TOTAL: u32 = 13u;
 
-// Twin of crate::gpu::types::MeasureUniform (16 bytes).
+// Twin of crate::gpu::types::MeasureUniform (64 bytes).
 struct MeasureUniform {
     centre: vec3<f32>,
     max_groups_x: u32,
+    // The binning's cells (for field_eval with refined vertices).
+    cell_origin: vec3<f32>,
+    cell_size: f32,
+    cell_dims: vec3<u32>,
+    // Å: how far the farthest-reaching atom counts.
+    reach: f32,
+    isovalue: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 const PARTIAL_GROUPS: u32 = 256u;
@@ -33,6 +44,11 @@ const PARTIAL_GROUPS: u32 = 256u;
 override CURVED: bool = false;
 // Twin of crate::surface::curved::MAX_LIFT (in units of the edge length).
 const MAX_LIFT: f32 = 0.5;
+// Twins of crate::surface::curved::{SHARP_COS, SHARP_LEVEL} and
+// crate::surface::analytic::PROJECT_POINTS_ITERATIONS.
+const SHARP_COS: f32 = 0.5;
+const SHARP_LEVEL: u32 = 4u;
+const PROJECT_POINTS_ITERATIONS: u32 = 8u;
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::measure`): the Rust side
 // builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
@@ -46,6 +62,13 @@ const MAX_LIFT: f32 = 0.5;
 // first_index, base_vertex, first_instance).
 @group(0) @binding(5) var<storage, read_write> dispatch_args: array<u32>;
 @group(0) @binding(6) var<storage, read_write> draw_args: array<u32>;
+// The binned atoms (position, alpha) and the binning's inclusive cell ends, for field_eval.
+@group(0) @binding(7) var<storage, read> sorted_atoms: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read> cell_end: array<u32>;
+
+fn field_cells() -> FieldCells {
+    return FieldCells(mu.cell_origin, mu.cell_size, mu.cell_dims, mu.reach);
+}
 
 var<workgroup> sh: array<vec2<f32>, 256>;
 
@@ -89,6 +112,52 @@ fn tri_volume(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
     return dot(a, cross(b, c)) / 6.0;
 }
 
+// Index of the point i steps towards b and j towards c of a sharp triangle split SHARP_LEVEL
+// times per edge (twin of crate::surface::curved::sharp_point).
+fn sharp_point(i: u32, j: u32) -> u32 {
+    return i * (2u * SHARP_LEVEL + 3u - i) / 2u + j;
+}
+
+// Twin of crate::surface::curved::sharp_area_volume: area and volume of the level set over the
+// triangle abc (relative to the centre), its points split SHARP_LEVEL times per edge and moved
+// onto the surface, Richardson over that level and half of it; z is 0 when a point did not
+// reach the surface (the caller measures the triangle the usual way).
+fn sharp_measure(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    var pts: array<vec3<f32>, 15>;
+    let n = f32(SHARP_LEVEL);
+    let longest = max(max(length(b - a), length(c - b)), length(a - c));
+    for (var i = 0u; i <= SHARP_LEVEL; i++) {
+        for (var j = 0u; j <= SHARP_LEVEL - i; j++) {
+            let p = a + (b - a) * (f32(i) / n) + (c - a) * (f32(j) / n);
+            let q = field_project(p + mu.centre, mu.isovalue, longest, PROJECT_POINTS_ITERATIONS);
+            if (!q.ok) {
+                return vec3<f32>(0.0);
+            }
+            pts[sharp_point(i, j)] = q.pos - mu.centre;
+        }
+    }
+    var sums: array<vec2<f32>, 2>;
+    for (var level = 0u; level < 2u; level++) {
+        let s = level + 1u;
+        var acc = vec2<f32>(0.0);
+        for (var i = 0u; i < SHARP_LEVEL; i += s) {
+            for (var j = 0u; j < SHARP_LEVEL - i; j += s) {
+                let p0 = pts[sharp_point(i, j)];
+                let pi = pts[sharp_point(i + s, j)];
+                let pj = pts[sharp_point(i, j + s)];
+                acc += vec2<f32>(tri_area(p0, pi, pj), tri_volume(p0, pi, pj));
+                if (i + j + s < SHARP_LEVEL) {
+                    let pij = pts[sharp_point(i + s, j + s)];
+                    acc += vec2<f32>(tri_area(pi, pij, pj), tri_volume(pi, pij, pj));
+                }
+            }
+        }
+        sums[level] = acc;
+    }
+    let m = sums[0] + (sums[0] - sums[1]) / 3.0;
+    return vec3<f32>(m, 1.0);
+}
+
 // Area and volume of triangle (i0, i1, i2), flat or curvature-corrected.
 fn measure_triangle(i0: u32, i1: u32, i2: u32) -> vec2<f32> {
     let a = vertex(i0);
@@ -97,6 +166,15 @@ fn measure_triangle(i0: u32, i1: u32, i2: u32) -> vec2<f32> {
     let flat = vec2<f32>(tri_area(a, b, c), tri_volume(a, b, c));
     if (!CURVED) {
         return flat;
+    }
+    let n0 = vertex_normal(i0);
+    let n1 = vertex_normal(i1);
+    let n2 = vertex_normal(i2);
+    if (min(min(dot(n0, n1), dot(n1, n2)), dot(n2, n0)) < SHARP_COS) {
+        let sharp = sharp_measure(a, b, c);
+        if (sharp.z != 0.0) {
+            return sharp.xy;
+        }
     }
     let ab = lifted_midpoint(i0, i1);
     let bc = lifted_midpoint(i1, i2);

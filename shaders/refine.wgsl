@@ -8,18 +8,17 @@
 // the binning's cells. Colours are left as emitted (the linear parameter, as on the CPU), and
 // so is the normal where the gradient vanishes. Rust side: src/gpu/mc.rs (Refine).
 
-// SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
-// prepended by src/gpu/shaders.rs.
+// SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl, and
+// field_eval and field_project from field.wgsl, both prepended by src/gpu/shaders.rs.
 
 // Word indices into the counters (twin of crate::gpu::types::GpuCounters).
 const C_SCAN_ACTIVE: u32 = 6u;
 const C_VERTEX_CAPACITY: u32 = 11u;
 
-// Twins of crate::surface::analytic::{REFINE_REACH, REFINE_ITERATIONS, REFINE_STEP}.
-const REFINE_REACH: f32 = 4.0;
+// Twins of crate::surface::analytic::{REFINE_ITERATIONS, PROJECT_ITERATIONS} (REFINE_REACH and
+// REFINE_STEP are in field.wgsl).
 const REFINE_ITERATIONS: u32 = 8u;
-// Å.
-const REFINE_STEP: f32 = 1e-4;
+const PROJECT_ITERATIONS: u32 = 4u;
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::refine`). Eight storage
 // buffers (the device minimum): the cell starts are read as the previous cell's end.
@@ -39,75 +38,11 @@ fn dens(p: vec3<u32>) -> f32 {
 }
 
 
-fn cell_coord(x: f32, o: f32, n: u32) -> u32 {
-    return u32(clamp(i32(floor((x - o) / u.cell_size)), 0, i32(n) - 1));
-}
-
-// (grad rho (Å⁻¹), rho) at p (Å): the sum over the atoms with |p - p_i| < REFINE_REACH alpha_i
-// of exp(-|p - p_i|² / (2 alpha_i²)) and its gradient (sorted_atoms: position, alpha).
-fn eval(p: vec3<f32>) -> vec4<f32> {
-    // The largest alpha is max_cut / cutoff; a little slack as in density.wgsl.
+// Where the binning put the atoms, for field_eval (shaders/field.wgsl): the largest alpha is
+// max_cut / cutoff, with a little slack as in density.wgsl.
+fn field_cells() -> FieldCells {
     let reach = REFINE_REACH * u.max_cut / u.cutoff * 1.0001 + 1e-4;
-    let cx0 = cell_coord(p.x - reach, u.cell_origin.x, u.cell_dims.x);
-    let cx1 = cell_coord(p.x + reach, u.cell_origin.x, u.cell_dims.x);
-    let cy0 = cell_coord(p.y - reach, u.cell_origin.y, u.cell_dims.y);
-    let cy1 = cell_coord(p.y + reach, u.cell_origin.y, u.cell_dims.y);
-    let cz0 = cell_coord(p.z - reach, u.cell_origin.z, u.cell_dims.z);
-    let cz1 = cell_coord(p.z + reach, u.cell_origin.z, u.cell_dims.z);
-    var rho = 0.0;
-    var g = vec3<f32>(0.0);
-    for (var cz = cz0; cz <= cz1; cz++) {
-        for (var cy = cy0; cy <= cy1; cy++) {
-            let row = u.cell_dims.x * (cy + u.cell_dims.y * cz);
-            let c0 = row + cx0;
-            var first = 0u;
-            if (c0 > 0u) {
-                first = cell_end[c0 - 1u];
-            }
-            let last = cell_end[row + cx1];
-            for (var s = first; s < last; s++) {
-                let a = sorted_atoms[s];
-                let d = p - a.xyz;
-                let d2 = (d.x * d.x + d.y * d.y) + d.z * d.z;
-                let r = REFINE_REACH * a.w;
-                if (d2 < r * r) {
-                    let k = 0.5 / (a.w * a.w);
-                    let w = exp(-k * d2);
-                    rho += w;
-                    g -= (2.0 * k * w) * d;
-                }
-            }
-        }
-    }
-    return vec4<f32>(g, rho);
-}
-
-struct Projected {
-    ok: bool,
-    pos: vec3<f32>,
-    grad: vec3<f32>,
-}
-
-// p (Å) moved onto rho = iso by Newton steps along the gradient (at most four), with the
-// gradient there; not ok when that does not converge within max_dist Å of p.
-fn project(p: vec3<f32>, iso: f32, max_dist: f32) -> Projected {
-    var x = p;
-    for (var it = 0u; it < 4u; it++) {
-        let e = eval(x);
-        let g2 = dot(e.xyz, e.xyz);
-        if (!(g2 > 0.0)) {
-            break;
-        }
-        let step = ((e.w - iso) / g2) * e.xyz;
-        x -= step;
-        if (length(x - p) > max_dist) {
-            break;
-        }
-        if (length(step) < REFINE_STEP) {
-            return Projected(true, x, e.xyz);
-        }
-    }
-    return Projected(false, p, vec3<f32>(0.0));
+    return FieldCells(u.cell_origin, u.cell_size, u.cell_dims, reach);
 }
 
 fn refine_vertex(id: u32, p0: vec3<u32>, axis: u32) {
@@ -132,7 +67,7 @@ fn refine_vertex(id: u32, p0: vec3<u32>, axis: u32) {
     var g = vec3<f32>(0.0);
     var f_last = 0.0;
     for (var it = 0u; it < REFINE_ITERATIONS; it++) {
-        let e = eval(pa + t * dir);
+        let e = field_eval(pa + t * dir);
         g = e.xyz;
         let f = e.w - iso;
         f_last = f;
@@ -171,7 +106,7 @@ fn refine_vertex(id: u32, p0: vec3<u32>, axis: u32) {
     var pos = pa + t * dir;
     let found = abs(f_last) * len <= 0.1 * REFINE_STEP * length(g) * len + 1e-4;
     if (!found) {
-        let q = project(pos, iso, 0.5 * len);
+        let q = field_project(pos, iso, 0.5 * len, PROJECT_ITERATIONS);
         if (q.ok) {
             pos = q.pos;
             g = q.grad;

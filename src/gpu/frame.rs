@@ -19,6 +19,7 @@ use super::resources::Buffers;
 use super::scan::{ScanPlan, Scanner};
 use super::timing::{Stage, Timer};
 use super::types::{C_SCAN_ACTIVE, C_SCAN_TRIANGLES, C_SCAN_VERTICES, MeasureUniform, SlabUniform};
+use crate::surface::analytic::REFINE_REACH;
 use crate::surface::{StageTimings, SurfaceParams};
 
 /// Which stages a frame re-runs.
@@ -218,6 +219,13 @@ impl Stages {
             &MeasureUniform {
                 centre: grid_centre(plan).to_array(),
                 max_groups_x: self.max_groups,
+                cell_origin: plan.grid.origin.to_array(),
+                cell_size: plan.cell_size,
+                cell_dims: plan.cell_dims,
+                // As refine.wgsl's field_cells: the largest alpha is max_cut / cutoff.
+                reach: REFINE_REACH * plan.max_cut / params.cutoff() * 1.0001 + 1e-4,
+                isovalue: params.isovalue,
+                pad: [0; 3],
             },
         );
         self.density.prepare(ctx, b);

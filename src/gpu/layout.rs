@@ -351,6 +351,10 @@ pub mod measure {
     pub const DISPATCH_ARGS: Slot = slot(5, "dispatch_args", ReadWrite);
     /// Indirect draw arguments.
     pub const DRAW_ARGS: Slot = slot(6, "draw_args", ReadWrite);
+    /// Atoms sorted by cell (sharp triangles are measured on their Gaussian sum).
+    pub const SORTED_ATOMS: Slot = slot(7, "sorted_atoms", Read);
+    /// Inclusive cell ends of the binning.
+    pub const CELL_END: Slot = slot(8, "cell_end", Read);
     /// Layout of `slab_begin`.
     pub const SLAB_BEGIN: &[Slot] = &[U, COUNTERS, DISPATCH_ARGS];
     /// Layout of `slab_end`.
@@ -358,7 +362,15 @@ pub mod measure {
     /// Layout of `frame_end`.
     pub const FRAME_END: &[Slot] = &[COUNTERS, DRAW_ARGS];
     /// Layout of `partial_sums`.
-    pub const PARTIAL_SUMS: &[Slot] = &[U, COUNTERS, VERTICES, INDICES, PARTIALS];
+    pub const PARTIAL_SUMS: &[Slot] = &[
+        U,
+        COUNTERS,
+        VERTICES,
+        INDICES,
+        PARTIALS,
+        SORTED_ATOMS,
+        CELL_END,
+    ];
     /// Layout of `final_sum`.
     pub const FINAL_SUM: &[Slot] = &[COUNTERS, PARTIALS];
     /// Every binding of the file.
@@ -370,6 +382,8 @@ pub mod measure {
         PARTIALS,
         DISPATCH_ARGS,
         DRAW_ARGS,
+        SORTED_ATOMS,
+        CELL_END,
     ];
 }
 

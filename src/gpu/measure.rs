@@ -83,6 +83,8 @@ impl Measure {
                     (m::VERTICES, &out.vertices.buffer),
                     (m::INDICES, &out.indices.buffer),
                     (m::PARTIALS, &b.partials),
+                    (m::SORTED_ATOMS, &b.sorted_atoms.buffer),
+                    (m::CELL_END, &b.cell_end.buffer),
                 ],
             );
         }

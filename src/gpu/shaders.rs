@@ -37,16 +37,21 @@ pub const EMIT: &str = concat!(
     include_str!("../../shaders/class_entries.wgsl"),
     include_str!("../../shaders/emit.wgsl")
 );
-/// Refined vertices on the exact Gaussian sum (`shaders/refine.wgsl` after the slab uniform and
-/// `shaders/brick_samples.wgsl`).
+/// Refined vertices on the exact Gaussian sum (`shaders/refine.wgsl` after the slab uniform,
+/// `shaders/brick_samples.wgsl` and the sum itself, `shaders/field.wgsl`).
 pub const REFINE: &str = concat!(
     include_str!("../../shaders/slab_uniform.wgsl"),
     include_str!("../../shaders/brick_samples.wgsl"),
     include_str!("../../shaders/class_entries.wgsl"),
+    include_str!("../../shaders/field.wgsl"),
     include_str!("../../shaders/refine.wgsl")
 );
-/// Area, volume and indirect draw arguments (`shaders/measure.wgsl`).
-pub const MEASURE: &str = include_str!("../../shaders/measure.wgsl");
+/// Area, volume and indirect draw arguments (`shaders/measure.wgsl` after the exact Gaussian
+/// sum, `shaders/field.wgsl`, which its sharp triangles are measured on).
+pub const MEASURE: &str = concat!(
+    include_str!("../../shaders/field.wgsl"),
+    include_str!("../../shaders/measure.wgsl")
+);
 
 /// Every compute stage as `(file name, full source)`, for validation.
 pub const ALL: &[(&str, &str)] = &[

@@ -125,8 +125,21 @@ pub struct MeasureUniform {
     pub centre: [f32; 3],
     /// Device limit on workgroups per dispatch dimension.
     pub max_groups_x: u32,
+    /// Corner of the binning's first cell in Å (sharp triangles are measured on the Gaussian
+    /// sum of the binned atoms).
+    pub cell_origin: [f32; 3],
+    /// Edge of a binning cell in Å.
+    pub cell_size: f32,
+    /// Binning cells per axis.
+    pub cell_dims: [u32; 3],
+    /// How far the farthest-reaching atom counts in the Gaussian sum, Å.
+    pub reach: f32,
+    /// Isovalue I (dimensionless).
+    pub isovalue: f32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<MeasureUniform>() == 16);
+const _: () = assert!(std::mem::size_of::<MeasureUniform>() == 64);
 
 /// Frame counters on the GPU, read back asynchronously. Twin: the `C_*` word indices in
 /// `shaders/compact.wgsl`, `shaders/emit.wgsl` and `shaders/measure.wgsl`.

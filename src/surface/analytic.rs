@@ -63,6 +63,11 @@ pub const REFINE_REACH: f32 = 4.0;
 pub const REFINE_ITERATIONS: u32 = 8;
 /// An edge's root is accepted when the next Newton step would move it less than this (Å).
 pub const REFINE_STEP: f32 = 1e-4;
+/// Most Newton steps of [`AnalyticField::project`] (a vertex whose edge has no root).
+pub const PROJECT_ITERATIONS: u32 = 4;
+/// Most Newton steps of [`AnalyticField::project_points`] (points of a sharp triangle measured
+/// on the surface, [`super::curved`]): they start up to a few tenths of an Å off it.
+pub const PROJECT_POINTS_ITERATIONS: u32 = 8;
 
 /// One atom of the field (position in Å, exponent factor in Å⁻², squared cutoff in Å², cutoff
 /// in Å).
@@ -397,7 +402,14 @@ impl AnalyticField {
                 // the quality's shorter reach, is on the other side): move onto the surface
                 // along the gradient instead, at most half an edge length.
                 self.gather(mid, len, near);
-                project_in(|x| near.eval(x), position, iso, 0.5 * len).unwrap_or((position, grad))
+                project_in(
+                    |x| near.eval(x),
+                    position,
+                    iso,
+                    0.5 * len,
+                    PROJECT_ITERATIONS,
+                )
+                .unwrap_or((position, grad))
             };
             let n = -grad;
             let normal = (n.length_squared() > 0.0 && n.is_finite()).then(|| n.normalize());
@@ -410,7 +422,34 @@ impl AnalyticField {
     pub fn project(&self, p: Vec3, iso: f32, max_dist: f32) -> Option<(Vec3, Vec3)> {
         NEAR.with_borrow_mut(|near| {
             self.gather(p, max_dist, near);
-            project_in(|x| near.eval(x), p, iso, max_dist)
+            project_in(|x| near.eval(x), p, iso, max_dist, PROJECT_ITERATIONS)
+        })
+    }
+
+    /// Moves every point of `points` (Å, all within `radius` Å of `centre`) onto `rho = iso`
+    /// along the gradient, as [`Self::project`] with up to [`PROJECT_POINTS_ITERATIONS`] Newton
+    /// steps each and the atoms gathered once for all of them. False (and `points` partly
+    /// moved) when one of them does not converge within `max_dist` Å of where it started.
+    pub fn project_points(
+        &self,
+        points: &mut [Vec3],
+        centre: Vec3,
+        radius: f32,
+        iso: f32,
+        max_dist: f32,
+    ) -> bool {
+        NEAR.with_borrow_mut(|near| {
+            self.gather(centre, radius + max_dist, near);
+            points.iter_mut().all(|p| {
+                let moved = project_in(
+                    |x| near.eval(x),
+                    *p,
+                    iso,
+                    max_dist,
+                    PROJECT_POINTS_ITERATIONS,
+                );
+                moved.map(|(x, _)| *p = x).is_some()
+            })
         })
     }
 }
@@ -470,15 +509,17 @@ fn refine_in(
     (pa + t * dir, g, found)
 }
 
-/// [`AnalyticField::project`] with `eval` summing the atoms near `p`.
+/// [`AnalyticField::project`] with `eval` summing the atoms near `p` and at most `iterations`
+/// Newton steps.
 fn project_in(
     eval: impl Fn(Vec3) -> (f32, Vec3),
     p: Vec3,
     iso: f32,
     max_dist: f32,
+    iterations: u32,
 ) -> Option<(Vec3, Vec3)> {
     let mut x = p;
-    for _ in 0..4 {
+    for _ in 0..iterations {
         let (rho, g) = eval(x);
         let f = rho - iso;
         let g2 = g.length_squared();

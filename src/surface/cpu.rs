@@ -255,7 +255,13 @@ impl CpuEngine {
         } else {
             let mesh = self.mc.merge();
             let (area, enclosed) = match &field {
-                Some(_) => curved::curved_area_volume(&mesh),
+                Some(field) => curved::curved_area_volume(
+                    &mesh,
+                    Some(curved::OnField {
+                        field,
+                        iso: params.isovalue,
+                    }),
+                ),
                 None => mesh.area_and_volume(),
             };
             (mesh, area, enclosed, None)

@@ -33,7 +33,7 @@ fn validate(name: &str, source: &str) -> Result<(), String> {
 /// Every file under `shaders/` is validated: each stage as the engine or the renderer
 /// assembles it (`mdsurf::gpu::shaders::ALL`, `mdsurf::render::SHADERS`, with their shared
 /// uniform files prepended), the shared files alone, and the shared function files
-/// (`brick_samples.wgsl`, `class_entries.wgsl`) inside the stages that include them. A new shader that neither lists
+/// (`brick_samples.wgsl`, `class_entries.wgsl`, `field.wgsl`) inside the stages that include them. A new shader that neither lists
 /// fails here.
 #[test]
 fn every_shader_parses_and_validates() {
@@ -48,7 +48,7 @@ fn every_shader_parses_and_validates() {
         .collect();
     let shared = ["slab_uniform.wgsl", "render_view.wgsl"];
     // Shared functions that use names each stage declares: checked inside the stages.
-    let included = ["brick_samples.wgsl", "class_entries.wgsl"];
+    let included = ["brick_samples.wgsl", "class_entries.wgsl", "field.wgsl"];
     let mut failures = Vec::new();
     for file in &files {
         let name = file
