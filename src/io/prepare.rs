@@ -118,7 +118,9 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
 
 /// A PDB file made safe for chemfiles, or `None` when it already is: non-ASCII bytes become `?`,
 /// and `CONECT` records before the first atom of a model are dropped (chemfiles indexes an empty
-/// list with them and crashes; a chunk of a file duplicated ahead of its atoms does this).
+/// list with them and crashes; a chunk of a file duplicated ahead of its atoms does this, and so
+/// do the CONECT records after the last ENDMDL of a wwPDB file whose models differ in size, as
+/// 1lcd's). mdsurf reads CONECT records itself from the original file (`super::conect`).
 fn clean_pdb(bytes: &[u8]) -> Option<Vec<u8>> {
     let orphan = |bytes: &[u8]| {
         let mut atoms = false;
@@ -351,6 +353,14 @@ fn decompress(
             .map_err(|e| write_failed(path, e))?;
     }
     finish(path, output)?;
+    if format.base == "PDB" {
+        // The same cleaning as an uncompressed PDB file gets (a wwPDB multi-model file's CONECT
+        // records after its last ENDMDL crashed chemfiles when that model has fewer atoms).
+        let bytes = std::fs::read(&copy).map_err(|e| write_failed(path, e))?;
+        if let Some(cleaned) = clean_pdb(&bytes) {
+            std::fs::write(&copy, cleaned).map_err(|e| write_failed(path, e))?;
+        }
+    }
     let mut cut_removed = false;
     if truncated.is_some() && format.base == "LAMMPS" {
         // chemfiles refuses a LAMMPS file whose last frame is incomplete: keep whole frames.

@@ -320,7 +320,7 @@ fn ses_preset_refines_vertices_unless_told_otherwise() {
     let (preset, tris) = area_with(&[], "preset.csv");
     let (refined, tris_refined) = area_with(&["--vertices", "refined"], "refined.csv");
     let (interpolated, tris_lin) = area_with(&["--vertices", "interpolated"], "lin.csv");
-    // The user's radius beats the preset's (1.136 Å for N).
+    // The user's radius beats the preset's (0.922 Å for N).
     let (own_n, _) = area_with(&["--radius", "N=1.4"], "own_n.csv");
     assert!(
         (own_n - preset).abs() > 1e-3 * preset,

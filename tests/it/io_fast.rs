@@ -251,6 +251,49 @@ fn wwpdb_models_followed_by_master_and_end_have_no_empty_last_frame() {
     assert_eq!(nmr.read_frame(0).expect("frame 0").positions.len(), 1855);
 }
 
+/// A compressed wwPDB multi-model file whose models differ in size, with CONECT records after
+/// the last ENDMDL (1lcd: 1,137 atoms in model 1, 1,125 in model 3), crashed chemfiles when
+/// it read those records with the last model (a segmentation fault, not an error). The
+/// decompressed copy is cleaned as an uncompressed file is: every model reads, and the one
+/// whose atom count differs says so in the CLI (tests/it/cli_errors.rs checks that message).
+#[test]
+fn compressed_wwpdb_with_models_of_different_sizes_reads_every_model() {
+    // Per frame: its atom count, or the error's text.
+    let frames = |t: &io::Trajectory| -> Vec<Result<usize, String>> {
+        (0..t.len())
+            .map(|i| {
+                t.read_frame(i)
+                    .map(|f| f.positions.len())
+                    .map_err(|e| e.to_string())
+            })
+            .collect()
+    };
+    let t = io::open(&data("1lcd.pdb.gz"), None).expect("1lcd");
+    assert_eq!(t.len(), 3);
+    let gz = frames(&t);
+    assert_eq!(gz[0], Ok(1137));
+    assert!(
+        gz.iter().any(|r| r
+            .as_ref()
+            .is_err_and(|e| e.contains("1125") && e.contains("1137"))),
+        "{gz:?}"
+    );
+    let plain = tempfile::tempdir().unwrap();
+    let copy = plain.path().join("1lcd.pdb");
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut flate2::read::GzDecoder::new(std::fs::File::open(data("1lcd.pdb.gz")).unwrap()),
+        &mut text,
+    )
+    .unwrap();
+    std::fs::write(&copy, text).unwrap();
+    let p = io::open(&copy, None).expect("uncompressed 1lcd");
+    let counts = |v: &[Result<usize, String>]| -> Vec<Option<usize>> {
+        v.iter().map(|r| r.as_ref().ok().copied()).collect()
+    };
+    assert_eq!(counts(&frames(&p)), counts(&gz));
+}
+
 /// The error of opening `path`: one line naming the file.
 fn one_line_error(path: &Path) -> String {
     let e = io::open(path, None).expect_err("damaged").to_string();
