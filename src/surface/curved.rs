@@ -26,15 +26,15 @@
 //! midpoints to better than 0.01 % (tests/it/surface_refine.rs).
 //!
 //! Sharp triangles: where a triangle's normals turn by more than 60° ([`SHARP_COS`]), across the
-//! narrow creases between atoms of a sharp surface (the SES preset: R 0.83, I 0.377) or over a
+//! narrow creases between atoms of a sharp surface (the SES preset: R 0.832, I 0.382) or over a
 //! feature smaller than the triangle, the lift is capped or wrong and such triangles came out
 //! 12 % short on 1hpv's SES-preset surface at H = 1 Å (9 % of its triangles; the whole surface
-//! 1.2 % short of its converged area). With the field at hand ([`OnField`]), they are measured
+//! 1.2 % short of its converged area; measured with the preset's first radii). With the field at hand ([`OnField`]), they are measured
 //! on the Gaussian sum itself instead ([`sharp_area_volume`]): split 4 x 4, every point moved
 //! onto the surface by Newton steps along the gradient, Richardson over that split and the 2 x 2
-//! one. That brings the same surface within 0.45 % of its converged area at H = 1 Å and within
-//! 0.03 % at 0.5 Å (tests/it/surface_refine.rs). At the default R and I (1hpv, quality high)
-//! it moves the area at H = 2 Å from 0.76 % to 0.29 % below the converged one (H = 0.5 Å), and
+//! one. That brings the same surface within 0.5 % of its converged area at H = 1 Å and within
+//! 0.04 % at 0.5 Å (tests/it/surface_refine.rs). At the default R and I (1hpv, quality high)
+//! it moves the area at H = 2 Å from 0.9 % to 0.38 % below the converged one (H -> 0), and
 //! at H = 1 Å by 0.04 %.
 //!
 //! Cost: about 100 flops per triangle, in parallel over fixed chunks summed in order (the result
