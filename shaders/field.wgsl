@@ -67,9 +67,16 @@ struct Projected {
     grad: vec3<f32>,
 }
 
-// p (Å) moved onto rho = iso by Newton steps along the gradient (at most `iterations`), with the
-// gradient there; not ok when that does not converge within max_dist Å of p.
-fn field_project(p: vec3<f32>, iso: f32, max_dist: f32, iterations: u32) -> Projected {
+// p (Å) moved onto rho = iso by Newton steps along the gradient (at most `iterations`, done when
+// a step is shorter than `tolerance` Å), with the gradient there; not ok when that does not
+// converge within max_dist Å of p.
+fn field_project(
+    p: vec3<f32>,
+    iso: f32,
+    max_dist: f32,
+    iterations: u32,
+    tolerance: f32,
+) -> Projected {
     var x = p;
     for (var it = 0u; it < iterations; it++) {
         let e = field_eval(x);
@@ -82,7 +89,7 @@ fn field_project(p: vec3<f32>, iso: f32, max_dist: f32, iterations: u32) -> Proj
         if (length(x - p) > max_dist) {
             break;
         }
-        if (length(step) < REFINE_STEP) {
+        if (length(step) < tolerance) {
             return Projected(true, x, e.xyz);
         }
     }

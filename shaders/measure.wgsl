@@ -45,10 +45,12 @@ override CURVED: bool = false;
 // Twin of crate::surface::curved::MAX_LIFT (in units of the edge length).
 const MAX_LIFT: f32 = 0.5;
 // Twins of crate::surface::curved::{SHARP_COS, SHARP_LEVEL} and
-// crate::surface::analytic::PROJECT_POINTS_ITERATIONS.
+// crate::surface::analytic::{PROJECT_POINTS_ITERATIONS, PROJECT_POINTS_STEP}.
 const SHARP_COS: f32 = 0.5;
 const SHARP_LEVEL: u32 = 4u;
 const PROJECT_POINTS_ITERATIONS: u32 = 8u;
+// Å.
+const PROJECT_POINTS_STEP: f32 = 1e-3;
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::measure`): the Rust side
 // builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
@@ -119,9 +121,10 @@ fn sharp_point(i: u32, j: u32) -> u32 {
 }
 
 // Twin of crate::surface::curved::sharp_area_volume: area and volume of the level set over the
-// triangle abc (relative to the centre), its points split SHARP_LEVEL times per edge and moved
-// onto the surface, Richardson over that level and half of it; z is 0 when a point did not
-// reach the surface (the caller measures the triangle the usual way).
+// triangle abc (relative to the centre), its points split SHARP_LEVEL times per edge and the
+// ones that are not corners moved onto the surface, Richardson over that level and half of it;
+// z is 0 when a point did not reach the surface (the caller measures the triangle the usual
+// way).
 fn sharp_measure(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
     var pts: array<vec3<f32>, 15>;
     let n = f32(SHARP_LEVEL);
@@ -129,7 +132,19 @@ fn sharp_measure(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
     for (var i = 0u; i <= SHARP_LEVEL; i++) {
         for (var j = 0u; j <= SHARP_LEVEL - i; j++) {
             let p = a + (b - a) * (f32(i) / n) + (c - a) * (f32(j) / n);
-            let q = field_project(p + mu.centre, mu.isovalue, longest, PROJECT_POINTS_ITERATIONS);
+            // The corners are mesh vertices, already on the surface.
+            let corner = (i == 0u || i == SHARP_LEVEL) && (j == 0u || j == SHARP_LEVEL);
+            if (corner) {
+                pts[sharp_point(i, j)] = p;
+                continue;
+            }
+            let q = field_project(
+                p + mu.centre,
+                mu.isovalue,
+                longest,
+                PROJECT_POINTS_ITERATIONS,
+                PROJECT_POINTS_STEP,
+            );
             if (!q.ok) {
                 return vec3<f32>(0.0);
             }

@@ -106,7 +106,7 @@ fn refine_vertex(id: u32, p0: vec3<u32>, axis: u32) {
     var pos = pa + t * dir;
     let found = abs(f_last) * len <= 0.1 * REFINE_STEP * length(g) * len + 1e-4;
     if (!found) {
-        let q = field_project(pos, iso, 0.5 * len, PROJECT_ITERATIONS);
+        let q = field_project(pos, iso, 0.5 * len, PROJECT_ITERATIONS, REFINE_STEP);
         if (q.ok) {
             pos = q.pos;
             g = q.grad;

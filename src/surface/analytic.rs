@@ -36,7 +36,7 @@ pub enum VertexMode {
     #[default]
     Interpolated,
     /// The root of the exact Gaussian sum on the edge, normals from its analytic gradient; the
-    /// area and volume account for curvature ([`super::curved`]). Costs about 1.5 to 3 times
+    /// area and volume account for curvature ([`super::curved`]). Costs about 2 to 7 times
     /// an interpolated CPU frame (`mdsurf bench` reports it; the bar for the default
     /// is 15 %), so it is not the default.
     Refined,
@@ -68,6 +68,9 @@ pub const PROJECT_ITERATIONS: u32 = 4;
 /// Most Newton steps of [`AnalyticField::project_points`] (points of a sharp triangle measured
 /// on the surface, [`super::curved`]): they start up to a few tenths of an Å off it.
 pub const PROJECT_POINTS_ITERATIONS: u32 = 8;
+/// A point of [`AnalyticField::project_points`] is on the surface when the next Newton step
+/// would move it less than this (Å): its error in a sharp triangle's area is second order in it.
+pub const PROJECT_POINTS_STEP: f32 = 1e-3;
 
 /// One atom of the field (position in Å, exponent factor in Å⁻², squared cutoff in Å², cutoff
 /// in Å).
@@ -408,6 +411,7 @@ impl AnalyticField {
                     iso,
                     0.5 * len,
                     PROJECT_ITERATIONS,
+                    REFINE_STEP,
                 )
                 .unwrap_or((position, grad))
             };
@@ -422,13 +426,20 @@ impl AnalyticField {
     pub fn project(&self, p: Vec3, iso: f32, max_dist: f32) -> Option<(Vec3, Vec3)> {
         NEAR.with_borrow_mut(|near| {
             self.gather(p, max_dist, near);
-            project_in(|x| near.eval(x), p, iso, max_dist, PROJECT_ITERATIONS)
+            project_in(
+                |x| near.eval(x),
+                p,
+                iso,
+                max_dist,
+                PROJECT_ITERATIONS,
+                REFINE_STEP,
+            )
         })
     }
 
     /// Moves every point of `points` (Å, all within `radius` Å of `centre`) onto `rho = iso`
     /// along the gradient, as [`Self::project`] with up to [`PROJECT_POINTS_ITERATIONS`] Newton
-    /// steps each and the atoms gathered once for all of them. False (and `points` partly
+    /// steps each, done at [`PROJECT_POINTS_STEP`], and the atoms gathered once for all of them. False (and `points` partly
     /// moved) when one of them does not converge within `max_dist` Å of where it started.
     pub fn project_points(
         &self,
@@ -447,6 +458,7 @@ impl AnalyticField {
                     iso,
                     max_dist,
                     PROJECT_POINTS_ITERATIONS,
+                    PROJECT_POINTS_STEP,
                 );
                 moved.map(|(x, _)| *p = x).is_some()
             })
@@ -509,14 +521,15 @@ fn refine_in(
     (pa + t * dir, g, found)
 }
 
-/// [`AnalyticField::project`] with `eval` summing the atoms near `p` and at most `iterations`
-/// Newton steps.
+/// [`AnalyticField::project`] with `eval` summing the atoms near `p`, at most `iterations`
+/// Newton steps, done when a step is shorter than `tolerance` Å.
 fn project_in(
     eval: impl Fn(Vec3) -> (f32, Vec3),
     p: Vec3,
     iso: f32,
     max_dist: f32,
     iterations: u32,
+    tolerance: f32,
 ) -> Option<(Vec3, Vec3)> {
     let mut x = p;
     for _ in 0..iterations {
@@ -533,7 +546,7 @@ fn project_in(
         if !near {
             return None;
         }
-        if step.length() < REFINE_STEP {
+        if step.length() < tolerance {
             return Some((x, g));
         }
     }

@@ -34,12 +34,14 @@
 //! onto the surface by Newton steps along the gradient, Richardson over that split and the 2 x 2
 //! one. That brings the same surface within 0.5 % of its converged area at H = 1 Å and within
 //! 0.04 % at 0.5 Å (tests/it/surface_refine.rs). At the default R and I (1hpv, quality high)
-//! it moves the area at H = 2 Å from 0.9 % to 0.38 % below the converged one (H -> 0), and
+//! it moves the area at H = 2 Å from 0.9 % to 0.36 % below the converged one (H -> 0), and
 //! at H = 1 Å by 0.04 %.
 //!
-//! Cost: about 100 flops per triangle, in parallel over fixed chunks summed in order (the result
-//! does not depend on the thread count); a sharp triangle costs 15 projections, each a few
-//! evaluations of the sum over the atoms gathered once for the triangle.
+//! Cost: about 100 flops per triangle, in parallel over fixed chunks of 256 triangles summed in
+//! order (the result does not depend on the thread count; chunks this small spread the sharp
+//! triangles, which cluster, over the threads); a sharp triangle costs 12 projections (its
+//! corners are on the surface already), each a few evaluations of the sum over the atoms
+//! gathered once for the triangle.
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -93,7 +95,7 @@ pub fn curved_area_volume(mesh: &Mesh, on: Option<OnField<'_>>) -> (f64, f64) {
         return (0.0, 0.0);
     };
     let centre = 0.5 * (lo + hi);
-    const CHUNK: usize = 3 * 8192;
+    const CHUNK: usize = 3 * 256;
     let (pos, nrm) = (&mesh.positions, &mesh.normals);
     if nrm.len() != pos.len() {
         return mesh.area_and_volume();
@@ -152,9 +154,16 @@ const fn sharp_point(i: usize, j: usize) -> usize {
     i * (2 * SHARP_LEVEL + 3 - i) / 2 + j
 }
 
+/// True for the point `(i, j)` of [`sharp_point`] (`i + j <= SHARP_LEVEL`) that is a corner of
+/// the triangle.
+const fn is_corner(i: usize, j: usize) -> bool {
+    (i == 0 || i == SHARP_LEVEL) && (j == 0 || j == SHARP_LEVEL)
+}
+
 /// Area (Å²) and signed volume about `centre` (Å³) of the piece of the Gaussian sum's level
 /// set over the triangle `abc` (Å, corners on it): the triangle is split into
-/// [`SHARP_LEVEL`]² small ones whose corners are moved onto the surface along the gradient
+/// [`SHARP_LEVEL`]² small ones whose corners (those not already the mesh's) are moved onto the
+/// surface along the gradient
 /// ([`AnalyticField::project_points`]), and Richardson extrapolation over that level and half
 /// of it (`A = A4 + (A4 - A2) / 3`) removes the leading chord error, as for the curved
 /// measure. `None` when a point does not reach the surface within the triangle's longest edge
@@ -164,11 +173,20 @@ pub fn sharp_area_volume(
     [a, b, c]: [Vec3; 3],
     centre: Vec3,
 ) -> Option<(f64, f64)> {
+    // The corners are mesh vertices, already on the surface; the other points start on the
+    // flat triangle and are moved onto it (in `inner`, in the order of `points`).
     let n = SHARP_LEVEL as f32;
     let mut points = [Vec3::ZERO; SHARP_POINTS];
+    let mut inner = [Vec3::ZERO; SHARP_POINTS - 3];
+    let mut k = 0;
     for i in 0..=SHARP_LEVEL {
         for j in 0..=SHARP_LEVEL - i {
-            points[sharp_point(i, j)] = a + (b - a) * (i as f32 / n) + (c - a) * (j as f32 / n);
+            let p = a + (b - a) * (i as f32 / n) + (c - a) * (j as f32 / n);
+            points[sharp_point(i, j)] = p;
+            if !is_corner(i, j) {
+                inner[k] = p;
+                k += 1;
+            }
         }
     }
     let mid = (a + b + c) / 3.0;
@@ -182,9 +200,17 @@ pub fn sharp_area_volume(
         .fold(0.0, f32::max);
     if !on
         .field
-        .project_points(&mut points, mid, radius, on.iso, longest)
+        .project_points(&mut inner, mid, radius, on.iso, longest)
     {
         return None;
+    }
+    let mut moved = inner.iter();
+    for i in 0..=SHARP_LEVEL {
+        for j in 0..=SHARP_LEVEL - i {
+            if !is_corner(i, j) {
+                points[sharp_point(i, j)] = *moved.next()?;
+            }
+        }
     }
     let p = |i: usize, j: usize| (points[sharp_point(i, j)] - centre).as_dvec3();
     // Sums over the small triangles of a split with steps of `s` points (1: fine, 2: half).

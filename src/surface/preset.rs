@@ -26,7 +26,7 @@ pub enum Preset {
     /// R = 0.832, I = 0.382, quality max, refined vertices and [`RadiusSet::Ses`] radii: area
     /// within 2 % of the SES area of the external surface (probe 1.4 Å, Bondi radii, MSMS) on
     /// the sixteen proteins of 454 to 9,466 atoms it was fitted on, at every H from 0.35 to
-    /// 1 Å (1.83 to 1.96 % at worst); 2.6 % at 1.5 Å and 4.0 % at 2 Å, where the grid no longer
+    /// 1 Å (1.83 to 1.96 % at worst); 2.5 % at 1.5 Å and 3.9 % at 2 Å, where the grid no longer
     /// resolves its creases. Of two proteins added after the fit, the 28-residue 1mot misses
     /// (+3.6 %): small, fully exposed proteins come out large (see the README).
     Ses,

@@ -189,7 +189,7 @@ fn hpv_area_and_volume_hold_at_coarse_h() {
 /// (9 % of the triangles of 1hpv's protein at H = 1 Å). Measured by the curved correction alone
 /// those triangles come out 12 % short (the lift from the normals is capped across a crease)
 /// and the whole surface 1.2 % short of its converged area; measured on the Gaussian sum itself
-/// they bring H = 1 Å within 0.6 % of it (-0.51 % when this was written; -1.16 % without). Reference: as [`hpv_reference`] (linear interpolation, flat
+/// they bring H = 1 Å within 0.6 % of it (-0.50 % when this was written; -1.16 % without). Reference: as [`hpv_reference`] (linear interpolation, flat
 /// triangles, H = 0.35 and 0.25 Å, extrapolated to H -> 0), independent of the refinement.
 #[test]
 fn ses_preset_surface_of_1hpv_holds_at_h_1_with_its_sharp_triangles_measured_on_the_sum() {
