@@ -255,6 +255,14 @@ fn params_ui(
             }
         }
     });
+    // A preset in use (its R, I and quality) at a spacing it does not hold at.
+    for preset in Preset::ALL {
+        if preset.apply(*p) == *p
+            && let Some(note) = preset.spacing_note(p.spacing)
+        {
+            ui.colored_label(ui.visuals().warn_fg_color, note);
+        }
+    }
     match core.grid_estimate(i, p) {
         Some((grid, bytes)) => {
             let [x, y, z] = grid.dims;

@@ -172,7 +172,8 @@ pub struct ParamArgs {
 }
 
 impl ParamArgs {
-    /// Checked parameters: H, R and I must be positive and finite.
+    /// Checked parameters: H, R and I must be positive and finite. Says on stderr when a preset
+    /// is used at a grid spacing it does not hold at ([`Preset::spacing_note`]).
     pub fn params(&self) -> Result<SurfaceParams> {
         let params = SurfaceParams {
             spacing: self.spacing,
@@ -185,6 +186,9 @@ impl ParamArgs {
             None => params,
         };
         params.validate()?;
+        if let Some(note) = self.preset.and_then(|p| p.spacing_note(params.spacing)) {
+            eprintln!("note: {note}");
+        }
         Ok(params)
     }
 

@@ -78,6 +78,30 @@ impl Preset {
         }
     }
 
+    /// The grid spacings (Å) over which the preset was fitted and holds its promise, finest
+    /// and coarsest. [`Preset::Ses`]: 0.35 to 1 Å (at 1.5 Å its worst fit row is 2.5 % off
+    /// the SES, at 2 Å 3.9 %: the grid no longer resolves the creases of its sharp surface).
+    pub fn spacing_range(self) -> (f32, f32) {
+        match self {
+            Preset::Ses => (SES_FINEST_SPACING, SES_COARSEST_SPACING),
+        }
+    }
+
+    /// A one-line note when `spacing` (Å) lies outside [`Self::spacing_range`], for the
+    /// command line and the window; `None` inside it.
+    pub fn spacing_note(self, spacing: f32) -> Option<String> {
+        let (finest, coarsest) = self.spacing_range();
+        if spacing > coarsest {
+            Some(format!(
+                "the {} preset holds its area to the SES at H = {finest} to {coarsest} Å; at                  H = {spacing} Å the grid is too coarse for its creases (up to 3.9 % off at                  2 Å): use H = {coarsest} Å or finer (--spacing {coarsest})",
+                self.name()
+            ))
+        } else {
+            // Finer than the fitted range only costs time: the area converges as H shrinks.
+            None
+        }
+    }
+
     /// `params` with R, I and quality set by the preset (H kept; the vertex mode, which is
     /// not part of [`SurfaceParams`], is [`Self::vertices`]).
     pub fn apply(self, params: SurfaceParams) -> SurfaceParams {
@@ -95,6 +119,11 @@ impl Preset {
 const SES_RADIUS_SCALE: f32 = 0.832;
 /// I of [`Preset::Ses`] (fitted; see the module docs).
 const SES_ISOVALUE: f32 = 0.382;
+
+/// Finest grid spacing (Å) [`Preset::Ses`] was checked at (`ses_reference.py --spacings`).
+const SES_FINEST_SPACING: f32 = 0.35;
+/// Coarsest grid spacing (Å) at which [`Preset::Ses`] holds 2 % on its fit rows.
+const SES_COARSEST_SPACING: f32 = 1.0;
 
 /// Radii (Å) by element of [`RadiusSet::Ses`] (fitted with R and I; see the module docs).
 const SES_RADII: [(&str, f32); 3] = [("H", 0.986), ("N", 0.922), ("O", 1.402)];
@@ -172,5 +201,16 @@ mod tests {
         assert_eq!(all.radius_for("CB", "C"), None);
         let none = RadiusSet::Mdsurf.with_overrides(&user);
         assert_eq!(none, user);
+    }
+
+    #[test]
+    fn the_ses_preset_notes_a_spacing_coarser_than_it_holds_at() {
+        let (finest, coarsest) = Preset::Ses.spacing_range();
+        assert!(finest < coarsest);
+        assert_eq!(Preset::Ses.spacing_note(coarsest), None);
+        assert_eq!(Preset::Ses.spacing_note(0.25), None);
+        let note = Preset::Ses.spacing_note(2.0).expect("2 Å is too coarse");
+        assert!(note.contains("ses") && note.contains("H = 2 Å"), "{note}");
+        assert!(note.contains("--spacing 1"), "{note}");
     }
 }

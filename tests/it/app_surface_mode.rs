@@ -131,6 +131,31 @@ fn ses_preset_button_sets_r_i_quality_and_vertices_and_keeps_h() {
 }
 
 #[test]
+fn ses_preset_at_a_coarse_spacing_says_so_in_the_panel() {
+    let mut h = panel_harness(loaded());
+    h.get_by_label(Preset::Ses.name()).click();
+    h.run();
+    let (_, coarsest) = Preset::Ses.spacing_range();
+    h.state_mut().draft.params.spacing = coarsest;
+    h.run();
+    assert!(
+        h.query_by_label_contains("too coarse").is_none(),
+        "a note at the preset's own coarsest spacing {coarsest} Å"
+    );
+    h.state_mut().draft.params.spacing = 2.0;
+    h.run();
+    assert!(
+        h.query_by_label_contains("too coarse for its creases")
+            .is_some(),
+        "no note with the ses preset at H = 2 Å"
+    );
+    // Without the preset's R, I and quality there is nothing to say.
+    h.state_mut().draft.params.isovalue = 0.5;
+    h.run();
+    assert!(h.query_by_label_contains("too coarse").is_none());
+}
+
+#[test]
 fn state_file_keeps_the_vertex_mode_and_old_files_load() {
     let state = StateFile::new(vec![
         Representation {

@@ -343,3 +343,41 @@ fn ses_preset_refines_vertices_unless_told_otherwise() {
         "preset {preset} vs the table's {listed}"
     );
 }
+
+/// `--preset ses` at a spacing coarser than it holds at still computes, and says so in one
+/// line on stderr; at its own spacings it says nothing.
+#[test]
+fn ses_preset_notes_a_too_coarse_spacing() {
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = data("1hpv.pdb");
+    let run_at = |spacing: &str| {
+        let stats = format!("h{spacing}.csv");
+        let args = [
+            "surface",
+            &pdb,
+            "--select",
+            "protein and chain A",
+            "--backend",
+            "cpu",
+            "--preset",
+            "ses",
+            "--spacing",
+            spacing,
+            "--stats",
+            &stats,
+        ];
+        let run = mdsurf(dir.path(), &args);
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        assert!(dir.path().join(&stats).exists());
+        run.stderr
+    };
+    let coarse = run_at("2");
+    let notes: Vec<&str> = coarse
+        .lines()
+        .filter(|l| l.contains("too coarse"))
+        .collect();
+    assert_eq!(notes.len(), 1, "{coarse}");
+    assert!(notes[0].contains("H = 2 Å"), "{coarse}");
+    let fine = run_at("1");
+    assert!(!fine.contains("too coarse"), "{fine}");
+}
