@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Radius models beyond the SES preset's per-element radii, fitted against the SES table
+(issue 13 section 2): does any of them bring every protein of tests/data/ses_reference.csv
+within 2 % of its SES area?
+
+Each model gives every atom a radius from a class of atoms, fitted with R and I by Nelder-Mead
+(smallest worst deviation, ties broken by the mean, quality max, refined vertices, from the
+preset's values) through mdsurf's Python package (`mdsurf.measure`, the same engine as the
+command line, in-process: about a second per evaluation of all eighteen rows):
+
+- `elements`: the preset's model, radii of H, N and O (C, S and the rest as mdsurf's table).
+- `h-split`:  hydrogens on carbon and polar hydrogens (nearest heavy atom N, O or S) apart.
+- `backbone`: the two hydrogen classes, and C, N and O of the backbone (N, CA, C, O, OXT)
+  apart from those of the side chains.
+- `burial`:   the preset's elements, each radius scaled by 1 + beta (n - 60) / 60 (kept within
+  0.5 to 1.5), n the heavy atoms within 10 Å of the atom in the frame read; beta is fitted.
+
+Rows: `--rows fit` scores the `fit` rows (as the preset was fitted), `--rows all` every row;
+`--leave-out NAME` leaves one row out of the score and prints its deviation (cross-validation).
+
+Usage:  python/.venv/bin/python scripts/ses_models.py --model h-split --rows all [--spacing 1]
+        (needs the package built into python/.venv, numpy and scipy; SES areas come from the
+        table, so MSMS is not needed)
+
+Results (2026-11-24, H = 1 Å, all eighteen rows scored) are in the README's SES section.
+"""
+
+import argparse
+import csv
+import os
+import sys
+
+import numpy as np
+from scipy.optimize import minimize
+from scipy.spatial import cKDTree
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import ses_reference as table  # noqa: E402
+
+import mdsurf  # noqa: E402
+
+# The preset's values (src/surface/preset.rs) the search starts from.
+PRESET_R, PRESET_I = 0.832, 0.382
+PRESET_RADII = {"H": 0.986, "C": 1.5, "N": 0.922, "O": 1.402, "S": 1.9}
+# Classes whose radii each model fits (a class absent from a model takes its element's).
+MODELS = {
+    "elements": ["H", "N", "O"],
+    "h-split": ["H-C", "H-polar", "N", "O"],
+    "backbone": ["H-C", "H-polar", "C-bb", "C-sc", "N-bb", "N-sc", "O-bb", "O-sc"],
+    "burial": ["H", "N", "O"],
+}
+BACKBONE = {"N", "CA", "C", "O", "OXT"}
+BURIAL_RADIUS = 10.0  # Å
+BURIAL_MIDPOINT = 60.0  # heavy atoms within BURIAL_RADIUS where the factor is 1
+
+
+def classify(protein):
+    """(element, class) of every atom: hydrogens by their nearest heavy atom, heavy atoms by
+    backbone or side chain; and the heavy atoms within BURIAL_RADIUS of each atom."""
+    xyz = np.array([a[2:5] for a in protein])
+    elements = [table.element(a[1]) for a in protein]
+    heavy = [i for i, e in enumerate(elements) if e != "H"]
+    tree = cKDTree(xyz[heavy])
+    classes = []
+    for i, e in enumerate(elements):
+        if e == "H":
+            _, j = tree.query(xyz[i])
+            classes.append("H-polar" if elements[heavy[j]] in ("N", "O", "S") else "H-C")
+        else:
+            classes.append(f"{e}-bb" if protein[i][1].strip() in BACKBONE else f"{e}-sc")
+    buried = np.array([len(n) for n in tree.query_ball_point(xyz, BURIAL_RADIUS)], float)
+    return xyz.astype(np.float32), elements, classes, buried
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--model", choices=MODELS, default="elements")
+    ap.add_argument("--rows", choices=["fit", "all"], default="all")
+    ap.add_argument("--leave-out", metavar="NAME")
+    ap.add_argument("--spacing", type=float, default=1.0, help="grid spacing H, Å")
+    ap.add_argument("--evaluations", type=int, default=250)
+    ap.add_argument("--start", metavar="VALUES",
+                    help="where the search starts: R, I, then the model's radii (and beta), "
+                         "space-separated (default: the preset's)")
+    args = ap.parse_args()
+
+    ses = {r["protein"]: float(r["ses_area_A2"]) for r in csv.DictReader(open(table.OUT))}
+    rows = [(name, role, *classify(protein)) for name, _, role, _, protein in table.selected_rows()]
+    free = MODELS[args.model]
+    burial = args.model == "burial"
+    scored = np.array([(args.rows == "all" or role == "fit") and name != args.leave_out
+                       for name, role, *_ in rows])
+
+    def radii(x, elements, classes, buried):
+        own = dict(PRESET_RADII)
+        own.update(zip(free, x[2:2 + len(free)]))
+        r = np.array([own.get(c, own.get(e, 1.5)) for e, c in zip(elements, classes)])
+        if burial:
+            r *= np.clip(1 + x[-1] * (buried - BURIAL_MIDPOINT) / BURIAL_MIDPOINT, 0.5, 1.5)
+        return r.astype(np.float32)
+
+    cache = {}
+
+    def deviations(x):
+        key = tuple(np.round(x, 4))
+        if key not in cache:
+            out = []
+            for name, _, xyz, elements, classes, buried in rows:
+                area, _ = mdsurf.measure(xyz[None], radii(x, elements, classes, buried),
+                                         spacing=args.spacing, radius_scale=x[0], isovalue=x[1],
+                                         quality="max", backend="cpu", vertices="refined")
+                out.append(area[0] / ses[name] - 1)
+            cache[key] = np.array(out)
+        return cache[key]
+
+    def score(x):
+        if min(x[:2 + len(free)]) <= 0.05:
+            return 1.0
+        d = np.abs(deviations(x)[scored])
+        return d.max() + 0.1 * d.mean()
+
+    x0 = [PRESET_R, PRESET_I] + [PRESET_RADII[c[0]] for c in free] + ([0.0] if burial else [])
+    if args.start:
+        x0 = [float(v) for v in args.start.split()]
+        if len(x0) != len(free) + 2 + burial:
+            sys.exit(f"--start: {len(free) + 2 + burial} values expected, {len(x0)} given")
+    steps = [0.04, 0.05] + [0.1] * len(free) + ([0.05] if burial else [])
+    simplex = [x0] + [np.add(x0, np.eye(len(x0))[k] * steps[k]) for k in range(len(x0))]
+    best = minimize(score, x0, method="Nelder-Mead",
+                    options=dict(initial_simplex=simplex, maxfev=args.evaluations,
+                                 xatol=1e-3, fatol=1e-4)).x
+    d = deviations(best)
+    names = ["R", "I"] + free + (["beta"] if burial else [])
+    print(f"model {args.model}, rows {args.rows}, left out {args.leave_out}, H {args.spacing} Å: "
+          + ", ".join(f"{n} {v:.3f}" for n, v in zip(names, best)))
+    print(f"worst scored {100 * np.abs(d[scored]).max():.2f} %"
+          + "".join(f"; {rows[i][0]} (not scored) {100 * d[i]:+.2f} %"
+                    for i in np.where(~scored)[0]))
+    print(" ".join(f"{r[0]}:{100 * v:+.2f}" for r, v in zip(rows, d)))
+
+
+if __name__ == "__main__":
+    main()
