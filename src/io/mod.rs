@@ -15,6 +15,7 @@
 //! part ends the readable frames as [`Damage`].
 
 mod chem;
+mod cif_residues;
 mod conect;
 mod dcd;
 pub mod error;

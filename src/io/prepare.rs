@@ -11,6 +11,9 @@
 //!   temporary plain file (chemfiles' bzip2 reader spins forever on a truncated stream). A stream
 //!   that ends early keeps what decompressed: the frames before the cut stay readable and the
 //!   last, cut frame is reported as damage.
+//! - mmCIF files get a residue number for every atom outside a polymer sequence
+//!   ([`super::cif_residues`]): chemfiles made all the waters of a chain one residue, and
+//!   refused files whose entity is `?`.
 //! - A path that is not UTF-8 (chemfiles panics on it) is opened through a symbolic link with a
 //!   plain name.
 //!
@@ -21,7 +24,7 @@ use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::format::FileFormat;
-use super::{IoError, tng};
+use super::{IoError, cif_residues, tng};
 
 /// Bytes read at a time while scanning or copying.
 const CHUNK: usize = 1 << 20;
@@ -57,10 +60,14 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
             if format.base == "TNG" && compression.is_none() {
                 return prepare_tng(path, format);
             }
-            if format.base == "PDB" && compression.is_none() {
+            if matches!(format.base, "PDB" | "mmCIF") && compression.is_none() {
                 let bytes =
                     std::fs::read(path).map_err(|e| IoError::unreadable(path, e.to_string()))?;
-                if let Some(cleaned) = clean_pdb(&bytes) {
+                let cleaned = match format.base {
+                    "PDB" => clean_pdb(&bytes),
+                    _ => cif_residues::renumber(&bytes).map(latin1_as_utf8),
+                };
+                if let Some(cleaned) = cleaned {
                     let (temp, copy) = temp_file(path, format.base)?;
                     std::fs::write(&copy, cleaned).map_err(|e| write_failed(path, e))?;
                     return Ok(Prepared {
@@ -150,6 +157,17 @@ fn clean_pdb(bytes: &[u8]) -> Option<Vec<u8>> {
         out.extend(line.iter().map(|&b| if b.is_ascii() { b } else { b'?' }));
     }
     Some(out)
+}
+
+/// `bytes` with every byte that is not valid UTF-8 read as Latin-1 (as a free-format copy
+/// gets; chemfiles' binding panics on invalid UTF-8).
+fn latin1_as_utf8(bytes: Vec<u8>) -> Vec<u8> {
+    if std::str::from_utf8(&bytes).is_ok() {
+        return bytes;
+    }
+    let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 8);
+    Cleaner::new(TextKind::Free).push(&bytes, true, &mut out);
+    out
 }
 
 /// How the text of a format may be cleaned.
@@ -353,11 +371,16 @@ fn decompress(
             .map_err(|e| write_failed(path, e))?;
     }
     finish(path, output)?;
-    if format.base == "PDB" {
-        // The same cleaning as an uncompressed PDB file gets (a wwPDB multi-model file's CONECT
-        // records after its last ENDMDL crashed chemfiles when that model has fewer atoms).
+    if matches!(format.base, "PDB" | "mmCIF") {
+        // The same cleaning as an uncompressed file gets (a wwPDB multi-model file's CONECT
+        // records after its last ENDMDL crashed chemfiles when that model has fewer atoms; an
+        // mmCIF file's waters were one residue).
         let bytes = std::fs::read(&copy).map_err(|e| write_failed(path, e))?;
-        if let Some(cleaned) = clean_pdb(&bytes) {
+        let cleaned = match format.base {
+            "PDB" => clean_pdb(&bytes),
+            _ => cif_residues::renumber(&bytes),
+        };
+        if let Some(cleaned) = cleaned {
             std::fs::write(&copy, cleaned).map_err(|e| write_failed(path, e))?;
         }
     }

@@ -143,3 +143,97 @@ fn lammps_bz2() {
 fn argon_tng() {
     check("argon_npt_compressed.tng", None, 1000, 101);
 }
+
+/// The `_atom_site` rows of a gzip-compressed mmCIF file in `tests/data`, each a map from
+/// column name to value (rows with quoted spaces are skipped: none in these files).
+fn atom_site_rows(file: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut flate2::read::GzDecoder::new(std::fs::File::open(data(file)).unwrap()),
+        &mut text,
+    )
+    .unwrap();
+    let columns: Vec<&str> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("_atom_site."))
+        .map(str::trim)
+        .collect();
+    text.lines()
+        .filter(|l| l.starts_with("ATOM") || l.starts_with("HETATM"))
+        .map(|l| l.split_whitespace().collect::<Vec<_>>())
+        .filter(|t| t.len() == columns.len())
+        .map(|t| {
+            let pairs = columns.iter().zip(t);
+            pairs.map(|(c, v)| (c.to_string(), v.to_string())).collect()
+        })
+        .collect()
+}
+
+/// An mmCIF file's waters are one residue each, numbered as the author numbered them
+/// (chemfiles made every water of a chain one residue, numbered by its entity), its polymer
+/// residues stay as its sequence numbers them, and the compressed and plain files agree.
+#[test]
+fn mmcif_waters_are_a_residue_each_with_the_author_number() {
+    let rows = atom_site_rows("1gbt.cif.gz");
+    let water_numbers: std::collections::BTreeSet<i64> = (rows.iter())
+        .filter(|r| r["label_comp_id"] == "HOH")
+        .map(|r| r["auth_seq_id"].parse().unwrap())
+        .collect();
+    let polymer_residues: std::collections::BTreeSet<(String, String)> = (rows.iter())
+        .filter(|r| r["group_PDB"] == "ATOM")
+        .map(|r| (r["label_asym_id"].clone(), r["label_seq_id"].clone()))
+        .collect();
+    assert!(water_numbers.len() > 100);
+
+    let gz = check("1gbt.cif.gz", None, rows.len(), 1);
+    let plain = tempfile::tempdir().unwrap();
+    let copy = plain.path().join("1gbt.cif");
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut flate2::read::GzDecoder::new(std::fs::File::open(data("1gbt.cif.gz")).unwrap()),
+        &mut text,
+    )
+    .unwrap();
+    std::fs::write(&copy, text).unwrap();
+    let plain = io::open(&copy, None).expect("plain 1gbt.cif");
+    for t in [&gz, &plain] {
+        let top = t.topology();
+        let waters: Vec<usize> = (0..top.len())
+            .filter(|&i| &top.residue_names[i] == "HOH")
+            .collect();
+        assert_eq!(waters.len(), water_numbers.len(), "one oxygen per water");
+        let residues: std::collections::BTreeSet<u32> =
+            waters.iter().map(|&i| top.residue_index[i]).collect();
+        assert_eq!(residues.len(), waters.len(), "every water its own residue");
+        let ids: std::collections::BTreeSet<i64> =
+            waters.iter().map(|&i| top.residue_ids[i]).collect();
+        assert_eq!(ids, water_numbers);
+        // Atoms come in the file's order.
+        let polymer: std::collections::BTreeSet<u32> = (0..top.len())
+            .filter(|&i| rows[i]["group_PDB"] == "ATOM")
+            .map(|i| top.residue_index[i])
+            .collect();
+        assert_eq!(polymer.len(), polymer_residues.len());
+    }
+    assert_eq!(gz.topology().residue_ids, plain.topology().residue_ids);
+}
+
+/// An mmCIF file written by another tool with `?` for every entity (Biopython's 7CFN) opens,
+/// and its ligand carries the author's residue number (chemfiles refused the whole file).
+#[test]
+fn mmcif_with_unknown_entities_opens() {
+    let rows = atom_site_rows("7cfn.cif.gz");
+    assert!(rows.iter().all(|r| r["label_entity_id"] == "?"));
+    let ligand: std::collections::BTreeSet<i64> = (rows.iter())
+        .filter(|r| r["group_PDB"] == "HETATM")
+        .map(|r| r["auth_seq_id"].parse().unwrap())
+        .collect();
+    assert!(!ligand.is_empty());
+    let t = check("7cfn.cif.gz", None, rows.len(), 1);
+    let top = t.topology();
+    let het: std::collections::BTreeSet<i64> = (0..top.len())
+        .filter(|&i| rows[i]["group_PDB"] == "HETATM")
+        .map(|i| top.residue_ids[i])
+        .collect();
+    assert_eq!(het, ligand);
+}
