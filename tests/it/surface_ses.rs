@@ -10,8 +10,9 @@
 //! [`MISS_LIMIT`] and listed so that the miss stays in view (a known miss that comes within
 //! 2 % fails here too, so the list cannot go stale). The preset was fitted on the sixteen `fit`
 //! rows at both spacings (worst 1.93 %: 1hpv_B +1.93 % at 0.5 Å, 7ddo -1.90 % and 1osm -1.89 %
-//! at 1 Å); of the two `check` rows, 1lcd comes within 0.13 % and 1mot, a 28-residue NMR
-//! domain, misses (+3.6 %). The margin is thin, so a change that moves the areas by a few
+//! at 1 Å). Of the six `check` rows (proteins added after the fit, chosen before their
+//! deviations were seen), 1lcd, 1gbt, 4zhl and 1a7g come within 1.5 %, and two NMR domains with
+//! hydrogens miss: 1mot (+3.6 %) and 2ofg (+3.8 % at 1 Å, +3.9 % at 0.5 Å). The margin is thin, so a change that moves the areas by a few
 //! tenths of a per cent fails here. The Gaussian areas must also match the table's own
 //! `preset_area` columns within 0.3 %, so the table (and the README's copy of it) says what the
 //! preset gives now.
@@ -48,8 +49,8 @@ fn atoms(file: &str, selection: &str) -> (Vec<Vec3>, Vec<f32>) {
 /// The target: the preset's area within 2 % of the SES area.
 const TARGET: f64 = 0.02;
 /// Rows that miss the target (checked after the fit), with why.
-const KNOWN_MISSES: &[&str] = &["1mot"];
-/// What a known miss is held to (1mot: +3.6 %).
+const KNOWN_MISSES: &[&str] = &["1mot", "2ofg"];
+/// What a known miss is held to (1mot: +3.7 %, 2ofg: +3.9 % at 0.5 Å).
 const MISS_LIMIT: f64 = 0.04;
 
 #[test]
