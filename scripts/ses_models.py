@@ -82,7 +82,8 @@ def main():
     ap.add_argument("--model", choices=MODELS, default="elements")
     ap.add_argument("--rows", choices=["fit", "all"], default="all")
     ap.add_argument("--leave-out", metavar="NAME", nargs="+", default=[])
-    ap.add_argument("--spacing", type=float, default=1.0, help="grid spacing H, Å")
+    ap.add_argument("--spacing", type=float, nargs="+", default=[1.0],
+                    help="grid spacings H, Å (the worst over all of them counts)")
     ap.add_argument("--evaluations", type=int, default=250)
     ap.add_argument("--start", metavar="VALUES",
                     help="where the search starts: R, I, then the model's radii (and beta), "
@@ -94,7 +95,7 @@ def main():
     free = MODELS[args.model]
     burial = args.model in ("burial", "exposed")
     scored = np.array([(args.rows == "all" or role == "fit") and name not in args.leave_out
-                       for name, role, *_ in rows])
+                       for name, role, *_ in rows] * len(args.spacing))
 
     def radii(x, elements, classes, buried):
         own = dict(PRESET_RADII)
@@ -112,11 +113,12 @@ def main():
         key = tuple(np.round(x, 4))
         if key not in cache:
             out = []
-            for name, _, xyz, elements, classes, buried in rows:
-                area, _ = mdsurf.measure(xyz[None], radii(x, elements, classes, buried),
-                                         spacing=args.spacing, radius_scale=x[0], isovalue=x[1],
-                                         quality="max", backend="cpu", vertices="refined")
-                out.append(area[0] / ses[name] - 1)
+            for h in args.spacing:
+                for name, _, xyz, elements, classes, buried in rows:
+                    area, _ = mdsurf.measure(xyz[None], radii(x, elements, classes, buried),
+                                             spacing=h, radius_scale=x[0], isovalue=x[1],
+                                             quality="max", backend="cpu", vertices="refined")
+                    out.append(area[0] / ses[name] - 1)
             cache[key] = np.array(out)
         return cache[key]
 
@@ -140,10 +142,13 @@ def main():
     names = ["R", "I"] + free + (["beta"] if burial else [])
     print(f"model {args.model}, rows {args.rows}, left out {args.leave_out}, H {args.spacing} Å: "
           + ", ".join(f"{n} {v:.3f}" for n, v in zip(names, best)))
+    n = len(rows)
     print(f"worst scored {100 * np.abs(d[scored]).max():.2f} %"
-          + "".join(f"; {rows[i][0]} (not scored) {100 * d[i]:+.2f} %"
-                    for i in np.where(~scored)[0]))
-    print(" ".join(f"{r[0]}:{100 * v:+.2f}" for r, v in zip(rows, d)))
+          + "".join(f"; {rows[i % n][0]} at {args.spacing[i // n]} Å (not scored) "
+                    f"{100 * d[i]:+.2f} %" for i in np.where(~scored)[0]))
+    for k, h in enumerate(args.spacing):
+        print(f"H {h} Å: " + " ".join(f"{r[0]}:{100 * v:+.2f}"
+                                      for r, v in zip(rows, d[k * n:(k + 1) * n])))
 
 
 if __name__ == "__main__":
