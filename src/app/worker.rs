@@ -659,12 +659,17 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
             .map_err(|e| format!("frame {}: {e}", req.frame))?;
         // The particles' radii and colours change only when they were rebuilt: otherwise keep
         // the same Arcs (no copy per frame, and the engine sees no change).
+        // Radii that follow exposure are new every frame.
         let (radii, colours) = match &slot.last {
-            Some((_, last)) if !lf.rebuilt => {
-                (last.particles.radii.clone(), last.particles.colours.clone())
-            }
+            Some((_, last)) if !lf.rebuilt => (
+                match &lf.frame_radii {
+                    Some(r) => Arc::new(r.clone()),
+                    None => last.particles.radii.clone(),
+                },
+                last.particles.colours.clone(),
+            ),
             _ => (
-                Arc::new(lf.particles.radii().to_vec()),
+                Arc::new(lf.radii().to_vec()),
                 Arc::new(lf.particles.colours().to_vec()),
             ),
         };

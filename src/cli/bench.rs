@@ -13,7 +13,8 @@ use std::time::Instant;
 use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 use mdsurf::export::write_atomic;
-use mdsurf::surface::{CpuEngine, StageTimings, SurfaceParams};
+use mdsurf::model::Particles;
+use mdsurf::surface::{CpuEngine, RadiusSet, StageTimings, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
 
 use super::bench_table::{Table, peak_rss_bytes};
@@ -303,7 +304,15 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
             }
         }
     };
-    let (system, first) = System::open(&input, 0)?;
+    let (mut system, first) = System::open(&input, 0)?;
+    // The preset's radii (and their exposure, frame by frame), as `surface` gives them.
+    let radius_set = args.params.radius_set();
+    if radius_set != RadiusSet::default() {
+        let mut options = input.particles.options_for(&system.trajectory)?;
+        options.radius_overrides = radius_set.with_overrides(&options.radius_overrides);
+        options.exposed_shrink = radius_set.exposed_shrink();
+        system.particles = Particles::new(system.trajectory.topology(), &first, &options)?;
+    }
     let mut cases = Vec::new();
     let name = input
         .traj
@@ -383,9 +392,16 @@ fn time_case(
         let t0 = Instant::now();
         let read_ms = read_frame(source, i, &mut positions)?;
         let t1 = Instant::now();
+        let frame_radii = match source {
+            Source::Real(sys) => sys.particles.frame_radii(&positions),
+            Source::Synthetic(_) => None,
+        };
         let atoms = match source {
             Source::Real(sys) => {
                 let mut set = sys.particles.atom_set(&positions);
+                if let Some(r) = &frame_radii {
+                    set.radii = r;
+                }
                 if args.no_color {
                     set.colours = None;
                 }

@@ -80,6 +80,7 @@ impl ParticleArgs {
             beads: self.beads,
             radius_overrides,
             colours,
+            exposed_shrink: None,
         })
     }
 }

@@ -391,13 +391,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     ..settings
                 };
                 let colours = lf.particles.colours();
-                let (s, c) = atom_instances(
-                    &lf.positions,
-                    lf.particles.radii(),
-                    Some(colours),
-                    &lf.bonds,
-                    &look,
-                );
+                let (s, c) =
+                    atom_instances(&lf.positions, lf.radii(), Some(colours), &lf.bonds, &look);
                 spheres.extend(s);
                 cylinders.extend(c);
                 points.extend_from_slice(&lf.positions);

@@ -13,10 +13,25 @@ pub const TRIANGLES_REL: f64 = 0.005;
 pub const AREA_VOLUME_REL: f64 = 0.001;
 /// Distance in Å between a GPU vertex and the CPU's (interpolated or refined, issue 13).
 pub const VERTEX_ABS: f32 = 1e-3;
+/// Distance in Å a refined vertex may slide along the surface between GPU and CPU when its
+/// grid edge crosses the surface at a grazing angle (the root's position along the edge is
+/// then sensitive to the last bits of the sum: 1hpv's SES surface has one such vertex in 12,144
+/// at 1.7e-3 Å, 2e-4 Å off along the normal); it must still be within [`VERTEX_ABS`] along the
+/// normal.
+pub const VERTEX_ALONG_SURFACE_ABS: f32 = 1e-2;
 /// Smallest cosine between a GPU vertex normal and the CPU's.
 pub const NORMAL_COS: f32 = 0.999;
 /// Absolute tolerance of a colour channel (linear RGB, 0..1).
 pub const COLOUR_ABS: f32 = 1.0 / 255.0;
+
+/// True when a refined GPU vertex `gpu` matches the CPU's `cpu` (Å) with the CPU's unit normal
+/// `normal`: within [`VERTEX_ABS`], or within [`VERTEX_ABS`] along the normal and
+/// [`VERTEX_ALONG_SURFACE_ABS`] in all.
+pub fn refined_vertex_close(gpu: glam::Vec3, cpu: glam::Vec3, normal: glam::Vec3) -> bool {
+    let d = gpu - cpu;
+    d.length() < VERTEX_ABS
+        || (d.dot(normal).abs() < VERTEX_ABS && d.length() < VERTEX_ALONG_SURFACE_ABS)
+}
 
 /// True when a GPU density sample `gpu` matches the CPU's `cpu`.
 pub fn density_close(gpu: f32, cpu: f32) -> bool {

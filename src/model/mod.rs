@@ -8,6 +8,7 @@ pub mod colour;
 pub mod colour_data;
 pub mod colour_map;
 pub mod elements;
+pub mod exposure;
 pub mod labels;
 pub mod particles;
 pub mod radii;

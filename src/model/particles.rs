@@ -17,6 +17,9 @@ pub struct ParticleOptions {
     pub radius_overrides: RadiusOverrides,
     /// Colour scheme per atom (beads take the mean colour of their atoms).
     pub colours: ColorScheme,
+    /// Shrink exposed atoms' radii by up to this fraction, frame by frame
+    /// ([`super::exposure`]; the SES preset's radii). Not for beads.
+    pub exposed_shrink: Option<f32>,
 }
 
 /// Per-particle radii and colours, constant over the trajectory, plus the per-frame positions.
@@ -28,6 +31,9 @@ pub struct Particles {
     beads: Option<BeadModel>,
     radii: Vec<f32>,
     colours: Vec<[f32; 3]>,
+    /// Which particles are heavy atoms and the fraction exposed ones shrink by, when the radii
+    /// follow exposure ([`ParticleOptions::exposed_shrink`]).
+    exposure: Option<(Vec<bool>, f32)>,
 }
 
 impl Particles {
@@ -63,12 +69,24 @@ impl Particles {
                 None => (None, radii, atom_colours),
             }
         };
+        let exposure = match (options.exposed_shrink, &beads) {
+            (Some(beta), None) => {
+                let is_heavy = |i: usize| !topology.elements[i].eq_ignore_ascii_case("H");
+                let heavy = match subset {
+                    Some(s) => s.iter().map(|&i| is_heavy(i as usize)).collect(),
+                    None => (0..topology.len()).map(is_heavy).collect(),
+                };
+                Some((heavy, beta))
+            }
+            _ => None,
+        };
         Ok(Particles {
             atom_count: topology.len(),
             subset: subset.map(<[u32]>::to_vec),
             beads,
             radii,
             colours,
+            exposure,
         })
     }
 
@@ -156,7 +174,21 @@ impl Particles {
         Ok(out)
     }
 
-    /// The engine input for `positions` (from [`Particles::positions`]), with colours.
+    /// The radii (Å) at `positions` (from [`Particles::positions`]) when they follow exposure
+    /// ([`super::exposure`]), `None` when they are [`Particles::radii`] in every frame.
+    pub fn frame_radii(&self, positions: &[Vec3]) -> Option<Vec<f32>> {
+        let (heavy, beta) = self.exposure.as_ref()?;
+        Some(super::exposure::shrink_exposed(
+            &self.radii,
+            positions,
+            heavy,
+            *beta,
+        ))
+    }
+
+    /// The engine input for `positions` (from [`Particles::positions`]), with colours and the
+    /// constant radii ([`Particles::frame_radii`] gives those of a frame when they follow
+    /// exposure; [`crate::scene::layer::LayerFrame::atom_set`] uses them).
     pub fn atom_set<'a>(&'a self, positions: &'a [Vec3]) -> AtomSet<'a> {
         AtomSet {
             positions,

@@ -50,12 +50,25 @@ pub struct LayerFrame {
     pub bonds: Arc<Vec<[u32; 2]>>,
     /// True when the particles were rebuilt for this frame (new atoms, colours or radii).
     pub rebuilt: bool,
+    /// This frame's radii in Å when they follow exposure ([`Particles::frame_radii`]), else
+    /// `None` (the particles' own).
+    pub frame_radii: Option<Vec<f32>>,
 }
 
 impl LayerFrame {
+    /// Particle radii in Å in this frame.
+    pub fn radii(&self) -> &[f32] {
+        self.frame_radii
+            .as_deref()
+            .unwrap_or_else(|| self.particles.radii())
+    }
+
     /// The surface engine's input.
     pub fn atom_set(&self) -> AtomSet<'_> {
-        self.particles.atom_set(&self.positions)
+        AtomSet {
+            radii: self.radii(),
+            ..self.particles.atom_set(&self.positions)
+        }
     }
 }
 
@@ -165,11 +178,13 @@ impl Layer {
             unreachable!("built above")
         };
         let positions = particles.positions(frame).map_err(model_err)?;
+        let frame_radii = particles.frame_radii(&positions);
         Ok(LayerFrame {
             particles: particles.clone(),
             positions,
             bonds: bonds.clone(),
             rebuilt,
+            frame_radii,
         })
     }
 }

@@ -191,6 +191,7 @@ impl Representation {
             beads: self.style == RepStyle::Beads,
             radius_overrides: self.radii.with_overrides(radius_overrides),
             colours: self.colour,
+            exposed_shrink: self.radii.exposed_shrink(),
         }
     }
 

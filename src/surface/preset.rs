@@ -125,7 +125,7 @@ impl Preset {
 /// R of [`Preset::Ses`] (fitted; see the module docs).
 const SES_RADIUS_SCALE: f32 = 0.832;
 /// I of [`Preset::Ses`] (fitted; see the module docs).
-const SES_ISOVALUE: f32 = 0.382;
+const SES_ISOVALUE: f32 = 0.378;
 
 /// Finest grid spacing (Å) [`Preset::Ses`] was checked at (`ses_reference.py --spacings`).
 const SES_FINEST_SPACING: f32 = 0.35;
@@ -133,7 +133,10 @@ const SES_FINEST_SPACING: f32 = 0.35;
 const SES_COARSEST_SPACING: f32 = 1.0;
 
 /// Radii (Å) by element of [`RadiusSet::Ses`] (fitted with R and I; see the module docs).
-const SES_RADII: [(&str, f32); 3] = [("H", 0.986), ("N", 0.922), ("O", 1.402)];
+const SES_RADII: [(&str, f32); 3] = [("H", 0.964), ("N", 0.882), ("O", 1.374)];
+/// Fraction by which [`RadiusSet::Ses`] shrinks the radius of an atom with no heavy atom
+/// around it ([`crate::model::exposure`]; fitted with R, I and the radii).
+const SES_EXPOSED_SHRINK: f32 = 0.186;
 
 /// The radii a representation's atoms start from: mdsurf's element table (DESIGN section 2) or
 /// a preset's, with the user's `--radius` overrides on top of either.
@@ -163,6 +166,15 @@ impl RadiusSet {
         match self {
             RadiusSet::Mdsurf => &[],
             RadiusSet::Ses => &SES_RADII,
+        }
+    }
+
+    /// The fraction by which this set shrinks exposed atoms' radii, frame by frame
+    /// ([`crate::model::exposure`]), or `None` when its radii are constant.
+    pub fn exposed_shrink(self) -> Option<f32> {
+        match self {
+            RadiusSet::Mdsurf => None,
+            RadiusSet::Ses => Some(SES_EXPOSED_SHRINK),
         }
     }
 
@@ -202,8 +214,8 @@ mod tests {
         let all = RadiusSet::Ses.with_overrides(&user);
         assert_eq!(all.radius_for("NZ", "N"), Some(1.5));
         assert_eq!(all.radius_for("N", "N"), Some(1.5));
-        assert_eq!(all.radius_for("OG", "O"), Some(1.402));
-        assert_eq!(all.radius_for("HA", "H"), Some(0.986));
+        assert_eq!(all.radius_for("OG", "O"), Some(1.374));
+        assert_eq!(all.radius_for("HA", "H"), Some(0.964));
         assert_eq!(all.radius_for("CA", "C"), Some(2.0));
         assert_eq!(all.radius_for("CB", "C"), None);
         let none = RadiusSet::Mdsurf.with_overrides(&user);

@@ -113,15 +113,19 @@ fn ses_preset_button_sets_r_i_quality_and_vertices_and_keeps_h() {
     let layer = shown(&s.core);
     assert_eq!(layer.rep.isovalue, i);
     assert_eq!(layer.rep.vertices, VertexMode::Refined);
-    // The preset's nitrogen radius reached the computed particles.
+    // The preset's nitrogen radius reached the computed particles, shrunk by the exposure of
+    // this small helix's atoms (fewer than 60 heavy atoms within 10 Å of any of them).
     let r_n = (RadiusSet::Ses.radii().iter())
         .find(|(e, _)| *e == "N")
         .map(|&(_, r)| r)
         .expect("N radius");
+    let beta = RadiusSet::Ses
+        .exposed_shrink()
+        .expect("the preset shrinks exposed atoms");
     let radii = &layer.particles.radii;
     assert!(
-        radii.contains(&r_n),
-        "no atom has the preset's N radius {r_n}"
+        radii.iter().any(|&r| r < r_n && r >= r_n * (1.0 - beta)),
+        "no atom has the preset's N radius {r_n}, shrunk by up to {beta}: {radii:?}"
     );
     assert!(
         !radii.contains(&1.4),

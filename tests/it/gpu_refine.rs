@@ -37,7 +37,7 @@ fn assert_refined_close(what: &str, gpu: &SurfaceOutput, cpu: &SurfaceOutput) ->
         .enumerate()
     {
         assert!(
-            (*g - *c).length() < tol::VERTEX_ABS,
+            tol::refined_vertex_close(*g, *c, cpu.mesh.normals[v]),
             "{what}: vertex {v} at {g} vs CPU {c}"
         );
     }
@@ -206,5 +206,72 @@ fn ses_preset_sharp_triangles_are_measured_on_the_sum_as_on_the_cpu() {
         (curved_only / cpu.area - 1.0).abs() > 3.0 * tol::AREA_VOLUME_REL,
         "curved only {curved_only} vs {}",
         cpu.area
+    );
+}
+
+/// The SES preset's radii follow each frame's exposure ([`mdsurf::model::exposure`]): one GPU
+/// engine fed two frames of 1hpv's chain A, the second spread 1.3 times about its centre (its
+/// atoms more exposed, so smaller), gives the CPU's area in both, and the second frame's area
+/// with the first frame's radii is off by more than three times the tolerance, so an engine that
+/// kept the old radii would fail here.
+#[test]
+fn ses_preset_radii_follow_each_frame_on_the_gpu_as_on_the_cpu() {
+    use mdsurf::model::RadiusOverrides;
+    use mdsurf::scene::layer::Layer;
+    use mdsurf::scene::representation::{RepStyle, Representation};
+    use mdsurf::surface::{AtomSet, Preset};
+    let Some(mut engine) = engine() else { return };
+    engine.set_vertices(VertexMode::Refined);
+    let traj = mdsurf::io::open(&crate::data_support::data("1hpv.pdb"), None).expect("1hpv");
+    let topology = traj.topology();
+    let first = traj.read_frame(0).expect("frame 0");
+    let centre = first.positions.iter().copied().sum::<Vec3>() / first.positions.len() as f32;
+    let mut spread = first.clone();
+    spread.index = 1;
+    for p in &mut spread.positions {
+        *p = centre + (*p - centre) * 1.3;
+    }
+    let rep = Representation {
+        radii: Preset::Ses.radius_set(),
+        ..Representation::new("a", "protein and chain A", RepStyle::Surface)
+    };
+    let mut layer = Layer::new(rep, topology, &RadiusOverrides::default()).expect("layer");
+    let p = Preset::Ses.apply(SurfaceParams {
+        spacing: 1.0,
+        ..Default::default()
+    });
+    let cpu = |set: &AtomSet| {
+        CpuEngine::new()
+            .with_vertices(VertexMode::Refined)
+            .compute(set, &p)
+            .expect("CPU surface")
+    };
+    let a = layer.frame(topology, &first).expect("frame 0");
+    let b = layer.frame(topology, &spread).expect("frame 1");
+    let mean = |r: &[f32]| r.iter().sum::<f32>() / r.len() as f32;
+    assert!(
+        mean(b.radii()) < 0.99 * mean(a.radii()),
+        "spread atoms not shrunk: {} vs {}",
+        mean(b.radii()),
+        mean(a.radii())
+    );
+    for (index, lf) in [&a, &b].into_iter().enumerate() {
+        let gpu = engine.compute(&lf.atom_set(), &p).expect("GPU surface");
+        let reference = cpu(&lf.atom_set());
+        assert!(
+            tol::rel_close(gpu.area, reference.area, tol::AREA_VOLUME_REL),
+            "frame {index}: GPU area {} vs CPU {}",
+            gpu.area,
+            reference.area
+        );
+    }
+    let stale = AtomSet {
+        radii: a.radii(),
+        ..b.atom_set()
+    };
+    let (stale_area, right) = (cpu(&stale).area, cpu(&b.atom_set()).area);
+    assert!(
+        (stale_area / right - 1.0).abs() > 3.0 * tol::AREA_VOLUME_REL,
+        "old radii {stale_area} vs new {right}"
     );
 }
