@@ -43,7 +43,9 @@ import ses_reference as table  # noqa: E402
 
 import mdsurf  # noqa: E402
 
-# The preset's values (src/surface/preset.rs) the search starts from.
+# Where the search starts (--start overrides): the per-element preset that came before the
+# exposed-atom radii (src/surface/preset.rs has the preset now: R 0.832, I 0.378, H 0.964,
+# N 0.882, O 1.374, beta 0.186).
 PRESET_R, PRESET_I = 0.832, 0.382
 PRESET_RADII = {"H": 0.986, "C": 1.5, "N": 0.922, "O": 1.402, "S": 1.9}
 # Classes whose radii each model fits (a class absent from a model takes its element's).

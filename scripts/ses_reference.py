@@ -48,12 +48,14 @@ Choices:
   O radii fitted with R and I. Bondi radii in mdsurf too (`--radius C=1.7` ...) fitted worse
   (3.9 % at best on the twelve rows).
 - Elements from atom names (first letter after leading digits), as mdsurf guesses them.
-- The preset (`--fit-radii H C N O` with FIT_QUALITY=max FIT_SPACINGS=1,0.5): R 0.832,
-  I 0.382, H 0.986, N 0.922, O 1.402 Å (C stayed at 1.5): 1.93 % at worst on the sixteen fit
-  rows at H = 1 and 0.5 Å at once (1.91 % when fitted; measured since with corner points
-  left in place and a 1e-3 Å projection tolerance) (1.83 to 1.96 % at every H from 0.35 to 1 Å). It was
-  searched with the same objective through mdsurf's Python package (`mdsurf.measure`, the same
-  engine in-process, a second per evaluation instead of twenty), from the previous preset.
+- The preset now (scripts/ses_models.py --model exposed --spacing 1 0.5 --leave-out 1gbt 4zhl
+  2ofg 1a7g): R 0.832, I 0.378, H 0.964, N 0.882, O 1.374 Å and exposed atoms shrunk by up to
+  18.6 % (src/model/exposure.rs): 2.13 % at worst on the eighteen fit rows at H = 1 and 0.5 Å,
+  1.96 % on the four check rows. This script's own fits (`--fit`, `--fit-radii`) search
+  constant radii only.
+- The per-element preset before it (`--fit-radii H C N O` with FIT_QUALITY=max
+  FIT_SPACINGS=1,0.5): R 0.832, I 0.382, H 0.986, N 0.922, O 1.402 Å: 1.93 % on its sixteen fit
+  rows, 3.6 % on 1mot and 3.8 % on 2ofg.
 - Protocol, and why every earlier row is now a fit row: the previous preset (R 0.830, I 0.377,
   H 0.991, N 1.136, O 1.331, fitted on seven rows at H = 1 Å, 1.96 % on them and 1.85 % on nine
   held out) was fitted while the sharp triangles of its surface were measured 12 % short
