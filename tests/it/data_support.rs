@@ -20,6 +20,18 @@ pub fn data(name: &str) -> PathBuf {
     path
 }
 
+/// The text of the gzip-compressed data file `name`.
+#[allow(dead_code)] // not every test file that includes this module reads one
+pub fn gunzipped(name: &str) -> String {
+    let mut text = String::new();
+    std::io::Read::read_to_string(
+        &mut flate2::read::GzDecoder::new(std::fs::File::open(data(name)).expect("open")),
+        &mut text,
+    )
+    .expect("gzip text");
+    text
+}
+
 /// A 3-frame PDB + DCD pair whose frame 1 has a NaN coordinate.
 #[allow(dead_code)] // not every test file that includes this module writes one
 pub fn nan_trajectory(dir: &Path) -> mdsurf::io::Trajectory {

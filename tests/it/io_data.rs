@@ -147,12 +147,7 @@ fn argon_tng() {
 /// The `_atom_site` rows of a gzip-compressed mmCIF file in `tests/data`, each a map from
 /// column name to value (rows with quoted spaces are skipped: none in these files).
 fn atom_site_rows(file: &str) -> Vec<std::collections::HashMap<String, String>> {
-    let mut text = String::new();
-    std::io::Read::read_to_string(
-        &mut flate2::read::GzDecoder::new(std::fs::File::open(data(file)).unwrap()),
-        &mut text,
-    )
-    .unwrap();
+    let text = crate::data_support::gunzipped(file);
     let columns: Vec<&str> = text
         .lines()
         .filter_map(|l| l.strip_prefix("_atom_site."))
@@ -188,13 +183,7 @@ fn mmcif_waters_are_a_residue_each_with_the_author_number() {
     let gz = check("1gbt.cif.gz", None, rows.len(), 1);
     let plain = tempfile::tempdir().unwrap();
     let copy = plain.path().join("1gbt.cif");
-    let mut text = String::new();
-    std::io::Read::read_to_string(
-        &mut flate2::read::GzDecoder::new(std::fs::File::open(data("1gbt.cif.gz")).unwrap()),
-        &mut text,
-    )
-    .unwrap();
-    std::fs::write(&copy, text).unwrap();
+    std::fs::write(&copy, crate::data_support::gunzipped("1gbt.cif.gz")).unwrap();
     let plain = io::open(&copy, None).expect("plain 1gbt.cif");
     for t in [&gz, &plain] {
         let top = t.topology();

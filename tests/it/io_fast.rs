@@ -291,13 +291,7 @@ fn compressed_wwpdb_with_models_of_different_sizes_reads_every_model() {
     );
     let plain = tempfile::tempdir().unwrap();
     let copy = plain.path().join("1lcd.pdb");
-    let mut text = String::new();
-    std::io::Read::read_to_string(
-        &mut flate2::read::GzDecoder::new(std::fs::File::open(data("1lcd.pdb.gz")).unwrap()),
-        &mut text,
-    )
-    .unwrap();
-    std::fs::write(&copy, text).unwrap();
+    std::fs::write(&copy, crate::data_support::gunzipped("1lcd.pdb.gz")).unwrap();
     let p = io::open(&copy, None).expect("uncompressed 1lcd");
     let counts = |v: &[Result<usize, String>]| -> Vec<Option<usize>> {
         v.iter().map(|r| r.as_ref().ok().copied()).collect()
