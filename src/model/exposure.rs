@@ -18,9 +18,11 @@ pub const EXPOSURE_RADIUS: f32 = 10.0;
 pub const EXPOSED_BELOW: f32 = 60.0;
 
 /// For every atom of `positions` (Å), the heavy atoms (`heavy[i]`) within
-/// [`EXPOSURE_RADIUS`] of it, itself included when heavy. Cells of [`EXPOSURE_RADIUS`]; atoms
-/// in parallel.
-pub fn heavy_neighbour_counts(positions: &[Vec3], heavy: &[bool]) -> Vec<u32> {
+/// [`EXPOSURE_RADIUS`] of it, itself included when heavy, counted up to `cap` (an atom stops
+/// counting there: the shrink needs no more than [`EXPOSED_BELOW`], and most atoms of a
+/// protein or a solvated system reach it in their first cells). Cells of [`EXPOSURE_RADIUS`];
+/// atoms in parallel.
+pub fn heavy_neighbour_counts(positions: &[Vec3], heavy: &[bool], cap: u32) -> Vec<u32> {
     let heavy_positions: Vec<Vec3> = positions
         .iter()
         .zip(heavy)
@@ -61,14 +63,20 @@ pub fn heavy_neighbour_counts(positions: &[Vec3], heavy: &[bool]) -> Vec<u32> {
         .map(|&p| {
             let c = cell_of(p);
             let (from, to) = ((c - 1).max(glam::IVec3::ZERO), (c + 1).min(max));
+            // The atom's own cell first (it holds most of the neighbours; clamped into the grid
+            // for an atom outside the heavy atoms' box: any cell may be visited, each once).
+            let around = (from.z..=to.z).flat_map(|z| {
+                (from.y..=to.y)
+                    .flat_map(move |y| (from.x..=to.x).map(move |x| glam::IVec3::new(x, y, z)))
+            });
             let mut n = 0u32;
-            for z in from.z..=to.z {
-                for y in from.y..=to.y {
-                    for x in from.x..=to.x {
-                        let k = index(glam::IVec3::new(x, y, z));
-                        let cell = &sorted[start[k] as usize..start[k + 1] as usize];
-                        n += cell.iter().filter(|q| q.distance_squared(p) <= r2).count() as u32;
-                    }
+            let own = c.clamp(glam::IVec3::ZERO, max);
+            for cell in std::iter::once(own).chain(around.filter(|&q| q != own)) {
+                let k = index(cell);
+                let atoms = &sorted[start[k] as usize..start[k + 1] as usize];
+                n += atoms.iter().filter(|q| q.distance_squared(p) <= r2).count() as u32;
+                if n >= cap {
+                    return cap;
                 }
             }
             n
@@ -79,7 +87,7 @@ pub fn heavy_neighbour_counts(positions: &[Vec3], heavy: &[bool]) -> Vec<u32> {
 /// `radii` (Å) of the atoms at `positions` (Å) with the exposed ones shrunk by up to the
 /// fraction `beta` (see the module docs); `heavy[i]` says which atoms count as neighbours.
 pub fn shrink_exposed(radii: &[f32], positions: &[Vec3], heavy: &[bool], beta: f32) -> Vec<f32> {
-    let counts = heavy_neighbour_counts(positions, heavy);
+    let counts = heavy_neighbour_counts(positions, heavy, EXPOSED_BELOW as u32);
     radii
         .iter()
         .zip(counts)
@@ -123,10 +131,11 @@ mod tests {
         }
         positions.push(Vec3::new(3.0, 13.0, 23.0));
         heavy.push(true);
-        assert_eq!(
-            heavy_neighbour_counts(&positions, &heavy),
-            brute(&positions, &heavy)
-        );
+        let all = brute(&positions, &heavy);
+        assert_eq!(heavy_neighbour_counts(&positions, &heavy, u32::MAX), all);
+        let capped: Vec<u32> = all.iter().map(|&n| n.min(8)).collect();
+        assert!(all.iter().any(|&n| n > 8) && all.iter().any(|&n| n < 8));
+        assert_eq!(heavy_neighbour_counts(&positions, &heavy, 8), capped);
     }
 
     #[test]
