@@ -657,21 +657,21 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
             .layer
             .frame(topology, &frame)
             .map_err(|e| format!("frame {}: {e}", req.frame))?;
-        // The particles' radii and colours change only when they were rebuilt: otherwise keep
-        // the same Arcs (no copy per frame, and the engine sees no change).
-        // Radii that follow exposure are new every frame.
-        let (radii, colours) = match &slot.last {
-            Some((_, last)) if !lf.rebuilt => (
-                match &lf.frame_radii {
-                    Some(r) => Arc::new(r.clone()),
-                    None => last.particles.radii.clone(),
-                },
-                last.particles.colours.clone(),
-            ),
-            _ => (
-                Arc::new(lf.radii().to_vec()),
-                Arc::new(lf.particles.colours().to_vec()),
-            ),
+        // The particles' radii and colours change only when they were rebuilt (radii that
+        // follow exposure: every frame): otherwise keep the same Arcs (no copy per frame, and
+        // the engine sees no change).
+        let last = slot
+            .last
+            .as_ref()
+            .map(|(_, l)| &l.particles)
+            .filter(|_| !lf.rebuilt);
+        let radii = match last {
+            Some(l) if lf.frame_radii.is_none() => l.radii.clone(),
+            _ => Arc::new(lf.radii().to_vec()),
+        };
+        let colours = match last {
+            Some(l) => l.colours.clone(),
+            None => Arc::new(lf.particles.colours().to_vec()),
         };
         let mut submitted = None;
         let mut result = LayerResult {

@@ -308,9 +308,7 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
     // The preset's radii (and their exposure, frame by frame), as `surface` gives them.
     let radius_set = args.params.radius_set();
     if radius_set != RadiusSet::default() {
-        let mut options = input.particles.options_for(&system.trajectory)?;
-        options.radius_overrides = radius_set.with_overrides(&options.radius_overrides);
-        options.exposed_shrink = radius_set.exposed_shrink();
+        let options = radius_set.particle_options(input.particles.options_for(&system.trajectory)?);
         system.particles = Particles::new(system.trajectory.topology(), &first, &options)?;
     }
     let mut cases = Vec::new();

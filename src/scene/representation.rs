@@ -187,12 +187,12 @@ impl Representation {
 
     /// How the selected atoms become particles (beads for the bead surface).
     pub fn particle_options(&self, radius_overrides: &RadiusOverrides) -> ParticleOptions {
-        ParticleOptions {
+        self.radii.particle_options(ParticleOptions {
             beads: self.style == RepStyle::Beads,
-            radius_overrides: self.radii.with_overrides(radius_overrides),
+            radius_overrides: radius_overrides.clone(),
             colours: self.colour,
-            exposed_shrink: self.radii.exposed_shrink(),
-        }
+            exposed_shrink: None,
+        })
     }
 
     /// Parses the selection.

@@ -26,7 +26,7 @@
 //! ([`super::curved`]) and gave 2.9 % once they were measured right.
 
 use super::{Quality, SurfaceParams, VertexMode};
-use crate::model::{RadiusOverride, RadiusOverrides};
+use crate::model::{ParticleOptions, RadiusOverride, RadiusOverrides};
 
 /// A named choice of R, I and quality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -179,6 +179,16 @@ impl RadiusSet {
         match self {
             RadiusSet::Mdsurf => None,
             RadiusSet::Ses => Some(SES_EXPOSED_SHRINK),
+        }
+    }
+
+    /// `options` with this set's radii under its own user overrides and this set's exposure
+    /// shrink: how a representation's radius set reaches its particles.
+    pub fn particle_options(self, options: ParticleOptions) -> ParticleOptions {
+        ParticleOptions {
+            radius_overrides: self.with_overrides(&options.radius_overrides),
+            exposed_shrink: self.exposed_shrink(),
+            ..options
         }
     }
 

@@ -18,7 +18,7 @@
 //! of it) says what the preset gives now.
 
 use glam::Vec3;
-use mdsurf::model::{ParticleOptions, Particles, RadiusOverrides};
+use mdsurf::model::{ParticleOptions, Particles};
 use mdsurf::scene::Selection;
 use mdsurf::surface::{AtomSet, CpuEngine, Preset, SurfaceEngine, SurfaceParams};
 
@@ -30,12 +30,9 @@ use crate::data_support::{DATA, data};
 fn atoms(file: &str, selection: &str) -> (Vec<Vec3>, Vec<f32>) {
     let traj = mdsurf::io::open(&data(file), None).expect("open test structure");
     let frame = traj.read_frame(0).expect("frame 0");
-    let set = Preset::Ses.radius_set();
-    let options = ParticleOptions {
-        radius_overrides: set.with_overrides(&RadiusOverrides::default()),
-        exposed_shrink: set.exposed_shrink(),
-        ..ParticleOptions::default()
-    };
+    let options = Preset::Ses
+        .radius_set()
+        .particle_options(ParticleOptions::default());
     let sel = Selection::parse(selection).expect("selection");
     let idx = sel.bind(traj.topology()).indices(&frame);
     let particles =
