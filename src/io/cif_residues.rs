@@ -13,17 +13,57 @@
 //! author's residue number (`auth_seq_id`) as its `label_seq_id`, or its entity number, or 0
 //! when neither is a number. Polymer residues keep their `label_seq_id` (author numbers repeat
 //! with insertion codes, as 1gbt's 184 and 184A). Atom order, count and positions do not change.
+//!
+//! A row with fewer values than its loop has columns (a cut file) is found by [`short_row`]:
+//! chemfiles would read past its end.
 
 /// `bytes` with the `_atom_site` rows rewritten as the module says, or `None` when no row
 /// needs it. Rows whose token count does not match the loop's columns (quoted values with
 /// spaces) are left as they are.
 pub(crate) fn renumber(bytes: &[u8]) -> Option<Vec<u8>> {
     let lines: Vec<&[u8]> = bytes.split_inclusive(|&b| b == b'\n').collect();
+    // (line index, rewritten line) of every row that changes.
+    let mut changes: Vec<(usize, Vec<u8>)> = Vec::new();
+    for_each_row(&lines, |i, width, fields| {
+        if let Some(row) = renumbered_row(lines[i], width, fields) {
+            changes.push((i, row));
+        }
+    });
+    if changes.is_empty() {
+        return None;
+    }
+    let mut out = Vec::with_capacity(bytes.len() + changes.len() * 4);
+    let mut next = changes.into_iter().peekable();
+    for (i, line) in lines.iter().enumerate() {
+        match next.next_if(|(k, _)| *k == i) {
+            Some((_, row)) => out.extend_from_slice(&row),
+            None => out.extend_from_slice(line),
+        }
+    }
+    Some(out)
+}
+
+/// The first `_atom_site` row with fewer values than its loop has columns, as (line number
+/// from 1, values, columns). chemfiles reads past the end of such a row (a segmentation fault
+/// on a cut `.cif.gz`), so the file is refused with this instead.
+pub(crate) fn short_row(bytes: &[u8]) -> Option<(usize, usize, usize)> {
+    let lines: Vec<&[u8]> = bytes.split_inclusive(|&b| b == b'\n').collect();
+    let mut found = None;
+    for_each_row(&lines, |i, width, _| {
+        let values = tokens(lines[i]).len();
+        if found.is_none() && values < width {
+            found = Some((i + 1, values, width));
+        }
+    });
+    found
+}
+
+/// Calls `row(line index, column count, fields)` for every row of every `_atom_site` loop of
+/// `lines`.
+fn for_each_row(lines: &[&[u8]], mut row: impl FnMut(usize, usize, &Fields)) {
     let mut columns: Vec<&[u8]> = Vec::new();
     let mut in_header = false;
     let mut in_rows = false;
-    // (line index, rewritten line) of every row that changes.
-    let mut changes: Vec<(usize, Vec<u8>)> = Vec::new();
     let mut fields = Fields::default();
     for (i, line) in lines.iter().enumerate() {
         let first = line.split(u8::is_ascii_whitespace).find(|t| !t.is_empty());
@@ -49,25 +89,17 @@ pub(crate) fn renumber(bytes: &[u8]) -> Option<Vec<u8>> {
             columns.clear();
             continue;
         }
-        if !in_rows {
-            continue;
-        }
-        if let Some(row) = renumbered_row(line, columns.len(), &fields) {
-            changes.push((i, row));
+        if in_rows {
+            row(i, columns.len(), &fields);
         }
     }
-    if changes.is_empty() {
-        return None;
-    }
-    let mut out = Vec::with_capacity(bytes.len() + changes.len() * 4);
-    let mut next = changes.into_iter().peekable();
-    for (i, line) in lines.iter().enumerate() {
-        match next.next_if(|(k, _)| *k == i) {
-            Some((_, row)) => out.extend_from_slice(&row),
-            None => out.extend_from_slice(line),
-        }
-    }
-    Some(out)
+}
+
+/// The whitespace-separated values of `line`.
+fn tokens(line: &[u8]) -> Vec<&[u8]> {
+    line.split(u8::is_ascii_whitespace)
+        .filter(|t| !t.is_empty())
+        .collect()
 }
 
 /// Column positions of the `_atom_site` fields the renumbering reads.
@@ -93,10 +125,7 @@ impl Fields {
 /// such column, or does not split into `width` tokens.
 fn renumbered_row(line: &[u8], width: usize, fields: &Fields) -> Option<Vec<u8>> {
     let seq = fields.label_seq?;
-    let tokens: Vec<&[u8]> = line
-        .split(u8::is_ascii_whitespace)
-        .filter(|t| !t.is_empty())
-        .collect();
+    let tokens = tokens(line);
     if tokens.len() != width || is_integer(tokens[seq]) {
         return None;
     }
@@ -165,6 +194,15 @@ mod tests {
         assert!(out.contains("HETATM 1 C1 LIG F ? 401 0.0"), "{out}");
         assert!(out.contains("HETATM 2 C1 LIG G 7 7 0.0"), "{out}");
         assert!(out.contains("HETATM 3 C1 LIG H ? 0 0.0"), "{out}");
+    }
+
+    #[test]
+    fn a_row_cut_short_is_found_with_its_line() {
+        let whole = format!("{HEADER}ATOM 1 CA ALA A 1 1 0.0 0.0 0.0 5\n");
+        assert_eq!(short_row(whole.as_bytes()), None);
+        let cut = format!("{whole}ATOM 2 CB ALA A 1 1 0.0");
+        let line = cut.lines().count();
+        assert_eq!(short_row(cut.as_bytes()), Some((line, 8, 11)));
     }
 
     #[test]

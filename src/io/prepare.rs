@@ -65,7 +65,10 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
                     std::fs::read(path).map_err(|e| IoError::unreadable(path, e.to_string()))?;
                 let cleaned = match format.base {
                     "PDB" => clean_pdb(&bytes),
-                    _ => cif_residues::renumber(&bytes).map(latin1_as_utf8),
+                    _ => {
+                        refuse_short_cif_row(path, &bytes)?;
+                        cif_residues::renumber(&bytes).map(latin1_as_utf8)
+                    }
                 };
                 if let Some(cleaned) = cleaned {
                     let (temp, copy) = temp_file(path, format.base)?;
@@ -157,6 +160,20 @@ fn clean_pdb(bytes: &[u8]) -> Option<Vec<u8>> {
         out.extend(line.iter().map(|&b| if b.is_ascii() { b } else { b'?' }));
     }
     Some(out)
+}
+
+/// An error naming `path` and the line when an mmCIF `_atom_site` row of `bytes` has fewer
+/// values than its columns ([`cif_residues::short_row`]: chemfiles would crash on it).
+fn refuse_short_cif_row(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    match cif_residues::short_row(bytes) {
+        Some((line, values, columns)) => Err(IoError::unreadable(
+            path,
+            format!(
+                "line {line}: an _atom_site row with {values} of its {columns} values (is the file cut short?)"
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// `bytes` with every byte that is not valid UTF-8 read as Latin-1 (as a free-format copy
@@ -378,7 +395,10 @@ fn decompress(
         let bytes = std::fs::read(&copy).map_err(|e| write_failed(path, e))?;
         let cleaned = match format.base {
             "PDB" => clean_pdb(&bytes),
-            _ => cif_residues::renumber(&bytes),
+            _ => {
+                refuse_short_cif_row(path, &bytes)?;
+                cif_residues::renumber(&bytes)
+            }
         };
         if let Some(cleaned) = cleaned {
             std::fs::write(&copy, cleaned).map_err(|e| write_failed(path, e))?;

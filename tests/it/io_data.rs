@@ -226,3 +226,26 @@ fn mmcif_with_unknown_entities_opens() {
         .collect();
     assert_eq!(het, ligand);
 }
+
+/// An mmCIF file cut in the middle of an `_atom_site` row, compressed or not, is refused with
+/// the line (chemfiles read past the end of the row: a segmentation fault on the `.cif.gz`).
+#[test]
+fn mmcif_cut_in_a_row_is_refused_with_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let gz = dir.path().join("cut.cif.gz");
+    let bytes = std::fs::read(data("1gbt.cif.gz")).unwrap();
+    std::fs::write(&gz, &bytes[..30_000]).unwrap();
+    let plain = dir.path().join("cut.cif");
+    let text = crate::data_support::gunzipped("1gbt.cif.gz");
+    // 40 characters into the 500th atom row.
+    let row = text.match_indices("\nATOM").nth(500).expect("500 atom rows").0;
+    let cut = &text[..row + 40];
+    std::fs::write(&plain, cut).unwrap();
+    for path in [&gz, &plain] {
+        let e = io::open(path, None).expect_err("a cut row").to_string();
+        assert!(
+            e.contains("cut.cif") && e.contains("line ") && e.contains("_atom_site row"),
+            "{e}"
+        );
+    }
+}
