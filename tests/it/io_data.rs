@@ -238,7 +238,11 @@ fn mmcif_cut_in_a_row_is_refused_with_its_line() {
     let plain = dir.path().join("cut.cif");
     let text = crate::data_support::gunzipped("1gbt.cif.gz");
     // 40 characters into the 500th atom row.
-    let row = text.match_indices("\nATOM").nth(500).expect("500 atom rows").0;
+    let row = text
+        .match_indices("\nATOM")
+        .nth(500)
+        .expect("500 atom rows")
+        .0;
     let cut = &text[..row + 40];
     std::fs::write(&plain, cut).unwrap();
     for path in [&gz, &plain] {
