@@ -106,9 +106,11 @@ fn make_engine(state: Option<&egui_wgpu::RenderState>, backend: Backend) -> work
 
 /// eframe's device asks for the limits and features the GPU surface engine needs (the adapter's
 /// buffer sizes, 16 storage buffers per stage, timestamps when offered), so the engine and the
-/// renderer share one device.
+/// renderer share one device; its instance opens OpenGL only where nothing else has an adapter
+/// ([`crate::gpu::GpuContext::window_backends`]).
 fn wgpu_options() -> egui_wgpu::WgpuConfiguration {
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.instance_descriptor.backends = crate::gpu::GpuContext::window_backends();
     setup.power_preference = wgpu::PowerPreference::HighPerformance;
     setup.device_descriptor = Arc::new(|adapter: &wgpu::Adapter| {
         let mut limits = crate::gpu::GpuContext::wanted_limits(&adapter.limits());

@@ -107,6 +107,21 @@ impl GpuContext {
         Ok(Self::from_device(device, queue, String::new()).with_adapter(&info))
     }
 
+    /// The backends a window's wgpu instance (eframe's, or a test harness's) may open: what
+    /// `WGPU_BACKEND` names; else Vulkan, Metal or DX12 when one of them has an adapter, OpenGL
+    /// only where none has. egui's default adds OpenGL beside them, and an instance that opened
+    /// EGL on NVIDIA's driver deadlocked it when dropped while another thread compiled a Vulkan
+    /// pipeline (as in [`GpuContext::new_headless`]); the window test hung that way on an H100.
+    pub fn window_backends() -> wgpu::Backends {
+        if let Some(named) = wgpu::Backends::from_env() {
+            return named;
+        }
+        match pollster::block_on(Self::headless_adapter(wgpu::Backends::PRIMARY)) {
+            Ok(_) => wgpu::Backends::PRIMARY,
+            Err(_) => wgpu::Backends::PRIMARY | wgpu::Backends::GL,
+        }
+    }
+
     /// The high-performance adapter of an instance limited to `backends` (or to what
     /// `WGPU_BACKEND` names).
     async fn headless_adapter(backends: wgpu::Backends) -> Result<wgpu::Adapter, GpuError> {

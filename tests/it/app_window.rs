@@ -13,6 +13,17 @@ use mdsurf::app::export::MoviePlan;
 use mdsurf::app::{Command, DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
 use mdsurf::render::RgbaImage;
 
+/// egui_kittest's wgpu set-up on the viewer's backends: its default also opens OpenGL, and on an
+/// H100 dropping that instance deadlocked NVIDIA's driver against the GPU tests compiling on
+/// other threads (this test and six GPU tests hung; see `GpuContext::window_backends`).
+fn harness_wgpu() -> egui_wgpu::WgpuSetup {
+    let mut setup = egui_kittest::wgpu::default_wgpu_setup();
+    if let egui_wgpu::WgpuSetup::CreateNew(new) = &mut setup {
+        new.instance_descriptor.backends = mdsurf::gpu::GpuContext::window_backends();
+    }
+    setup
+}
+
 #[test]
 fn window_loads_demo_and_draws_the_surface() {
     if let Err(e) = mdsurf::render::HeadlessGpu::new() {
@@ -32,7 +43,7 @@ fn window_loads_demo_and_draws_the_surface() {
     };
     let mut h = Harness::builder()
         .with_size([1200.0, 800.0])
-        .wgpu()
+        .wgpu_setup(harness_wgpu())
         .build_eframe(|cc| -> Viewer {
             let result = Arc::new(Mutex::new(None));
             create_viewer(
