@@ -9,6 +9,8 @@
 use std::path::Path;
 use std::process::Command;
 
+use crate::xvfb_support::xvfb_run;
+
 use mdsurf::render::RgbaImage;
 
 fn require_gpu() -> bool {
@@ -45,8 +47,8 @@ fn scripted_shot(
     let dir = tempfile::tempdir().expect("temp dir");
     let shot = dir.path().join("shot.png");
     let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
+    let (_one_server_at_a_time, mut xvfb) = xvfb_run();
+    let out = xvfb
         .arg(env!("CARGO_BIN_EXE_mdsurf"))
         .arg(demo.join("md_1u19.gro"))
         .arg(demo.join("md_1u19.xtc"))

@@ -8,6 +8,8 @@
 use std::path::Path;
 use std::process::Command;
 
+use crate::xvfb_support::xvfb_run;
+
 /// Allowed change of anonymous memory between frame 100 and frame 500 (KiB).
 const MAX_GROWTH_KIB: i64 = 20 * 1024;
 
@@ -26,8 +28,8 @@ fn window_memory_stays_flat_over_500_frames() {
     let long = dir.path().join("long.xtc");
     std::fs::write(&long, one.repeat(10)).expect("write");
     let log_path = dir.path().join("memory.csv");
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1280x800x24"])
+    let (_one_server_at_a_time, mut xvfb) = xvfb_run();
+    let out = xvfb
         .arg(env!("CARGO_BIN_EXE_mdsurf"))
         .arg(demo.join("md_1u19.gro"))
         .arg(&long)

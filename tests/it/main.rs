@@ -5,6 +5,7 @@ mod cli_common;
 mod data_support;
 mod gpu_support;
 mod surface_common;
+mod xvfb_support;
 
 mod app_gpu_worker;
 mod app_panels;
