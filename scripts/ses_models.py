@@ -16,6 +16,11 @@ command line, in-process: about a second per evaluation of all eighteen rows):
   1 - beta (60 - n) / 60 where n < 60 (n as for `burial`); beta is fitted.
 - `burial`:   the preset's elements, each radius scaled by 1 + beta (n - 60) / 60 (kept within
   0.5 to 1.5), n the heavy atoms within 10 Å of the atom in the frame read; beta is fitted.
+- `exposure16`: the preset's model (src/model/exposure.rs): `exposed` with the heavy atoms
+  counted within 16 Å and 160 of them where the shrink ends: each radius times
+  1 - beta clamp((160 - n) / 160, 0, 1); beta is fitted. The 16 Å and 160 were chosen by a
+  screen of such counts (6 to 16 Å, one or two terms, with and without groove features) on the
+  fit rows (README, section "Refined vertices and the SES preset").
 
 Rows: `--rows fit` scores the `fit` rows (as the preset was fitted), `--rows all` every row;
 `--leave-out NAME ...` leaves rows out of the score and prints their deviations (cross-validation;
@@ -44,8 +49,9 @@ import ses_reference as table  # noqa: E402
 import mdsurf  # noqa: E402
 
 # Where the search starts (--start overrides): the per-element preset that came before the
-# exposed-atom radii (src/surface/preset.rs has the preset now: R 0.832, I 0.378, H 0.964,
-# N 0.882, O 1.374, beta 0.186).
+# exposed-atom radii (src/surface/preset.rs has the preset now, --model exposure16: R 0.802,
+# I 0.293, H 1.020, N 0.707, O 1.413, beta 0.598; the 10 Å one before it, --model exposed:
+# R 0.832, I 0.378, H 0.964, N 0.882, O 1.374, beta 0.186).
 PRESET_R, PRESET_I = 0.832, 0.382
 PRESET_RADII = {"H": 0.986, "C": 1.5, "N": 0.922, "O": 1.402, "S": 1.9}
 # Classes whose radii each model fits (a class absent from a model takes its element's).
@@ -55,15 +61,21 @@ MODELS = {
     "backbone": ["H-C", "H-polar", "C-bb", "C-sc", "N-bb", "N-sc", "O-bb", "O-sc"],
     "burial": ["H", "N", "O"],
     "exposed": ["H", "N", "O"],
+    "exposure16": ["H", "N", "O"],
 }
+# Each model's exposure parameters after the radii: their names and initial simplex steps.
+EXTRA = {"burial": ["beta"], "exposed": ["beta"], "exposure16": ["beta"]}
 BACKBONE = {"N", "CA", "C", "O", "OXT"}
 BURIAL_RADIUS = 10.0  # Å
 BURIAL_MIDPOINT = 60.0  # heavy atoms within BURIAL_RADIUS where the factor is 1
+EXPOSURE16_RADIUS = 16.0  # Å
+EXPOSURE16_MIDPOINT = 160.0  # heavy atoms within EXPOSURE16_RADIUS where the shrink ends
 
 
 def classify(protein):
     """(element, class) of every atom: hydrogens by their nearest heavy atom, heavy atoms by
-    backbone or side chain; and the heavy atoms within BURIAL_RADIUS of each atom."""
+    backbone or side chain; and the heavy atoms within BURIAL_RADIUS and within
+    EXPOSURE16_RADIUS of each atom."""
     xyz = np.array([a[2:5] for a in protein])
     elements = [table.element(a[1]) for a in protein]
     heavy = [i for i, e in enumerate(elements) if e != "H"]
@@ -75,7 +87,8 @@ def classify(protein):
             classes.append("H-polar" if elements[heavy[j]] in ("N", "O", "S") else "H-C")
         else:
             classes.append(f"{e}-bb" if protein[i][1].strip() in BACKBONE else f"{e}-sc")
-    buried = np.array([len(n) for n in tree.query_ball_point(xyz, BURIAL_RADIUS)], float)
+    buried = {r: np.array([len(n) for n in tree.query_ball_point(xyz, r)], float)
+              for r in (BURIAL_RADIUS, EXPOSURE16_RADIUS)}
     return xyz.astype(np.float32), elements, classes, buried
 
 
@@ -95,7 +108,7 @@ def main():
     ses = {r["protein"]: float(r["ses_area_A2"]) for r in csv.DictReader(open(table.OUT))}
     rows = [(name, role, *classify(protein)) for name, _, role, _, protein in table.selected_rows()]
     free = MODELS[args.model]
-    burial = args.model in ("burial", "exposed")
+    extra = EXTRA.get(args.model, [])
     scored = np.array([(args.rows == "all" or role == "fit") and name not in args.leave_out
                        for name, role, *_ in rows] * len(args.spacing))
 
@@ -103,10 +116,14 @@ def main():
         own = dict(PRESET_RADII)
         own.update(zip(free, x[2:2 + len(free)]))
         r = np.array([own.get(c, own.get(e, 1.5)) for e, c in zip(elements, classes)])
+        n = buried[BURIAL_RADIUS]
         if args.model == "burial":
-            r *= np.clip(1 + x[-1] * (buried - BURIAL_MIDPOINT) / BURIAL_MIDPOINT, 0.5, 1.5)
+            r *= np.clip(1 + x[-1] * (n - BURIAL_MIDPOINT) / BURIAL_MIDPOINT, 0.5, 1.5)
         elif args.model == "exposed":
-            r *= 1 - x[-1] * np.clip((BURIAL_MIDPOINT - buried) / BURIAL_MIDPOINT, 0, 1)
+            r *= 1 - x[-1] * np.clip((BURIAL_MIDPOINT - n) / BURIAL_MIDPOINT, 0, 1)
+        elif args.model == "exposure16":
+            n = buried[EXPOSURE16_RADIUS]
+            r *= 1 - x[-1] * np.clip((EXPOSURE16_MIDPOINT - n) / EXPOSURE16_MIDPOINT, 0, 1)
         return r.astype(np.float32)
 
     cache = {}
@@ -130,18 +147,18 @@ def main():
         d = np.abs(deviations(x)[scored])
         return d.max() + 0.1 * d.mean()
 
-    x0 = [PRESET_R, PRESET_I] + [PRESET_RADII[c[0]] for c in free] + ([0.0] if burial else [])
+    x0 = [PRESET_R, PRESET_I] + [PRESET_RADII[c[0]] for c in free] + [0.0] * len(extra)
     if args.start:
         x0 = [float(v) for v in args.start.split()]
-        if len(x0) != len(free) + 2 + burial:
-            sys.exit(f"--start: {len(free) + 2 + burial} values expected, {len(x0)} given")
-    steps = [0.04, 0.05] + [0.1] * len(free) + ([0.05] if burial else [])
+        if len(x0) != len(free) + 2 + len(extra):
+            sys.exit(f"--start: {len(free) + 2 + len(extra)} values expected, {len(x0)} given")
+    steps = [0.04, 0.05] + [0.1] * len(free) + [0.05] * len(extra)
     simplex = [x0] + [np.add(x0, np.eye(len(x0))[k] * steps[k]) for k in range(len(x0))]
     best = minimize(score, x0, method="Nelder-Mead",
                     options=dict(initial_simplex=simplex, maxfev=args.evaluations,
                                  xatol=1e-3, fatol=1e-4)).x
     d = deviations(best)
-    names = ["R", "I"] + free + (["beta"] if burial else [])
+    names = ["R", "I"] + free + extra
     print(f"model {args.model}, rows {args.rows}, left out {args.leave_out}, H {args.spacing} Å: "
           + ", ".join(f"{n} {v:.3f}" for n, v in zip(names, best)))
     n = len(rows)

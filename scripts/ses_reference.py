@@ -48,12 +48,14 @@ Choices:
   O radii fitted with R and I. Bondi radii in mdsurf too (`--radius C=1.7` ...) fitted worse
   (3.9 % at best on the twelve rows).
 - Elements from atom names (first letter after leading digits), as mdsurf guesses them.
-- The preset now (scripts/ses_models.py --model exposed --spacing 1 0.5 --leave-out 1gbt 4zhl
-  2ofg 1a7g): R 0.832, I 0.378, H 0.964, N 0.882, O 1.374 Å and exposed atoms shrunk by up to
-  18.6 % (src/model/exposure.rs): 2.13 % at worst on the eighteen fit rows at H = 1 and 0.5 Å,
-  1.96 % on the four check rows. This script's own fits (`--fit`, `--fit-radii`) search
-  constant radii only.
-- The per-element preset before it (`--fit-radii H C N O` with FIT_QUALITY=max
+- The preset now (scripts/ses_models.py --model exposure16 --spacing 1 0.5 --leave-out 1gbt
+  4zhl 2ofg 1a7g): R 0.802, I 0.293, H 1.020, N 0.707, O 1.413 Å and atoms with fewer than 160
+  heavy atoms within 16 Å shrunk by up to 59.8 % (src/model/exposure.rs): 1.84 % at worst on
+  the eighteen fit rows at H = 1 and 0.5 Å, 1.81 % on the four check rows. This script's own
+  fits (`--fit`, `--fit-radii`) search constant radii only.
+- The one before it (--model exposed): R 0.832, I 0.378, H 0.964, N 0.882, O 1.374 Å, atoms
+  with fewer than 60 heavy atoms within 10 Å shrunk by up to 18.6 %: 2.13 % on the fit rows.
+- The per-element preset before that (`--fit-radii H C N O` with FIT_QUALITY=max
   FIT_SPACINGS=1,0.5): R 0.832, I 0.382, H 0.986, N 0.922, O 1.402 Å: 1.93 % on its sixteen fit
   rows, 3.6 % on 1mot and 3.8 % on 2ofg.
 - Protocol, and why every earlier row is now a fit row: the previous preset (R 0.830, I 0.377,

@@ -232,7 +232,7 @@ mod tests {
                 radius_overrides: crate::model::RadiusOverrides::parse_all(&["C=1.7"])
                     .expect("valid override"),
                 colours: "chain".parse().expect("scheme"),
-                exposed_shrink: None,
+                exposure: None,
             },
             reps: Vec::new(),
         };

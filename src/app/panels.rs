@@ -166,10 +166,10 @@ pub fn surface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut SurfaceDraft) -
             RadiusSet::ALL,
             RadiusSet::name,
             &format!(
-                "mdsurf: the element table; ses: the SES preset's ({}), exposed atoms shrunk by \
-                 up to {:.1} % in each frame; radius overrides apply on top",
+                "mdsurf: the element table; ses: the SES preset's ({}), in each frame shrunk on \
+                 atoms with few heavy atoms within {} Å (exposed); radius overrides apply on top",
                 ses_radii.join(", "),
-                100.0 * RadiusSet::Ses.exposed_shrink().unwrap_or(0.0)
+                RadiusSet::Ses.exposure().map_or(0.0, |m| m.radius)
             ),
         );
     }

@@ -521,7 +521,7 @@ impl Viewer {
                     beads: self.core.base.style == crate::scene::representation::RepStyle::Beads,
                     radius_overrides: self.core.radius_overrides.clone(),
                     colours: self.core.base.colour,
-                    exposed_shrink: None,
+                    exposure: None,
                 },
                 reps: self.core.reps.clone(),
             });

@@ -80,7 +80,7 @@ impl ParticleArgs {
             beads: self.beads,
             radius_overrides,
             colours,
-            exposed_shrink: None,
+            exposure: None,
         })
     }
 }
@@ -159,11 +159,11 @@ pub struct ParamArgs {
     #[arg(long, value_name = "Q", default_value = "medium")]
     pub quality: Quality,
     /// Named R, I, quality, vertices and radii (H kept): `ses` = area close to the
-    /// solvent-excluded surface (probe 1.4 Å; within 2.13 % at H = 0.35 to 1 Å on the 22
-    /// proteins of tests/data/ses_reference.csv): R 0.832, I 0.378, quality max, refined
-    /// vertices unless --vertices says otherwise, radii H 0.964, N 0.882, O 1.374 Å under any
-    /// --radius, exposed atoms (fewer than 60 heavy atoms within 10 Å) shrunk by up to 18.6 %
-    /// in each frame.
+    /// solvent-excluded surface (probe 1.4 Å; within 1.84 % at H = 0.35 to 1 Å on the 22
+    /// proteins of tests/data/ses_reference.csv): R 0.802, I 0.293, quality max, refined
+    /// vertices unless --vertices says otherwise, radii H 1.020, N 0.707, O 1.413 Å under any
+    /// --radius, atoms with fewer than 160 heavy atoms within 16 Å shrunk in each frame (by up
+    /// to 59.8 %, for an isolated atom).
     #[arg(long, value_name = "NAME", conflicts_with_all = ["radius_scale", "isovalue", "quality"])]
     pub preset: Option<Preset>,
     /// Vertices: `interpolated` (linear along grid edges, as the paper) or `refined` (on the

@@ -5,6 +5,7 @@
 use glam::Vec3;
 
 use super::beads::check_count;
+use super::exposure::ExposureModel;
 use super::{BeadModel, ColorScheme, Frame, ModelError, RadiusOverrides, Topology};
 use crate::surface::AtomSet;
 
@@ -17,9 +18,9 @@ pub struct ParticleOptions {
     pub radius_overrides: RadiusOverrides,
     /// Colour scheme per atom (beads take the mean colour of their atoms).
     pub colours: ColorScheme,
-    /// Shrink exposed atoms' radii by up to this fraction, frame by frame
-    /// ([`super::exposure`]; the SES preset's radii). Not for beads.
-    pub exposed_shrink: Option<f32>,
+    /// Radii that follow exposure frame by frame ([`super::exposure`]; the SES preset's
+    /// radii). Not for beads.
+    pub exposure: Option<ExposureModel>,
 }
 
 /// Per-particle radii and colours, constant over the trajectory, plus the per-frame positions.
@@ -31,9 +32,9 @@ pub struct Particles {
     beads: Option<BeadModel>,
     radii: Vec<f32>,
     colours: Vec<[f32; 3]>,
-    /// Which particles are heavy atoms and the fraction exposed ones shrink by, when the radii
-    /// follow exposure ([`ParticleOptions::exposed_shrink`]).
-    exposure: Option<(Vec<bool>, f32)>,
+    /// Which particles are heavy atoms and how their radii follow exposure, when they do
+    /// ([`ParticleOptions::exposure`]).
+    exposure: Option<(Vec<bool>, ExposureModel)>,
 }
 
 impl Particles {
@@ -69,14 +70,14 @@ impl Particles {
                 None => (None, radii, atom_colours),
             }
         };
-        let exposure = match (options.exposed_shrink, &beads) {
-            (Some(beta), None) => {
+        let exposure = match (options.exposure, &beads) {
+            (Some(model), None) => {
                 let is_heavy = |i: usize| !topology.elements[i].eq_ignore_ascii_case("H");
                 let heavy = match subset {
                     Some(s) => s.iter().map(|&i| is_heavy(i as usize)).collect(),
                     None => (0..topology.len()).map(is_heavy).collect(),
                 };
-                Some((heavy, beta))
+                Some((heavy, model))
             }
             _ => None,
         };
@@ -177,13 +178,8 @@ impl Particles {
     /// The radii (Å) at `positions` (from [`Particles::positions`]) when they follow exposure
     /// ([`super::exposure`]), `None` when they are [`Particles::radii`] in every frame.
     pub fn frame_radii(&self, positions: &[Vec3]) -> Option<Vec<f32>> {
-        let (heavy, beta) = self.exposure.as_ref()?;
-        Some(super::exposure::shrink_exposed(
-            &self.radii,
-            positions,
-            heavy,
-            *beta,
-        ))
+        let (heavy, model) = self.exposure.as_ref()?;
+        Some(model.apply(&self.radii, positions, heavy))
     }
 
     /// The engine input for `positions` (from [`Particles::positions`]), with colours and the

@@ -191,7 +191,7 @@ impl Representation {
             beads: self.style == RepStyle::Beads,
             radius_overrides: radius_overrides.clone(),
             colours: self.colour,
-            exposed_shrink: None,
+            exposure: None,
         })
     }
 

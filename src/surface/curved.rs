@@ -26,7 +26,7 @@
 //! midpoints to better than 0.01 % (tests/it/surface_refine.rs).
 //!
 //! Sharp triangles: where a triangle's normals turn by more than 60° ([`SHARP_COS`]), across the
-//! narrow creases between atoms of a sharp surface (the SES preset: R 0.832, I 0.382) or over a
+//! narrow creases between atoms of a sharp surface (the SES preset) or over a
 //! feature smaller than the triangle, the lift is capped or wrong and such triangles came out
 //! 12 % short on 1hpv's SES-preset surface at H = 1 Å (9 % of its triangles; the whole surface
 //! 1.2 % short of its converged area; measured with the preset's first radii). With the field at hand ([`OnField`]), they are measured

@@ -113,19 +113,25 @@ fn ses_preset_button_sets_r_i_quality_and_vertices_and_keeps_h() {
     let layer = shown(&s.core);
     assert_eq!(layer.rep.isovalue, i);
     assert_eq!(layer.rep.vertices, VertexMode::Refined);
-    // The preset's nitrogen radius reached the computed particles, shrunk by the exposure of
-    // this small helix's atoms (fewer than 60 heavy atoms within 10 Å of any of them).
+    // The preset's nitrogen radius reached the computed particles, changed by the exposure of
+    // this small helix's atoms (each with fewer heavy atoms around it than the model's
+    // saturation), so by a factor the model gives for some count below it.
     let r_n = (RadiusSet::Ses.radii().iter())
         .find(|(e, _)| *e == "N")
         .map(|&(_, r)| r)
         .expect("N radius");
-    let beta = RadiusSet::Ses
-        .exposed_shrink()
-        .expect("the preset shrinks exposed atoms");
+    let model = RadiusSet::Ses
+        .exposure()
+        .expect("the preset's radii follow exposure");
     let radii = &layer.particles.radii;
+    let n_factors: Vec<f32> = (0..model.saturation())
+        .map(|n| r_n * model.factor(n))
+        .collect();
     assert!(
-        radii.iter().any(|&r| r < r_n && r >= r_n * (1.0 - beta)),
-        "no atom has the preset's N radius {r_n}, shrunk by up to {beta}: {radii:?}"
+        radii
+            .iter()
+            .any(|&r| r != r_n && n_factors.iter().any(|&f| (f - r).abs() < 1e-5)),
+        "no atom has the preset's N radius {r_n} changed by its exposure: {radii:?}"
     );
     assert!(
         !radii.contains(&1.4),

@@ -172,7 +172,7 @@ fn protein_refined_at_h_2_matches_cpu_and_converged_area() {
     assert_eq!(again.mesh, lin.mesh);
 }
 
-/// The SES preset's sharp surface (R 0.832, I 0.382, quality max) has triangles whose normals
+/// The SES preset's sharp surface (its R, I and radii at quality max) has triangles whose normals
 /// turn by more than 60°, which both engines measure on the Gaussian sum itself
 /// (`mdsurf::surface::curved::sharp_area_volume`, `sharp_measure` in `shaders/measure.wgsl`):
 /// the GPU's area and volume agree with the CPU's, and those triangles matter by more than three

@@ -184,7 +184,7 @@ fn hpv_area_and_volume_hold_at_coarse_h() {
     assert!((lin.area / area - 1.0).abs() > 0.01 || (lin.volume / volume - 1.0).abs() > 0.01);
 }
 
-/// The SES preset's surface (R 0.832, I 0.382, quality max, its radii) is sharper than the
+/// The SES preset's surface (its R, I and radii at quality max) is sharper than the
 /// default one: narrow creases between atoms, where a triangle's normals turn by more than 60°
 /// (9 % of the triangles of 1hpv's protein at H = 1 Å). Measured by the curved correction alone
 /// those triangles come out 12 % short (the lift from the normals is capped across a crease)
