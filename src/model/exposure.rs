@@ -84,14 +84,16 @@ pub fn heavy_neighbour_counts(
         .iter()
         .fold(Vec3::splat(f32::NEG_INFINITY), |a, &p| a.max(p));
     // Cells of radius / CELLS_PER_RADIUS, larger where atoms are sparse over a large box (no
-    // more than four cells per heavy atom).
+    // more than four cells per heavy atom; counted in f64, so that a box of any finite size
+    // gets cells).
     let limit = (4 * heavy_positions.len()).max(1 << 12) as f64;
+    let extent = (hi - lo).as_dvec3();
     let mut size = radius / CELLS_PER_RADIUS;
-    let dims_for = |size: f32| ((hi - lo) / size).floor().as_uvec3() + 1;
-    while dims_for(size).as_dvec3().element_product() > limit {
+    let dims_for = |size: f32| (extent / size as f64).floor() + 1.0;
+    while dims_for(size).element_product() > limit {
         size *= 1.25;
     }
-    let dims = dims_for(size);
+    let dims = dims_for(size).as_uvec3();
     let cell_of = |p: Vec3| ((p - lo) / size).floor().as_ivec3();
     let index = |c: IVec3| (c.x + dims.x as i32 * (c.y + dims.y as i32 * c.z)) as usize;
     // Heavy atoms sorted by cell (counting sort): cell k holds start[k]..start[k + 1].
@@ -133,14 +135,17 @@ pub fn heavy_neighbour_counts(
                 if cell.cmplt(IVec3::ZERO).any() || cell.cmpgt(max).any() {
                     continue;
                 }
+                let k = index(cell);
+                let atoms = &sorted[start[k] as usize..start[k + 1] as usize];
+                if atoms.is_empty() {
+                    continue;
+                }
                 let box_lo = lo + cell.as_vec3() * size;
                 let box_hi = box_lo + size;
                 let nearest = (box_lo - p).max(p - box_hi).max(Vec3::ZERO);
                 if nearest.length_squared() > r2 {
                     continue;
                 }
-                let k = index(cell);
-                let atoms = &sorted[start[k] as usize..start[k + 1] as usize];
                 let farthest = (p - box_lo).abs().max((box_hi - p).abs());
                 n += if farthest.length_squared() <= r2 {
                     atoms.len() as u32
@@ -202,7 +207,8 @@ mod tests {
         }
     }
 
-    /// A model of two terms, as the SES preset's: shrink below 40, grow a little below 80.
+    /// A model of two terms: shrink below 40, grow a little below 80 (the SES preset has one
+    /// term; a second was among the models compared).
     const TWO_TERMS: ExposureModel = ExposureModel {
         radius: 10.0,
         terms: &[(40.0, -0.5), (80.0, 0.1)],
@@ -254,5 +260,25 @@ mod tests {
         let lone = TWO_TERMS.apply(&radii, &positions, &heavy_lone);
         assert!((lone[0] - expected).abs() < 1e-6);
         assert!((lone[1] - 1.5 * TWO_TERMS.factor(0)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn an_atom_far_from_the_others_gets_counts_without_a_grid_the_size_of_the_gap() {
+        // A protein-sized cluster and one heavy atom 1e30 Å away (an XYZ file can hold it):
+        // the cells grow instead of the grid, and the counts stay exact.
+        let mut positions: Vec<Vec3> = (0..200)
+            .map(|i| Vec3::new((i % 6) as f32, ((i / 6) % 6) as f32, (i / 36) as f32) * 1.5)
+            .collect();
+        positions.push(Vec3::new(1e30, 0.0, 0.0));
+        let heavy = vec![true; positions.len()];
+        for radius in [10.0, 16.0] {
+            let counted = heavy_neighbour_counts(&positions, &heavy, radius, u32::MAX);
+            assert_eq!(
+                counted,
+                brute(&positions, &heavy, radius),
+                "radius {radius}"
+            );
+            assert_eq!(counted[200], 1);
+        }
     }
 }
