@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Builds the large inputs of the README's speed table (issue 12, section 3); they are not
-committed, this script is.
+"""Builds the large inputs of the speed tables in docs/performance.md (section "CPU engine on the
+2-core development machine"; issue 12, section 3); they are not committed, this script is.
 
   python3 scripts/make_large_inputs.py [OUT_DIR]      (default: target/large)
 

@@ -20,18 +20,19 @@ command line, in-process: about a second per evaluation of all eighteen rows):
   counted within 16 Å and 160 of them where the shrink ends: each radius times
   1 - beta clamp((160 - n) / 160, 0, 1); beta is fitted. The 16 Å and 160 were chosen by a
   screen of such counts (6 to 16 Å, one or two terms, with and without groove features) on the
-  fit rows (README, section "Refined vertices and the SES preset").
+  fit rows (docs/fidelity.md, section "How the exposure model was found").
 
 Rows: `--rows fit` scores the `fit` rows (as the preset was fitted), `--rows all` every row;
 `--leave-out NAME ...` leaves rows out of the score and prints their deviations (cross-validation;
-the README's fits were made on the eighteen rows before 1gbt, 4zhl, 2ofg and 1a7g, so
+the fits in docs/fidelity.md were made on the eighteen rows before 1gbt, 4zhl, 2ofg and 1a7g, so
 `--leave-out 1gbt 4zhl 2ofg 1a7g` repeats them).
 
 Usage:  python/.venv/bin/python scripts/ses_models.py --model h-split --rows all [--spacing 1]
         (needs the package built into python/.venv, numpy and scipy; SES areas come from the
         table, so MSMS is not needed)
 
-Results (2026-11-24, H = 1 Å, all eighteen rows scored) are in the README's SES section.
+Results (2026-11-24, H = 1 Å, all eighteen rows scored) are in docs/fidelity.md, section
+"The SES preset".
 """
 
 import argparse

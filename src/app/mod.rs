@@ -6,6 +6,7 @@
 
 pub mod device_loss;
 pub mod export;
+pub mod offscreen;
 pub mod panels;
 pub mod plot;
 pub mod recent;
@@ -13,6 +14,7 @@ pub mod source;
 pub mod state;
 pub mod timeline;
 pub mod trajectory_panel;
+pub mod view_renderer;
 pub mod viewer;
 pub mod viewport;
 pub mod worker;

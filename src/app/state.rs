@@ -415,6 +415,16 @@ impl AppCore {
         changed
     }
 
+    /// Waits up to `timeout` for the worker's next reply and takes it with any after it;
+    /// returns true when the picture changed.
+    pub fn poll_wait(&mut self, timeout: Duration) -> bool {
+        let mut changed = false;
+        if let Some(reply) = self.worker.recv_timeout(timeout) {
+            changed |= self.accept(reply);
+        }
+        changed | self.poll()
+    }
+
     /// Waits (up to `timeout`) until the worker has nothing queued and its replies are taken.
     pub fn wait_idle(&mut self, timeout: Duration) -> bool {
         let end = std::time::Instant::now() + timeout;

@@ -1,25 +1,20 @@
-//! The 3D view inside the window: keeps the GPU copy of the shown surface and particles,
-//! renders it offscreen with [`crate::render::Renderer`] into a texture that egui shows, and turns
-//! mouse input into camera commands ([`viewport_ui`]). Screenshots and movie frames come from
+//! The 3D view inside the window: the viewer's renderer ([`ViewRenderer`]: the GPU copy of the
+//! shown surface and particles, drawn offscreen) shown as a texture through egui, and mouse
+//! input turned into camera commands ([`viewport_ui`]). Screenshots and movie frames come from
 //! the same scene through `render_to_rgba`.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use super::state::{AppCore, Command};
-use crate::render::{
-    Camera, GpuScene, RenderError, RenderSettings, RenderTargets, Renderer, RgbaImage,
-    atom_instances, render_to_rgba,
-};
+use super::view_renderer::ViewRenderer;
+use crate::render::{Camera, RenderError, RenderSettings, RgbaImage};
 
-/// The window's GPU side: eframe's device, our renderer, the scene and the output texture.
+/// The window's GPU side: the viewer's renderer ([`ViewRenderer`]) on eframe's device, and
+/// the egui texture its picture is shown through.
 pub struct GpuView {
-    device: wgpu::Device,
-    queue: wgpu::Queue,
+    view: ViewRenderer,
     egui_renderer: Arc<egui::mutex::RwLock<egui_wgpu::Renderer>>,
-    renderer: Renderer,
-    scene: GpuScene,
-    targets: Option<RenderTargets>,
     texture: Option<egui::TextureId>,
     /// Time of the last render in ms (CPU side: encoding and submission).
     pub render_ms: f64,
@@ -29,18 +24,14 @@ impl GpuView {
     /// Destroys the window's wgpu device, as a driver reset would: the fault injected by
     /// [`crate::app::device_loss::LOSE_DEVICE_ENV`] to test the recovery path.
     pub fn destroy_device(&self) {
-        self.device.destroy();
+        self.view.device().0.destroy();
     }
 
     /// Uses eframe's wgpu device.
     pub fn new(state: &egui_wgpu::RenderState) -> GpuView {
         GpuView {
-            device: state.device.clone(),
-            queue: state.queue.clone(),
+            view: ViewRenderer::new(state.device.clone(), state.queue.clone()),
             egui_renderer: state.renderer.clone(),
-            renderer: Renderer::new(&state.device),
-            scene: GpuScene::new(),
-            targets: None,
             texture: None,
             render_ms: 0.0,
         }
@@ -48,64 +39,12 @@ impl GpuView {
 
     /// The device (to share with the GPU surface engine).
     pub fn device(&self) -> (&wgpu::Device, &wgpu::Queue) {
-        (&self.device, &self.queue)
+        self.view.device()
     }
 
-    /// Uploads the shown surfaces and particles when they changed: one surface layer per
-    /// visible surface representation (with its current opacity, so an opacity change redraws
-    /// without recomputing), and the atoms of every atom representation in one instance list.
+    /// Uploads the shown surfaces and particles when they changed ([`ViewRenderer::sync`]).
     pub fn sync(&mut self, core: &mut AppCore) {
-        let Some(shown) = core.shown.as_mut() else {
-            return;
-        };
-        if !shown.dirty {
-            return;
-        }
-        shown.dirty = false;
-        let c = &shown.computed;
-        let mut k = 0;
-        let mut spheres = Vec::new();
-        let mut cylinders = Vec::new();
-        for l in &c.layers {
-            // The representation as it is now (its opacity may have changed since).
-            let now = core
-                .rep_ids
-                .iter()
-                .position(|&id| id == l.id)
-                .and_then(|i| core.reps.get(i));
-            let Some(rep) = now.filter(|r| r.visible) else {
-                continue;
-            };
-            if let Some(style) = rep.style.atom_style() {
-                let look = RenderSettings {
-                    atom_style: style,
-                    ..core.render
-                };
-                let p = &l.particles;
-                let (s, cyl) =
-                    atom_instances(&p.positions, &p.radii, Some(&p.colours), &p.bonds, &look);
-                spheres.extend(s);
-                cylinders.extend(cyl);
-                continue;
-            }
-            match &l.gpu_surface {
-                Some(g) => {
-                    let grid = &l.output.grid;
-                    let far = glam::UVec3::from(grid.dims).saturating_sub(glam::UVec3::ONE);
-                    let hi = grid.origin + far.as_vec3() * grid.spacing;
-                    self.scene
-                        .set_layer_gpu_surface(k, g.clone(), Some((grid.origin, hi)));
-                }
-                None => self
-                    .scene
-                    .set_layer_mesh(k, &self.device, &self.queue, &l.output.mesh),
-            }
-            self.scene.layer_mut(k).opacity = Some(rep.opacity);
-            k += 1;
-        }
-        self.scene.set_surface_count(k);
-        self.scene
-            .set_atoms(&self.device, &self.queue, &spheres, &cylinders);
+        self.view.sync(core);
     }
 
     /// Renders the scene at `size` pixels into the window texture and returns its egui id.
@@ -116,32 +55,21 @@ impl GpuView {
         size: [u32; 2],
     ) -> Option<egui::TextureId> {
         let t0 = Instant::now();
-        let size = [size[0].max(1), size[1].max(1)];
-        let resized = self.targets.as_ref().is_none_or(|t| t.size() != size);
+        let resized = self.view.draw(camera, settings, size);
+        let targets = self.view.targets()?;
         if resized {
-            self.targets = Some(RenderTargets::new(&self.device, size));
-        }
-        let targets = self.targets.as_mut()?;
-        self.renderer.render(
-            &self.device,
-            &self.queue,
-            targets,
-            &self.scene,
-            camera,
-            settings,
-        );
-        if resized {
+            let device = self.view.device().0;
             let mut r = self.egui_renderer.write();
             match self.texture {
                 Some(id) => r.update_egui_texture_from_wgpu_texture(
-                    &self.device,
+                    device,
                     targets.colour_view(),
                     wgpu::FilterMode::Linear,
                     id,
                 ),
                 None => {
                     self.texture = Some(r.register_native_texture(
-                        &self.device,
+                        device,
                         targets.colour_view(),
                         wgpu::FilterMode::Linear,
                     ))
@@ -159,15 +87,7 @@ impl GpuView {
         settings: &RenderSettings,
         size: [u32; 2],
     ) -> Result<RgbaImage, RenderError> {
-        render_to_rgba(
-            &self.device,
-            &self.queue,
-            &self.renderer,
-            &self.scene,
-            camera,
-            settings,
-            size,
-        )
+        self.view.snapshot(camera, settings, size)
     }
 
     /// The egui id of the window texture, once rendered.
@@ -177,7 +97,7 @@ impl GpuView {
 
     /// Size in pixels of the last window render.
     pub fn size(&self) -> Option<[u32; 2]> {
-        self.targets.as_ref().map(|t| t.size())
+        self.view.targets().map(|t| t.size())
     }
 }
 

@@ -158,6 +158,13 @@ pub struct Computed {
     pub time_ps: Option<f64>,
     /// Time to read the frame in ms.
     pub read_ms: f64,
+    /// Wall-clock time the worker spent on this request in ms: reading, particles, and every
+    /// surface submitted and its counters waited for (not the wait for the window to take the
+    /// previous reply).
+    pub compute_ms: f64,
+    /// GPU memory the worker's surface engines hold after this frame, in bytes (0 on the host
+    /// engines).
+    pub gpu_bytes: u64,
     /// The visible representations, in drawing order (shared with the worker's cache).
     pub layers: Vec<Arc<LayerResult>>,
 }
@@ -603,6 +610,7 @@ fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f6
 }
 
 fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Computed, String> {
+    let started = Instant::now();
     let (frame, read_ms) = frame_of(cache, req)?;
     let topology = req.source.topology();
     // Forget representations that are gone (their GPU engines are dropped with them).
@@ -791,11 +799,22 @@ fn compute(engine: &mut Engine, cache: &mut Cache, req: &Request) -> Result<Comp
         }
         layers.push(result);
     }
+    let main_bytes = match engine {
+        Engine::Gpu(e) => e.gpu_bytes(),
+        Engine::Host(_) => 0,
+    };
+    let sibling_bytes: u64 = cache
+        .slots
+        .values()
+        .filter_map(|s| s.gpu.as_ref().map(|e| e.gpu_bytes()))
+        .sum();
     Ok(Computed {
         generation: req.generation,
         frame: req.frame,
         time_ps: frame.time_ps,
         read_ms,
+        compute_ms: started.elapsed().as_secs_f64() * 1e3,
+        gpu_bytes: main_bytes + sibling_bytes,
         layers,
     })
 }

@@ -78,6 +78,63 @@ pub struct BenchArgs {
     /// Also write the table as CSV.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// How the GPU's sparse density gather reads atoms: `tiled` (the brick's threads share
+    /// each atom load through workgroup memory; default) or `rows` (each thread loads its own).
+    #[arg(long, value_enum, default_value_t = GatherArg::Tiled)]
+    pub density_gather: GatherArg,
+    /// Play TOP [TRAJ] (or the demo) through the viewer's own frame loop offscreen: the
+    /// window's worker, timeline and renderer drawing into a texture, with no window; prints
+    /// frames shown per second, frames dropped, compute, latency and draw times, memory.
+    #[arg(long)]
+    pub viewer: bool,
+    /// With --viewer: the picture's size in pixels.
+    #[arg(long, value_name = "WxH", default_value = "1920x1080", requires = "viewer",
+          value_parser = super::render::parse_size)]
+    pub size: [u32; 2],
+    /// With --viewer: timeline frames to play (a shorter trajectory loops).
+    #[arg(long, value_name = "N", default_value_t = 240, requires = "viewer",
+          value_parser = clap::value_parser!(u32).range(2..=1_000_000))]
+    pub frames: u32,
+    /// With --viewer: the timeline's speed in frames per second (as the window's, 0.5 to
+    /// 240); frames not ready when the next falls due are dropped.
+    #[arg(long, value_name = "FPS", default_value_t = 240.0, requires = "viewer",
+          value_parser = parse_play_fps)]
+    pub play_fps: f32,
+    /// With --viewer: play the first frame as N frames, each atom moved by up to 0.3 Å per
+    /// axis per frame (automatic for single-frame files, with --frames frames).
+    #[arg(long, value_name = "N", requires = "viewer",
+          value_parser = clap::value_parser!(u32).range(2..=1_000_000))]
+    pub jitter_frames: Option<u32>,
+}
+
+/// Parses the viewer benchmark's timeline speed (0.5 to 240 frames per second).
+fn parse_play_fps(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad frame rate '{s}': expected a number, e.g. 60"))?;
+    if !(0.5..=240.0).contains(&v) {
+        return Err(format!("frame rate '{s}' must be between 0.5 and 240"));
+    }
+    Ok(v)
+}
+
+/// The `--density-gather` choices (see [`mdsurf::gpu::DensityGather`]).
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GatherArg {
+    /// Each thread loads the atoms around its own run of voxels.
+    Rows,
+    /// A brick's threads stage the atoms around the brick in workgroup memory.
+    Tiled,
+}
+
+impl From<GatherArg> for mdsurf::gpu::DensityGather {
+    fn from(g: GatherArg) -> Self {
+        match g {
+            GatherArg::Rows => mdsurf::gpu::DensityGather::Rows,
+            GatherArg::Tiled => mdsurf::gpu::DensityGather::Tiled,
+        }
+    }
 }
 
 /// Parses an atom count: `1000000`, `1e6`, `950k`, `2.37M`.
@@ -157,6 +214,9 @@ pub struct BenchResult {
 /// Runs `mdsurf bench`.
 pub fn run(args: BenchArgs) -> Result<()> {
     let params = args.params.params()?;
+    if args.viewer {
+        return super::bench_viewer::run(&args);
+    }
     if args.table1 {
         print_table1(&args)?;
         if args.top.is_none() && args.synthetic.is_empty() && args.synthetic_shell.is_empty() {
@@ -164,6 +224,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
         }
     }
     let mut engines = engines_for(args.backend)?;
+    for engine in &mut engines {
+        if let BenchEngine::Gpu(gpu) = engine {
+            gpu.set_options(mdsurf::gpu::EngineOptions {
+                density_gather: args.density_gather.into(),
+                ..gpu.options()
+            });
+        }
+    }
     let cases = build_cases(&args, params)?;
     let mut results = Vec::new();
     let mut refine_notes = Vec::new();
@@ -271,6 +339,7 @@ fn print_table1(args: &BenchArgs) -> Result<()> {
         repeats: args.repeats as usize,
         max_atoms: args.max_atoms,
         colours: !args.no_color,
+        density_gather: args.density_gather.into(),
     };
     let text = if args.plan_only {
         let sizing = if args.mesh_bound {

@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod bench_table;
+pub mod bench_viewer;
 pub mod chunk;
 pub mod common;
 pub mod merge;

@@ -124,7 +124,7 @@ fn parse_focal(s: &str) -> Result<f32, String> {
     check_focal_distance(parse_f32(s, "focal distance")?)
 }
 
-fn parse_size(s: &str) -> Result<[u32; 2], String> {
+pub(crate) fn parse_size(s: &str) -> Result<[u32; 2], String> {
     let bad = || format!("bad size '{s}': expected WIDTHxHEIGHT, e.g. 1920x1080");
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
     let w: u32 = w.trim().parse().map_err(|_| bad())?;

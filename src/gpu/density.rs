@@ -2,8 +2,11 @@
 //! a slab, the Gaussians of the atoms in the neighbouring bin cells, eight voxels along x per
 //! thread. Density and colour are fused in one pass; pipeline variants skip the colour volume
 //! (no colours) or the density write (a colour-only change keeps the density as it is). Each
-//! variant has a dense entry point (every voxel of the slab) and a sparse one (the bricks
-//! [`super::bricks`] listed, dispatched indirectly, writing brick-local slots).
+//! variant has a dense entry point (every voxel of the slab) and two sparse ones (the bricks
+//! [`super::bricks`] listed, dispatched indirectly, writing brick-local slots): each thread
+//! loading its own atoms ([`DensityGather::Rows`]), or the brick's threads staging the atoms
+//! around the brick in workgroup memory and sharing them ([`DensityGather::Tiled`]). Both
+//! sparse gathers give every voxel the same bits.
 
 use super::context::GpuContext;
 use super::kernel::{Bound, Kernel, Layout, module};
@@ -24,14 +27,29 @@ pub enum DensityMode {
     ColourOnly,
 }
 
+/// How the sparse-brick gather reads its atoms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DensityGather {
+    /// Each thread walks the bin cells around its own run of voxels and loads their atoms.
+    Rows,
+    /// The 64 threads of a brick load the atoms of the cells around the brick once, in
+    /// chunks of 64, into workgroup memory, and each thread tests every staged atom.
+    #[default]
+    Tiled,
+}
+
 /// The density kernels (three variants, dense and sparse, on one layout) and their cached bind
 /// group.
 #[derive(Debug)]
 pub struct DensityStage {
     /// Dense entry points: with colour, plain, colour only.
     dense: [Kernel; 3],
-    /// Sparse-brick entry points, in the same order.
+    /// Sparse-brick entry points, each thread loading its own atoms, in the same order.
     sparse: [Kernel; 3],
+    /// Sparse-brick entry points with the atoms staged per brick, in the same order.
+    tiled: [Kernel; 3],
+    /// Which sparse entry points [`DensityStage::record_sparse`] records.
+    pub gather: DensityGather,
     bind: Bound,
 }
 
@@ -48,6 +66,8 @@ impl DensityStage {
         DensityStage {
             dense: variants.map(|c| Kernel::new(ctx, &m, "main", c, &layout)),
             sparse: variants.map(|c| Kernel::new(ctx, &m, "bricks", c, &layout)),
+            tiled: variants.map(|c| Kernel::new(ctx, &m, "bricks_tiled", c, &layout)),
+            gather: DensityGather::default(),
             bind: Bound::default(),
         }
     }
@@ -109,6 +129,10 @@ impl DensityStage {
         args: &wgpu::Buffer,
         mode: DensityMode,
     ) {
-        self.sparse[Self::variant(mode)].dispatch_indirect(pass, &self.bind, &[offset], args);
+        let kernels = match self.gather {
+            DensityGather::Rows => &self.sparse,
+            DensityGather::Tiled => &self.tiled,
+        };
+        kernels[Self::variant(mode)].dispatch_indirect(pass, &self.bind, &[offset], args);
     }
 }

@@ -468,6 +468,7 @@ impl GpuEngine {
             work,
             sparse,
             sizes.class_entries.sparse,
+            self.options.density_gather,
         );
         self.state.sparse_classes = sizes.class_entries.sparse;
         let mut rec = Recorder::new(&self.ctx, wall_clock && !self.timer.enabled());
@@ -528,6 +529,7 @@ impl GpuEngine {
             Work::Full,
             true,
             sparse_classes,
+            self.options.density_gather,
         );
         let mut rec = Recorder::new(&self.ctx, false);
         self.stages.record_bricks(&mut rec, &self.buffers);

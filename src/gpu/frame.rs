@@ -11,7 +11,7 @@ use super::GpuError;
 use super::bin::Binner;
 use super::bricks::BrickStage;
 use super::context::GpuContext;
-use super::density::{DensityMode, DensityStage};
+use super::density::{DensityGather, DensityMode, DensityStage};
 use super::mc::{Classify, Compact, Emit, Refine};
 use super::measure::Measure;
 use super::plan::{FramePlan, Slab};
@@ -170,7 +170,8 @@ impl Stages {
     /// buffers were replaced, those of every output set together (so the first frame builds
     /// both). Creates no GPU object in steady state. `sparse`: density and classification run
     /// on the sparse bricks the atoms reach; `sparse_classes`: the class entries are held per
-    /// brick slot (as the buffers were sized, [`super::plan::BufferPlan::class_entries`]).
+    /// brick slot (as the buffers were sized, [`super::plan::BufferPlan::class_entries`]);
+    /// `gather`: which sparse density gather runs.
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
@@ -182,8 +183,10 @@ impl Stages {
         work: Work,
         sparse: bool,
         sparse_classes: bool,
+        gather: DensityGather,
     ) {
         self.sparse = sparse;
+        self.density.gather = gather;
         self.slab_values.clear();
         self.slab_values.extend(
             plan.slabs

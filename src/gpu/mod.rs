@@ -39,6 +39,7 @@ pub mod tolerance;
 pub mod types;
 
 pub use context::{GpuContext, GpuObjects, gpu_required};
+pub use density::DensityGather;
 pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
 pub use factory::{Backend, Picked, pick_engine};
 pub use frame::Work;

@@ -3,6 +3,7 @@
 //! frame did.
 
 use super::GpuContext;
+use super::density::DensityGather;
 use super::frame::Work;
 use crate::surface::GridSpec;
 
@@ -27,6 +28,8 @@ pub struct EngineOptions {
     /// ([`super::plan::settled_brick_slots`]). They grow from the reached-brick count,
     /// re-running density when a frame's bricks did not fit.
     pub initial_brick_slots: Option<u64>,
+    /// How the sparse-brick density gather reads its atoms (both give the same bits).
+    pub density_gather: DensityGather,
 }
 
 impl EngineOptions {
@@ -38,6 +41,7 @@ impl EngineOptions {
             headroom: super::plan::DEFAULT_HEADROOM,
             sparse_bricks: true,
             initial_brick_slots: None,
+            density_gather: DensityGather::default(),
         }
     }
 }

@@ -15,7 +15,8 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::engine::{Changes, GpuEngine};
+use super::density::DensityGather;
+use super::engine::{Changes, EngineOptions, GpuEngine};
 use super::plan::{
     BufferPlan, DEFAULT_HEADROOM, DeviceLimits, GpuMemory, MeshCapacity, count_reached_bricks,
     first_mesh_want, largest_brick_slots, plan_frame, settled_brick_slots,
@@ -77,6 +78,8 @@ pub struct Table1Options {
     pub max_atoms: Option<usize>,
     /// Compute the colour volume too (the structure's element colours).
     pub colours: bool,
+    /// How the sparse density gather reads its atoms.
+    pub density_gather: DensityGather,
 }
 
 impl Default for Table1Options {
@@ -85,6 +88,7 @@ impl Default for Table1Options {
             repeats: 10,
             max_atoms: None,
             colours: true,
+            density_gather: DensityGather::default(),
         }
     }
 }
@@ -263,6 +267,10 @@ pub fn run_rows(
             source,
         };
         let mut engine = GpuEngine::with_context(ctx.clone())?;
+        engine.set_options(EngineOptions {
+            density_gather: opts.density_gather,
+            ..engine.options()
+        });
         let mut positions = Vec::new();
         let mut samples: [Vec<f64>; 5] = Default::default();
         let mut last = None;
