@@ -6,6 +6,8 @@
 //! frame the worker delivers, as the window repaints on each reply.
 
 use std::collections::HashMap;
+
+use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -49,6 +51,8 @@ pub struct PlayReport {
     pub wall_s: f64,
     /// Worker time per shown frame in ms ([`super::worker::Computed::compute_ms`]).
     pub compute_ms: Vec<f64>,
+    /// Of that, reading the frame (the frame source's time), per shown frame, in ms.
+    pub read_ms: Vec<f64>,
     /// From the timeline reaching a frame to its surface arriving, per shown frame, in ms.
     pub latency_ms: Vec<f64>,
     /// From the start of a draw until the device finished it, per shown frame, in ms (on a
@@ -56,6 +60,9 @@ pub struct PlayReport {
     pub draw_ms: Vec<f64>,
     /// Encoding and submitting a draw on the host, per shown frame, in ms.
     pub draw_host_ms: Vec<f64>,
+    /// The last frame drawn again with nothing else on the device, each draw waited for, in
+    /// ms ([`DRAWS_ALONE`] draws after playback).
+    pub draw_alone_ms: Vec<f64>,
     /// Most GPU memory the surface engines held, in bytes.
     pub engine_bytes: u64,
     /// Triangles of the last shown frame (every surface together).
@@ -146,6 +153,7 @@ pub fn play(
             let c = &shown.computed;
             report.frames_shown += 1;
             report.compute_ms.push(c.compute_ms);
+            report.read_ms.push(c.read_ms);
             report.engine_bytes = report.engine_bytes.max(c.gpu_bytes);
             report.triangles = c.triangle_count();
             if let Some(t) = reached.remove(&c.frame) {
@@ -161,8 +169,20 @@ pub fn play(
     }
     report.wall_s = start.elapsed().as_secs_f64();
     report.frames_played = opts.frames;
+    core.timeline.apply(TimelineCmd::SetPlaying(false));
+    core.wait_idle(Duration::from_secs(600));
+    view.sync(&mut core);
+    for _ in 0..DRAWS_ALONE {
+        let t = Instant::now();
+        view.draw(&core.camera, &core.render, opts.size);
+        ctx.wait().map_err(|e| e.to_string())?;
+        report.draw_alone_ms.push(ms(t.elapsed()));
+    }
     Ok(report)
 }
+
+/// Draws of the last frame timed alone after playback.
+pub const DRAWS_ALONE: usize = 20;
 
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
@@ -227,18 +247,50 @@ impl FrameSource for JitteredSource {
         frame.index = index;
         if index > 0 {
             let k = index as u64;
-            for (i, p) in frame.positions.iter_mut().enumerate() {
-                let i = i as u64;
-                *p += glam::Vec3::new(
-                    unit_noise(k, i, 0),
-                    unit_noise(k, i, 1),
-                    unit_noise(k, i, 2),
-                ) * self.jitter;
-            }
+            frame
+                .positions
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(i, p)| {
+                    let i = i as u64;
+                    *p += glam::Vec3::new(
+                        unit_noise(k, i, 0),
+                        unit_noise(k, i, 1),
+                        unit_noise(k, i, 2),
+                    ) * self.jitter;
+                });
         }
         Ok(frame)
     }
     fn name(&self) -> String {
         format!("{} (jittered)", self.inner.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::source::helix_source;
+
+    #[test]
+    fn jittered_frames_are_new_but_close() {
+        let inner: Arc<dyn FrameSource> = Arc::new(helix_source(20, 1));
+        let first = inner.read_frame(0).unwrap();
+        let s = JitteredSource::new(inner, 5, 0.3).unwrap();
+        assert_eq!(s.len(), 5);
+        assert_eq!(s.read_frame(0).unwrap().positions, first.positions);
+        let f3 = s.read_frame(3).unwrap();
+        assert_eq!(f3.index, 3);
+        assert_ne!(f3.positions, first.positions);
+        assert_eq!(
+            f3.positions,
+            s.read_frame(3).unwrap().positions,
+            "not repeatable"
+        );
+        for (a, b) in f3.positions.iter().zip(&first.positions) {
+            let d = (*a - *b).abs().max_element();
+            assert!(d <= 0.3 + 1e-6, "moved {d} Å");
+        }
+        assert!(s.read_frame(5).is_err());
     }
 }

@@ -79,8 +79,9 @@ pub struct BenchArgs {
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// How the GPU's sparse density gather reads atoms: `tiled` (the brick's threads share
-    /// each atom load through workgroup memory; default) or `rows` (each thread loads its own).
-    #[arg(long, value_enum, default_value_t = GatherArg::Tiled)]
+    /// each atom load through workgroup memory), `rows` (each thread loads its own) or `auto`
+    /// (tiled where a brick spans at most three bin cells, as at H = 1 to 2 Å; the default).
+    #[arg(long, value_enum, default_value_t = GatherArg::Auto)]
     pub density_gather: GatherArg,
     /// Play TOP [TRAJ] (or the demo) through the viewer's own frame loop offscreen: the
     /// window's worker, timeline and renderer drawing into a texture, with no window; prints
@@ -126,6 +127,8 @@ pub enum GatherArg {
     Rows,
     /// A brick's threads stage the atoms around the brick in workgroup memory.
     Tiled,
+    /// Tiled for small bricks against the bin cells, rows for large ones.
+    Auto,
 }
 
 impl From<GatherArg> for mdsurf::gpu::DensityGather {
@@ -133,6 +136,7 @@ impl From<GatherArg> for mdsurf::gpu::DensityGather {
         match g {
             GatherArg::Rows => mdsurf::gpu::DensityGather::Rows,
             GatherArg::Tiled => mdsurf::gpu::DensityGather::Tiled,
+            GatherArg::Auto => mdsurf::gpu::DensityGather::Auto,
         }
     }
 }

@@ -99,9 +99,11 @@ fn format_report(
         ),
         format!("  dropped            {} frames", r.frames_dropped()),
         format!("  compute per frame  {}", spread(&r.compute_ms)),
+        format!("    of which reading {}", spread(&r.read_ms)),
         format!("  latency            {}", spread(&r.latency_ms)),
         format!("  draw, to GPU done  {}", spread(&r.draw_ms)),
         format!("  draw, host side    {}", spread(&r.draw_host_ms)),
+        format!("  draw alone         {}", spread(&r.draw_alone_ms)),
         format!("  triangles          {}", r.triangles),
         format!("  peak host memory   {rss}"),
         format!(

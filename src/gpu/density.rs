@@ -34,8 +34,37 @@ pub enum DensityGather {
     Rows,
     /// The 64 threads of a brick load the atoms of the cells around the brick once, in
     /// chunks of 64, into workgroup memory, and each thread tests every staged atom.
-    #[default]
     Tiled,
+    /// Tiled where a brick is small against the bin cells, rows where it is large (see
+    /// [`DensityGather::resolve`]).
+    #[default]
+    Auto,
+}
+
+/// The largest brick edge, in bin cells, for which [`DensityGather::Auto`] tiles. A brick
+/// spans (BRICK - 1) H; the cells around it are more than each thread's own by a factor that
+/// grows with that span, and past about three cells the extra atoms every thread tests cost
+/// more than the loads it shares (NVIDIA H100, Table 1 rows, 2026-11-26: tiled 1.6x faster at
+/// H = 1 Å, 1.1x at H = 2 Å, 1.6x slower at H = 4 Å, with cells of 4.5 to 6 Å).
+pub const TILED_MAX_BRICK_CELLS: f32 = 3.0;
+
+impl DensityGather {
+    /// The gather that runs for a grid of spacing `h` (Å) binned in cells of `cell_size` (Å):
+    /// [`DensityGather::Auto`] becomes tiled when a brick spans at most
+    /// [`TILED_MAX_BRICK_CELLS`] cells, else rows.
+    pub fn resolve(self, h: f32, cell_size: f32) -> DensityGather {
+        match self {
+            DensityGather::Auto => {
+                let span = (super::plan::BRICK - 1) as f32 * h;
+                if span <= TILED_MAX_BRICK_CELLS * cell_size {
+                    DensityGather::Tiled
+                } else {
+                    DensityGather::Rows
+                }
+            }
+            g => g,
+        }
+    }
 }
 
 /// The density kernels (three variants, dense and sparse, on one layout) and their cached bind
@@ -48,7 +77,8 @@ pub struct DensityStage {
     sparse: [Kernel; 3],
     /// Sparse-brick entry points with the atoms staged per brick, in the same order.
     tiled: [Kernel; 3],
-    /// Which sparse entry points [`DensityStage::record_sparse`] records.
+    /// Which sparse entry points [`DensityStage::record_sparse`] records (resolved for the
+    /// frame's grid, never [`DensityGather::Auto`]).
     pub gather: DensityGather,
     bind: Bound,
 }
@@ -131,8 +161,25 @@ impl DensityStage {
     ) {
         let kernels = match self.gather {
             DensityGather::Rows => &self.sparse,
-            DensityGather::Tiled => &self.tiled,
+            DensityGather::Tiled | DensityGather::Auto => &self.tiled,
         };
         kernels[Self::variant(mode)].dispatch_indirect(pass, &self.bind, &[offset], args);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_tiles_small_bricks_only() {
+        // 5 Å cells: a brick of 7 Å (H = 1) or 14 Å (H = 2) spans at most three cells, one
+        // of 28 Å (H = 4) more.
+        assert_eq!(DensityGather::Auto.resolve(1.0, 5.0), DensityGather::Tiled);
+        assert_eq!(DensityGather::Auto.resolve(2.0, 5.0), DensityGather::Tiled);
+        assert_eq!(DensityGather::Auto.resolve(4.0, 5.0), DensityGather::Rows);
+        // Explicit choices stay.
+        assert_eq!(DensityGather::Rows.resolve(1.0, 5.0), DensityGather::Rows);
+        assert_eq!(DensityGather::Tiled.resolve(4.0, 5.0), DensityGather::Tiled);
     }
 }

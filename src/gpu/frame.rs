@@ -171,7 +171,7 @@ impl Stages {
     /// both). Creates no GPU object in steady state. `sparse`: density and classification run
     /// on the sparse bricks the atoms reach; `sparse_classes`: the class entries are held per
     /// brick slot (as the buffers were sized, [`super::plan::BufferPlan::class_entries`]);
-    /// `gather`: which sparse density gather runs.
+    /// `gather`: which sparse density gather runs ([`DensityGather::resolve`]d for the grid).
     #[allow(clippy::too_many_arguments)]
     pub fn prepare(
         &mut self,
@@ -186,7 +186,7 @@ impl Stages {
         gather: DensityGather,
     ) {
         self.sparse = sparse;
-        self.density.gather = gather;
+        self.density.gather = gather.resolve(plan.grid.spacing, plan.cell_size);
         self.slab_values.clear();
         self.slab_values.extend(
             plan.slabs

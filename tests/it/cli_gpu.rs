@@ -119,3 +119,66 @@ fn gpu_bench_of_a_single_frame_file_times_whole_frames() {
     let (upload, density) = (csv.col("upload_ms")[0], csv.col("density_ms")[0]);
     assert!(upload > 0.0 && density > 0.0, "{:?}", csv.rows[0]);
 }
+
+/// `bench --viewer` plays a (jittered) single-frame file through the viewer's own worker,
+/// timeline and renderer offscreen: every timeline frame is either shown or counted as
+/// dropped, at least one surface reached the picture, and the report names what it drew.
+#[test]
+fn viewer_bench_plays_frames_offscreen() {
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = data("1hpv.pdb");
+    let args = [
+        "bench",
+        "--viewer",
+        &pdb,
+        "--frames",
+        "6",
+        "--play-fps",
+        "3",
+        "--size",
+        "160x120",
+    ];
+    let run = mdsurf(dir.path(), &args);
+    if run.code != 0 {
+        let required = std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1");
+        if run.stderr.contains("needs a GPU") && !required {
+            eprintln!("note: no GPU adapter, skipping (set REQUIRE_GPU=1 to fail instead)");
+            return;
+        }
+        panic!(
+            "bench --viewer failed (status {}): {}",
+            run.code, run.stderr
+        );
+    }
+    let field = |name: &str| -> Vec<String> {
+        let line = run
+            .stdout
+            .lines()
+            .find(|l| l.trim_start().starts_with(name))
+            .unwrap_or_else(|| panic!("no '{name}' line in:\n{}", run.stdout));
+        line[line.find(name).unwrap() + name.len()..]
+            .split_whitespace()
+            .map(str::to_string)
+            .collect()
+    };
+    let shown: usize = field("shown")[0].parse().unwrap();
+    let dropped: usize = field("dropped")[0].parse().unwrap();
+    assert!(shown >= 1, "{}", run.stdout);
+    assert_eq!(shown + dropped, 6, "{}", run.stdout);
+    assert!(
+        field("representations").join(" ").contains("macromolecule"),
+        "{}",
+        run.stdout
+    );
+    let triangles: usize = field("triangles")[0].parse().unwrap();
+    assert!(triangles > 1_000, "{}", run.stdout);
+    assert!(
+        field("picture").join(" ").starts_with("160 x 120"),
+        "{}",
+        run.stdout
+    );
+    let gpu_mib: f64 = field("GPU memory")[0].parse().unwrap();
+    assert!(gpu_mib > 0.0, "{}", run.stdout);
+    let draw = field("draw alone");
+    assert!(draw[0].parse::<f64>().unwrap() > 0.0, "{}", run.stdout);
+}
