@@ -194,7 +194,7 @@ fn ms(d: Duration) -> f64 {
 /// the 1M-atom box) in the viewer benchmark.
 pub struct JitteredSource {
     inner: Arc<dyn FrameSource>,
-    first: Frame,
+    first: Arc<Frame>,
     frames: usize,
     jitter: f32,
 }
@@ -235,7 +235,7 @@ impl FrameSource for JitteredSource {
     fn len(&self) -> usize {
         self.frames
     }
-    fn read_frame(&self, index: usize) -> Result<Frame, String> {
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
         if index >= self.frames {
             return Err(format!(
                 "{}: no frame {index} (it has {})",
@@ -243,7 +243,7 @@ impl FrameSource for JitteredSource {
                 self.frames
             ));
         }
-        let mut frame = self.first.clone();
+        let mut frame = Frame::clone(&self.first);
         frame.index = index;
         if index > 0 {
             let k = index as u64;
@@ -260,7 +260,7 @@ impl FrameSource for JitteredSource {
                     ) * self.jitter;
                 });
         }
-        Ok(frame)
+        Ok(Arc::new(frame))
     }
     fn name(&self) -> String {
         format!("{} (jittered)", self.inner.name())

@@ -24,8 +24,9 @@ pub trait FrameSource: Send + Sync {
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
-    /// Reads frame `index` (from 0); the error is one line naming the file and frame.
-    fn read_frame(&self, index: usize) -> Result<Frame, String>;
+    /// Reads frame `index` (from 0); the error is one line naming the file and frame. The
+    /// frame is shared, not copied: a streamed file hands out the frame its cache holds.
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String>;
     /// Short name for the window title and messages (file name).
     fn name(&self) -> String;
     /// The images shown when surfaces are periodic (`--periodic`), else `None`.
@@ -52,14 +53,18 @@ impl FrameSource for MemorySource {
     fn len(&self) -> usize {
         self.frames.len()
     }
-    fn read_frame(&self, index: usize) -> Result<Frame, String> {
-        self.frames.get(index).cloned().ok_or_else(|| {
-            format!(
-                "{}: no frame {index} (it has {})",
-                self.name,
-                self.frames.len()
-            )
-        })
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
+        self.frames
+            .get(index)
+            .cloned()
+            .map(Arc::new)
+            .ok_or_else(|| {
+                format!(
+                    "{}: no frame {index} (it has {})",
+                    self.name,
+                    self.frames.len()
+                )
+            })
     }
     fn name(&self) -> String {
         self.name.clone()
@@ -73,8 +78,10 @@ impl FrameSource for crate::io::Trajectory {
     fn len(&self) -> usize {
         crate::io::Trajectory::len(self)
     }
-    fn read_frame(&self, index: usize) -> Result<Frame, String> {
-        crate::io::Trajectory::read_frame(self, index).map_err(|e| e.to_string())
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
+        crate::io::Trajectory::read_frame(self, index)
+            .map(Arc::new)
+            .map_err(|e| e.to_string())
     }
     fn name(&self) -> String {
         let p = self.path();
@@ -156,12 +163,13 @@ impl FrameSource for StreamedSource {
     fn len(&self) -> usize {
         self.streamer.len()
     }
-    fn read_frame(&self, index: usize) -> Result<Frame, String> {
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
         self.streamer.set_playhead(index);
         if self.smooth == 0 {
-            return self.read_one(index).map(|f| Frame::clone(&f));
+            return self.read_one(index);
         }
         crate::transform::smooth::smooth_frame(index, self.len(), self.smooth, |j| self.read_one(j))
+            .map(Arc::new)
     }
     fn name(&self) -> String {
         FrameSource::name(self.streamer.trajectory())

@@ -426,7 +426,7 @@ struct RepSlot {
 /// Per-source state the worker keeps between requests.
 struct Cache {
     source: Option<Arc<dyn FrameSource>>,
-    frames: HashMap<usize, crate::model::Frame>,
+    frames: HashMap<usize, Arc<crate::model::Frame>>,
     order: Vec<usize>,
     radius_overrides: RadiusOverrides,
     slots: HashMap<u64, RepSlot>,
@@ -565,7 +565,7 @@ fn run(
     }
 }
 
-fn frame_of(cache: &mut Cache, req: &Request) -> Result<(crate::model::Frame, f64), String> {
+fn frame_of(cache: &mut Cache, req: &Request) -> Result<(Arc<crate::model::Frame>, f64), String> {
     let same = cache
         .source
         .as_ref()
