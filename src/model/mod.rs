@@ -10,6 +10,7 @@ pub mod colour_map;
 pub mod elements;
 pub mod exposure;
 pub mod labels;
+pub mod lipid_like;
 pub mod particles;
 pub mod radii;
 pub mod residues;

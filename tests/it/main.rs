@@ -46,6 +46,7 @@ mod render_gpu_surface;
 mod render_images;
 mod render_refined;
 mod render_stereo;
+mod scene_lipids;
 mod scene_reps;
 mod scene_selection;
 mod shaders_validate;

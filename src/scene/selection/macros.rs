@@ -4,6 +4,7 @@
 
 use super::ast::{NumField, StrField};
 use crate::model::Topology;
+use crate::model::lipid_like::lipid_like_names;
 use crate::model::residues::{is_amino_acid, is_ion, is_lipid, is_nucleotide, is_water};
 
 /// Backbone atom names of amino-acid residues: the all-atom heavy backbone (`N CA C O`), the
@@ -43,7 +44,9 @@ pub(crate) enum Macro {
     Water,
     /// Atoms of ion residues.
     Ion,
-    /// Atoms of lipid residues (`POPC POPE POPG DPPC CHOL ...`).
+    /// Atoms of lipid residues (`POPC POPE POPG DPPC CHOL ...`), and of residue types that
+    /// hold what lipids hold ([`crate::model::lipid_like`]: `DMP`, `POP`, Martini lipids under
+    /// any name).
     Lipid,
     /// Atoms whose element is hydrogen (elements come from the file or are guessed from names).
     Hydrogen,
@@ -51,7 +54,8 @@ pub(crate) enum Macro {
     Heavy,
     /// Atoms that are not hydrogen (the same as `heavy`).
     NoH,
-    /// Atoms in none of protein, nucleic, water, ion, lipid (drugs, cofactors, anything else).
+    /// Atoms in none of protein, nucleic, water, ion, lipid (drugs, cofactors, anything else;
+    /// lipids recognised by content are no ligands either).
     Ligand,
 }
 
@@ -85,7 +89,7 @@ impl Macro {
             Macro::Nucleic => by_residue(is_nucleic),
             Macro::Water => by_residue(is_water),
             Macro::Ion => by_residue(is_ion),
-            Macro::Lipid => by_residue(is_lipid),
+            Macro::Lipid => lipid_mask(topology),
             Macro::Backbone => {
                 let protein = by_residue(is_amino_acid);
                 (0..n)
@@ -104,9 +108,30 @@ impl Macro {
             }
             Macro::Hydrogen => (0..n).map(|i| element(i) == "H").collect(),
             Macro::Heavy | Macro::NoH => (0..n).map(|i| element(i) != "H").collect(),
-            Macro::Ligand => by_residue(is_ligand),
+            Macro::Ligand => {
+                let lipid = lipid_mask(topology);
+                by_residue(is_ligand)
+                    .into_iter()
+                    .zip(lipid)
+                    .map(|(ligand, lipid)| ligand && !lipid)
+                    .collect()
+            }
         }
     }
+}
+
+/// Atoms of lipid residues: named in the list, or recognised by what they hold
+/// ([`lipid_like_names`]).
+fn lipid_mask(topology: &Topology) -> Vec<bool> {
+    let by_content = lipid_like_names(topology);
+    let (names, ids) = topology.residue_names.distinct();
+    let verdicts: Vec<bool> = names
+        .iter()
+        .map(|name| is_lipid(name) || by_content.contains(name))
+        .collect();
+    let mut mask: Vec<bool> = ids.iter().map(|&id| verdicts[id as usize]).collect();
+    mask.resize(topology.len(), false);
+    mask
 }
 
 /// Applies `test` once per distinct residue name (names repeat, tests are string searches).
