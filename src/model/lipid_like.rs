@@ -69,8 +69,8 @@ pub fn lipid_like_names(topology: &Topology) -> HashSet<Arc<str>> {
     // The first residue of each name, as its residue index, and what it holds.
     let mut first: Vec<Option<u32>> = vec![None; names.len()];
     let mut holds = vec![Composition::default(); names.len()];
-    for i in 0..n {
-        let name = ids[i] as usize;
+    for (i, &name) in ids.iter().enumerate().take(n) {
+        let name = name as usize;
         if !candidate[name] {
             continue;
         }
