@@ -81,3 +81,15 @@ def test_engine_works_after_fork(backend):
     with multiprocessing.get_context("fork").Pool(1) as pool:
         there = pool.apply_async(_area_in_child, (backend,)).get(timeout=120)
     assert there == pytest.approx(here, rel=1e-9)
+
+
+def test_no_driver_noise_without_a_desktop_session():
+    """Without XDG_RUNTIME_DIR (SSH, clusters, CI) opening the GPU prints nothing on stderr:
+    Mesa's device-select layer would print two 'XDG_RUNTIME_DIR is invalid' lines."""
+    gpu_or_skip()
+    env = {k: v for k, v in os.environ.items() if k not in ("XDG_RUNTIME_DIR", "NODEVICE_SELECT")}
+    code = "import mdsurf, numpy as np\nmdsurf.surface(np.zeros((1, 3)), [1.5], backend='gpu')\n"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "XDG_RUNTIME_DIR" not in out.stderr
+    assert out.stderr.strip() == "", out.stderr

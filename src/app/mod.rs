@@ -6,6 +6,7 @@
 
 pub mod device_loss;
 pub mod export;
+pub mod keys;
 pub mod offscreen;
 pub mod panels;
 pub mod plot;

@@ -88,6 +88,8 @@ pub enum Command {
     ExportCsv(Option<PathBuf>),
     /// Close the error message.
     DismissError,
+    /// Show (`true`) or hide the keyboard shortcut list (window layer; see `app::keys`).
+    ShowShortcuts(bool),
 }
 
 /// The latest surface on screen plus what produced it.

@@ -66,6 +66,8 @@ pub struct Viewer {
     device: Option<(DeviceWatch, ReopenSlot)>,
     /// Per-frame transformations of the frames loaded, and the Trajectory section's draft.
     transforms: super::trajectory_panel::TransformDraft,
+    /// True while the keyboard shortcut list is shown.
+    shortcuts_shown: bool,
 }
 
 impl Viewer {
@@ -96,6 +98,7 @@ impl Viewer {
             files: None,
             device: None,
             transforms: Default::default(),
+            shortcuts_shown: false,
         }
     }
 
@@ -128,6 +131,11 @@ impl Viewer {
     /// The state behind the window (for tests).
     pub fn core(&self) -> &AppCore {
         &self.core
+    }
+
+    /// True while the keyboard shortcut list is shown.
+    pub fn shortcuts_shown(&self) -> bool {
+        self.shortcuts_shown
     }
 
     /// Starts loading `top` (+ `traj`) on a background thread; the current data stays until it
@@ -236,6 +244,7 @@ impl Viewer {
                         self.core.status = format!("movie cancelled after {} images", job.done);
                     }
                 }
+                Command::ShowShortcuts(shown) => self.shortcuts_shown = shown,
                 _ => {}
             }
         }
@@ -360,9 +369,15 @@ impl Viewer {
 
     fn menu_ui(&mut self, ui: &mut egui::Ui) -> Vec<Command> {
         let mut out = Vec::new();
+        let is_mac = ui.ctx().os() == egui::os::OperatingSystem::Mac;
+        // A menu entry showing the keys of `action` from the shortcut table.
+        let entry = |text: &str, action| {
+            egui::Button::new(text).shortcut_text(super::keys::keys_for(action, is_mac))
+        };
+        use super::keys::Action;
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
-                if ui.button("Open…").clicked() {
+                if ui.add(entry("Open…", Action::Open)).clicked() {
                     out.push(Command::OpenDialog);
                 }
                 ui.menu_button("Recent", |ui| {
@@ -380,11 +395,11 @@ impl Viewer {
                 if ui.button("Open view…").clicked() {
                     out.push(Command::OpenView(None));
                 }
-                if ui.button("Save view…").clicked() {
+                if ui.add(entry("Save view…", Action::SaveView)).clicked() {
                     out.push(Command::SaveView(None));
                 }
                 ui.separator();
-                if ui.button("Screenshot…").clicked() {
+                if ui.add(entry("Screenshot…", Action::Screenshot)).clicked() {
                     out.push(Command::Screenshot {
                         scale: 1,
                         size: None,
@@ -393,6 +408,14 @@ impl Viewer {
                 }
                 if ui.button("Quit").clicked() {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("Help", |ui| {
+                if ui
+                    .add(entry(super::keys::OVERLAY_TITLE, Action::ToggleHelp))
+                    .clicked()
+                {
+                    out.push(Command::ShowShortcuts(true));
                 }
             });
             ui.label(&self.core.status);
@@ -429,7 +452,8 @@ impl eframe::App for Viewer {
         }
         self.step_movie();
 
-        let mut cmds = Vec::new();
+        // Shortcuts first, from this frame's keys (none while a text field has the focus).
+        let mut cmds = super::keys::keys_ui(&ctx, &self.core, self.shortcuts_shown);
         egui::Panel::top("menu").show(ui, |ui| cmds.extend(self.menu_ui(ui)));
         if let Some(err) = self.core.error.clone() {
             egui::Panel::top("error").show(ui, |ui| {
@@ -484,6 +508,10 @@ impl eframe::App for Viewer {
                 gpu.render(&self.core.camera, &self.core.render, size);
             }
         });
+        cmds.extend(super::keys::shortcuts_overlay_ui(
+            &ctx,
+            self.shortcuts_shown,
+        ));
         for cmd in cmds {
             self.apply(&ctx, cmd);
         }

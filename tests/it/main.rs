@@ -8,6 +8,7 @@ mod surface_common;
 mod xvfb_support;
 
 mod app_gpu_worker;
+mod app_keys;
 mod app_panels;
 mod app_smoke;
 mod app_soak;

@@ -15,10 +15,18 @@ The GPU device is opened lazily, in the process that first computes with ``backe
 ``mdsurf.analysis.GaussianSurface`` is an MDAnalysis analysis (serial, multiprocessing, dask).
 """
 
+import os
+
 import numpy as np
 
-from . import _mdsurf
-from ._mdsurf import Grid, Surface, element_radius, guess_element
+# Mesa's Vulkan device-select layer prints "error: XDG_RUNTIME_DIR is invalid or not set" when
+# there is no desktop session (SSH, clusters, CI) and has nothing to choose by there; its own
+# switch turns it off, as the command line does for itself. Set before any device is opened.
+if not os.environ.get("XDG_RUNTIME_DIR"):
+    os.environ.setdefault("NODEVICE_SELECT", "1")
+
+from . import _mdsurf  # noqa: E402
+from ._mdsurf import Grid, Surface, element_radius, guess_element  # noqa: E402
 
 __all__ = [
     "Grid",
