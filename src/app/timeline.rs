@@ -147,8 +147,13 @@ impl Timeline {
 }
 
 /// The timeline bar: transport buttons, scrub slider, frame and time readout, speed, stride and
-/// end mode. `time_ps` is the time of the frame on screen, when known.
-pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec<Command> {
+/// end mode. `on_screen` is the index of the frame on screen and its time in ps (when the
+/// file records one); the time label belongs to that frame ([`time_label`]).
+pub fn timeline_ui(
+    ui: &mut egui::Ui,
+    t: &Timeline,
+    on_screen: Option<(usize, Option<f64>)>,
+) -> Vec<Command> {
     let mut out = Vec::new();
     let mut cmd = |c: TimelineCmd| out.push(Command::Timeline(c));
     ui.horizontal(|ui| {
@@ -178,7 +183,7 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
             cmd(TimelineCmd::Seek(f));
         }
         ui.label(format!("/ {}", t.len.saturating_sub(1)));
-        ui.label(time_ps.map_or_else(|| "t = ?".into(), |p| format!("t = {p:.1} ps")));
+        ui.label(time_label(t.current, on_screen));
         let mut fps = t.fps;
         if ui
             .add(
@@ -217,9 +222,37 @@ pub fn timeline_ui(ui: &mut egui::Ui, t: &Timeline, time_ps: Option<f64>) -> Vec
     out
 }
 
+/// The time shown beside the frame slider: the time of the frame on screen, with that
+/// frame's index when it is not the slider's `current` frame (while playback or a seek waits
+/// for its surface), so a time is never shown beside another frame's number.
+pub fn time_label(current: usize, on_screen: Option<(usize, Option<f64>)>) -> String {
+    match on_screen {
+        None => "t = ?".into(),
+        Some((frame, time)) => {
+            let t = time.map_or_else(|| "t = ?".into(), |p| format!("t = {p:.1} ps"));
+            if frame == current {
+                t
+            } else {
+                format!("{t} (frame {frame} on screen)")
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_time_belongs_to_the_frame_on_screen() {
+        assert_eq!(time_label(4, Some((4, Some(80000.0)))), "t = 80000.0 ps");
+        assert_eq!(
+            time_label(4, Some((3, Some(60000.0)))),
+            "t = 60000.0 ps (frame 3 on screen)"
+        );
+        assert_eq!(time_label(0, Some((0, None))), "t = ?");
+        assert_eq!(time_label(2, None), "t = ?");
+    }
 
     #[test]
     fn loop_bounce_and_once_at_the_end() {

@@ -491,8 +491,12 @@ impl eframe::App for Viewer {
         egui::Panel::right("readouts")
             .show(ui, |ui| readouts_ui(ui, &self.core, render_ms, self.fps));
         egui::Panel::bottom("timeline").show(ui, |ui| {
-            let time = self.core.shown.as_ref().and_then(|s| s.computed.time_ps);
-            cmds.extend(timeline_ui(ui, &self.core.timeline, time));
+            let on_screen = self
+                .core
+                .shown
+                .as_ref()
+                .map(|s| (s.computed.frame, s.computed.time_ps));
+            cmds.extend(timeline_ui(ui, &self.core.timeline, on_screen));
             let (h, cur, len) = (
                 &self.core.history,
                 self.core.timeline.current,

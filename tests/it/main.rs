@@ -13,6 +13,7 @@ mod app_panels;
 mod app_smoke;
 mod app_soak;
 mod app_stream_source;
+mod app_time_label;
 mod app_surface_mode;
 mod app_window;
 mod cli_bench;
