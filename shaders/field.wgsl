@@ -4,7 +4,9 @@
 // that includes it binds `sorted_atoms` (position, alpha; sorted by cell) and `cell_end` (the
 // binning's inclusive cell ends) and defines `field_cells()`, where the atoms are binned.
 
-// Twins of crate::surface::analytic::{REFINE_REACH, REFINE_STEP}.
+// Twins of crate::surface::analytic::{REFINE_REACH, REFINE_STEP}. REFINE_REACH is quality max's
+// cutoff, which every refined frame runs at, grid included (crate::surface::VertexMode::effective,
+// issue 33): so the sum here is the one density.wgsl samples, with the same cutoff test.
 const REFINE_REACH: f32 = 4.0;
 // Å.
 const REFINE_STEP: f32 = 1e-4;
@@ -23,7 +25,9 @@ fn field_cell(x: f32, o: f32, size: f32, n: u32) -> u32 {
 }
 
 // (grad rho (Å⁻¹), rho) at p (Å): the sum over the atoms with |p - p_i| < REFINE_REACH alpha_i
-// of exp(-|p - p_i|² / (2 alpha_i²)) and its gradient.
+// of exp(-|p - p_i|² / (2 alpha_i²)) and its gradient. The cutoff test is density.wgsl's (d²
+// summed x, y, z in that order against (q alpha)², q = u.cutoff = REFINE_REACH there), so at a
+// grid point an atom counts here exactly when it counts in the sample.
 fn field_eval(p: vec3<f32>) -> vec4<f32> {
     let fc = field_cells();
     let reach = fc.reach;

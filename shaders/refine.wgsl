@@ -4,8 +4,8 @@
 // crate::surface::analytic::AnalyticField::refine_edge: the same safeguarded Newton / regula
 // falsi on the edge from the linear estimate, bracketed by the slab's samples, the same
 // fallback projection along the gradient when the sum has no root on the edge, the same
-// constants. Atoms count out to REFINE_REACH alpha (beyond the quality's cutoff), found through
-// the binning's cells. Colours are left as emitted (the linear parameter, as on the CPU), and
+// constants. Atoms count out to REFINE_REACH alpha, the cutoff the grid was sampled with (refined
+// frames run at quality max, issue 33), found through the binning's cells. Colours are left as emitted (the linear parameter, as on the CPU), and
 // so is the normal where the gradient vanishes. Rust side: src/gpu/mc.rs (Refine).
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl, and

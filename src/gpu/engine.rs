@@ -311,6 +311,9 @@ impl GpuEngine {
         bricks_counted: bool,
     ) -> Result<(FrameInfo, Option<StageTimings>), SurfaceError> {
         let start = Instant::now();
+        // Refined vertices run at quality max (grid and refinement, issue 33); a switch of
+        // vertex mode then re-runs the density like any change of quality.
+        let params = &self.vertices.effective(params);
         params.validate()?;
         inputs::check_lengths(atoms)?;
         let n = atoms.positions.len() as u64;

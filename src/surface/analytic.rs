@@ -10,13 +10,22 @@
 //! gather dominates (about two thirds of the refinement). `mdsurf bench --vertices refined`
 //! reports the cost per frame; the GPU twin is `shaders/refine.wgsl`.
 //!
-//! Reach: every atom counts out to [`REFINE_REACH`] = 4 alpha (the `max` quality's cutoff, where
-//! a term is below 3.4e-4), whatever the quality. The sampled density keeps the quality's cutoff
-//! (it decides the topology), but the surface the vertices are placed on is the Gaussian sum
-//! itself: with the `high` cutoff (3 alpha) each atom's term would jump by 0.011 at its cutoff
-//! sphere, and the level set of such a sum has small cliffs whose measured area keeps growing as
-//! H shrinks (1hpv, I = 0.5: +0.6 % from H = 1 to H = 0.25), where at 4 alpha it converges
-//! (within 0.001 % from H = 0.5 down).
+//! Cutoff (issue 33): the vertices lie on the level set of the very function the grid samples,
+//! and for refined vertices that function is the sum at quality max. An engine computing refined
+//! vertices samples its grid at [`REFINED_QUALITY`] (cutoff [`REFINE_REACH`] = 4 alpha, where a
+//! term is below 3.4e-4) whatever quality it is asked for ([`VertexMode::effective`]), and the
+//! field counts each atom out to its own cutoff with the density's f32 test (`d² < cut2`, `d²`
+//! summed x, y, z in that order), so at a grid point an atom counts here exactly when it counts
+//! in the sample. Why not refine at a shorter cutoff: each term jumps at its cutoff sphere by
+//! `exp(-q²/2)` (0.044 at medium, 0.011 at high), so the level set of such a sum has steps about
+//! `jump / |grad rho|` high (about 0.1 Å at medium, 0.03 Å at high) along every cutoff sphere
+//! that crosses it; their area comes in only as H approaches that height, so neither vertex mode
+//! converges at usable H (1hpv, I = 0.5, H = 1 to 0.125 Å: interpolated 7648 to 8032 Å² at
+//! medium and 7463 to 7549 Å² at high; refined on those sums 7791 to 8154 and 7524 to 7571 Å²),
+//! where at quality max both converge on 7472 Å². Refining on 4 alpha over a grid sampled at a
+//! shorter cutoff (the scheme before issue 33) put the vertices on another surface than the one
+//! the grid's topology follows: at H = 0.25 Å, refined areas of 7500 Å² at high (0.4 % above the
+//! 7472 Å² that sum converges on) and 8514 Å² at medium.
 //!
 //! Data flow: [`PreparedAtom`]s -> [`AnalyticField`] -> [`AnalyticField::refine_edge`] (one
 //! Marching Cubes vertex: position where `rho = I` on its grid edge, normal `-grad rho`
@@ -25,8 +34,8 @@
 
 use glam::Vec3;
 
-use super::GridSpec;
 use super::bin::PreparedAtom;
+use super::{GridSpec, Quality, SurfaceParams};
 
 /// How Marching Cubes places its vertices and normals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -36,7 +45,8 @@ pub enum VertexMode {
     #[default]
     Interpolated,
     /// The root of the exact Gaussian sum on the edge, normals from its analytic gradient; the
-    /// area and volume account for curvature ([`super::curved`]). Costs about 2 to 7 times
+    /// area and volume account for curvature ([`super::curved`]). Computed at quality max
+    /// whatever the quality asked for ([`VertexMode::effective`]). Costs about 2 to 7 times
     /// an interpolated CPU frame (`mdsurf bench` reports it; the issue's bar for the default
     /// is 15 %), so it is not the default.
     Refined,
@@ -53,11 +63,29 @@ impl VertexMode {
             VertexMode::Refined => "refined",
         }
     }
+
+    /// The parameters an engine computes a surface with in this mode from the ones it is asked
+    /// for: refined vertices run at [`REFINED_QUALITY`] whatever `params.quality` says (the
+    /// module docs say why), interpolated ones as asked. Both engines apply it before planning
+    /// the grid, so the grid and the refinement sample one function.
+    pub fn effective(self, params: &SurfaceParams) -> SurfaceParams {
+        match self {
+            VertexMode::Interpolated => *params,
+            VertexMode::Refined => SurfaceParams {
+                quality: REFINED_QUALITY,
+                ..*params
+            },
+        }
+    }
 }
 
 super::params::display_and_parse_by_name!(VertexMode, "vertex mode", "interpolated or refined");
 
-/// How far each atom's Gaussian reaches in the analytic sum, in units of its alpha.
+/// The quality every refined surface is computed at (grid and refinement), whatever quality it
+/// is asked for: the sum out to 4 alpha, whose level set has no steps worth measuring.
+pub const REFINED_QUALITY: Quality = Quality::Max;
+/// The cutoff of [`REFINED_QUALITY`] in units of alpha: how far each atom counts in the sum of
+/// a refined surface (the GPU's twin is `REFINE_REACH` in `shaders/field.wgsl`).
 pub const REFINE_REACH: f32 = 4.0;
 /// Most safeguarded Newton steps per edge (each one evaluation of rho and its gradient).
 pub const REFINE_ITERATIONS: u32 = 8;
@@ -238,17 +266,11 @@ pub struct AnalyticField {
 
 impl AnalyticField {
     /// Bins `atoms` (in canonical order; kept within each cell) into cells half the largest
-    /// reach wide over the bounding box of `grid`; each atom reaches [`REFINE_REACH`] alpha
-    /// (`alpha² = 0.5 / k`).
+    /// cutoff wide over the bounding box of `grid`; each atom counts out to its own cutoff
+    /// ([`PreparedAtom::cut`], `q alpha`, tested as the density tests it: in a refined frame
+    /// `q` is [`REFINE_REACH`]).
     pub fn new(atoms: &[PreparedAtom], grid: &GridSpec) -> AnalyticField {
-        let reach2 = |a: &PreparedAtom| REFINE_REACH * REFINE_REACH * 0.5 / a.k;
-        let cell = 0.5
-            * atoms
-                .iter()
-                .map(reach2)
-                .fold(0.0f32, f32::max)
-                .sqrt()
-                .max(1e-3);
+        let cell = 0.5 * atoms.iter().map(|a| a.cut).fold(0.0f32, f32::max).max(1e-3);
         let extent = grid.spacing
             * Vec3::new(
                 grid.dims[0] as f32,
@@ -285,8 +307,8 @@ impl AnalyticField {
             field.atoms[fill[c] as usize] = FieldAtom {
                 pos: Vec3::from(a.pos),
                 k: a.k,
-                cut2: reach2(a),
-                reach: reach2(a).sqrt(),
+                cut2: a.cut2,
+                reach: a.cut,
             };
             fill[c] += 1;
         }
@@ -303,7 +325,7 @@ impl AnalyticField {
     }
 
     /// `rho(p)` and `grad rho(p)` (Å⁻¹) at `p` (Å): the sum over the atoms with
-    /// `|p - p_i| < 4 alpha_i` of `exp(-k_i |p - p_i|²)` and its gradient.
+    /// `|p - p_i|² < cut2_i` (the density's cutoff) of `exp(-k_i |p - p_i|²)` and its gradient.
     pub fn eval(&self, p: Vec3) -> (f32, Vec3) {
         let mut rho = 0.0f32;
         let mut grad = Vec3::ZERO;
@@ -360,7 +382,7 @@ impl AnalyticField {
     }
 
     /// Fills `out` with the atoms that reach some point within `radius` Å of `centre`
-    /// (`|centre - p_i| < 4 alpha_i + radius`), in the order [`Self::eval`] sums them, so a sum
+    /// (`|centre - p_i| < cut_i + radius`), in the order [`Self::eval`] sums them, so a sum
     /// over `out` at such a point has the same terms in the same order as `eval` there.
     fn gather(&self, centre: Vec3, radius: f32, out: &mut NearAtoms) {
         out.clear();
@@ -379,10 +401,11 @@ impl AnalyticField {
     /// steps safeguarded by the bracket (regula falsi when a step leaves it), starting from the
     /// linear estimate `t0`. It stops when the next step would be shorter than [`REFINE_STEP`]
     /// (and takes it) or after [`REFINE_ITERATIONS`] evaluations. The bracket's end values are
-    /// the samples', so a root the 4-alpha sum does not have on the edge (the samples use the
-    /// quality's shorter cutoff) ends at the end point nearest to it. Returns the position (Å) and
-    /// the unit normal `-grad rho / |grad rho|` from the last evaluation, `None` when the
-    /// gradient vanishes there.
+    /// the samples', of the same sum up to the rounding of the exponential, so the edge has a
+    /// root but where a sample lies within that rounding of `iso` or a term's 3.4e-4 step at its
+    /// cutoff sphere straddles `iso`; then the search ends near the step or end point. Returns
+    /// the position (Å) and the unit normal `-grad rho / |grad rho|` from the last evaluation,
+    /// `None` when the gradient vanishes there.
     pub fn refine_edge(
         &self,
         pa: Vec3,
@@ -401,9 +424,8 @@ impl AnalyticField {
             let (position, grad) = if found {
                 (position, grad)
             } else {
-                // No root of the 4-alpha sum on this edge (its end point's sample, cut off at
-                // the quality's shorter reach, is on the other side): move onto the surface
-                // along the gradient instead, at most half an edge length.
+                // No root on this edge (see above): move onto the surface along the gradient
+                // instead, at most half an edge length.
                 self.gather(mid, len, near);
                 project_in(
                     |x| near.eval(x),
@@ -551,4 +573,29 @@ fn project_in(
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Refined surfaces run at one quality, whatever the asked one, and the GPU's field counts
+    /// atoms out to that quality's cutoff (issue 33); interpolated ones run as asked.
+    #[test]
+    fn refined_vertices_run_at_the_quality_whose_cutoff_the_field_uses() {
+        assert_eq!(REFINE_REACH, REFINED_QUALITY.cutoff());
+        for quality in Quality::ALL {
+            let asked = SurfaceParams {
+                spacing: 0.7,
+                quality,
+                ..SurfaceParams::default()
+            };
+            let refined = SurfaceParams {
+                quality: REFINED_QUALITY,
+                ..asked
+            };
+            assert_eq!(VertexMode::Refined.effective(&asked), refined);
+            assert_eq!(VertexMode::Interpolated.effective(&asked), asked);
+        }
+    }
 }

@@ -193,6 +193,8 @@ impl CpuEngine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
     ) -> Result<SurfaceOutput, SurfaceError> {
+        // Refined vertices run at quality max (grid and refinement, issue 33).
+        let params = &self.vertices.effective(params);
         let grid = self.plan(atoms, params)?;
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
 

@@ -127,7 +127,9 @@ fn cluster_refined_matches_cpu_at_medium_and_high() {
         radii,
         colours: Some(colours),
     };
-    // Medium leaves more edges where the 4-alpha sum has no root (the fallback projection).
+    // Refined surfaces run at quality max whatever the asked quality (issue 33), on the GPU as
+    // on the CPU: both asked qualities give the same mesh.
+    let mut first = None;
     for quality in [Quality::Medium, Quality::High] {
         let p = SurfaceParams {
             spacing: 0.6,
@@ -139,6 +141,8 @@ fn cluster_refined_matches_cpu_at_medium_and_high() {
         let n = assert_refined_close(&format!("cluster {quality:?}"), &gpu, &cpu);
         assert!(n > 500, "only {n} vertices");
         assert!(gpu.mesh.is_closed());
+        let first = first.get_or_insert(gpu.clone());
+        assert_eq!(gpu.mesh, first.mesh, "{quality:?} vs medium");
     }
 }
 
@@ -151,16 +155,18 @@ fn protein_refined_at_h_2_matches_cpu_and_converged_area() {
         quality: Quality::High,
         ..Default::default()
     };
-    // Interpolated first, then refined on the same engine: the switch alone re-runs the work.
+    // Interpolated first, then refined on the same engine: the switch alone re-runs the work,
+    // density included (refined surfaces run at quality max, issue 33: the grid is the one
+    // with max's wider padding).
     let lin = engine.compute(&atoms.set(), &p).expect("GPU surface");
     engine.set_vertices(VertexMode::Refined);
     let gpu = engine.compute(&atoms.set(), &p).expect("GPU surface");
-    assert_eq!(lin.mesh.indices, gpu.mesh.indices);
-    assert!(
-        lin.mesh.positions != gpu.mesh.positions,
-        "the switch changed nothing"
-    );
     let cpu = cpu_refined(&atoms, &p);
+    assert_eq!(gpu.grid, cpu.grid);
+    assert!(
+        gpu.grid != lin.grid,
+        "the switch kept the quality-high grid"
+    );
     assert_refined_close("1hpv H=2", &gpu, &cpu);
     // The converged area, extrapolated to H -> 0 from interpolated quality-max CPU surfaces at
     // H = 0.35 and 0.25 (`hpv_reference` in tests/it/surface_refine.rs): 7472.3 Å². Refined
