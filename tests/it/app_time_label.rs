@@ -27,7 +27,7 @@ fn shown_time_is_the_shown_frames_time() {
     let mut core = AppCore::new(worker);
     core.base.spacing = 3.0;
     core.set_source(source.clone());
-    let mut check = |core: &mut AppCore, what: &str| {
+    let check = |core: &mut AppCore, what: &str| {
         assert!(
             core.wait_idle(Duration::from_secs(300)),
             "{what}: timed out"
