@@ -7,6 +7,7 @@
 pub mod device_loss;
 pub mod export;
 pub mod keys;
+pub mod membrane_view;
 pub mod offscreen;
 pub mod panels;
 pub mod plot;
@@ -164,6 +165,7 @@ pub fn create_viewer(
     if let Some(cam) = &options.camera {
         cam.apply(&mut core.camera);
         core.fit_pending = cam.fit;
+        core.orient_pending = false;
     }
     let gpu = state.map(viewport::GpuView::new);
     let mut viewer = Viewer::new(core, gpu, options.script.clone(), script_result);

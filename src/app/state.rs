@@ -123,6 +123,10 @@ pub struct AppCore {
     pub camera: Camera,
     /// True when the camera should be fitted to the next surface.
     pub fit_pending: bool,
+    /// True when the camera should also turn to the system's own view with the next fit: a
+    /// membrane seen from the side ([`super::membrane_view`]). Off when a saved view gives the
+    /// direction.
+    pub orient_pending: bool,
     /// Turntable speed in degrees per second.
     pub turntable: Option<f32>,
     /// Playback.
@@ -161,6 +165,7 @@ impl AppCore {
             render: RenderSettings::default(),
             camera: Camera::default(),
             fit_pending: true,
+            orient_pending: true,
             turntable: None,
             timeline: Timeline::new(0),
             shown: None,
@@ -343,6 +348,11 @@ impl AppCore {
                     projection,
                     ..Camera::default()
                 };
+                if let Some(shown) = &self.shown {
+                    super::membrane_view::orient_to_membrane(&mut self.camera, &shown.computed);
+                } else {
+                    self.orient_pending = true;
+                }
                 self.fit_camera();
             }
             Command::FitCamera => self.fit_camera(),
@@ -467,6 +477,9 @@ impl AppCore {
                 if self.fit_pending
                     && let Some((centre, radius)) = scene_bounds(&c)
                 {
+                    if std::mem::take(&mut self.orient_pending) {
+                        super::membrane_view::orient_to_membrane(&mut self.camera, &c);
+                    }
                     self.camera.fit_sphere(centre, radius);
                     self.fit_pending = false;
                 }

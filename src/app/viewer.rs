@@ -274,6 +274,7 @@ impl Viewer {
         if let Some(cam) = state.camera {
             cam.apply(&mut self.core.camera);
             self.core.fit_pending = cam.fit;
+            self.core.orient_pending = false;
         }
         self.core.timeline.stride = state.trajectory.stride.max(1);
         self.core.timeline.fps = state.trajectory.fps;

@@ -52,6 +52,9 @@ pub struct Camera {
     pub projection: Projection,
     /// Radius of the scene's bounding sphere around `target` (Å); sets clip planes and depth cue.
     pub scene_radius: f32,
+    /// The world direction shown upwards on screen (unit vector; +y by default, a membrane's
+    /// normal in its side view). Yaw turns about it, pitch tilts towards it.
+    pub vertical: Vec3,
 }
 
 impl Default for Camera {
@@ -64,6 +67,7 @@ impl Default for Camera {
             fov_y: 35f32.to_radians(),
             projection: Projection::Perspective,
             scene_radius: 20.0,
+            vertical: Vec3::Y,
         }
     }
 }
@@ -92,11 +96,35 @@ impl Camera {
         self.distance = radius / (self.fov_y * 0.5).sin() * 1.05;
     }
 
+    /// The rotation taking +y to [`Camera::vertical`] (yaw and pitch are measured in its frame).
+    fn frame(&self) -> Quat {
+        let v = self.vertical.normalize_or(Vec3::Y);
+        Quat::from_rotation_arc(Vec3::Y, v)
+    }
+
     /// Unit vector from the target towards the eye.
     pub fn back(&self) -> Vec3 {
         let (sy, cy) = self.yaw.sin_cos();
         let (sp, cp) = self.pitch.sin_cos();
-        Vec3::new(sy * cp, sp, cy * cp)
+        self.frame() * Vec3::new(sy * cp, sp, cy * cp)
+    }
+
+    /// Looks at the scene from the side of a layer with normal `normal` (a membrane): the
+    /// normal becomes the screen's vertical, the view horizontal (pitch 0), from the side
+    /// `front` points to within the layer's plane (the protein's side; any side when `front`
+    /// lies along the normal).
+    pub fn side_view(&mut self, normal: Vec3, front: Vec3) {
+        let Some(n) = normal.try_normalize() else {
+            return;
+        };
+        self.vertical = n;
+        self.pitch = 0.0;
+        let local = self.frame().inverse() * (front - n * front.dot(n));
+        self.yaw = if local.x.abs() + local.z.abs() > 1e-6 {
+            local.x.atan2(local.z)
+        } else {
+            0.0
+        };
     }
 
     /// Eye position in Å.
@@ -106,7 +134,10 @@ impl Camera {
 
     /// Unit vector pointing right in the image.
     pub fn right(&self) -> Vec3 {
-        Vec3::Y.cross(self.back()).normalize_or(Vec3::X)
+        let frame = self.frame();
+        (frame * Vec3::Y)
+            .cross(self.back())
+            .normalize_or(frame * Vec3::X)
     }
 
     /// Unit vector pointing up in the image.
@@ -143,7 +174,8 @@ impl Camera {
 
     /// World-to-view matrix (right-handed, looking down -z).
     pub fn view_matrix(&self) -> Mat4 {
-        glam::camera::rh::view::look_at_mat4(self.eye(), self.target, Vec3::Y)
+        let vertical = self.frame() * Vec3::Y;
+        glam::camera::rh::view::look_at_mat4(self.eye(), self.target, vertical)
     }
 
     /// Near and far clip distances in Å, enclosing the scene's bounding sphere.

@@ -77,6 +77,9 @@ pub struct CameraState {
     /// When true, only the direction (yaw, pitch, projection) is used and the camera is fitted
     /// to the scene (a state written by hand usually wants this).
     pub fit: bool,
+    /// The world direction shown upwards on screen (a unit vector; `[0, 1, 0]` by default, a
+    /// membrane's normal in its side view).
+    pub vertical: [f32; 3],
 }
 
 impl Default for CameraState {
@@ -97,6 +100,7 @@ impl CameraState {
             orthographic: camera.projection == Projection::Orthographic,
             scene_radius: camera.scene_radius,
             fit,
+            vertical: camera.vertical.to_array(),
         }
     }
 
@@ -104,6 +108,12 @@ impl CameraState {
     pub fn apply(&self, camera: &mut Camera) {
         camera.yaw = self.yaw_deg.to_radians();
         camera.pitch = self.pitch_deg.to_radians();
+        let vertical = glam::Vec3::from(self.vertical);
+        camera.vertical = if vertical.is_finite() {
+            vertical.normalize_or(glam::Vec3::Y)
+        } else {
+            glam::Vec3::Y
+        };
         camera.projection = if self.orthographic {
             Projection::Orthographic
         } else {

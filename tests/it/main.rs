@@ -9,6 +9,7 @@ mod xvfb_support;
 
 mod app_gpu_worker;
 mod app_keys;
+mod app_membrane_view;
 mod app_panels;
 mod app_smoke;
 mod app_soak;
