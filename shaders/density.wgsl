@@ -69,31 +69,18 @@ fn bricks(
     if (a >= active_bricks[0]) {
         return;
     }
-    let b = active_bricks[1u + a];
-    let bx = b % u.brick_dims.x;
-    let by = (b / u.brick_dims.x) % u.brick_dims.y;
-    let bz = b / (u.brick_dims.x * u.brick_dims.y);
+    let brick = brick_at(active_bricks[1u + a]);
+    let bx = brick.x;
+    let by = brick.y;
+    let bz = brick.z;
     // Bricks outside this slab's density layers belong to another slab's pass.
-    let bz0 = u.dens_z0 / BRICK;
-    let bz1 = (u.dens_z0 + u.dens_layers - 1u) / BRICK;
-    if (bz < bz0 || bz > bz1) {
+    if (!in_slab(bz)) {
         return;
     }
     // The list index a is the brick's slot; slots count from the slab's first brick layer.
     let table = u.brick_dims.x * u.brick_dims.y * u.brick_dims.z;
-    let first = density[bz0 * u.brick_dims.x * u.brick_dims.y] & 0x7fffffffu;
-    let slot = a - first;
-    var capacity = (arrayLength(&density) - table) / (BRICK * BRICK * BRICK);
-    if (WITH_COLOUR) {
-        capacity = min(capacity, arrayLength(&colour) / (3u * BRICK * BRICK * BRICK));
-    }
-    if (lid == 0u) {
-        atomicMax(&counters[C_BRICK_SLOTS], slot + 1u);
-    }
-    if (slot >= capacity) {
-        if (lid == 0u) {
-            atomicOr(&counters[C_OVERFLOW], OVERFLOW_BRICKS);
-        }
+    let slot = a - first_slot();
+    if (!claim_slot(slot, lid)) {
         return;
     }
     let ly = lid % BRICK;
@@ -130,31 +117,21 @@ fn bricks_tiled(
     if (a >= active_bricks[0]) {
         return;
     }
-    let b = active_bricks[1u + a];
-    let bx = b % u.brick_dims.x;
-    let by = (b / u.brick_dims.x) % u.brick_dims.y;
-    let bz = b / (u.brick_dims.x * u.brick_dims.y);
-    let bz0 = u.dens_z0 / BRICK;
-    let bz1 = (u.dens_z0 + u.dens_layers - 1u) / BRICK;
-    if (bz < bz0 || bz > bz1) {
+    let brick = brick_at(active_bricks[1u + a]);
+    let bx = brick.x;
+    let by = brick.y;
+    let bz = brick.z;
+    if (!in_slab(bz)) {
         return;
     }
     let table = u.brick_dims.x * u.brick_dims.y * u.brick_dims.z;
+    // The first slot comes from a read-write buffer: shared through workgroup memory so the
+    // barriers below stay in uniform control flow.
     if (lid == 0u) {
-        tile_first_slot = density[bz0 * u.brick_dims.x * u.brick_dims.y] & 0x7fffffffu;
+        tile_first_slot = first_slot();
     }
     let slot = a - workgroupUniformLoad(&tile_first_slot);
-    var capacity = (arrayLength(&density) - table) / (BRICK * BRICK * BRICK);
-    if (WITH_COLOUR) {
-        capacity = min(capacity, arrayLength(&colour) / (3u * BRICK * BRICK * BRICK));
-    }
-    if (lid == 0u) {
-        atomicMax(&counters[C_BRICK_SLOTS], slot + 1u);
-    }
-    if (slot >= capacity) {
-        if (lid == 0u) {
-            atomicOr(&counters[C_OVERFLOW], OVERFLOW_BRICKS);
-        }
+    if (!claim_slot(slot, lid)) {
         return;
     }
     let ly = lid % BRICK;
@@ -218,6 +195,47 @@ fn bricks_tiled(
         let c = slot * (BRICK * BRICK * BRICK) + BRICK * (ly + BRICK * lz);
         write_run(i0, table + c, c, dens, col);
     }
+}
+
+// Brick coordinates of brick id b (x fastest).
+fn brick_at(b: u32) -> vec3<u32> {
+    return vec3<u32>(
+        b % u.brick_dims.x,
+        (b / u.brick_dims.x) % u.brick_dims.y,
+        b / (u.brick_dims.x * u.brick_dims.y),
+    );
+}
+
+// True when brick layer bz holds density layers of this slab.
+fn in_slab(bz: u32) -> bool {
+    let bz0 = u.dens_z0 / BRICK;
+    let bz1 = (u.dens_z0 + u.dens_layers - 1u) / BRICK;
+    return bz >= bz0 && bz <= bz1;
+}
+
+// The slot of the slab's first brick layer (from the slot table at the start of density).
+fn first_slot() -> u32 {
+    return density[(u.dens_z0 / BRICK) * u.brick_dims.x * u.brick_dims.y] & 0x7fffffffu;
+}
+
+// Records that `slot` is used (thread 0) and whether the buffers hold it; when they do not,
+// raises OVERFLOW_BRICKS (thread 0) and returns false.
+fn claim_slot(slot: u32, lid: u32) -> bool {
+    let table = u.brick_dims.x * u.brick_dims.y * u.brick_dims.z;
+    var capacity = (arrayLength(&density) - table) / (BRICK * BRICK * BRICK);
+    if (WITH_COLOUR) {
+        capacity = min(capacity, arrayLength(&colour) / (3u * BRICK * BRICK * BRICK));
+    }
+    if (lid == 0u) {
+        atomicMax(&counters[C_BRICK_SLOTS], slot + 1u);
+    }
+    if (slot >= capacity) {
+        if (lid == 0u) {
+            atomicOr(&counters[C_OVERFLOW], OVERFLOW_BRICKS);
+        }
+        return false;
+    }
+    return true;
 }
 
 // RUN voxels from (i0, j, dens_z0 + kl) along x, into density words dbase.. and colour

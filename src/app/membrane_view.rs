@@ -43,48 +43,13 @@ pub fn layer_normal(points: &[Vec3]) -> Option<Vec3> {
     Some(vectors[0].as_vec3().normalize())
 }
 
-/// Eigenvalues (ascending) and unit eigenvectors of a symmetric 3 x 3 matrix, by Jacobi
-/// rotations.
+/// Eigenvalues (ascending) and unit eigenvectors of a symmetric 3 x 3 matrix.
 fn symmetric_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
-    let mut a = m.to_cols_array_2d();
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    for _ in 0..50 {
-        let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
-        if off < 1e-12 * (a[0][0].abs() + a[1][1].abs() + a[2][2].abs() + 1e-300) {
-            break;
-        }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q].abs() < 1e-300 {
-                continue;
-            }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-            let c = 1.0 / (t * t + 1.0).sqrt();
-            let s = t * c;
-            // Rows p and q of every column, then columns p and q: A <- J^T A J.
-            for row in a.iter_mut() {
-                let (x, y) = (row[p], row[q]);
-                row[p] = c * x - s * y;
-                row[q] = s * x + c * y;
-            }
-            for k in 0..3 {
-                let (x, y) = (a[p][k], a[q][k]);
-                a[p][k] = c * x - s * y;
-                a[q][k] = s * x + c * y;
-            }
-            // V <- V J (v[k] is row k; column i is eigenvector i).
-            for row in v.iter_mut() {
-                let (x, y) = (row[p], row[q]);
-                row[p] = c * x - s * y;
-                row[q] = s * x + c * y;
-            }
-        }
-    }
+    let (values, v) = crate::transform::fit::jacobi_eigen(m.to_cols_array_2d());
     let mut order = [0usize, 1, 2];
-    order.sort_by(|&i, &j| a[i][i].total_cmp(&a[j][j]));
-    let values = order.map(|i| a[i][i]);
+    order.sort_by(|&i, &j| values[i].total_cmp(&values[j]));
     let vectors = order.map(|i| DVec3::new(v[0][i], v[1][i], v[2][i]).normalize());
-    (values, vectors)
+    (order.map(|i| values[i]), vectors)
 }
 
 /// Turns `camera` to the side view of the membrane in `c`, when it has one; returns true when

@@ -115,7 +115,7 @@ pub fn rotation_from_correlation(s: &[[f64; 3]; 3]) -> DMat3 {
         [szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy],
         [sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz],
     ];
-    let (values, vectors) = jacobi_eigen4(n);
+    let (values, vectors) = jacobi_eigen(n);
     let best = (0..4)
         .max_by(|&a, &b| values[a].total_cmp(&values[b]))
         .unwrap_or(0);
@@ -132,24 +132,24 @@ pub fn rotation_from_correlation(s: &[[f64; 3]; 3]) -> DMat3 {
     DMat3::from_quat(quat.normalize())
 }
 
-/// Eigenvalues and eigenvectors (columns of the returned matrix) of a symmetric 4x4 matrix,
-/// by cyclic Jacobi rotations.
-fn jacobi_eigen4(mut a: [[f64; 4]; 4]) -> ([f64; 4], [[f64; 4]; 4]) {
-    let mut v = [[0.0f64; 4]; 4];
+/// Eigenvalues and eigenvectors (columns of the returned matrix: `v[k][i]` is component k of
+/// vector i) of a symmetric N x N matrix, by cyclic Jacobi rotations. Unordered.
+pub(crate) fn jacobi_eigen<const N: usize>(mut a: [[f64; N]; N]) -> ([f64; N], [[f64; N]; N]) {
+    let mut v = [[0.0f64; N]; N];
     for (i, row) in v.iter_mut().enumerate() {
         row[i] = 1.0;
     }
     for _sweep in 0..50 {
-        let off: f64 = (0..4)
-            .flat_map(|p| (p + 1..4).map(move |q| (p, q)))
+        let off: f64 = (0..N)
+            .flat_map(|p| (p + 1..N).map(move |q| (p, q)))
             .map(|(p, q)| a[p][q] * a[p][q])
             .sum();
-        let scale: f64 = (0..4).map(|i| a[i][i] * a[i][i]).sum::<f64>() + off;
+        let scale: f64 = (0..N).map(|i| a[i][i] * a[i][i]).sum::<f64>() + off;
         if off <= 1e-30 * scale.max(1e-300) {
             break;
         }
-        for p in 0..4 {
-            for q in p + 1..4 {
+        for p in 0..N {
+            for q in p + 1..N {
                 if a[p][q].abs() < 1e-300 {
                     continue;
                 }
@@ -176,7 +176,7 @@ fn jacobi_eigen4(mut a: [[f64; 4]; 4]) -> ([f64; 4], [[f64; 4]; 4]) {
             }
         }
     }
-    ([a[0][0], a[1][1], a[2][2], a[3][3]], v)
+    (std::array::from_fn(|i| a[i][i]), v)
 }
 
 #[cfg(test)]
