@@ -1,4 +1,6 @@
-//! Residue numbers chemfiles can use in an mmCIF file's `_atom_site` loop.
+//! Residue numbers chemfiles can use in an mmCIF file's `_atom_site` loop. chemfiles reads
+//! mmCIF files only on the reference path ([`super::open_via_chemfiles`], for tests); our
+//! reader ([`super::mmcif`]) numbers residues by the same rules.
 //!
 //! chemfiles 0.10 numbers a residue by `label_seq_id`, and where that is `.` (waters, ligands,
 //! sugars: every atom outside a polymer sequence) by `label_entity_id`. Two things go wrong:

@@ -1,20 +1,25 @@
 //! Reading structures and trajectories: the first stage of the data flow. [`open`] turns a
 //! topology file (and optionally a separate trajectory file) into a [`Trajectory`]: a constant
 //! [`Topology`](crate::model::Topology) plus random access to [`Frame`](crate::model::Frame)s,
-//! one at a time (the whole trajectory is never loaded). [`FrameStreamer`] wraps a trajectory in
+//! one at a time (the whole trajectory is never loaded; the models of an mmCIF file are read at
+//! once, with the topology). [`FrameStreamer`] wraps a trajectory in
 //! a reader thread with a bounded cache for the viewer.
 //!
-//! Large plain PDB and XYZ files take a fast path (`fast`): read once, in Rust, giving exactly
-//! what the chemfiles path gives. Every other format goes through chemfiles (PDB, mmCIF, GRO, XTC, TRR, DCD, LAMMPS dump, XYZ, TNG,
-//! Amber NetCDF, with `.gz`/`.bz2`/`.xz` compression); wwPDB files are additionally read by pdbtbx
-//! for element columns, B-factors and chains. All failures are [`IoError`]s that print as one
-//! line naming the file (and frame, and atom); chemfiles' own warnings are captured (see
-//! [`take_warnings`]) rather than printed. No byte of a file reaches the C++ readers unchecked:
-//! text is made valid UTF-8 and `.gz`/`.bz2` decompressed in Rust (`prepare`), XTC/TRR frame
-//! headers (`xdr`), TNG blocks (`tng`) and DCD headers (`dcd`) are walked first, and a damaged
-//! part ends the readable frames as [`Damage`].
+//! mmCIF files (`.cif`, `.mmcif`, also compressed) are read by our own reader (`mmcif`, on the
+//! tokens of `cif_lexer`): no C++ parser sees their bytes (chemfiles' mmCIF reader crashed on
+//! tabs in an `_atom_site` row and stopped at a blank line inside the loop). Large plain PDB and
+//! XYZ files take a fast path (`fast`): read once, in Rust, giving exactly what the chemfiles
+//! path gives. Every other format goes through chemfiles (PDB, GRO, XTC, TRR, DCD, LAMMPS dump,
+//! XYZ, TNG, Amber NetCDF, with `.gz`/`.bz2`/`.xz` compression); PDB files are additionally
+//! read column by column for element columns, B-factors and chains (`wwpdb`). All failures are
+//! [`IoError`]s that print as one line naming the file (and frame, and atom, or line); chemfiles'
+//! own warnings are captured (see [`take_warnings`]) rather than printed. No byte of a file
+//! reaches the C++ readers unchecked: text is made valid UTF-8 and `.gz`/`.bz2` decompressed in
+//! Rust (`prepare`), XTC/TRR frame headers (`xdr`), TNG blocks (`tng`) and DCD headers (`dcd`)
+//! are walked first, and a damaged part ends the readable frames as [`Damage`].
 
 mod chem;
+mod cif_lexer;
 mod cif_residues;
 mod conect;
 mod dcd;
@@ -23,6 +28,8 @@ mod fast;
 mod fast_pdb;
 mod fast_xyz;
 pub mod format;
+mod mmcif;
+mod mmcif_bonds;
 mod pdb_templates;
 mod prepare;
 mod quiet;

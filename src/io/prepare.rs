@@ -11,9 +11,10 @@
 //!   temporary plain file (chemfiles' bzip2 reader spins forever on a truncated stream). A stream
 //!   that ends early keeps what decompressed: the frames before the cut stay readable and the
 //!   last, cut frame is reported as damage.
-//! - mmCIF files get a residue number for every atom outside a polymer sequence
-//!   ([`super::cif_residues`]): chemfiles made all the waters of a chain one residue, and
-//!   refused files whose entity is `?`.
+//! - mmCIF files (only on the reference path, [`super::open_via_chemfiles`]: [`super::open`]
+//!   reads them with [`super::mmcif`]) get a residue number for every atom outside a polymer
+//!   sequence ([`super::cif_residues`]): chemfiles made all the waters of a chain one residue,
+//!   and refused files whose entity is `?`.
 //! - A path that is not UTF-8 (chemfiles panics on it) is opened through a symbolic link with a
 //!   plain name.
 //!
@@ -337,19 +338,7 @@ fn decompress(
     compression: Option<&str>,
     text: Option<TextKind>,
 ) -> Result<Prepared, IoError> {
-    let file = open(path)?;
-    let mut input: Box<dyn Read> = match compression {
-        Some("GZ") => Box::new(flate2::read::MultiGzDecoder::new(std::io::BufReader::new(
-            file,
-        ))),
-        Some("XZ") => Box::new(lzma_rust2::XzReader::new(
-            std::io::BufReader::new(file),
-            true,
-        )),
-        _ => Box::new(bzip2::read::MultiBzDecoder::new(std::io::BufReader::new(
-            file,
-        ))),
-    };
+    let mut input = decoder(open(path)?, compression);
     let (temp, copy) = temp_file(path, format.base)?;
     let mut output = BufWriter::new(create(path, &copy)?);
     let mut cleaner = text.map(Cleaner::new);
@@ -433,6 +422,56 @@ fn decompress(
         cut_removed,
         temp: Some(temp),
     })
+}
+
+/// The Rust decoder of `compression` (`GZ`, `XZ`, else bzip2) reading `file`.
+fn decoder(file: File, compression: Option<&str>) -> Box<dyn Read> {
+    let file = std::io::BufReader::new(file);
+    match compression {
+        Some("GZ") => Box::new(flate2::read::MultiGzDecoder::new(file)),
+        Some("XZ") => Box::new(lzma_rust2::XzReader::new(file, true)),
+        _ => Box::new(bzip2::read::MultiBzDecoder::new(file)),
+    }
+}
+
+/// The whole content of `path` in memory, decompressed (in Rust) when `format` is compressed,
+/// and why the compressed stream ends early when it does (what decompressed before is kept).
+/// For the readers that parse a file themselves ([`super::mmcif`]); no temporary copy.
+pub(crate) fn read_all(
+    path: &Path,
+    format: &FileFormat,
+) -> Result<(Vec<u8>, Option<String>), IoError> {
+    let compression = format.chemfiles.rsplit_once(" / ").map(|(_, c)| c);
+    let mut file = open(path)?;
+    let Some(compression) = compression else {
+        let mut bytes = Vec::new();
+        file.read_to_end(&mut bytes)
+            .map_err(|e| IoError::unreadable(path, e.to_string()))?;
+        return Ok((bytes, None));
+    };
+    let mut input = decoder(file, Some(compression));
+    let mut bytes = Vec::new();
+    let mut buffer = vec![0u8; CHUNK];
+    loop {
+        match input.read(&mut buffer) {
+            Ok(0) => break,
+            Ok(n) => bytes.extend_from_slice(&buffer[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => {
+                let total = bytes.len();
+                let reason =
+                    format!("the compressed data is cut or corrupt after {total} bytes ({e})");
+                if bytes.is_empty() {
+                    return Err(IoError::unreadable(path, reason));
+                }
+                return Ok((bytes, Some(reason)));
+            }
+        }
+    }
+    if bytes.is_empty() {
+        return Err(IoError::unreadable(path, "the compressed data is empty"));
+    }
+    Ok((bytes, None))
 }
 
 /// Copies `input` to `output` through `cleaner`.

@@ -9,10 +9,10 @@ use std::sync::{Mutex, MutexGuard};
 use glam::Vec3;
 
 use super::chem::{ChemReader, check_positions};
-use super::format::detect;
-use super::prepare::prepare;
+use super::format::{FileFormat, detect};
+use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
-use super::{IoError, dcd, fast, wwpdb, xdr};
+use super::{IoError, dcd, fast, mmcif, wwpdb, xdr};
 
 use crate::model::{Frame, Topology, sizing};
 
@@ -62,23 +62,34 @@ impl std::fmt::Debug for Trajectory {
 /// trajectory whose last frames are damaged (truncated) still opens: [`Trajectory::len`] counts
 /// the good frames and [`Trajectory::damage`] says where it breaks.
 ///
-/// Large plain PDB and XYZ files are read by our own readers (see `fast`), every other file by
-/// chemfiles; setting the environment variable `MDSURF_NO_FAST_READ` sends every file to
-/// chemfiles (for timing the two paths against each other).
+/// mmCIF files (plain or compressed) are read by our own reader (`mmcif`), never by chemfiles;
+/// large plain PDB and XYZ files by our fast readers (see `fast`); every other file by
+/// chemfiles. Setting the environment variable `MDSURF_NO_FAST_READ` sends PDB and XYZ files to
+/// chemfiles too (for timing the two paths against each other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, true)
 }
 
-/// [`open`] with every file read through chemfiles, never a fast reader: the reference the fast
-/// readers are tested against.
+/// [`open`] with every file read through chemfiles, never a fast reader and never our mmCIF
+/// reader: the reference those readers are tested against (tests and benchmarks only; chemfiles'
+/// mmCIF reader crashes on some legal files).
 pub fn open_via_chemfiles(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, false)
 }
 
-/// True when `path` is a file a fast reader reads (a plain single-frame PDB or XYZ file it
-/// reproduces exactly); false for every other file, which goes through chemfiles.
+/// True when `path` is a file our own readers read: an mmCIF file, or a plain single-frame PDB
+/// or XYZ file a fast reader reproduces exactly; false for every other file, which goes through
+/// chemfiles.
 pub fn reads_fast(path: &Path) -> Result<bool, IoError> {
-    Ok(fast::read(path, &detect(path)?).is_some())
+    let format = detect(path)?;
+    Ok(format.base == "mmCIF" || fast::read(path, &format).is_some())
+}
+
+/// Reads the mmCIF file `path` with our reader: every model as a frame, and why a compressed
+/// stream ends early when it does.
+fn read_cif(path: &Path, format: &FileFormat) -> Result<(mmcif::CifRead, Option<String>), IoError> {
+    let (bytes, truncated) = read_all(path, format)?;
+    Ok((mmcif::read(path, &bytes)?, truncated))
 }
 
 fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajectory, IoError> {
@@ -88,9 +99,22 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
             path: top.to_path_buf(),
         });
     }
-    // Large plain PDB and XYZ files: read once, in Rust (see `fast`); else through chemfiles.
-    let fast = allow_fast.then(|| fast::read(top, &top_format)).flatten();
-    let (mut topology, first, top_reader) = match fast {
+    // mmCIF files: our reader. Large plain PDB and XYZ files: read once, in Rust (see `fast`).
+    // Everything else through chemfiles.
+    let mut later_models = None;
+    let ours = if allow_fast && top_format.base == "mmCIF" {
+        let (read, truncated) = read_cif(top, &top_format)?;
+        let mut frames = read.frames.into_iter();
+        let first = frames.next().unwrap_or_default();
+        later_models = Some((frames.collect::<Vec<_>>(), truncated));
+        Some(fast::FastRead {
+            topology: read.topology,
+            frame: first,
+        })
+    } else {
+        allow_fast.then(|| fast::read(top, &top_format)).flatten()
+    };
+    let (mut topology, first, top_reader) = match ours {
         Some(read) => (read.topology, FirstFrame::Read(read.frame), None),
         None => {
             let mut reader = ChemReader::open(top, &top_format)?;
@@ -120,11 +144,17 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     let mut walk = None;
     let reader = match (traj, top_reader, first) {
         (None, Some(reader), _) => FrameSource::Chem(reader),
-        (None, None, first) => FrameSource::Memory {
-            path: top.to_path_buf(),
-            base: top_format.base,
-            frame: first.into_frame(),
-        },
+        (None, None, first) => {
+            let (later, truncated) = later_models.unwrap_or_default();
+            let mut frames = vec![first.into_frame()];
+            frames.extend(later);
+            FrameSource::Memory {
+                path: top.to_path_buf(),
+                base: top_format.base,
+                frames,
+                truncated,
+            }
+        }
         (Some(path), top_reader, _) => {
             let format = detect(path)?;
             drop(top_reader);
@@ -136,6 +166,16 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
                 _ => None,
             };
             match kind {
+                // An mmCIF trajectory: every model, read by our reader.
+                None if allow_fast && format.base == "mmCIF" => {
+                    let (read, truncated) = read_cif(path, &format)?;
+                    FrameSource::Memory {
+                        path: path.to_path_buf(),
+                        base: format.base,
+                        frames: read.frames,
+                        truncated,
+                    }
+                }
                 Some(kind) => {
                     let prepared = prepare(path, &format)?;
                     let w = xdr::walk(&prepared.open_path, format.base)
@@ -248,9 +288,11 @@ impl Trajectory {
     }
 
     /// What [`Trajectory::read_frame`]`(0)` checks, without handing the frame out: a frame
-    /// held in memory (a single-frame file read at open) is checked in place, not copied.
+    /// held in memory (read at open) is checked in place, not copied.
     fn check_first_frame(&self) -> Result<(), IoError> {
-        if let FrameSource::Memory { path, frame, .. } = &*self.lock() {
+        if let FrameSource::Memory { path, frames, .. } = &*self.lock()
+            && let Some(frame) = frames.first()
+        {
             check_positions(path, 0, &frame.positions)?;
             return self.check_fits(frame, 0);
         }
@@ -391,15 +433,18 @@ impl FirstFrame {
     }
 }
 
-/// Where frames come from: chemfiles, our own readers for XTC and TRR, or the one frame a fast
-/// reader read with the topology (kept in memory).
+/// Where frames come from: chemfiles, our own readers for XTC and TRR, or the frames a reader
+/// of our own read with the topology (kept in memory: the one frame of a fast-read file, the
+/// models of an mmCIF file).
 enum FrameSource {
     Chem(ChemReader),
     Xdr(XdrReader),
     Memory {
         path: PathBuf,
         base: &'static str,
-        frame: Frame,
+        frames: Vec<Frame>,
+        /// Why the compressed file ends early, when it does (its last frame is then cut).
+        truncated: Option<String>,
     },
 }
 
@@ -424,14 +469,15 @@ impl FrameSource {
         match self {
             FrameSource::Chem(r) => r.len(),
             FrameSource::Xdr(r) => r.len(),
-            FrameSource::Memory { .. } => 1,
+            FrameSource::Memory { frames, .. } => frames.len(),
         }
     }
 
     fn truncated(&self) -> Option<(&str, bool)> {
         match self {
             FrameSource::Chem(r) => r.truncated(),
-            FrameSource::Xdr(_) | FrameSource::Memory { .. } => None,
+            FrameSource::Memory { truncated, .. } => truncated.as_deref().map(|t| (t, false)),
+            FrameSource::Xdr(_) => None,
         }
     }
 
@@ -439,14 +485,14 @@ impl FrameSource {
         match self {
             FrameSource::Chem(r) => r.read_frame(index),
             FrameSource::Xdr(r) => r.read_frame(index),
-            FrameSource::Memory { path, frame, .. } => {
-                if index != 0 {
+            FrameSource::Memory { path, frames, .. } => {
+                let Some(frame) = frames.get(index) else {
                     return Err(IoError::FrameOutOfRange {
                         path: path.clone(),
                         frame: index,
-                        len: 1,
+                        len: frames.len(),
                     });
-                }
+                };
                 check_positions(path, index, &frame.positions)?;
                 Ok(frame.clone())
             }

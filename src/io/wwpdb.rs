@@ -1,7 +1,9 @@
 //! wwPDB enrichment: pdbtbx (mmCIF) or a fixed-column reader (PDB) fills in what chemfiles does
 //! not read, the B-factors, occupancies and serial numbers (and elements and chains when
 //! chemfiles found none). Atoms are matched by position, so the order and count of atoms stay
-//! chemfiles' (the order of the frames).
+//! chemfiles' (the order of the frames). mmCIF files reach chemfiles, and so this, only on the
+//! reference path ([`super::open_via_chemfiles`]); our mmCIF reader ([`super::mmcif`]) reads
+//! these columns itself.
 
 use std::collections::HashMap;
 use std::path::Path;

@@ -65,7 +65,8 @@ fn every_structure_in_tests_data_reads_the_same_both_ways() {
         let Ok(format) = io::detect(&path) else {
             continue;
         };
-        if !format.has_names {
+        // mmCIF files are read by our mmCIF reader, compared with chemfiles in io_mmcif.rs.
+        if !format.has_names || format.base == "mmCIF" {
             continue;
         }
         if io::reads_fast(&path).unwrap() {

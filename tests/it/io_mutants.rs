@@ -1,10 +1,10 @@
 //! The mutation test of issue 10: seeded mutants (bit flips, truncations, chunks duplicated or
 //! deleted) of every format in the project's data (PDB, GRO, gzipped GRO, XTC, DCD, TNG, LAMMPS
-//! dump, bzip2-compressed LAMMPS dump), 100 per format, each run through the real binary
-//! (`mdsurf surface`) with a time limit. Every run must end with exit 0 or 2 (never a signal,
-//! never a panic's 101, never a hang), print no panic and no third-party library noise, give
-//! exactly one line of error on exit 2 (at most one note on exit 0), and stay under 1 GB of
-//! resident memory.
+//! dump, bzip2-compressed LAMMPS dump, mmCIF, gzipped mmCIF), 100 per format, each run through
+//! the real binary (`mdsurf surface`) with a time limit. Every run must end with exit 0 or 2
+//! (never a signal, never a panic's 101, never a hang), print no panic and no third-party
+//! library noise, give exactly one line of error on exit 2 (at most one note on exit 0), and
+//! stay under 1 GB of resident memory.
 //!
 //! Run many more locally: `MDSURF_MUTANTS=2000 MDSURF_MUTANT_SEED=7 cargo test --release
 //! io_mutants -- --nocapture` (or `scripts/mutants 2000 7`). A failing mutant is kept next to the
@@ -106,6 +106,18 @@ fn cases() -> Vec<Case> {
             bytes: read("spce_all_coords.lammpstrj.bz2"),
             topology: None,
             extension: "lammpstrj.bz2",
+        },
+        Case {
+            name: "mmCIF",
+            bytes: crate::data_support::gunzipped("1gbt.cif.gz").into_bytes(),
+            topology: None,
+            extension: "cif",
+        },
+        Case {
+            name: "mmCIF.GZ",
+            bytes: read("1a7g.cif.gz"),
+            topology: None,
+            extension: "cif.gz",
         },
     ]
 }

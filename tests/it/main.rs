@@ -39,6 +39,7 @@ mod io_bad;
 mod io_data;
 mod io_fast;
 mod io_hostile;
+mod io_mmcif;
 mod io_model;
 mod io_mutants;
 mod io_roundtrip;
