@@ -1,9 +1,10 @@
 //! `mdsurf render`: pictures without a window, through the viewer's renderer. Opens the files,
 //! computes the surface of each selected frame with the chosen engine, renders it offscreen with
-//! `render_to_rgba` (optionally turning the camera per image, or in stereo) and writes PNGs
-//! atomically.
+//! `render_to_rgba` (optionally turning the camera per image, or in stereo) and writes PNGs, or
+//! one H.264 MP4 movie (`-o movie.mp4`), atomically.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -15,6 +16,7 @@ use mdsurf::render::{
     Stereo, atom_instances, bounding_sphere, render_to_rgba, write_png,
 };
 
+use mdsurf::export::video::{Mp4Movie, VideoQuality, check_even_size, check_fps, is_mp4};
 use mdsurf::gpu::{Changes, GpuEngine, Picked, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::representation::{RepStyle, Representation};
@@ -48,8 +50,16 @@ pub struct RenderArgs {
     pub frames: Option<FrameRange>,
     /// Output PNG. For several images a pattern: `{frame}` (or `{frame:05}`, zero-padded) is the
     /// trajectory frame index, as in `mdsurf surface`; `{image}` the image number (5 digits).
-    #[arg(short = 'o', long = "output", value_name = "PNG")]
+    /// A `.mp4` name writes all images as one H.264 movie instead (even --size needed).
+    #[arg(short = 'o', long = "output", value_name = "PNG|MP4")]
     pub output: PathBuf,
+    /// Movie frame rate, frames per second (MP4 output; default 24).
+    #[arg(long, value_name = "FPS", value_parser = parse_fps)]
+    pub fps: Option<f64>,
+    /// Movie quality preset: low, medium (default) or high (MP4 output; the surface's
+    /// resolution is --quality).
+    #[arg(long, value_name = "PRESET")]
+    pub video_quality: Option<VideoQuality>,
     /// Image size in pixels.
     #[arg(long, value_name = "WxH", default_value = "1280x720", value_parser = parse_size)]
     pub size: [u32; 2],
@@ -152,6 +162,14 @@ fn parse_pair(s: &str) -> Result<[f32; 2], String> {
     Ok(pair)
 }
 
+fn parse_fps(s: &str) -> Result<f64, String> {
+    let fps: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad frame rate '{s}': expected frames per second"))?;
+    check_fps(fps)
+}
+
 fn parse_turntable(s: &str) -> Result<f32, String> {
     let d: f32 = s
         .trim()
@@ -163,6 +181,29 @@ fn parse_turntable(s: &str) -> Result<f32, String> {
         ));
     }
     Ok(d)
+}
+
+/// Set by the first SIGINT or SIGTERM while a movie is being written: the frame loop stops with
+/// an error and the movie's temporary file is removed (a second signal ends the process).
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_interrupt(signal: libc::c_int) {
+    INTERRUPTED.store(true, Ordering::SeqCst);
+    // SAFETY: `signal` is async-signal-safe; the default action makes a second signal fatal.
+    unsafe {
+        libc::signal(signal, libc::SIG_DFL);
+    }
+}
+
+/// Catches SIGINT and SIGTERM so that an interrupted movie is cleaned up, not left half-written.
+fn catch_interrupts() {
+    #[cfg(unix)]
+    // SAFETY: the handler only stores to an atomic and calls `signal`, both async-signal-safe.
+    unsafe {
+        let handler = on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t;
+        libc::signal(libc::SIGINT, handler);
+        libc::signal(libc::SIGTERM, handler);
+    }
 }
 
 /// `pattern` for trajectory frame `frame` and image number `image`: `{frame}` is the frame
@@ -250,7 +291,25 @@ pub fn run(args: RenderArgs) -> Result<()> {
             .max(1.0) as usize;
         frames = vec![frames[0]; images];
     }
-    let paths = output_paths(&args.output, &frames)?;
+    let movie_out = is_mp4(&args.output);
+    let paths = if movie_out {
+        if args.chunk.is_some() {
+            bail!(
+                "-o {}: --chunk renders PNG sequences only; render the movie in one run",
+                args.output.display()
+            );
+        }
+        check_even_size(&args.output, args.size)?;
+        vec![args.output.clone(); frames.len()]
+    } else {
+        if args.fps.is_some() || args.video_quality.is_some() {
+            bail!(
+                "-o {}: --fps and --video-quality apply to a movie; give the output a .mp4 name",
+                args.output.display()
+            );
+        }
+        output_paths(&args.output, &frames)?
+    };
     // Like `surface`, a missing output folder is refused before any work (never created).
     if let Some(first) = paths.first() {
         super::surface::check_parent_dir(first)?;
@@ -361,12 +420,33 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let surface_count = layers.iter().filter(|l| l.rep().style.is_surface()).count();
     scene.set_surface_count(surface_count);
+    // The movie is written to a temporary file and renamed at the end: an error (or an early
+    // exit) on any frame leaves no movie file.
+    let mut movie = if movie_out {
+        let fps = args.fps.unwrap_or(24.0);
+        let quality = args.video_quality.unwrap_or_default();
+        let movie = Mp4Movie::create(&args.output, args.size, fps, quality)?;
+        catch_interrupts();
+        Some(movie)
+    } else {
+        None
+    };
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;
         }
         if i > 0 && i < block.start {
             continue;
+        }
+        if let Some(m) = &movie
+            && INTERRUPTED.load(Ordering::SeqCst)
+        {
+            bail!(
+                "{}: interrupted after {} of {} frames; no movie written",
+                m.path().display(),
+                m.frames(),
+                frames.len()
+            );
         }
         let t0 = Instant::now();
         let frame = if i == 0 {
@@ -484,7 +564,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
             draw_colour_bar(&mut image, d.map, d.effective_range());
         }
         let path = &paths[i];
-        write_png(path, &image)?;
+        match movie.as_mut() {
+            Some(m) => m.push(&image)?,
+            None => write_png(path, &image)?,
+        }
         eprintln!(
             "frame {f}: {}; read {read_ms:.1} ms, total {:.1} ms -> {}",
             if summary.is_empty() {
@@ -494,6 +577,17 @@ pub fn run(args: RenderArgs) -> Result<()> {
             },
             ms_since(t0),
             path.display()
+        );
+    }
+    if let Some(m) = movie {
+        let s = m.finish()?;
+        eprintln!(
+            "movie: {} frames, {:.2} s at {} frames/s, {:.1} kB -> {}",
+            s.frames,
+            s.seconds,
+            args.fps.unwrap_or(24.0),
+            s.bytes as f64 / 1000.0,
+            args.output.display()
         );
     }
     Ok(())

@@ -4,7 +4,7 @@
 //! and special files (devices, pipes) written in place, never replaced by a regular file.
 
 use std::fs;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use tempfile::NamedTempFile;
@@ -32,6 +32,15 @@ impl Write for Sink {
         match self {
             Sink::Temp(t) => t.flush(),
             Sink::Direct(f) => f.flush(),
+        }
+    }
+}
+
+impl Seek for Sink {
+    fn seek(&mut self, pos: SeekFrom) -> io::Result<u64> {
+        match self {
+            Sink::Temp(t) => t.seek(pos),
+            Sink::Direct(f) => f.seek(pos),
         }
     }
 }

@@ -11,6 +11,8 @@ pub mod ply;
 pub mod stats;
 pub mod stats_merge;
 pub mod stl;
+#[cfg(feature = "app")]
+pub mod video;
 
 use std::fmt;
 use std::io::{self, Write};

@@ -1,0 +1,304 @@
+//! `mdsurf render -o movie.mp4` end to end: the real binary writes an H.264 MP4 of the bundled
+//! demo; ffprobe (Debian `ffmpeg`, installed by scripts/test) reads back its codec, size, frame
+//! rate, frame count and duration, and its first frame, decoded by ffmpeg, matches the PNG
+//! render of the same frame (PSNR >= 35 dB). Failed movies (odd size, missing folder, a frame
+//! that cannot be read half-way) leave no file and exit with one line. The movie tests need a
+//! wgpu adapter (lavapipe is enough; skipped with a note unless `REQUIRE_GPU=1`) and ffmpeg
+//! (its absence fails them).
+
+use std::path::Path;
+use std::process::Command;
+
+use mdsurf::render::RgbaImage;
+
+use crate::cli_common::{Run, asset, mdsurf};
+
+fn have_gpu() -> bool {
+    match mdsurf::render::HeadlessGpu::new() {
+        Ok(_) => true,
+        Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("REQUIRE_GPU=1 but {e}")
+        }
+        Err(e) => {
+            eprintln!("note: skipping: {e}");
+            false
+        }
+    }
+}
+
+/// Runs an ffmpeg tool, failing (never skipping) when it is not installed.
+fn ffmpeg_tool(tool: &str, args: &[&str]) -> Vec<u8> {
+    let out = Command::new(tool).args(args).output().unwrap_or_else(|e| {
+        panic!(
+            "cannot run {tool} ({e}): install ffmpeg (`apt-get install ffmpeg`; scripts/test \
+             installs it) to check the movies mdsurf writes"
+        )
+    });
+    assert!(
+        out.status.success(),
+        "{tool} {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out.stdout
+}
+
+/// The value of `"key": value` in ffprobe's JSON (quotes stripped): enough for its flat output.
+fn json_field(json: &str, key: &str) -> String {
+    let at = json
+        .find(&format!("\"{key}\""))
+        .unwrap_or_else(|| panic!("ffprobe output has no {key}: {json}"));
+    let rest = &json[at + key.len() + 2..];
+    let rest = rest.trim_start().trim_start_matches(':').trim_start();
+    let end = rest.find([',', '\n', '}']).unwrap_or(rest.len());
+    rest[..end].trim().trim_matches('"').to_string()
+}
+
+/// Peak signal-to-noise ratio in dB of two RGB images (8 bits per channel).
+fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let mse = a
+        .iter()
+        .zip(b)
+        .map(|(&x, &y)| (f64::from(x) - f64::from(y)).powi(2))
+        .sum::<f64>()
+        / a.len() as f64;
+    if mse == 0.0 {
+        return f64::INFINITY;
+    }
+    10.0 * (255.0f64 * 255.0 / mse).log10()
+}
+
+fn render(dir: &Path, extra: &[&str]) -> Run {
+    let (gro, xtc) = (asset("md_1u19.gro"), asset("md_1u19.xtc"));
+    let mut args = vec!["render", gro.as_str(), xtc.as_str(), "--backend", "cpu"];
+    args.extend_from_slice(extra);
+    mdsurf(dir, &args)
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+fn assert_one_line_failure(r: &Run, needle: &str) {
+    assert_ne!(r.code, 0, "should fail: {}", r.stderr);
+    let err = r.stderr.trim();
+    assert!(
+        err.lines().count() == 1 && err.contains(needle),
+        "expected one line naming {needle:?}, got:\n{err}"
+    );
+}
+
+#[test]
+fn movie_has_the_frames_size_rate_and_pictures_of_the_png_renders() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let size = ["--size", "320x240"];
+    let r = render(
+        dir.path(),
+        &[
+            &["--frames", "0:6", "--fps", "10", "--video-quality", "high"],
+            &size[..],
+            &["-o", "movie.mp4"],
+        ]
+        .concat(),
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stderr.contains("movie: 6 frames"), "{}", r.stderr);
+    // Only the movie is left: no temporary files beside it.
+    assert_eq!(files_in(dir.path()), ["movie.mp4"]);
+    let movie = dir.path().join("movie.mp4");
+    let m = movie.to_str().expect("utf-8 path");
+
+    let probe = ffmpeg_tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=codec_name,width,height,r_frame_rate,avg_frame_rate,nb_read_frames",
+            "-show_entries",
+            "format=duration",
+            "-of",
+            "json",
+            m,
+        ],
+    );
+    let json = String::from_utf8_lossy(&probe);
+    assert_eq!(json_field(&json, "codec_name"), "h264", "{json}");
+    assert_eq!(json_field(&json, "width"), "320", "{json}");
+    assert_eq!(json_field(&json, "height"), "240", "{json}");
+    assert_eq!(json_field(&json, "r_frame_rate"), "10/1", "{json}");
+    assert_eq!(json_field(&json, "nb_read_frames"), "6", "{json}");
+    let duration: f64 = json_field(&json, "duration").parse().expect("duration");
+    assert!((duration - 0.6).abs() < 0.02, "duration {duration}: {json}");
+
+    // The first (key) frame and the last (predicted) frame decoded to RGB against the PNG
+    // sequence of the same run (same camera). 4:2:0 chroma alone limits these small pictures to
+    // about 41 dB; the `high` preset gives about 40 dB.
+    let r = render(
+        dir.path(),
+        &[&["--frames", "0:6"], &size[..], &["-o", "f_{frame}.png"]].concat(),
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    for image in [0, 5] {
+        let png_name = format!("f_{image}.png");
+        let png = RgbaImage::read_png(&dir.path().join(&png_name)).expect("png");
+        let rgb: Vec<u8> = png
+            .pixels
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect();
+        let select = format!("select=eq(n\\,{image})");
+        let decoded = ffmpeg_tool(
+            "ffmpeg",
+            &[
+                "-v",
+                "error",
+                "-i",
+                m,
+                "-vf",
+                &select,
+                "-frames:v",
+                "1",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-",
+            ],
+        );
+        assert_eq!(decoded.len(), 320 * 240 * 3, "decoded frame size");
+        let db = psnr(&decoded, &rgb);
+        eprintln!("movie frame {image}: PSNR {db:.1} dB");
+        assert!(
+            db >= 35.0,
+            "movie frame {image} vs {png_name}: PSNR {db:.1} dB < 35"
+        );
+    }
+}
+
+#[test]
+fn odd_size_is_refused_in_one_line_and_writes_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let r = render(
+        dir.path(),
+        &["--frames", "0:3", "--size", "161x120", "-o", "movie.mp4"],
+    );
+    assert_one_line_failure(&r, "161x120");
+    assert!(r.stderr.contains("160x120"), "{}", r.stderr);
+    assert!(
+        files_in(dir.path()).is_empty(),
+        "{:?}",
+        files_in(dir.path())
+    );
+}
+
+#[test]
+fn movie_into_a_missing_folder_or_an_empty_range_writes_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let r = render(
+        dir.path(),
+        &[
+            "--frames",
+            "0:3",
+            "--size",
+            "160x120",
+            "-o",
+            "nowhere/movie.mp4",
+        ],
+    );
+    assert_one_line_failure(&r, "nowhere");
+    let r = render(
+        dir.path(),
+        &[
+            "--frames",
+            "500:600",
+            "--size",
+            "160x120",
+            "-o",
+            "movie.mp4",
+        ],
+    );
+    assert_one_line_failure(&r, "--frames");
+    assert!(
+        files_in(dir.path()).is_empty(),
+        "{:?}",
+        files_in(dir.path())
+    );
+    // Movie flags on a PNG output are refused rather than ignored.
+    let r = render(dir.path(), &["--fps", "30", "-o", "f.png"]);
+    assert_one_line_failure(&r, "--fps");
+    assert!(
+        files_in(dir.path()).is_empty(),
+        "{:?}",
+        files_in(dir.path())
+    );
+}
+
+#[test]
+fn interrupted_movie_leaves_no_file() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (gro, xtc) = (asset("md_1u19.gro"), asset("md_1u19.xtc"));
+    // A long turntable (360 images) of small pictures, interrupted after its first image.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mdsurf"))
+        .args([
+            "render",
+            &gro,
+            &xtc,
+            "--backend",
+            "cpu",
+            "--turntable",
+            "1",
+            "--size",
+            "64x48",
+            "-o",
+            "movie.mp4",
+        ])
+        .current_dir(dir.path())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start mdsurf");
+    let mut lines = BufReader::new(child.stderr.take().expect("stderr")).lines();
+    let mut seen = Vec::new();
+    for line in lines.by_ref() {
+        let line = line.expect("stderr line");
+        let first_image = line.starts_with("frame ");
+        seen.push(line);
+        if first_image {
+            break;
+        }
+    }
+    assert!(
+        seen.last().is_some_and(|l| l.starts_with("frame ")),
+        "no image rendered: {seen:?}"
+    );
+    // SAFETY: sends SIGINT to the child we started (its pid is valid until we wait on it).
+    unsafe {
+        libc::kill(child.id() as libc::pid_t, libc::SIGINT);
+    }
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = child.wait().expect("wait");
+    assert_eq!(status.code(), Some(2), "{seen:?} {rest:?}");
+    let last = rest.last().map(String::as_str).unwrap_or("");
+    assert!(last.contains("interrupted"), "{rest:?}");
+    assert!(
+        files_in(dir.path()).is_empty(),
+        "{:?}",
+        files_in(dir.path())
+    );
+}
