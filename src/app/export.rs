@@ -1,8 +1,32 @@
 //! Pictures out of the viewer: the movie plan (a frame range, a turntable, or both) and its
 //! step list, the progress of a running export, and the numbered file names. The window layer
-//! renders each step with the same offscreen renderer as screenshots (`render_to_rgba`).
+//! renders each step with the same offscreen renderer as screenshots (`render_to_rgba`) and
+//! writes it as a numbered PNG or into an H.264 MP4 file ([`crate::export::video`]).
 
 use std::path::{Path, PathBuf};
+
+use crate::export::video::{Mp4Movie, VideoQuality};
+
+/// An MP4 movie's file, frame rate and quality (instead of a PNG sequence).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VideoPlan {
+    /// The `.mp4` file written (atomically: no partial file on cancel or failure).
+    pub path: PathBuf,
+    /// Frames per second.
+    pub fps: f64,
+    /// Encoder quality preset.
+    pub quality: VideoQuality,
+}
+
+impl Default for VideoPlan {
+    fn default() -> Self {
+        VideoPlan {
+            path: PathBuf::from("mdsurf-movie.mp4"),
+            fps: 24.0,
+            quality: VideoQuality::default(),
+        }
+    }
+}
 
 /// What a movie export records.
 #[derive(Debug, Clone, PartialEq)]
@@ -17,8 +41,10 @@ pub struct MoviePlan {
     pub turntable_frames: usize,
     /// Image size in pixels.
     pub size: [u32; 2],
-    /// Folder the numbered PNGs go to.
+    /// Folder the numbered PNGs go to (when `video` is `None`).
     pub dir: PathBuf,
+    /// Write one MP4 file instead of numbered PNGs.
+    pub video: Option<VideoPlan>,
 }
 
 impl Default for MoviePlan {
@@ -30,6 +56,7 @@ impl Default for MoviePlan {
             turntable_frames: 180,
             size: [1280, 720],
             dir: PathBuf::from("mdsurf-movie"),
+            video: None,
         }
     }
 }
@@ -72,7 +99,6 @@ impl MoviePlan {
 }
 
 /// A running export.
-#[derive(Debug, Clone)]
 pub struct MovieJob {
     /// All steps.
     pub steps: Vec<MovieStep>,
@@ -82,6 +108,9 @@ pub struct MovieJob {
     pub start_yaw: f32,
     /// Image size in pixels.
     pub size: [u32; 2],
+    /// The MP4 file being written, or `None` for numbered PNGs. Dropping the job (cancel, a
+    /// failed image) deletes its temporary file.
+    pub video: Option<Mp4Movie>,
 }
 
 impl MovieJob {
@@ -166,12 +195,49 @@ pub fn export_ui(
                 .prefix("h "),
         );
     });
-    let mut dir = plan.dir.display().to_string();
-    if ui
-        .add(egui::TextEdit::singleline(&mut dir).hint_text("output folder"))
-        .changed()
-    {
-        plan.dir = PathBuf::from(dir);
+    let mut mp4 = plan.video.is_some();
+    ui.horizontal(|ui| {
+        ui.radio_value(&mut mp4, true, "MP4 (H.264)");
+        ui.radio_value(&mut mp4, false, "PNG sequence");
+    });
+    match (mp4, plan.video.as_mut()) {
+        (true, None) => plan.video = Some(VideoPlan::default()),
+        (false, Some(_)) => plan.video = None,
+        _ => {}
+    }
+    match plan.video.as_mut() {
+        Some(video) => {
+            let mut file = video.path.display().to_string();
+            if ui
+                .add(egui::TextEdit::singleline(&mut file).hint_text("movie.mp4"))
+                .changed()
+            {
+                video.path = PathBuf::from(file);
+            }
+            ui.horizontal(|ui| {
+                ui.add(
+                    egui::DragValue::new(&mut video.fps)
+                        .range(1.0..=240.0)
+                        .suffix(" fps"),
+                );
+                egui::ComboBox::from_label("quality")
+                    .selected_text(video.quality.name())
+                    .show_ui(ui, |ui| {
+                        for q in VideoQuality::ALL {
+                            ui.selectable_value(&mut video.quality, q, q.name());
+                        }
+                    });
+            });
+        }
+        None => {
+            let mut dir = plan.dir.display().to_string();
+            if ui
+                .add(egui::TextEdit::singleline(&mut dir).hint_text("output folder"))
+                .changed()
+            {
+                plan.dir = PathBuf::from(dir);
+            }
+        }
     }
     match job {
         Some(j) => {
@@ -185,7 +251,12 @@ pub fn export_ui(
             }
         }
         None => {
-            if ui.button("Export movie (PNG sequence)").clicked() {
+            let label = if plan.video.is_some() {
+                "Export movie (MP4)"
+            } else {
+                "Export movie (PNG sequence)"
+            };
+            if ui.button(label).clicked() {
                 out.push(Command::StartMovie(plan.clone()));
             }
         }

@@ -17,6 +17,7 @@ use super::source::{FrameSource, open_files_with};
 use super::state::{AppCore, Command};
 use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
+use crate::export::video::Mp4Movie;
 use crate::render::colour_bar::draw_colour_bar;
 use crate::render::write_png;
 use crate::scene::state_file::{CameraState, LookState, StateFile, TrajectoryState};
@@ -223,13 +224,27 @@ impl Viewer {
                     false,
                 ),
                 Command::StartMovie(plan) => {
-                    // The folder typed in the movie panel is made here (image writes never
-                    // create folders, as for every other output).
-                    if let Err(e) = std::fs::create_dir_all(&plan.dir) {
-                        self.core.error =
-                            Some(format!("cannot create {}: {e}", plan.dir.display()));
-                        continue;
-                    }
+                    let video = match &plan.video {
+                        // The movie goes to a temporary file beside the target, renamed when
+                        // the last image is in.
+                        Some(v) => match Mp4Movie::create(&v.path, plan.size, v.fps, v.quality) {
+                            Ok(m) => Some(m),
+                            Err(e) => {
+                                self.core.error = Some(e.to_string());
+                                continue;
+                            }
+                        },
+                        None => {
+                            // The folder typed in the movie panel is made here (image writes
+                            // never create folders, as for every other output).
+                            if let Err(e) = std::fs::create_dir_all(&plan.dir) {
+                                self.core.error =
+                                    Some(format!("cannot create {}: {e}", plan.dir.display()));
+                                continue;
+                            }
+                            None
+                        }
+                    };
                     let steps = plan.steps(self.core.timeline.current);
                     self.core.timeline.playing = false;
                     self.movie = Some(MovieJob {
@@ -237,6 +252,7 @@ impl Viewer {
                         done: 0,
                         start_yaw: self.core.camera.yaw,
                         size: plan.size,
+                        video,
                     });
                 }
                 Command::CancelMovie => {

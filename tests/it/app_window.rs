@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use mdsurf::app::export::MoviePlan;
+use mdsurf::app::export::{MoviePlan, VideoPlan};
 use mdsurf::app::{Command, DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
 use mdsurf::render::RgbaImage;
 
@@ -119,6 +119,7 @@ fn window_loads_demo_and_draws_the_surface() {
         turntable_frames: 1,
         size: [64, 48],
         dir: movie.clone(),
+        video: None,
     };
     let ctx = h.ctx.clone();
     h.state_mut().command(&ctx, Command::StartMovie(plan));
@@ -147,4 +148,64 @@ fn window_loads_demo_and_draws_the_surface() {
         "camera and frame should change"
     );
     assert!(!movie.join("frame_00003.png").exists());
+
+    // The same movie as one MP4 file (H.264): ffprobe counts its frames and reads its size.
+    let mp4 = config.path().join("movie.mp4");
+    let plan = MoviePlan {
+        frames: Some((0, 2)),
+        stride: 1,
+        degrees_per_frame: 15.0,
+        turntable_frames: 1,
+        size: [64, 48],
+        dir: movie.clone(),
+        video: Some(VideoPlan {
+            path: mp4.clone(),
+            fps: 10.0,
+            ..VideoPlan::default()
+        }),
+    };
+    h.state_mut().command(&ctx, Command::StartMovie(plan));
+    let start = Instant::now();
+    while h.state().movie_running() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "MP4 movie not done after 2 minutes"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+        h.step();
+    }
+    assert!(
+        h.state().core().error.is_none(),
+        "{:?}",
+        h.state().core().error
+    );
+    let probe = std::process::Command::new("ffprobe")
+        .args([
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=codec_name,width,height,nb_read_frames",
+            "-of",
+            "csv=p=0",
+        ])
+        .arg(&mp4)
+        .output()
+        .expect("ffprobe is missing: install ffmpeg (scripts/test installs it)");
+    let text = String::from_utf8_lossy(&probe.stdout);
+    assert_eq!(
+        text.trim(),
+        "h264,64,48,3",
+        "ffprobe: {text} {:?}",
+        probe.stderr
+    );
+    // No temporary file is left beside it.
+    let leftovers: Vec<_> = std::fs::read_dir(config.path())
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
 }

@@ -23,8 +23,20 @@ impl Viewer {
             return;
         };
         let Some(step) = job.next().cloned() else {
-            self.core.status = format!("movie: wrote {} images", job.done);
-            self.movie = None;
+            let done = job.done;
+            let video = self.movie.take().and_then(|j| j.video);
+            match video.map(|v| (v.path().to_path_buf(), v.finish())) {
+                None => self.core.status = format!("movie: wrote {done} images"),
+                Some((path, Ok(summary))) => {
+                    self.core.status = format!(
+                        "movie: wrote {} ({} frames, {:.1} s)",
+                        path.display(),
+                        summary.frames,
+                        summary.seconds
+                    );
+                }
+                Some((_, Err(e))) => self.core.error = Some(format!("movie stopped: {e}")),
+            }
             return;
         };
         if self.core.timeline.current != step.frame {
@@ -56,7 +68,10 @@ impl Viewer {
                 if let Some((map, range)) = bar {
                     draw_colour_bar(&mut img, map, range);
                 }
-                write_png(&step.path, &img).map_err(|e| e.to_string())
+                match job.video.as_mut() {
+                    Some(video) => video.push(&img).map_err(|e| e.to_string()),
+                    None => write_png(&step.path, &img).map_err(|e| e.to_string()),
+                }
             });
         match result {
             Ok(()) => job.done += 1,
