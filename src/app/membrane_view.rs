@@ -1,6 +1,7 @@
 //! A membrane opens in side view (issue 30 section 3): when a frame has a lipid representation
 //! (the default one, `lipid`) whose atoms lie in a layer, the camera turns so the layer's normal
-//! is up on screen and looks along the layer, from the side the macromolecule sits on.
+//! is up on screen and looks along the layer, from the side the macromolecule sits on. The
+//! window does it on its first surface and on Reset view, `mdsurf render` on its first frame.
 
 use glam::{DMat3, DVec3, Vec3};
 
@@ -55,26 +56,28 @@ fn symmetric_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
 /// Turns `camera` to the side view of the membrane in `c`, when it has one; returns true when
 /// it did. The macromolecule's side of the membrane faces the camera.
 pub fn orient_to_membrane(camera: &mut Camera, c: &Computed) -> bool {
-    let lipids: Vec<Vec3> = c
-        .layers
-        .iter()
-        .filter(|l| l.rep.selection == LIPID)
-        .flat_map(|l| l.particles.positions.iter().copied())
-        .collect();
-    let Some(normal) = layer_normal(&lipids) else {
+    let points = |selection: &str| -> Vec<Vec3> {
+        c.layers
+            .iter()
+            .filter(|l| l.rep.selection == selection)
+            .flat_map(|l| l.particles.positions.iter().copied())
+            .collect()
+    };
+    orient_to_layer(camera, &points(LIPID), &points(MACROMOLECULE))
+}
+
+/// Turns `camera` to the side view of the layer the `lipids` (Å) form, from the side the
+/// `protein` atoms (Å; may be empty) lie on; returns false, leaving the camera, when the lipids
+/// form no layer ([`layer_normal`]). `mdsurf render` calls it with its layers' atoms.
+pub fn orient_to_layer(camera: &mut Camera, lipids: &[Vec3], protein: &[Vec3]) -> bool {
+    let Some(normal) = layer_normal(lipids) else {
         return false;
     };
     let centre = |points: &[Vec3]| points.iter().copied().sum::<Vec3>() / points.len() as f32;
-    let protein: Vec<Vec3> = c
-        .layers
-        .iter()
-        .filter(|l| l.rep.selection == MACROMOLECULE)
-        .flat_map(|l| l.particles.positions.iter().copied())
-        .collect();
     let front = if protein.is_empty() {
         Vec3::ZERO
     } else {
-        centre(&protein) - centre(&lipids)
+        centre(protein) - centre(lipids)
     };
     camera.side_view(normal, front);
     true

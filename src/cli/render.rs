@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
+use mdsurf::app::membrane_view::orient_to_layer;
 use mdsurf::render::settings::{
     DEFAULT_EYE_SEPARATION, check_eye_separation, check_focal_distance,
 };
@@ -15,6 +16,7 @@ use mdsurf::render::{
     AtomStyle, Background, Camera, GpuScene, HeadlessGpu, Projection, RenderSettings, Renderer,
     Stereo, atom_instances, bounding_sphere, render_to_rgba, write_png,
 };
+use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 
 use mdsurf::export::video::{Mp4Movie, VideoQuality, check_even_size, check_fps, is_mp4};
 use mdsurf::gpu::{Changes, GpuEngine, Picked, pick_engine};
@@ -459,12 +461,19 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let mut cylinders = Vec::new();
         let mut points = Vec::new();
         let mut summary = Vec::new();
+        // Atoms of the default lipid and macromolecule representations (frame 0: side view).
+        let (mut lipids, mut protein) = (Vec::new(), Vec::new());
         let mut k = 0;
         for layer in layers.iter_mut() {
             let rep = layer.rep().clone();
             let lf = layer
                 .frame(&topology, &frame)
                 .map_err(|e| anyhow!("{files}: frame {f}: {e}"))?;
+            if i == 0 && rep.selection == LIPID {
+                lipids.extend_from_slice(&lf.positions);
+            } else if i == 0 && rep.selection == MACROMOLECULE {
+                protein.extend_from_slice(&lf.positions);
+            }
             if let Some(style) = rep.style.atom_style() {
                 let look = RenderSettings {
                     atom_style: style,
@@ -535,8 +544,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             let (centre, radius) = bounding_sphere(points.iter()).ok_or_else(|| {
                 anyhow!("frame {f}: nothing to draw (empty surfaces and no atoms)")
             })?;
+            let state_camera = choice.state.as_ref().and_then(|s| s.camera);
+            if state_camera.is_none() && args.view.is_none() {
+                // A membrane is drawn from the side, its normal up (as the window opens it).
+                orient_to_layer(&mut camera, &lipids, &protein);
+            }
             camera.fit_sphere(centre, radius);
-            if let Some(cam) = choice.state.as_ref().and_then(|s| s.camera) {
+            if let Some(cam) = state_camera {
                 cam.apply(&mut camera);
             }
             if let Some([yaw, pitch]) = args.view {

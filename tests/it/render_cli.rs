@@ -145,3 +145,69 @@ fn window_without_display_suggests_render() {
         "{err}"
     );
 }
+
+/// The extent (width, height) in pixels of what differs from the top-left (background) pixel.
+fn drawn_extent(img: &RgbaImage) -> (u32, u32) {
+    let bg = img.pixel(0, 0);
+    let (mut x0, mut x1, mut y0, mut y1) = (u32::MAX, 0, u32::MAX, 0);
+    for y in 0..img.height {
+        for x in 0..img.width {
+            if img.pixel(x, y) != bg {
+                (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+            }
+        }
+    }
+    (x1.saturating_sub(x0), y1.saturating_sub(y0))
+}
+
+/// A membrane is drawn from the side by default (its normal up): YiiP's lipids alone (a patch
+/// about 100 x 100 x 40 Å, normal along z) are much wider than tall on screen, while `--view
+/// 0,0` keeps the old direction (looking down z at the square patch).
+#[test]
+fn a_membrane_renders_side_on() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let data = |n: &str| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data")
+            .join(n)
+            .display()
+            .to_string()
+    };
+    let (gro, xtc) = (data("YiiP_lipids.gro.gz"), data("YiiP_lipids.xtc"));
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let out_s = out.display().to_string();
+        let mut args = vec![
+            "render",
+            &gro,
+            &xtc,
+            "--frames",
+            "0:1",
+            "--size",
+            "240x240",
+            "--spacing",
+            "3",
+            "--backend",
+            "cpu",
+            "--select",
+            "lipid",
+            "-o",
+            &out_s,
+        ];
+        args.extend_from_slice(extra);
+        let run = mdsurf(&args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        drawn_extent(&RgbaImage::read_png(&out).expect("png"))
+    };
+    let (w, h) = render("side.png", &[]);
+    assert!(w as f32 > 1.6 * h as f32, "side view {w} x {h}");
+    let (w, h) = render("top.png", &["--view", "0,0"]);
+    assert!((w as f32) < 1.3 * h as f32, "--view 0,0 {w} x {h}");
+}
