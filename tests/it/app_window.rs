@@ -13,6 +13,8 @@ use mdsurf::app::export::{MoviePlan, VideoPlan};
 use mdsurf::app::{Command, DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
 use mdsurf::render::RgbaImage;
 
+use crate::cli_common::ffmpeg_tool;
+
 /// egui_kittest's wgpu set-up on the viewer's backends: its default also opens OpenGL, and on an
 /// H100 dropping that instance deadlocked NVIDIA's driver against the GPU tests compiling on
 /// other threads (this test and six GPU tests hung; see `GpuContext::window_backends`).
@@ -121,6 +123,62 @@ fn window_loads_demo_and_draws_the_surface() {
         dir: movie.clone(),
         video: None,
     };
+    run_movie(&mut h, plan.clone());
+    let frames: Vec<RgbaImage> = (0..3)
+        .map(|i| {
+            RgbaImage::read_png(&movie.join(format!("frame_{i:05}.png"))).expect("movie frame")
+        })
+        .collect();
+    assert!(frames.iter().all(|f| (f.width, f.height) == (64, 48)));
+    assert_ne!(
+        frames[0].pixels, frames[2].pixels,
+        "camera and frame should change"
+    );
+    assert!(!movie.join("frame_00003.png").exists());
+
+    // The same movie as one MP4 file (H.264): ffprobe counts its frames and reads its size.
+    let mp4 = config.path().join("movie.mp4");
+    run_movie(
+        &mut h,
+        MoviePlan {
+            video: Some(VideoPlan {
+                path: mp4.clone(),
+                fps: 10.0,
+                ..VideoPlan::default()
+            }),
+            ..plan
+        },
+    );
+    let mp4_s = mp4.display().to_string();
+    let probe = ffmpeg_tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=codec_name,width,height,nb_read_frames",
+            "-of",
+            "csv=p=0",
+            &mp4_s,
+        ],
+    );
+    let text = String::from_utf8_lossy(&probe);
+    assert_eq!(text.trim(), "h264,64,48,3", "ffprobe: {text}");
+    // No temporary file is left beside it.
+    let leftovers: Vec<_> = std::fs::read_dir(config.path())
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// Starts the movie export `plan` in the window and steps it until it is done (at most two
+/// minutes), with no error.
+fn run_movie(h: &mut Harness<'_, Viewer>, plan: MoviePlan) {
     let ctx = h.ctx.clone();
     h.state_mut().command(&ctx, Command::StartMovie(plan));
     let start = Instant::now();
@@ -137,75 +195,4 @@ fn window_loads_demo_and_draws_the_surface() {
         "{:?}",
         h.state().core().error
     );
-    let frames: Vec<RgbaImage> = (0..3)
-        .map(|i| {
-            RgbaImage::read_png(&movie.join(format!("frame_{i:05}.png"))).expect("movie frame")
-        })
-        .collect();
-    assert!(frames.iter().all(|f| (f.width, f.height) == (64, 48)));
-    assert_ne!(
-        frames[0].pixels, frames[2].pixels,
-        "camera and frame should change"
-    );
-    assert!(!movie.join("frame_00003.png").exists());
-
-    // The same movie as one MP4 file (H.264): ffprobe counts its frames and reads its size.
-    let mp4 = config.path().join("movie.mp4");
-    let plan = MoviePlan {
-        frames: Some((0, 2)),
-        stride: 1,
-        degrees_per_frame: 15.0,
-        turntable_frames: 1,
-        size: [64, 48],
-        dir: movie.clone(),
-        video: Some(VideoPlan {
-            path: mp4.clone(),
-            fps: 10.0,
-            ..VideoPlan::default()
-        }),
-    };
-    h.state_mut().command(&ctx, Command::StartMovie(plan));
-    let start = Instant::now();
-    while h.state().movie_running() {
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "MP4 movie not done after 2 minutes"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-        h.step();
-    }
-    assert!(
-        h.state().core().error.is_none(),
-        "{:?}",
-        h.state().core().error
-    );
-    let probe = std::process::Command::new("ffprobe")
-        .args([
-            "-v",
-            "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=codec_name,width,height,nb_read_frames",
-            "-of",
-            "csv=p=0",
-        ])
-        .arg(&mp4)
-        .output()
-        .expect("ffprobe is missing: install ffmpeg (scripts/test installs it)");
-    let text = String::from_utf8_lossy(&probe.stdout);
-    assert_eq!(
-        text.trim(),
-        "h264,64,48,3",
-        "ffprobe: {text} {:?}",
-        probe.stderr
-    );
-    // No temporary file is left beside it.
-    let leftovers: Vec<_> = std::fs::read_dir(config.path())
-        .unwrap()
-        .filter_map(Result::ok)
-        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
-        .collect();
-    assert!(leftovers.is_empty(), "{leftovers:?}");
 }

@@ -191,3 +191,35 @@ pub fn volume_of(tris: &[[[f32; 3]; 3]]) -> f64 {
         })
         .sum()
 }
+
+/// True when a wgpu adapter opens; without one, a note and false, unless `REQUIRE_GPU=1`, where
+/// a missing adapter fails the test.
+pub fn have_gpu() -> bool {
+    match mdsurf::render::HeadlessGpu::new() {
+        Ok(_) => true,
+        Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("REQUIRE_GPU=1 but {e}")
+        }
+        Err(e) => {
+            eprintln!("note: skipping: {e}");
+            false
+        }
+    }
+}
+
+/// Runs an ffmpeg tool (`ffprobe`, `ffmpeg`) and returns its stdout, failing (never skipping)
+/// when it is not installed or fails.
+pub fn ffmpeg_tool(tool: &str, args: &[&str]) -> Vec<u8> {
+    let out = Command::new(tool).args(args).output().unwrap_or_else(|e| {
+        panic!(
+            "cannot run {tool} ({e}): install ffmpeg (`apt-get install ffmpeg`; scripts/test \
+             installs it) to check the movies mdsurf writes"
+        )
+    });
+    assert!(
+        out.status.success(),
+        "{tool} {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out.stdout
+}

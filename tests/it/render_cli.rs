@@ -8,6 +8,8 @@ use std::process::{Command, Output};
 
 use mdsurf::render::RgbaImage;
 
+use crate::cli_common::have_gpu;
+
 fn demo(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("assets")
@@ -21,19 +23,6 @@ fn mdsurf(args: &[&str]) -> Output {
         .args(args)
         .output()
         .expect("run mdsurf")
-}
-
-fn have_gpu() -> bool {
-    match mdsurf::render::HeadlessGpu::new() {
-        Ok(_) => true,
-        Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("REQUIRE_GPU=1 but {e}")
-        }
-        Err(e) => {
-            eprintln!("note: skipping: {e}");
-            false
-        }
-    }
 }
 
 #[test]

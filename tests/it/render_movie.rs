@@ -11,36 +11,7 @@ use std::process::Command;
 
 use mdsurf::render::RgbaImage;
 
-use crate::cli_common::{Run, asset, mdsurf};
-
-fn have_gpu() -> bool {
-    match mdsurf::render::HeadlessGpu::new() {
-        Ok(_) => true,
-        Err(e) if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("REQUIRE_GPU=1 but {e}")
-        }
-        Err(e) => {
-            eprintln!("note: skipping: {e}");
-            false
-        }
-    }
-}
-
-/// Runs an ffmpeg tool, failing (never skipping) when it is not installed.
-fn ffmpeg_tool(tool: &str, args: &[&str]) -> Vec<u8> {
-    let out = Command::new(tool).args(args).output().unwrap_or_else(|e| {
-        panic!(
-            "cannot run {tool} ({e}): install ffmpeg (`apt-get install ffmpeg`; scripts/test \
-             installs it) to check the movies mdsurf writes"
-        )
-    });
-    assert!(
-        out.status.success(),
-        "{tool} {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out.stdout
-}
+use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf};
 
 /// The value of `"key": value` in ffprobe's JSON (quotes stripped): enough for its flat output.
 fn json_field(json: &str, key: &str) -> String {
