@@ -6,7 +6,7 @@
 
 use crate::render::{
     Camera, GpuScene, RenderError, RenderSettings, RenderTargets, Renderer, RgbaImage,
-    atom_instances, render_to_rgba,
+    render_to_rgba,
 };
 
 use super::state::AppCore;
@@ -49,50 +49,22 @@ impl ViewRenderer {
             return false;
         }
         shown.dirty = false;
-        let c = &shown.computed;
-        let mut k = 0;
-        let mut spheres = Vec::new();
-        let mut cylinders = Vec::new();
-        for l in &c.layers {
-            // The representation as it is now (its opacity may have changed since).
-            let now = core
-                .rep_ids
+        // Each layer with the representation as it is now (its opacity may have changed
+        // since); hidden ones are not drawn.
+        let now = |id: u64| {
+            core.rep_ids
                 .iter()
-                .position(|&id| id == l.id)
-                .and_then(|i| core.reps.get(i));
-            let Some(rep) = now.filter(|r| r.visible) else {
-                continue;
-            };
-            if let Some(style) = rep.style.atom_style() {
-                let look = RenderSettings {
-                    atom_style: style,
-                    ..core.render
-                };
-                let p = &l.particles;
-                let (s, cyl) =
-                    atom_instances(&p.positions, &p.radii, Some(&p.colours), &p.bonds, &look);
-                spheres.extend(s);
-                cylinders.extend(cyl);
-                continue;
-            }
-            match &l.gpu_surface {
-                Some(g) => {
-                    let grid = &l.output.grid;
-                    let far = glam::UVec3::from(grid.dims).saturating_sub(glam::UVec3::ONE);
-                    let hi = grid.origin + far.as_vec3() * grid.spacing;
-                    self.scene
-                        .set_layer_gpu_surface(k, g.clone(), Some((grid.origin, hi)));
-                }
-                None => self
-                    .scene
-                    .set_layer_mesh(k, &self.device, &self.queue, &l.output.mesh),
-            }
-            self.scene.layer_mut(k).opacity = Some(rep.opacity);
-            k += 1;
-        }
-        self.scene.set_surface_count(k);
+                .position(|&i| i == id)
+                .and_then(|i| core.reps.get(i))
+                .filter(|r| r.visible)
+        };
+        let layers = shown
+            .computed
+            .layers
+            .iter()
+            .filter_map(|l| Some((l.as_ref(), now(l.id)?)));
         self.scene
-            .set_atoms(&self.device, &self.queue, &spheres, &cylinders);
+            .show_layers(&self.device, &self.queue, layers, &core.render);
         true
     }
 

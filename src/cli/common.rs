@@ -17,6 +17,7 @@ use mdsurf::model::colour_map::parse_range;
 use mdsurf::model::{
     ColorScheme, ColourMap, DataColours, Frame, ParticleOptions, Particles, RadiusOverrides,
 };
+use mdsurf::scene::representation::Representation;
 use mdsurf::surface::{
     CpuEngine, Preset, Quality, RadiusSet, SurfaceEngine, SurfaceParams, VertexMode,
 };
@@ -200,6 +201,19 @@ impl ParamArgs {
         self.preset.map(Preset::radius_set).unwrap_or_default()
     }
 
+    /// Sets how the vertices of `reps` are placed: by [`ParamArgs::vertex_mode`], except that
+    /// representations from a state file (`from_state`) keep their own unless `--vertices` or
+    /// `--preset` is given.
+    pub fn apply_vertices(&self, reps: &mut [Representation], from_state: bool) {
+        if from_state && self.vertices.is_none() && self.preset.is_none() {
+            return;
+        }
+        let mode = self.vertex_mode();
+        for rep in reps {
+            rep.vertices = mode;
+        }
+    }
+
     /// How vertices are placed: `--vertices` when given, else the preset's, else interpolated.
     pub fn vertex_mode(&self) -> VertexMode {
         self.vertices
@@ -234,7 +248,7 @@ pub enum Backend {
 
 /// Creates the engine for `backend` on a headless device ([`mdsurf::gpu::pick_engine`]);
 /// `auto` says on stderr which one it picked and why (unless `quiet`).
-pub fn make_engine(backend: Backend, quiet: bool) -> Result<Box<dyn SurfaceEngine>> {
+pub fn make_engine(backend: Backend, quiet: bool) -> Result<Box<dyn SurfaceEngine + Send>> {
     let note = |text: String| {
         if !quiet {
             eprintln!("{text}");

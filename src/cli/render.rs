@@ -4,6 +4,7 @@
 //! one H.264 MP4 movie (`-o movie.mp4`), atomically.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -14,24 +15,23 @@ use mdsurf::render::settings::{
 };
 use mdsurf::render::{
     AtomStyle, Background, Camera, GpuScene, HeadlessGpu, Projection, RenderSettings, Renderer,
-    Stereo, atom_instances, bounding_sphere, render_to_rgba, write_png,
+    Stereo, bounding_sphere, render_to_rgba, write_png,
 };
 use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 
 use mdsurf::export::video::{Mp4Movie, VideoQuality, check_even_size, check_fps, is_mp4};
-use mdsurf::gpu::{Changes, GpuEngine, Picked, pick_engine};
+use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::representation::{RepStyle, Representation};
-use mdsurf::surface::SurfaceEngine;
-use mdsurf::surface::SurfaceOutput;
+use mdsurf::scene::{SceneBackend, SceneEngine};
 
 use super::chunk::ChunkSpec;
 use super::common::{
     Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
     set_vertex_mode,
 };
-use super::scene_args::{SceneArgs, bind_layers};
-use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
+use super::scene_args::{SceneArgs, bind_scene};
+use super::transform_args::{FrameReader, TransformArgs, host_scene};
 
 /// Arguments of `mdsurf render`.
 #[derive(clap::Args, Debug)]
@@ -341,7 +341,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     check_colour_frames(&options, &frames)?;
     let topology = system.trajectory.topology().clone();
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
-    let first_frame = reader.read_frame(frames[0])?;
+    let first_frame = Arc::new(reader.read_frame(frames[0])?);
     let mut choice = args.scene.representations(
         state,
         &topology,
@@ -375,37 +375,38 @@ pub fn run(args: RenderArgs) -> Result<()> {
             });
         }
     }
+    args.params
+        .apply_vertices(&mut choice.reps, choice.state.is_some());
+    let gpu = HeadlessGpu::new()
+        .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
+    let renderer = Renderer::new(&gpu.device);
+    // The GPU engine computes on the render device and its buffers are drawn in place, as in
+    // the window; otherwise the mesh comes back to the host and is uploaded (the CPU engine,
+    // or the periodic one: never a second GPU device).
+    let mut engine = match in_place_engine(args.backend, &reader, &gpu)? {
+        Some(e) => SceneEngine::new(SceneBackend::Gpu(Box::new(e))),
+        None => {
+            let host = match reader.chain().periodic() {
+                Some(_) => args.backend,
+                None => Backend::Cpu,
+            };
+            host_scene(host, reader.chain(), false)?
+        }
+    };
+    if let SceneBackend::Host(e) = engine.backend_mut() {
+        set_vertex_mode(e.as_mut(), args.params.vertex_mode());
+    }
     let files = system.frames_path.display().to_string();
-    let mut layers = bind_layers(
+    let reps = bind_scene(
+        &mut engine,
         &choice.reps,
         &topology,
         &first_frame,
         &options.radius_overrides,
         &files,
     )?;
-    layers.retain(|l| l.rep().visible);
-    if layers.is_empty() {
+    if reps.is_empty() {
         bail!("nothing to draw: every representation is hidden");
-    }
-    let gpu = HeadlessGpu::new()
-        .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
-    let renderer = Renderer::new(&gpu.device);
-    // The GPU engine computes on the render device and its buffers are drawn in place, as in
-    // the window; otherwise the mesh comes back to the host and is uploaded.
-    let mut in_place = in_place_engine(args.backend, &reader, &gpu)?;
-    // The host engine: the periodic one, or the CPU engine when the GPU was passed over (or
-    // draws in place and the host engine stays unused); never a second GPU device.
-    let host_backend = match reader.chain().periodic() {
-        Some(_) => args.backend,
-        None => Backend::Cpu,
-    };
-    let mut engine = FrameEngine::new(host_backend, reader.chain(), false)?;
-    let vertices = args.params.vertex_mode();
-    if let Some(e) = in_place.as_mut().and_then(|v| v.first_mut()) {
-        e.set_vertices(vertices);
-    }
-    if let FrameEngine::Plain(e) = &mut engine {
-        set_vertex_mode(e.as_mut(), vertices);
     }
     choice.print_defaults();
     if args.transforms.any() {
@@ -420,8 +421,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
         },
         ..Camera::default()
     };
-    let surface_count = layers.iter().filter(|l| l.rep().style.is_surface()).count();
-    scene.set_surface_count(surface_count);
     // The movie is written to a temporary file and renamed at the end: an error (or an early
     // exit) on any frame leaves no movie file.
     let mut movie = if movie_out {
@@ -454,93 +453,50 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let frame = if i == 0 {
             first_frame.clone()
         } else {
-            reader.read_frame(f)?
+            Arc::new(reader.read_frame(f)?)
         };
         let read_ms = ms_since(t0);
-        let mut spheres = Vec::new();
-        let mut cylinders = Vec::new();
-        let mut points = Vec::new();
-        let mut summary = Vec::new();
-        // Atoms of the default lipid and macromolecule representations (frame 0: side view).
-        let (mut lipids, mut protein) = (Vec::new(), Vec::new());
-        let mut k = 0;
-        for layer in layers.iter_mut() {
-            let rep = layer.rep().clone();
-            let lf = layer
-                .frame(&topology, &frame)
-                .map_err(|e| anyhow!("{files}: frame {f}: {e}"))?;
-            if i == 0 && rep.selection == LIPID {
-                lipids.extend_from_slice(&lf.positions);
-            } else if i == 0 && rep.selection == MACROMOLECULE {
-                protein.extend_from_slice(&lf.positions);
-            }
-            if let Some(style) = rep.style.atom_style() {
-                let look = RenderSettings {
-                    atom_style: style,
-                    ..settings
-                };
-                let colours = lf.particles.colours();
-                let (s, c) =
-                    atom_instances(&lf.positions, lf.radii(), Some(colours), &lf.bonds, &look);
-                spheres.extend(s);
-                cylinders.extend(c);
-                points.extend_from_slice(&lf.positions);
-                continue;
-            }
-            if let Some(engines) = in_place.as_mut()
-                && !lf.positions.is_empty()
-            {
-                let e = engine_of_layer(engines, k, &gpu, vertices)?;
-                let atoms = lf.atom_set();
-                let fail =
-                    |e: String| anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name);
-                let info = e
-                    .submit(&atoms, &rep.params(), Changes::ALL)
-                    .map_err(|e| fail(e.to_string()))?;
-                let stats = e
-                    .finish(info.frame, &atoms, &rep.params())
-                    .map_err(|e| fail(e.to_string()))?;
-                if i == 0 {
-                    // The camera is fitted to the first frame's surface: read it back once.
-                    let mesh = e.read_mesh(&stats).map_err(|e| fail(e.to_string()))?;
-                    points.extend_from_slice(&mesh.positions);
-                }
-                let surface = e.surface();
-                let g = surface.grid;
-                let hi = g.origin
-                    + g.spacing * glam::Vec3::from(g.dims.map(|d| d.saturating_sub(1) as f32));
-                scene.set_layer_gpu_surface(k, surface, Some((g.origin, hi)));
-                scene.layer_mut(k).opacity = Some(rep.opacity);
-                summary.push(format!(
+        let computed = engine
+            .frame(&topology, f, &frame, &reps)
+            .map_err(|e| anyhow!("{files}: {e}"))?;
+        scene.show_layers(
+            &gpu.device,
+            &gpu.queue,
+            computed.layers.iter().map(|l| (l.as_ref(), &l.rep)),
+            &settings,
+        );
+        let summary: Vec<String> = computed
+            .surfaces()
+            .map(|l| {
+                format!(
                     "{}: {} triangles, area {:.1} Å², volume {:.1} Å³",
-                    rep.name, stats.triangle_count, stats.area, stats.volume
-                ));
-                k += 1;
-                continue;
-            }
-            let out = if lf.positions.is_empty() {
-                SurfaceOutput::default()
-            } else {
-                engine
-                    .compute(&frame, &lf.atom_set(), &rep.params())
-                    .map_err(|e| {
-                        anyhow!("{files}: frame {f}: representation '{}': {e}", rep.name)
-                    })?
-            };
-            scene.set_layer_mesh(k, &gpu.device, &gpu.queue, &out.mesh);
-            scene.layer_mut(k).opacity = Some(rep.opacity);
-            points.extend_from_slice(&out.mesh.positions);
-            summary.push(format!(
-                "{}: {} triangles, area {:.1} Å², volume {:.1} Å³",
-                rep.name,
-                out.mesh.triangle_count(),
-                out.area,
-                out.volume
-            ));
-            k += 1;
-        }
-        scene.set_atoms(&gpu.device, &gpu.queue, &spheres, &cylinders);
+                    l.rep.name,
+                    l.triangle_count(),
+                    l.output.area,
+                    l.output.volume
+                )
+            })
+            .collect();
         if i == 0 {
+            // The camera is fitted to the first frame's atoms and surfaces (read back once
+            // when they stayed on the GPU); a membrane is seen from the side.
+            let mut points = Vec::new();
+            let (mut lipids, mut protein) = (Vec::new(), Vec::new());
+            for l in &computed.layers {
+                if l.rep.selection == LIPID {
+                    lipids.extend_from_slice(&l.particles.positions);
+                } else if l.rep.selection == MACROMOLECULE {
+                    protein.extend_from_slice(&l.particles.positions);
+                }
+                if l.is_surface() {
+                    let mesh = engine
+                        .read_mesh(f, l)
+                        .map_err(|e| anyhow!("{files}: {e}"))?;
+                    points.extend_from_slice(&mesh.positions);
+                } else {
+                    points.extend_from_slice(&l.particles.positions);
+                }
+            }
             let (centre, radius) = bounding_sphere(points.iter()).ok_or_else(|| {
                 anyhow!("frame {f}: nothing to draw (empty surfaces and no atoms)")
             })?;
@@ -574,7 +530,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             args.size,
         )?;
         // Data colours get a colour bar (the first representation coloured by data).
-        if let Some(d) = layers.iter().find_map(|l| l.rep().colour.data().copied()) {
+        if let Some(d) = reps.iter().find_map(|r| r.rep.colour.data().copied()) {
             draw_colour_bar(&mut image, d.map, d.effective_range());
         }
         let path = &paths[i];
@@ -613,7 +569,7 @@ fn in_place_engine(
     backend: Backend,
     reader: &FrameReader,
     gpu: &HeadlessGpu,
-) -> Result<Option<Vec<GpuEngine>>> {
+) -> Result<Option<GpuEngine>> {
     if backend == Backend::Cpu || reader.chain().periodic().is_some() {
         return Ok(None);
     }
@@ -625,7 +581,7 @@ fn in_place_engine(
                 "backend: gpu ({}), drawn in place",
                 e.context().adapter_name
             );
-            Some(vec![*e])
+            Some(*e)
         }
         Picked::Cpu { why } => {
             if let Some(why) = why {
@@ -634,23 +590,6 @@ fn in_place_engine(
             None
         }
     })
-}
-
-/// The GPU engine of surface layer `k` (each surface keeps its own output buffers), created on
-/// `gpu`'s device the first time.
-fn engine_of_layer<'a>(
-    engines: &'a mut Vec<GpuEngine>,
-    k: usize,
-    gpu: &HeadlessGpu,
-    vertices: mdsurf::surface::VertexMode,
-) -> Result<&'a mut GpuEngine> {
-    while engines.len() <= k {
-        let mut e = GpuEngine::with_context(gpu.context.clone())
-            .context("--backend gpu: cannot start the GPU engine")?;
-        e.set_vertices(vertices);
-        engines.push(e);
-    }
-    Ok(&mut engines[k])
 }
 
 #[cfg(test)]

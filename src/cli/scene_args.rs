@@ -8,9 +8,9 @@ use std::path::PathBuf;
 use anyhow::{Result, anyhow, bail};
 use mdsurf::model::{Frame, ParticleOptions, RadiusOverrides, Topology};
 use mdsurf::scene::defaults::{default_representations, describe};
-use mdsurf::scene::layer::Layer;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
+use mdsurf::scene::{RepRequest, SceneEngine};
 use mdsurf::surface::{RadiusSet, SurfaceParams};
 
 /// Which representations a headless command computes or draws.
@@ -116,26 +116,39 @@ impl SceneArgs {
     }
 }
 
-/// Binds `reps` to `topology`; a visible surface representation whose static selection picks
-/// no atom is an error naming it (`--select 'resname XYZ'` on a file without XYZ).
-pub fn bind_layers(
+/// Numbers the visible representations of `reps` for `scene` (ids 0, 1, ... in order) and binds
+/// them to `topology` with `radius_overrides`; a visible representation whose static selection picks no atom in `first`
+/// is an error naming it (`--select 'resname XYZ'` on a file without XYZ).
+pub fn bind_scene(
+    scene: &mut SceneEngine,
     reps: &[Representation],
     topology: &Topology,
     first: &Frame,
     radius_overrides: &RadiusOverrides,
     files: &str,
-) -> Result<Vec<Layer>> {
-    let mut layers = Vec::with_capacity(reps.len());
-    for rep in reps {
-        let layer = Layer::new(rep.clone(), topology, radius_overrides)?;
-        if rep.visible && !layer.is_dynamic() && layer.atoms(first).is_empty() {
+) -> Result<Vec<RepRequest>> {
+    scene.reset(topology, radius_overrides);
+    let requests: Vec<RepRequest> = reps
+        .iter()
+        .filter(|r| r.visible)
+        .enumerate()
+        .map(|(id, rep)| RepRequest {
+            id: id as u64,
+            rep: rep.clone(),
+        })
+        .collect();
+    scene.bind(topology, &requests)?;
+    for RepRequest { id, rep } in &requests {
+        if let Some(layer) = scene.layer(*id)
+            && !layer.is_dynamic()
+            && layer.atoms(first).is_empty()
+        {
             bail!(
                 "{files}: selection '{}' of representation '{}' matches no atom",
                 rep.selection,
                 rep.name
             );
         }
-        layers.push(layer);
     }
-    Ok(layers)
+    Ok(requests)
 }

@@ -7,6 +7,7 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -15,7 +16,8 @@ use mdsurf::export::glb::GlbAnimation;
 use mdsurf::export::stats_merge::{PartHeader, part_path};
 use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
 
-use mdsurf::surface::{SurfaceOutput, SurfaceParams};
+use mdsurf::scene::SceneBackend;
+use mdsurf::surface::SurfaceParams;
 
 use super::chunk::ChunkSpec;
 
@@ -23,8 +25,8 @@ use super::common::{
     Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
     set_vertex_mode,
 };
-use super::scene_args::{SceneArgs, bind_layers};
-use super::transform_args::{FrameEngine, FrameReader, TransformArgs};
+use super::scene_args::{SceneArgs, bind_scene};
+use super::transform_args::{FrameReader, TransformArgs, host_scene};
 
 /// Above this many frames on a terminal, a progress bar replaces the per-frame lines.
 const PROGRESS_BAR_FRAMES: usize = 20;
@@ -124,16 +126,28 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         &options,
         args.quiet,
     )?;
+    let mut reps = choice.reps.clone();
+    args.params
+        .apply_vertices(&mut reps, choice.state.is_some());
+    // Only visible surface representations are computed.
+    reps.retain(|r| r.style.is_surface());
+    let mut engine = host_scene(args.backend, reader.chain(), args.quiet)?;
+    if let SceneBackend::Host(e) = engine.backend_mut() {
+        // Without -o only area, volume and counts are reported: the mesh need not be built.
+        e.set_keep_mesh(output.is_some());
+        if reader.chain().periodic().is_none() {
+            set_vertex_mode(e.as_mut(), args.params.vertex_mode());
+        }
+    }
     let files = system.frames_path.display().to_string();
-    let mut layers = bind_layers(
-        &choice.reps,
+    let layers = bind_scene(
+        &mut engine,
+        &reps,
         topology,
         &first,
         &options.radius_overrides,
         &files,
     )?;
-    // Only visible surface representations are computed.
-    layers.retain(|l| l.rep().visible && l.rep().style.is_surface());
     if layers.is_empty() {
         bail!("no visible surface representation to compute (the state file hides them all)");
     }
@@ -156,7 +170,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             );
         }
         if layers.len() > 1 && !out.has_rep {
-            let names: Vec<&str> = layers.iter().map(|l| l.rep().name.as_str()).collect();
+            let names: Vec<&str> = layers.iter().map(|l| l.rep.name.as_str()).collect();
             bail!(
                 "-o {}: {} surface representations ({}), so the output needs a {{rep}} pattern (e.g. surf_{{rep}}.{}), or pick one with --select",
                 out.raw,
@@ -165,12 +179,6 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                 out.format
             );
         }
-    }
-    let mut engine = FrameEngine::new(args.backend, reader.chain(), args.quiet)?;
-    if let FrameEngine::Plain(e) = &mut engine {
-        // Without -o only area, volume and counts are reported: the mesh need not be built.
-        e.set_keep_mesh(output.is_some());
-        set_vertex_mode(e.as_mut(), args.params.vertex_mode());
     }
     choice.print_defaults();
     if args.transforms.any() && !args.quiet {
@@ -213,7 +221,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if let Some(out) = output.as_ref().filter(|_| animate) {
         for layer in &layers {
             movies.push(GlbAnimation::create(
-                &out.path_for(0, &layer.rep().name),
+                &out.path_for(0, &layer.rep.name),
                 args.fps,
             )?);
         }
@@ -224,7 +232,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             .then(|| progress_bar(frames.len()));
     // The loop's first frame is usually the one read above: it is taken, not read again (a
     // million atoms: a copy and a check of every position).
-    let mut first = Some(first);
+    let mut first = Some(Arc::new(first));
     let t_all = Instant::now();
     let mut failure = None;
     let mut ok_frames = 0usize;
@@ -233,43 +241,33 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             let t0 = Instant::now();
             let frame = match first.take().filter(|_| index == first_index) {
                 Some(frame) => frame,
-                None => reader.read_frame(index)?,
+                None => Arc::new(reader.read_frame(index)?),
             };
             let read_ms = ms_since(t0);
+            let computed = engine
+                .frame(topology, index, &frame, &layers)
+                .map_err(|e| anyhow!("{files}: {e}"))?;
             let mut rows = Vec::with_capacity(layers.len());
-            for (k, layer) in layers.iter_mut().enumerate() {
-                let t1 = Instant::now();
-                let rep = layer.rep().clone();
-                let lf = layer
-                    .frame(topology, &frame)
-                    .map_err(|e| anyhow!("{files}: frame {index}: {e}"))?;
-                let surf = if lf.positions.is_empty() {
-                    // A per-frame selection (within ...) that picks nothing in this frame.
-                    SurfaceOutput::default()
-                } else {
-                    engine
-                        .compute(&frame, &lf.atom_set(), &rep.params())
-                        .map_err(|e| {
-                            anyhow!("{files}: frame {index}: representation '{}': {e}", rep.name)
-                        })?
-                };
+            for (k, layer) in computed.layers.iter().enumerate() {
+                let surf = &layer.output;
                 if let Some(movie) = movies.get_mut(k) {
                     movie.add_frame(index, frame.time_ps, &surf.mesh)?;
                 } else if let Some(out) = &output {
-                    export::write_mesh(&out.path_for(index, &rep.name), &surf.mesh)?;
+                    export::write_mesh(&out.path_for(index, &layer.rep.name), &surf.mesh)?;
                 }
+                let first_row = rows.is_empty();
                 rows.push(StatsRow {
                     frame: index,
-                    rep: rep.name.clone(),
+                    rep: layer.rep.name.clone(),
                     time_ps: frame.time_ps,
-                    atoms: lf.positions.len(),
+                    atoms: layer.particles.positions.len(),
                     dims: surf.grid.dims,
                     vertices: surf.vertex_count(),
                     triangles: surf.triangle_count(),
                     area: surf.area,
                     volume: surf.volume,
-                    total_ms: ms_since(t1) + if rows.is_empty() { read_ms } else { 0.0 },
-                    read_ms: if rows.is_empty() { read_ms } else { 0.0 },
+                    total_ms: layer.compute_ms + if first_row { read_ms } else { 0.0 },
+                    read_ms: if first_row { read_ms } else { 0.0 },
                     timings: surf.timings,
                 });
             }

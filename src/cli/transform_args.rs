@@ -7,8 +7,9 @@ use anyhow::{Result, anyhow};
 use mdsurf::io::{self, Trajectory};
 use mdsurf::model::Frame;
 use mdsurf::scene::state_file::StateFile;
-use mdsurf::surface::periodic::{GPU_NOTE, PeriodicEngine};
-use mdsurf::surface::{AtomSet, SurfaceEngine, SurfaceOutput, SurfaceParams};
+use mdsurf::scene::{SceneBackend, SceneEngine};
+use mdsurf::surface::periodic::GPU_NOTE;
+use mdsurf::surface::{CpuEngine, SurfaceEngine};
 use mdsurf::transform::{
     FitReference, Replicate, TransformChain, TransformOptions, TransformedFrames,
 };
@@ -84,61 +85,22 @@ impl TransformArgs {
     }
 }
 
-/// The engine a command computes surfaces with: the backend asked for, or the CPU periodic
-/// engine ([`mdsurf::surface::periodic`]) when the transformations ask for periodic surfaces.
-pub enum FrameEngine {
-    /// The backend's engine.
-    Plain(Box<dyn SurfaceEngine>),
-    /// The periodic engine and the images shown.
-    Periodic {
-        /// The engine.
-        engine: PeriodicEngine,
-        /// Images side by side.
-        replicate: Replicate,
-    },
-}
-
-impl FrameEngine {
-    /// The engine for `backend`, or the periodic engine when `chain` is periodic (then a GPU
-    /// asked for with `--backend gpu` is not started, and a note says so unless `quiet`).
-    pub fn new(backend: Backend, chain: &TransformChain, quiet: bool) -> Result<FrameEngine> {
-        match chain.periodic() {
-            None => Ok(FrameEngine::Plain(make_engine(backend, quiet)?)),
-            Some(replicate) => {
-                if backend == Backend::Gpu && !quiet {
-                    eprintln!("{GPU_NOTE}");
-                }
-                Ok(FrameEngine::Periodic {
-                    engine: PeriodicEngine::new(),
-                    replicate,
-                })
+/// The scene engine of a headless command on the host: `backend`'s engine (the mesh comes back
+/// to the host), or, when `chain` is periodic, the CPU periodic engine (then a GPU asked for
+/// with `--backend gpu` is not started, and a note says so unless `quiet`).
+pub fn host_scene(backend: Backend, chain: &TransformChain, quiet: bool) -> Result<SceneEngine> {
+    let engine: Box<dyn SurfaceEngine + Send> = match chain.periodic() {
+        None => make_engine(backend, quiet)?,
+        Some(_) => {
+            if backend == Backend::Gpu && !quiet {
+                eprintln!("{GPU_NOTE}");
             }
+            Box::new(CpuEngine::new())
         }
-    }
-
-    /// Name for messages (`cpu`, `gpu`, `cpu (periodic)`).
-    pub fn name(&self) -> &str {
-        match self {
-            FrameEngine::Plain(e) => e.name(),
-            FrameEngine::Periodic { .. } => "cpu (periodic)",
-        }
-    }
-
-    /// The surface of `atoms` (particles of `frame`, whose cell the periodic engine uses);
-    /// the error is one line without the file and frame.
-    pub fn compute(
-        &mut self,
-        frame: &Frame,
-        atoms: &AtomSet<'_>,
-        params: &SurfaceParams,
-    ) -> Result<SurfaceOutput, String> {
-        match self {
-            FrameEngine::Plain(e) => e.compute(atoms, params).map_err(|e| e.to_string()),
-            FrameEngine::Periodic { engine, replicate } => engine
-                .compute_in_cell(frame.cell.as_ref(), atoms, params, *replicate)
-                .map_err(|e| e.to_string()),
-        }
-    }
+    };
+    let mut scene = SceneEngine::new(SceneBackend::Host(engine));
+    scene.set_periodic(chain.periodic());
+    Ok(scene)
 }
 
 /// Builds the transformation chain for `trajectory` (its first frame decides the defaults; the

@@ -11,6 +11,7 @@ mod pipelines;
 pub mod readback;
 pub mod renderer;
 pub mod scene;
+mod scene_layers;
 pub mod settings;
 pub mod shapes;
 pub mod targets;

@@ -1,0 +1,550 @@
+//! The scene engine: the one frame path from a transformed frame to every representation's
+//! particles and surface, used by the viewer's worker, `render`, `surface` and
+//! `bench --viewer`. Each of those keeps only its own loop (latest-wins thread, frame range,
+//! writers, images) around [`SceneEngine::frame`].
+//!
+//! Each representation keeps a slot between frames: its bound selection ([`Layer`]), its own
+//! GPU engine (the first surface uses the main one; the others get siblings on the same
+//! device, so every surface keeps its own buffers), its last result, and what its engine was
+//! last sent. A representation whose inputs did not change (same frame, selection, style,
+//! colours and parameters) reuses its last result; a GPU engine is told only what changed
+//! since its last frame (frame, radii, colours; it compares the parameters itself), so an
+//! isovalue change re-runs only Marching Cubes and a colour scheme only the colour pass.
+//!
+//! On the GPU every surface is submitted first (one submit each), then the counters are
+//! collected in the same order; a surface that overflowed its buffers is re-run by
+//! [`GpuEngine::finish`]. The mesh stays in the engine's buffers ([`LayerResult::gpu_surface`]);
+//! [`SceneEngine::read_mesh`] brings it back when a caller needs the triangles. Periodic
+//! surfaces (`--periodic`) come from the CPU periodic engine whatever the backend.
+
+use std::collections::HashMap;
+use std::collections::hash_map::Entry as MapEntry;
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
+use super::layer::{Layer, LayerFrame};
+use super::representation::Representation;
+use crate::gpu::{Changes, GpuEngine, Work};
+use crate::model::{Frame, RadiusOverrides, Topology};
+use crate::surface::periodic::PeriodicEngine;
+use crate::surface::{AtomSet, Mesh, MeshCounts, SurfaceEngine, SurfaceOutput};
+use crate::transform::Replicate;
+
+/// The engine a scene computes its surfaces with.
+pub enum SceneBackend {
+    /// Any engine through [`SurfaceEngine::compute`] (the mesh comes back to the host); one
+    /// engine serves every representation.
+    Host(Box<dyn SurfaceEngine + Send>),
+    /// The GPU engine: the mesh stays in its buffers. Each further surface representation gets
+    /// its own engine on the same device.
+    Gpu(Box<GpuEngine>),
+}
+
+impl SceneBackend {
+    /// Name of the engine (`cpu`, `gpu`).
+    pub fn name(&self) -> &str {
+        match self {
+            SceneBackend::Host(e) => e.name(),
+            SceneBackend::Gpu(e) => e.name(),
+        }
+    }
+}
+
+/// What one representation keeps between frames.
+struct RepSlot {
+    /// The bound selection and its particles.
+    layer: Layer,
+    /// Its own GPU engine (GPU backend only; the first surface uses the main engine).
+    gpu: Option<Box<GpuEngine>>,
+    /// The frame index and result of its last successful frame (shared, not copied).
+    last: Option<(usize, Arc<LayerResult>)>,
+    /// What its engine's last frame was computed from, to send only what changed since.
+    sent: Option<Sent>,
+}
+
+/// Inputs of an engine's last successful frame.
+struct Sent {
+    /// Frame index: positions follow from it and the particles.
+    frame: usize,
+    /// Which atoms the particles were (`None`: all) and whether they were beads.
+    atoms: (Option<Vec<u32>>, bool),
+    radii: Arc<Vec<f32>>,
+    colours: Arc<Vec<[f32; 3]>>,
+}
+
+/// Which atoms `lf`'s particles come from, and whether they are beads.
+fn atoms_key(lf: &LayerFrame) -> (Option<Vec<u32>>, bool) {
+    (
+        lf.particles.subset().map(<[u32]>::to_vec),
+        lf.particles.is_beads(),
+    )
+}
+
+impl Sent {
+    /// What differs between this and the next frame's inputs (the surface parameters are
+    /// compared by the engine itself).
+    fn changes(&self, frame: usize, lf: &LayerFrame, data: &ParticleData) -> Changes {
+        let same_atoms = !lf.rebuilt || self.atoms == atoms_key(lf);
+        Changes {
+            positions: self.frame != frame || !same_atoms,
+            radii: !Arc::ptr_eq(&self.radii, &data.radii) && self.radii != data.radii,
+            colours: !Arc::ptr_eq(&self.colours, &data.colours) && self.colours != data.colours,
+        }
+    }
+}
+
+/// The parts of a representation that change what is computed (not its name, opacity or
+/// visibility, which only change how it is drawn).
+fn compute_key(rep: &Representation) -> impl PartialEq + '_ {
+    (
+        &rep.selection,
+        rep.style,
+        rep.colour,
+        rep.style.is_surface().then(|| (rep.params(), rep.vertices)),
+    )
+}
+
+/// A surface submitted to a GPU engine whose counters are not collected yet.
+struct Submitted {
+    /// The engine's frame number.
+    frame: u64,
+    /// Which stages the submit ran.
+    work: Work,
+}
+
+/// A representation's result while a frame is computed: reused as it was, or new (with a GPU
+/// submit still to collect).
+enum Entry {
+    Reused(Arc<LayerResult>),
+    New(Box<LayerResult>, Option<Submitted>),
+}
+
+/// Computes the representations of frames; see the module documentation.
+pub struct SceneEngine {
+    backend: SceneBackend,
+    slots: HashMap<RepId, RepSlot>,
+    /// The representation computing on the main GPU engine.
+    main_owner: Option<RepId>,
+    /// The CPU engine of periodic surfaces, whatever the backend.
+    periodic: PeriodicEngine,
+    /// The images shown when surfaces are periodic.
+    replicate: Option<Replicate>,
+    radius_overrides: RadiusOverrides,
+}
+
+impl SceneEngine {
+    /// A scene computing its surfaces with `backend`, not periodic, with no radius overrides.
+    pub fn new(backend: SceneBackend) -> SceneEngine {
+        SceneEngine {
+            backend,
+            slots: HashMap::new(),
+            main_owner: None,
+            periodic: PeriodicEngine::default(),
+            replicate: None,
+            radius_overrides: RadiusOverrides::default(),
+        }
+    }
+
+    /// Name of the engine for messages (`cpu`, `gpu`, `cpu (periodic)`).
+    pub fn name(&self) -> &str {
+        match self.replicate {
+            Some(_) => "cpu (periodic)",
+            None => self.backend.name(),
+        }
+    }
+
+    /// The backend (for settings such as the host engine's vertex mode or mesh keeping).
+    pub fn backend_mut(&mut self) -> &mut SceneBackend {
+        &mut self.backend
+    }
+
+    /// Makes surfaces periodic with `replicate` images (the CPU periodic engine), or not.
+    pub fn set_periodic(&mut self, replicate: Option<Replicate>) {
+        if self.replicate != replicate {
+            self.replicate = replicate;
+            self.forget_results();
+        }
+    }
+
+    /// Starts over on a new system, or with other radius overrides: every representation is
+    /// bound again to `topology` (those that no longer bind are dropped) and no result is
+    /// reused. The GPU engines are kept (they are expensive to build).
+    pub fn reset(&mut self, topology: &Topology, radius_overrides: &RadiusOverrides) {
+        self.radius_overrides = radius_overrides.clone();
+        self.forget_results();
+        self.slots.retain(|_, s| {
+            match Layer::new(s.layer.rep().clone(), topology, radius_overrides) {
+                Ok(layer) => {
+                    s.layer = layer;
+                    true
+                }
+                Err(_) => false,
+            }
+        });
+    }
+
+    fn forget_results(&mut self) {
+        for slot in self.slots.values_mut() {
+            slot.last = None;
+            slot.sent = None;
+        }
+    }
+
+    /// Binds `reps` to `topology` now (the first [`SceneEngine::frame`] would), so that a
+    /// caller can check them before any frame is computed; forgets representations not in
+    /// `reps`.
+    pub fn bind(&mut self, topology: &Topology, reps: &[RepRequest]) -> Result<(), SceneError> {
+        self.retain(reps);
+        for RepRequest { id, rep } in reps {
+            slot_of(&mut self.slots, &self.radius_overrides, topology, *id, rep)?;
+        }
+        Ok(())
+    }
+
+    /// The bound selection of representation `id`, once bound.
+    pub fn layer(&self, id: RepId) -> Option<&Layer> {
+        self.slots.get(&id).map(|s| &s.layer)
+    }
+
+    /// Forgets representations that are not in `reps` (their GPU engines are dropped).
+    fn retain(&mut self, reps: &[RepRequest]) {
+        self.slots.retain(|id, _| reps.iter().any(|r| r.id == *id));
+        if self
+            .main_owner
+            .is_some_and(|id| !self.slots.contains_key(&id))
+        {
+            self.main_owner = None;
+        }
+    }
+
+    /// Computes frame `index` (`frame`, already transformed) for every visible representation
+    /// of `reps`, in their order; representations not in `reps` are forgotten.
+    pub fn frame(
+        &mut self,
+        topology: &Topology,
+        index: usize,
+        frame: &Arc<Frame>,
+        reps: &[RepRequest],
+    ) -> Result<SceneFrame, SceneError> {
+        self.retain(reps);
+        // First every representation: host surfaces computed, GPU surfaces only submitted.
+        let mut entries = Vec::with_capacity(reps.len());
+        for RepRequest { id, rep } in reps.iter().filter(|r| r.rep.visible) {
+            entries.push(self.start(topology, index, frame, *id, rep)?);
+        }
+        // Then the GPU counters, in the same order; each result is kept for reuse.
+        let mut layers = Vec::with_capacity(entries.len());
+        for entry in entries {
+            let result = match entry {
+                Entry::Reused(r) => r,
+                Entry::New(r, submitted) => self.collect(index, *r, submitted)?,
+            };
+            layers.push(result);
+        }
+        Ok(SceneFrame {
+            frame: index,
+            time_ps: frame.time_ps,
+            gpu_bytes: self.gpu_bytes(),
+            layers,
+        })
+    }
+
+    /// Starts representation `id` on frame `index`: reused, computed on the host, or submitted
+    /// to its GPU engine.
+    fn start(
+        &mut self,
+        topology: &Topology,
+        index: usize,
+        frame: &Frame,
+        id: RepId,
+        rep: &Representation,
+    ) -> Result<Entry, SceneError> {
+        let started = Instant::now();
+        let slot = slot_of(&mut self.slots, &self.radius_overrides, topology, id, rep)?;
+        if let Some((f, last)) = &slot.last
+            && *f == index
+            && !slot.layer.is_dynamic()
+            && compute_key(&last.rep) == compute_key(rep)
+        {
+            return Ok(Entry::Reused(Arc::new(LayerResult {
+                rep: rep.clone(),
+                reused: true,
+                gpu_work: None,
+                ..(**last).clone()
+            })));
+        }
+        let lf = slot
+            .layer
+            .frame(topology, frame)
+            .map_err(|source| SceneError::Particles {
+                frame: index,
+                source,
+            })?;
+        // The particles' radii and colours change only when they were rebuilt (radii that
+        // follow exposure: every frame): otherwise keep the same Arcs (no copy per frame, and
+        // the engine sees no change).
+        let last = slot
+            .last
+            .as_ref()
+            .map(|(_, l)| &l.particles)
+            .filter(|_| !lf.rebuilt);
+        let radii = match last {
+            Some(l) if lf.frame_radii.is_none() => l.radii.clone(),
+            _ => Arc::new(lf.radii().to_vec()),
+        };
+        let colours = match last {
+            Some(l) => l.colours.clone(),
+            None => Arc::new(lf.particles.colours().to_vec()),
+        };
+        let mut result = LayerResult {
+            id,
+            rep: rep.clone(),
+            output: SurfaceOutput::default(),
+            gpu_surface: None,
+            particles: ParticleData {
+                positions: Vec::new(),
+                radii,
+                colours,
+                bonds: lf.bonds.clone(),
+            },
+            beads: lf.particles.is_beads(),
+            gpu_work: None,
+            reused: false,
+            compute_ms: 0.0,
+        };
+        let mut submitted = None;
+        if rep.style.is_surface() && !lf.positions.is_empty() {
+            let atoms = lf.atom_set();
+            let surface_failed = |source| SceneError::Surface {
+                frame: index,
+                rep: rep.name.clone(),
+                source,
+            };
+            if let Some(replicate) = self.replicate {
+                result.output = self
+                    .periodic
+                    .compute_in_cell(frame.cell.as_ref(), &atoms, &rep.params(), replicate)
+                    .map_err(|source| SceneError::Periodic {
+                        frame: index,
+                        rep: rep.name.clone(),
+                        source,
+                    })?;
+                slot.sent = None;
+            } else {
+                let changes = match slot.sent.take() {
+                    Some(sent) => sent.changes(index, &lf, &result.particles),
+                    None => Changes::ALL,
+                };
+                match &mut self.backend {
+                    SceneBackend::Host(e) => {
+                        e.set_vertices(rep.vertices);
+                        result.output = e.compute(&atoms, &rep.params()).map_err(surface_failed)?;
+                    }
+                    SceneBackend::Gpu(main) => {
+                        // The main engine serves one representation (one that never had an
+                        // engine of its own, so its change tracking stays valid); each other
+                        // surface gets its own engine on the same device.
+                        if self.main_owner.is_none() && slot.gpu.is_none() {
+                            self.main_owner = Some(id);
+                        }
+                        let e = if self.main_owner == Some(id) {
+                            main.as_mut()
+                        } else {
+                            slot.gpu.get_or_insert_with(|| sibling_of(main)).as_mut()
+                        };
+                        e.set_vertices(rep.vertices);
+                        let info = e
+                            .submit(&atoms, &rep.params(), changes)
+                            .map_err(surface_failed)?;
+                        submitted = Some(Submitted {
+                            frame: info.frame,
+                            work: info.work,
+                        });
+                    }
+                }
+                slot.sent = Some(Sent {
+                    frame: index,
+                    atoms: atoms_key(&lf),
+                    radii: result.particles.radii.clone(),
+                    colours: result.particles.colours.clone(),
+                });
+            }
+        }
+        result.particles.positions = lf.positions;
+        result.compute_ms = started.elapsed().as_secs_f64() * 1e3;
+        Ok(Entry::New(Box::new(result), submitted))
+    }
+
+    /// Finishes a new result: collects its GPU counters when it was submitted, and keeps it in
+    /// its slot for reuse.
+    fn collect(
+        &mut self,
+        index: usize,
+        mut result: LayerResult,
+        submitted: Option<Submitted>,
+    ) -> Result<Arc<LayerResult>, SceneError> {
+        let id = result.id;
+        if let Some(Submitted { frame, work }) = submitted {
+            let started = Instant::now();
+            let p = &result.particles;
+            let atoms = AtomSet {
+                positions: &p.positions,
+                radii: &p.radii,
+                colours: Some(&p.colours),
+            };
+            let params = result.rep.params();
+            let finished = match self.gpu_engine_of(id) {
+                Some(e) => e.finish(frame, &atoms, &params).map(|stats| {
+                    let mut surface = e.surface();
+                    surface.stats = Some(stats);
+                    (stats, surface)
+                }),
+                None => Err(crate::surface::SurfaceError::Gpu(
+                    "the representation's GPU engine is gone".into(),
+                )),
+            };
+            let (stats, surface) = match finished {
+                Ok(done) => done,
+                Err(source) => {
+                    if let Some(slot) = self.slots.get_mut(&id) {
+                        slot.sent = None;
+                    }
+                    return Err(SceneError::Surface {
+                        frame: index,
+                        rep: result.rep.name.clone(),
+                        source,
+                    });
+                }
+            };
+            result.output = SurfaceOutput {
+                grid: surface.grid,
+                mesh: Mesh::default(),
+                area: stats.area,
+                volume: stats.volume,
+                timings: stats.timings,
+                // The mesh stays in the engine's buffers.
+                counts_without_mesh: Some(MeshCounts {
+                    vertices: stats.vertex_count as usize,
+                    triangles: stats.triangle_count as usize,
+                }),
+            };
+            result.gpu_surface = Some(surface);
+            result.gpu_work = Some(work);
+            result.compute_ms += started.elapsed().as_secs_f64() * 1e3;
+        }
+        let result = Arc::new(result);
+        if let Some(slot) = self.slots.get_mut(&id) {
+            slot.last = Some((index, result.clone()));
+        }
+        Ok(result)
+    }
+
+    /// The GPU engine of representation `id`, when the backend is the GPU.
+    fn gpu_engine_of(&mut self, id: RepId) -> Option<&mut GpuEngine> {
+        let SceneBackend::Gpu(main) = &mut self.backend else {
+            return None;
+        };
+        if self.main_owner == Some(id) {
+            Some(main.as_mut())
+        } else {
+            self.slots.get_mut(&id)?.gpu.as_deref_mut()
+        }
+    }
+
+    /// Tells each GPU engine behind a surface of `shown` (about to be drawn) that its output
+    /// set is on screen, so that no later frame writes it, even one that fails.
+    pub fn hold_shown(&mut self, shown: &SceneFrame) {
+        for layer in shown.layers.iter().filter(|l| l.gpu_surface.is_some()) {
+            if let Some(e) = self.gpu_engine_of(layer.id) {
+                e.hold_output_set();
+            }
+        }
+    }
+
+    /// The triangles of `layer` (a result of this engine's last frame) on the host: its mesh,
+    /// or the GPU engine's buffers read back.
+    pub fn read_mesh(&mut self, index: usize, layer: &LayerResult) -> Result<Mesh, SceneError> {
+        let stats = match &layer.gpu_surface {
+            Some(g) => g.stats,
+            None => return Ok(layer.output.mesh.clone()),
+        };
+        let failed = |source| SceneError::Surface {
+            frame: index,
+            rep: layer.rep.name.clone(),
+            source,
+        };
+        let stats = stats.ok_or_else(|| {
+            failed(crate::surface::SurfaceError::Gpu(
+                "the surface has no counters".into(),
+            ))
+        })?;
+        match self.gpu_engine_of(layer.id) {
+            Some(e) => e
+                .read_mesh(&stats)
+                .map_err(|e| failed(crate::surface::SurfaceError::Gpu(e.to_string()))),
+            None => Err(failed(crate::surface::SurfaceError::Gpu(
+                "the representation's GPU engine is gone".into(),
+            ))),
+        }
+    }
+
+    /// GPU memory the scene's engines hold, in bytes (0 on the host engines).
+    pub fn gpu_bytes(&self) -> u64 {
+        let main = match &self.backend {
+            SceneBackend::Gpu(e) => e.gpu_bytes(),
+            SceneBackend::Host(_) => 0,
+        };
+        let siblings: u64 = self
+            .slots
+            .values()
+            .filter_map(|s| s.gpu.as_ref().map(|e| e.gpu_bytes()))
+            .sum();
+        main + siblings
+    }
+}
+
+/// The slot of representation `id` in `slots`, bound for `rep`: kept when the selection is the
+/// same (binding, engine and what it was last sent), bound anew otherwise (keeping its engine).
+fn slot_of<'a>(
+    slots: &'a mut HashMap<RepId, RepSlot>,
+    radius_overrides: &RadiusOverrides,
+    topology: &Topology,
+    id: RepId,
+    rep: &Representation,
+) -> Result<&'a mut RepSlot, SceneError> {
+    let bind = || Layer::new(rep.clone(), topology, radius_overrides).map_err(SceneError::Bind);
+    Ok(match slots.entry(id) {
+        MapEntry::Occupied(o) if o.get().layer.rep().selection == rep.selection => {
+            let slot = o.into_mut();
+            slot.layer.set_rep(rep.clone());
+            slot
+        }
+        MapEntry::Occupied(o) => {
+            let layer = bind()?;
+            let slot = o.into_mut();
+            *slot = RepSlot {
+                layer,
+                gpu: slot.gpu.take(),
+                last: None,
+                sent: None,
+            };
+            slot
+        }
+        MapEntry::Vacant(v) => v.insert(RepSlot {
+            layer: bind()?,
+            gpu: None,
+            last: None,
+            sent: None,
+        }),
+    })
+}
+
+/// A new GPU engine on the same device as `engine` (for a further surface representation).
+fn sibling_of(engine: &GpuEngine) -> Box<GpuEngine> {
+    let ctx = engine.context();
+    Box::new(GpuEngine::from_device(
+        ctx.device.clone(),
+        ctx.queue.clone(),
+    ))
+}
