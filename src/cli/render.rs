@@ -20,10 +20,11 @@ use mdsurf::render::{
 use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 
 use mdsurf::export::video::{Mp4Movie, VideoQuality, check_even_size, check_fps, is_mp4};
+use mdsurf::export::{StatsRow, StatsWriter};
 use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::representation::{RepStyle, Representation};
-use mdsurf::scene::{SceneBackend, SceneEngine};
+use mdsurf::scene::{LayerResult, SceneBackend, SceneEngine};
 
 use super::chunk::ChunkSpec;
 use super::common::{
@@ -55,6 +56,10 @@ pub struct RenderArgs {
     /// A `.mp4` name writes all images as one H.264 movie instead (even --size needed).
     #[arg(short = 'o', long = "output", value_name = "PNG|MP4")]
     pub output: PathBuf,
+    /// Also write each rendered frame's area and volume per surface representation, as
+    /// `mdsurf surface --stats` does (same columns).
+    #[arg(long, value_name = "FILE.csv")]
+    pub stats: Option<PathBuf>,
     /// Movie frame rate, frames per second (MP4 output; default 24).
     #[arg(long, value_name = "FPS", value_parser = parse_fps)]
     pub fps: Option<f64>,
@@ -293,6 +298,30 @@ pub fn run(args: RenderArgs) -> Result<()> {
             .max(1.0) as usize;
         frames = vec![frames[0]; images];
     }
+    // A state file's camera script makes the images unless --frames or --turntable do.
+    let script = state
+        .as_ref()
+        .and_then(|s| Some((s, s.movie.as_ref()?)))
+        .filter(|_| args.frames.is_none() && args.turntable.is_none());
+    let shots = match script {
+        Some((state, script)) => {
+            let opacity = |name: &str| {
+                state
+                    .representations
+                    .iter()
+                    .find(|r| r.name == name)
+                    .map(|r| r.opacity)
+            };
+            let shots = script.shots(args.frame, len, opacity).map_err(|e| {
+                let file = args.scene.state.as_deref().unwrap_or(Path::new("state"));
+                anyhow!("{}: {e}", file.display())
+            })?;
+            frames = shots.iter().map(|s| s.frame).collect();
+            shots
+        }
+        None => Vec::new(),
+    };
+    let fps = args.fps.or(script.map(|(_, s)| s.fps)).unwrap_or(24.0);
     let movie_out = is_mp4(&args.output);
     let paths = if movie_out {
         if args.chunk.is_some() {
@@ -315,6 +344,26 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // Like `surface`, a missing output folder is refused before any work (never created).
     if let Some(first) = paths.first() {
         super::surface::check_parent_dir(first)?;
+    }
+    if let Some(stats) = &args.stats {
+        super::surface::check_parent_dir(stats)?;
+        if chunk.is_some() {
+            bail!(
+                "--stats {}: a chunk renders part of the frames; run `mdsurf surface --chunk` for their stats",
+                stats.display()
+            );
+        }
+        if paths.iter().any(|p| p == stats) {
+            bail!(
+                "-o {} and --stats {} are the same file: give them different names",
+                args.output.display(),
+                stats.display()
+            );
+        }
+        let inputs: Vec<PathBuf> = std::iter::once(args.input.top.clone())
+            .chain(args.input.traj.clone())
+            .collect();
+        super::surface::refuse_shared_paths(None, Some(stats), &inputs)?;
     }
     // The images this process writes; the camera is still fitted to the run's first frame.
     let block = chunk.map_or(0..frames.len(), |c| c.block(frames.len()));
@@ -424,7 +473,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // The movie is written to a temporary file and renamed at the end: an error (or an early
     // exit) on any frame leaves no movie file.
     let mut movie = if movie_out {
-        let fps = args.fps.unwrap_or(24.0);
         let quality = args.video_quality.unwrap_or_default();
         let movie = Mp4Movie::create(&args.output, args.size, fps, quality)?;
         catch_interrupts();
@@ -432,6 +480,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     } else {
         None
     };
+    let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
+    let mut stats_frame = None;
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;
@@ -459,10 +509,28 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let computed = engine
             .frame(&topology, f, &frame, &reps)
             .map_err(|e| anyhow!("{files}: {e}"))?;
+        // The script's fades: a representation faded out is not drawn.
+        let shot = shots.get(i);
+        let drawn: Vec<(&LayerResult, Representation)> = computed
+            .layers
+            .iter()
+            .filter_map(|l| {
+                let mut rep = l.rep.clone();
+                if let Some((_, o)) =
+                    shot.and_then(|s| s.opacity.iter().find(|(n, _)| *n == rep.name))
+                {
+                    if *o <= 0.0 {
+                        return None;
+                    }
+                    rep.opacity = *o;
+                }
+                Some((l.as_ref(), rep))
+            })
+            .collect();
         scene.show_layers(
             &gpu.device,
             &gpu.queue,
-            computed.layers.iter().map(|l| (l.as_ref(), &l.rep)),
+            drawn.iter().map(|(l, rep)| (*l, rep)),
             &settings,
         );
         let summary: Vec<String> = computed
@@ -520,6 +588,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
         let mut cam = camera;
         cam.turn(args.turntable.unwrap_or(0.0) * i as f32);
+        if let Some(shot) = shot {
+            let c = shot.camera;
+            cam.orbit(-c.yaw_deg.to_radians(), c.pitch_deg.to_radians());
+            cam.zoom(1.0 / c.zoom);
+        }
         let mut image = render_to_rgba(
             &gpu.device,
             &gpu.queue,
@@ -532,6 +605,15 @@ pub fn run(args: RenderArgs) -> Result<()> {
         // Data colours get a colour bar (the first representation coloured by data).
         if let Some(d) = reps.iter().find_map(|r| r.rep.colour.data().copied()) {
             draw_colour_bar(&mut image, d.map, d.effective_range());
+        }
+        if let Some(stats) = stats.as_mut()
+            && stats_frame != Some(f)
+        {
+            // One set of rows per frame (a turntable shows one frame many times).
+            for row in StatsRow::of_scene(&computed, read_ms) {
+                stats.write_row(&row)?;
+            }
+            stats_frame = Some(f);
         }
         let path = &paths[i];
         match movie.as_mut() {
@@ -549,13 +631,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
             path.display()
         );
     }
+    if let Some(stats) = stats {
+        stats.finish()?;
+    }
     if let Some(m) = movie {
         let s = m.finish()?;
         eprintln!(
             "movie: {} frames, {:.2} s at {} frames/s, {:.1} kB -> {}",
             s.frames,
             s.seconds,
-            args.fps.unwrap_or(24.0),
+            fps,
             s.bytes as f64 / 1000.0,
             args.output.display()
         );

@@ -247,30 +247,15 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             let computed = engine
                 .frame(topology, index, &frame, &layers)
                 .map_err(|e| anyhow!("{files}: {e}"))?;
-            let mut rows = Vec::with_capacity(layers.len());
             for (k, layer) in computed.layers.iter().enumerate() {
-                let surf = &layer.output;
+                let mesh = &layer.output.mesh;
                 if let Some(movie) = movies.get_mut(k) {
-                    movie.add_frame(index, frame.time_ps, &surf.mesh)?;
+                    movie.add_frame(index, frame.time_ps, mesh)?;
                 } else if let Some(out) = &output {
-                    export::write_mesh(&out.path_for(index, &layer.rep.name), &surf.mesh)?;
+                    export::write_mesh(&out.path_for(index, &layer.rep.name), mesh)?;
                 }
-                let first_row = rows.is_empty();
-                rows.push(StatsRow {
-                    frame: index,
-                    rep: layer.rep.name.clone(),
-                    time_ps: frame.time_ps,
-                    atoms: layer.particles.positions.len(),
-                    dims: surf.grid.dims,
-                    vertices: surf.vertex_count(),
-                    triangles: surf.triangle_count(),
-                    area: surf.area,
-                    volume: surf.volume,
-                    total_ms: layer.compute_ms + if first_row { read_ms } else { 0.0 },
-                    read_ms: if first_row { read_ms } else { 0.0 },
-                    timings: surf.timings,
-                });
             }
+            let rows = StatsRow::of_scene(&computed, read_ms);
             Ok(rows)
         })();
         match rows {
@@ -393,7 +378,7 @@ fn progress_bar(len: usize) -> ProgressBar {
 
 /// Fails with one line when two outputs, or an output and an input, are one file (the second
 /// write would silently replace the first, or the input).
-fn refuse_shared_paths(
+pub(crate) fn refuse_shared_paths(
     output: Option<&OutputPattern>,
     stats: Option<&Path>,
     inputs: &[PathBuf],

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use super::stats_merge::PartHeader;
 use super::{AtomicFile, ExportError};
+use crate::scene::SceneFrame;
 use crate::surface::StageTimings;
 
 /// The CSV header columns, in order.
@@ -60,6 +61,33 @@ pub struct StatsRow {
 }
 
 impl StatsRow {
+    /// The rows of a computed frame, one per surface representation in its order; the first
+    /// row's times include `read_ms`, the time it took to read the frame (ms).
+    pub fn of_scene(scene: &SceneFrame, read_ms: f64) -> Vec<StatsRow> {
+        scene
+            .surfaces()
+            .enumerate()
+            .map(|(k, layer)| {
+                let read_ms = if k == 0 { read_ms } else { 0.0 };
+                let surface = &layer.output;
+                StatsRow {
+                    frame: scene.frame,
+                    rep: layer.rep.name.clone(),
+                    time_ps: scene.time_ps,
+                    atoms: layer.particles.positions.len(),
+                    dims: surface.grid.dims,
+                    vertices: surface.vertex_count(),
+                    triangles: surface.triangle_count(),
+                    area: surface.area,
+                    volume: surface.volume,
+                    total_ms: layer.compute_ms + read_ms,
+                    read_ms,
+                    timings: surface.timings,
+                }
+            })
+            .collect()
+    }
+
     /// The row as CSV fields, in [`STATS_COLUMNS`] order.
     pub fn fields(&self) -> [String; 17] {
         self.fields_with(true)

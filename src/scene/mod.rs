@@ -10,6 +10,7 @@ pub mod defaults;
 pub mod engine;
 pub mod frame;
 pub mod layer;
+pub mod movie;
 pub mod representation;
 pub mod selection;
 pub mod state_file;

@@ -54,6 +54,9 @@ pub struct StateFile {
     /// Which frame is shown and how the timeline plays.
     #[serde(default)]
     pub trajectory: TrajectoryState,
+    /// A camera script for movies ([`super::movie`]); `render --state` plays it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub movie: Option<super::movie::MovieScript>,
 }
 
 /// The orbit camera, in degrees and Å.
@@ -287,6 +290,7 @@ impl StateFile {
             camera: None,
             look: LookState::default(),
             trajectory: TrajectoryState::default(),
+            movie: None,
         }
     }
 

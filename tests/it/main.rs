@@ -52,6 +52,8 @@ mod render_movie;
 mod render_refined;
 mod render_stereo;
 mod scene_lipids;
+mod scene_movie;
+mod scene_one_path;
 mod scene_reps;
 mod scene_selection;
 mod shaders_validate;
