@@ -26,6 +26,7 @@ fn surface_err(prefix: &str, err: SurfaceError) -> PyErr {
     let msg = format!("{prefix}{err}");
     match err {
         SurfaceError::InvalidParameter { .. }
+        | SurfaceError::OutOfRange { .. }
         | SurfaceError::EmptySystem
         | SurfaceError::NonFiniteCoordinate { .. }
         | SurfaceError::InvalidRadius { .. }

@@ -107,6 +107,18 @@ impl ChunkSpec {
     }
 }
 
+/// Fails with one line when `chunk` splits `items` frames or images into more chunks than
+/// there are of them (every chunk must have work; a count such as 4294967296 is a typo).
+pub fn check_chunk_count(chunk: Chunk, items: usize) -> Result<()> {
+    if chunk.count > items {
+        bail!(
+            "--chunk {chunk}: {} chunks for {items} frame(s) or image(s); use at most {items}",
+            chunk.count
+        );
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -86,16 +86,16 @@ pub struct RenderArgs {
     #[arg(long, value_name = "BG", default_value = "dark")]
     pub background: Background,
     /// Surface opacity 0..1 (below 1 shows the atoms inside).
-    #[arg(long, value_name = "A", default_value_t = 1.0)]
+    #[arg(long, value_name = "A", default_value_t = 1.0, value_parser = parse_unit)]
     pub opacity: f32,
     /// Atoms: none, spheres, sticks or ball-and-stick.
     #[arg(long, value_name = "STYLE", default_value = "none")]
     pub atoms: AtomStyle,
     /// Ambient occlusion strength 0..1 (0: off).
-    #[arg(long, value_name = "S", default_value_t = 0.7)]
+    #[arg(long, value_name = "S", default_value_t = 0.7, value_parser = parse_unit)]
     pub ao: f32,
     /// Depth cue strength 0..1 (far parts fade towards the background).
-    #[arg(long, value_name = "S", default_value_t = 0.6)]
+    #[arg(long, value_name = "S", default_value_t = 0.6, value_parser = parse_unit)]
     pub depth_cue: f32,
     /// Orthographic instead of perspective projection.
     #[arg(long)]
@@ -131,6 +131,14 @@ fn parse_f32(s: &str, what: &str) -> Result<f32, String> {
     s.trim()
         .parse()
         .map_err(|_| format!("bad {what} '{s}': expected a number"))
+}
+
+/// A strength or opacity from 0 to 1 (NaN and infinities refused, as the state file does).
+fn parse_unit(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': expected a number from 0 to 1")),
+    }
 }
 
 fn parse_eye_separation(s: &str) -> Result<f32, String> {
@@ -366,6 +374,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         super::surface::refuse_shared_paths(None, Some(stats), &inputs)?;
     }
     // The images this process writes; the camera is still fitted to the run's first frame.
+    if let Some(c) = chunk {
+        super::chunk::check_chunk_count(c, frames.len())?;
+    }
     let block = chunk.map_or(0..frames.len(), |c| c.block(frames.len()));
     if block.is_empty() {
         eprintln!(
@@ -377,13 +388,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let mut settings = RenderSettings {
         background: args.background,
-        surface_opacity: args.opacity.clamp(0.0, 1.0),
+        surface_opacity: args.opacity,
         atom_style: args.atoms,
         stereo: args.stereo,
         eye_separation: args.eyes.eye_separation,
         focal_distance: args.eyes.focal,
-        ambient_occlusion: args.ao.clamp(0.0, 1.0),
-        depth_cue: args.depth_cue.clamp(0.0, 1.0),
+        ambient_occlusion: args.ao,
+        depth_cue: args.depth_cue,
         ..RenderSettings::default()
     };
     let options = args.input.particles.options_for(&system.trajectory)?;
@@ -409,7 +420,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         // The look flags that are per representation apply to the first one (the selection,
         // or the default macromolecule surface); --atoms adds atoms of the same selection.
         if let Some(main) = choice.reps.first_mut() {
-            main.opacity = args.opacity.clamp(0.0, 1.0);
+            main.opacity = args.opacity;
         }
         if args.atoms != AtomStyle::Hidden {
             let selection = args.scene.select.clone().unwrap_or_else(|| "all".into());

@@ -19,7 +19,7 @@ use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
 use mdsurf::scene::SceneBackend;
 use mdsurf::surface::SurfaceParams;
 
-use super::chunk::ChunkSpec;
+use super::chunk::{ChunkSpec, check_chunk_count};
 
 use super::common::{
     Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
@@ -193,6 +193,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             .min(system.selectable_len()),
         range.step,
     ];
+    if let Some(c) = chunk {
+        check_chunk_count(c, frames.len())?;
+    }
     let frames = match chunk {
         Some(c) => frames[c.block(frames.len())].to_vec(),
         None => frames,

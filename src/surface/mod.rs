@@ -42,6 +42,19 @@ pub enum SurfaceError {
         /// The value given.
         value: String,
     },
+    /// H, R or I was a positive number outside the range that makes sense for it
+    /// ([`params::SPACING_RANGE`] and its siblings).
+    #[error("{name} = {value} is outside {min} to {max}")]
+    OutOfRange {
+        /// Which parameter.
+        name: &'static str,
+        /// The value given.
+        value: String,
+        /// Smallest value allowed.
+        min: f32,
+        /// Largest value allowed.
+        max: f32,
+    },
     /// There were no atoms.
     #[error("the system has no atoms")]
     EmptySystem,

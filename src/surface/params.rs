@@ -71,6 +71,15 @@ pub(crate) use display_and_parse_by_name;
 
 display_and_parse_by_name!(Quality, "quality", "low, medium, high or max");
 
+/// Grid spacings H that make sense, in Å: finer than 0.01 Å is a grid no machine holds for a
+/// molecule, coarser than 100 Å shows nothing of it.
+pub const SPACING_RANGE: (f32, f32) = (0.01, 100.0);
+/// Radius scales R that make sense (Gaussian widths from 1 % to 100 times the atom radius).
+pub const RADIUS_SCALE_RANGE: (f32, f32) = (0.01, 100.0);
+/// Isovalues I that make sense (1 is the peak of one isolated atom; the sum of thousands of
+/// overlapping atoms stays far below 1000).
+pub const ISOVALUE_RANGE: (f32, f32) = (1e-6, 1000.0);
+
 /// Parameters of one surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfaceParams {
@@ -98,15 +107,23 @@ impl Default for SurfaceParams {
 impl SurfaceParams {
     /// Checks that H, R and I are finite and positive.
     pub fn validate(&self) -> Result<(), SurfaceError> {
-        for (name, value) in [
-            ("grid spacing H", self.spacing),
-            ("radius scale R", self.radius_scale),
-            ("isovalue I", self.isovalue),
+        for (name, value, (min, max)) in [
+            ("grid spacing H", self.spacing, SPACING_RANGE),
+            ("radius scale R", self.radius_scale, RADIUS_SCALE_RANGE),
+            ("isovalue I", self.isovalue, ISOVALUE_RANGE),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(SurfaceError::InvalidParameter {
                     name,
                     value: value.to_string(),
+                });
+            }
+            if !(min..=max).contains(&value) {
+                return Err(SurfaceError::OutOfRange {
+                    name,
+                    value: value.to_string(),
+                    min,
+                    max,
                 });
             }
         }

@@ -91,6 +91,23 @@ fn bad_parameters_name_the_value() {
     ] {
         fails_cleanly(d, &[&gro, flag, value], "o.ply", &[name, value]);
     }
+    // Positive, finite and still absurd: refused with the range, never a panic or a hang
+    // (1e-45 divided by zero in binning; 1e38 overflowed; 3e9 gave area 0 and exit 0).
+    for (flag, value, name) in [
+        ("--spacing", "1e-45", "H"),
+        ("--spacing", "3e9", "H"),
+        ("--radius-scale", "1e38", "R"),
+        ("--isovalue", "3e9", "I"),
+    ] {
+        fails_cleanly(d, &[&gro, flag, value], "o.ply", &[name, value, "outside"]);
+    }
+    // More chunks than frames is a typo, not a part file to write.
+    fails_cleanly(
+        d,
+        &[&gro, "--chunk", "0/4294967296"],
+        "o.ply",
+        &["--chunk", "4294967296"],
+    );
     fails_cleanly(d, &[&gro, "--radius", "C=abc"], "o.ply", &["C=abc"]);
     fails_cleanly(
         d,
@@ -99,6 +116,26 @@ fn bad_parameters_name_the_value() {
         &["purple-ish"],
     );
     fails_cleanly(d, &[&gro, "--frames", "7:x"], "o.ply", &["7:x"]);
+}
+
+#[test]
+fn render_refuses_nan_and_out_of_range_look_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let gro = asset("md_1u19.gro");
+    for (flag, value) in [
+        ("--opacity", "nan"),
+        ("--ao", "1.5"),
+        ("--depth-cue", "-inf"),
+    ] {
+        let run = mdsurf(dir.path(), &["render", &gro, flag, value, "-o", "x.png"]);
+        assert_eq!(run.code, 2, "{flag} {value}: {}", run.stderr);
+        assert!(
+            run.stderr.contains(flag) && run.stderr.contains(value),
+            "{}",
+            run.stderr
+        );
+        assert!(!dir.path().join("x.png").exists());
+    }
 }
 
 #[test]
