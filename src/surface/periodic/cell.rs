@@ -1,4 +1,4 @@
-//! Triclinic periodic cells (issue 30): the cell of a frame as [`--periodic`] uses it, either
+//! Triclinic periodic cells (issue 30): the cell of a frame as `--periodic` uses it, either
 //! the rectangular box of the original engine ([`PeriodicBox`], kept bit for bit) or a general
 //! cell spanned by three edge vectors a, b, c ([`TriclinicCell`]: rhombic dodecahedra,
 //! truncated octahedra, rotated boxes).

@@ -6,7 +6,7 @@
 //! the box ([`density`]) -> density (and colour) on a periodic grid of `N_i = ceil(L_i / H)`
 //! samples per axis, spacing `L_i / N_i <= H` -> Marching Cubes over every cell with wrap-around
 //! ([`mc`]) -> the mesh inside one box, open at the faces -> area and per-box volume
-//! ([`measure`]) -> optionally `a x b x c` copies side by side ([`replicate`]).
+//! ([`measure`]) -> optionally `a x b x c` copies side by side ([`replicate_mesh`]).
 //!
 //! Definitions are those of DESIGN section 2 with every periodic image of every atom counted:
 //! `rho(x) = sum_i sum_n exp(-|x - p_i - n L|^2 / (2 alpha_i^2))` over the pairs within the
