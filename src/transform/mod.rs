@@ -165,7 +165,7 @@ pub enum TransformError {
         /// The half-width asked for.
         k: usize,
     },
-    /// A box `--periodic` cannot use (triclinic, too small).
+    /// A box `--periodic` cannot use (too small or flat).
     #[error("{file}: --periodic: {reason}")]
     BadBox {
         /// The file.
