@@ -548,3 +548,33 @@ fn adks_protein_alone_has_the_non_periodic_surface() {
     // Split across the faces, so open there and only there.
     assert!(open_only_on_faces(&periodic.mesh, &cell, [1.0; 3]) > 0);
 }
+
+#[test]
+fn triclinic_colours_are_normalised_and_large_grids_refused() {
+    let cell = TriclinicCell::new(octahedron(20.0)).expect("cell");
+    let (pos, radii) = liquid(&cell, 60, 13);
+    let colour = [0.2, 0.4, 0.6];
+    let colours = vec![colour; pos.len()];
+    let atoms = AtomSet {
+        positions: &pos,
+        radii: &radii,
+        colours: Some(&colours),
+    };
+    let p = params(0.7, 1.0);
+    let out = PeriodicEngine::new()
+        .compute_triclinic(&atoms, &p, &cell, Replicate([1, 2, 1]))
+        .expect("surface");
+    assert!(out.mesh.vertex_count() > 100);
+    for c in &out.mesh.colours {
+        for k in 0..3 {
+            assert!((c[k] - colour[k]).abs() < 1e-3, "{c:?}");
+        }
+    }
+    let err = PeriodicEngine::with_memory_limit(10_000)
+        .compute_triclinic(&atoms, &p, &cell, Replicate::default())
+        .unwrap_err()
+        .to_string();
+    assert!(!err.contains('\n') && !err.is_empty(), "{err}");
+    let bad = PeriodicEngine::new().compute_triclinic(&atoms, &p, &cell, Replicate([0, 1, 1]));
+    assert!(bad.is_err());
+}
