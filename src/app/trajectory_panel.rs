@@ -133,7 +133,7 @@ pub fn trajectory_ui(ui: &mut egui::Ui, draft: &mut TransformDraft) -> bool {
             ui.checkbox(&mut draft.periodic, "Periodic surface")
                 .on_hover_text(
                     "Gaussians reach across the box faces: no walls at the faces; area and \
-                     volume per box (rectangular boxes; computed on the CPU)",
+                     volume per cell (any box, triclinic too; computed on the CPU)",
                 );
             ui.add_enabled_ui(draft.periodic, |ui| {
                 ui.horizontal(|ui| {

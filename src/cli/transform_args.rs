@@ -40,11 +40,12 @@ pub struct TransformArgs {
     #[arg(long, value_name = "K", default_value_t = 0)]
     pub smooth: usize,
     /// Periodic density: Gaussians near a box face also reach across it, so a liquid or a
-    /// membrane patch has no walls at the box faces; the mesh is the surface in one box and
-    /// area and volume are per box (needs a rectangular box; computed on the CPU).
+    /// membrane patch has no walls at the box faces; the mesh is the surface in one cell and
+    /// area and volume are per cell (rectangular or triclinic; computed on the CPU).
     #[arg(long)]
     pub periodic: bool,
-    /// With --periodic (implied): show A x B x C images of the box side by side.
+    /// With --periodic (implied): show A x B x C images of the cell side by side (along a, b,
+    /// c).
     #[arg(long, value_name = "A,B,C")]
     pub replicate: Option<Replicate>,
 }

@@ -165,7 +165,7 @@ pub enum TransformError {
         /// The half-width asked for.
         k: usize,
     },
-    /// A box `--periodic` cannot use (triclinic, too small).
+    /// A box `--periodic` cannot use (too small or flat).
     #[error("{file}: --periodic: {reason}")]
     BadBox {
         /// The file.
@@ -263,7 +263,7 @@ impl TransformChain {
             let Some(rows) = first.cell.as_ref() else {
                 return Err(no_box(Step::Periodic));
             };
-            crate::surface::periodic::PeriodicBox::from_cell(rows).map_err(|e| {
+            crate::surface::periodic::PeriodicCell::from_cell(rows).map_err(|e| {
                 TransformError::BadBox {
                     file: file.clone(),
                     reason: e.to_string(),
@@ -458,7 +458,7 @@ impl TransformChain {
             let Some(rows) = frame.cell.as_ref() else {
                 return Err(frame_error("no periodic box (--periodic needs one)".into()));
             };
-            crate::surface::periodic::PeriodicBox::from_cell(rows)
+            crate::surface::periodic::PeriodicCell::from_cell(rows)
                 .map_err(|e| frame_error(format!("--periodic: {e}")))?;
         }
         Ok(())

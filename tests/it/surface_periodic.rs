@@ -1,6 +1,9 @@
 //! Periodic density (issue 11 §2): surfaces of atoms in a periodic box with no walls at the
 //! faces, area and volume per box invariant under shifting and wrapping the atoms, replicated
 //! images, and the command line's `--periodic` / `--replicate` with their one-line errors.
+//! Triclinic cells: [`triclinic`].
+
+mod triclinic;
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -11,7 +14,7 @@ use mdsurf::model::Frame;
 use mdsurf::scene::state_file::StateFile;
 use mdsurf::surface::periodic::density::PeriodicGrid;
 use mdsurf::surface::periodic::measure::box_volume;
-use mdsurf::surface::periodic::{PeriodicBox, PeriodicEngine, Replicate};
+use mdsurf::surface::periodic::{PeriodicBox, PeriodicCell, PeriodicEngine, Replicate};
 use mdsurf::surface::{AtomSet, CpuEngine, Mesh, SurfaceEngine, SurfaceOutput, SurfaceParams};
 
 use crate::cli_common::{Csv, Run, mdsurf};
@@ -370,14 +373,19 @@ fn replicate_gives_that_many_seamless_copies() {
 }
 
 #[test]
-fn triclinic_and_tiny_boxes_are_refused_with_one_line() {
+fn triclinic_cells_are_accepted_and_tiny_boxes_refused_with_one_line() {
     let rows = [
         Vec3::new(50.0, 0.0, 0.0),
         Vec3::new(10.0, 45.0, 0.0),
         Vec3::new(5.0, 8.0, 40.0),
     ];
+    // Only the rectangular box type refuses it; --periodic takes it as a triclinic cell.
     let err = PeriodicBox::from_cell(&rows).unwrap_err().to_string();
     assert!(err.contains("triclinic") && !err.contains('\n'), "{err}");
+    assert!(matches!(
+        PeriodicCell::from_cell(&rows),
+        Ok(PeriodicCell::Triclinic(_))
+    ));
     let err = PeriodicBox::new(Vec3::new(1.0, 50.0, 50.0))
         .unwrap_err()
         .to_string();
@@ -450,9 +458,9 @@ fn cli_periodic_errors_are_one_line() {
         &["nobox.pdb", "--replicate", "2,2,1"],
         &["nobox.pdb", "--periodic"],
     );
-    let adk = data("adk_oplsaa.gro");
-    let adk = adk.to_string_lossy();
-    fails(d, &[&adk, "--periodic"], &["adk_oplsaa.gro", "triclinic"]);
+    let flat = "CRYST1    1.000    1.000    1.000  90.00  90.00  90.00 P 1           1\n";
+    std::fs::write(d.join("flat.pdb"), format!("{flat}{pdb}")).expect("write");
+    fails(d, &["flat.pdb", "--periodic"], &["flat.pdb", "--periodic"]);
     let bilayer = data(BILAYER);
     let bilayer = bilayer.to_string_lossy();
     for bad in ["0,1,1", "a,b", "2,2", "1,1,99"] {

@@ -17,6 +17,12 @@
 //! interpolation Marching Cubes uses. Every term is exact for the piecewise-linear surface, so
 //! the result is the volume that mesh bounds in the box. Edges inside the face shared by two
 //! triangles cancel, so only the open boundary counts.
+//!
+//! Triclinic cells ([`super::triclinic`]) use the same rule in index space, where the cell is
+//! the box `[0, N_a] x [0, N_b] x [0, N_c]` with spacing 1, and multiply by `|det J|` (Å³ per
+//! index-space unit volume, `J = [a/N_a, b/N_b, c/N_c]`): the affine map to Cartesian scales
+//! every volume by it and maps the piecewise-linear surface onto the Cartesian mesh, so the
+//! volume per cell is still exactly the region `rho >= I` inside the cell bounded by the mesh.
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;

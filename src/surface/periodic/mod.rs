@@ -1,12 +1,12 @@
-//! Periodic density (issue 11 §2): the surface of atoms in an orthorhombic periodic box, where
+//! Periodic density (issue 11 §2, issue 30): the surface of atoms in a periodic cell, where
 //! the Gaussians of atoms near a face also reach across it, so a liquid, a material or a
-//! membrane patch has no walls or seams at the box faces.
+//! membrane patch has no walls or seams at the cell faces.
 //!
 //! Data flow: [`AtomSet`] + [`PeriodicBox`] + [`SurfaceParams`] -> images of the atoms that reach
 //! the box ([`density`]) -> density (and colour) on a periodic grid of `N_i = ceil(L_i / H)`
 //! samples per axis, spacing `L_i / N_i <= H` -> Marching Cubes over every cell with wrap-around
 //! ([`mc`]) -> the mesh inside one box, open at the faces -> area and per-box volume
-//! ([`measure`]) -> optionally `a x b x c` copies side by side ([`replicate`]).
+//! ([`measure`]) -> optionally `a x b x c` copies side by side ([`replicate_mesh`]).
 //!
 //! Definitions are those of DESIGN section 2 with every periodic image of every atom counted:
 //! `rho(x) = sum_i sum_n exp(-|x - p_i - n L|^2 / (2 alpha_i^2))` over the pairs within the
@@ -15,11 +15,18 @@
 //! linear surface (see [`measure`]). Both are per box, so shifting every atom by any vector and
 //! wrapping changes them only by the sampling error.
 //!
-//! Triclinic (and rotated) cells are refused with [`BoxError::Triclinic`].
+//! Rectangular boxes (edges along x, y, z) take the path above, unchanged. Triclinic and
+//! rotated cells ([`PeriodicCell::Triclinic`]) are sampled along their edge vectors and
+//! marched in index space ([`triclinic`]), with the same definitions: area of the Cartesian
+//! triangles, volume of the region `rho >= I` inside one cell.
 
+pub mod cell;
 pub mod density;
 pub mod mc;
 pub mod measure;
+pub mod triclinic;
+
+pub use cell::{PeriodicCell, TriclinicCell};
 
 use std::fmt;
 use std::time::Instant;
@@ -50,9 +57,10 @@ pub struct PeriodicBox {
 /// Why a cell cannot be used as a periodic box; prints as one line (the caller adds the file).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum BoxError {
-    /// The cell is not a rectangular box aligned with x, y and z.
+    /// The cell is not a rectangular box aligned with x, y and z (from [`PeriodicBox::from_cell`]
+    /// only; [`PeriodicCell::from_cell`] takes such cells as [`TriclinicCell`]s).
     #[error(
-        "the cell a = ({:.3}, {:.3}, {:.3}), b = ({:.3}, {:.3}, {:.3}), c = ({:.3}, {:.3}, {:.3}) Å is triclinic (or rotated); --periodic supports only rectangular boxes with edges along x, y and z",
+        "the cell a = ({:.3}, {:.3}, {:.3}), b = ({:.3}, {:.3}, {:.3}), c = ({:.3}, {:.3}, {:.3}) Å is triclinic (or rotated), not a box with edges along x, y and z",
         rows[0].x, rows[0].y, rows[0].z, rows[1].x, rows[1].y, rows[1].z, rows[2].x, rows[2].y, rows[2].z
     )]
     Triclinic {
@@ -67,6 +75,15 @@ pub enum BoxError {
     TooSmall {
         /// Edge lengths (Å).
         lengths: Vec3,
+    },
+    /// A cell whose opposite faces are closer than [`MIN_BOX`] (or not finite).
+    #[error(
+        "the cell is {:.3} x {:.3} x {:.3} Å between opposite faces, not a periodic cell (each width must be at least {MIN_BOX} Å)",
+        widths.x, widths.y, widths.z
+    )]
+    Thin {
+        /// Distances between opposite faces (Å).
+        widths: Vec3,
     },
 }
 
@@ -110,7 +127,8 @@ impl PeriodicBox {
     }
 }
 
-/// How many images of the box the mesh shows side by side along x, y and z (`--replicate`).
+/// How many images of the cell the mesh shows side by side along x, y and z (along a, b and c
+/// for a triclinic cell; `--replicate`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(transparent)]
 pub struct Replicate(pub [u32; 3]);
@@ -283,8 +301,44 @@ impl PeriodicEngine {
         })
     }
 
-    /// [`PeriodicEngine::compute`] in the box of a frame's cell (rows a, b, c in Å, as
-    /// [`crate::model::Frame::cell`] holds them).
+    /// The surface of `atoms` in the triclinic `cell` (any cell, rectangular ones included,
+    /// through the triclinic path of [`triclinic`]), shown as `replicate` images along a, b
+    /// and c. Area (Å²) and volume (Å³) per cell, times the number of images.
+    pub fn compute_triclinic(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        cell: &TriclinicCell,
+        replicate: Replicate,
+    ) -> Result<SurfaceOutput, SurfaceError> {
+        params.validate()?;
+        atoms.validate()?;
+        if replicate.validate().is_err() {
+            return Err(SurfaceError::InvalidParameter {
+                name: "replicate count",
+                value: replicate.to_string(),
+            });
+        }
+        let memory = self.memory_limit.unwrap_or_else(available_memory_bytes);
+        triclinic::compute(&mut self.volume, memory, atoms, params, cell, replicate)
+    }
+
+    /// [`PeriodicEngine::compute`] or [`PeriodicEngine::compute_triclinic`], as `cell` is.
+    pub fn compute_cell(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        cell: &PeriodicCell,
+        replicate: Replicate,
+    ) -> Result<SurfaceOutput, SurfaceError> {
+        match cell {
+            PeriodicCell::Rectangular(b) => self.compute(atoms, params, b, replicate),
+            PeriodicCell::Triclinic(c) => self.compute_triclinic(atoms, params, c, replicate),
+        }
+    }
+
+    /// [`PeriodicEngine::compute_cell`] in a frame's cell (rows a, b, c in Å, as
+    /// [`crate::model::Frame::cell`] holds them): rectangular or triclinic.
     pub fn compute_in_cell(
         &mut self,
         cell: Option<&[Vec3; 3]>,
@@ -292,8 +346,8 @@ impl PeriodicEngine {
         params: &SurfaceParams,
         replicate: Replicate,
     ) -> Result<SurfaceOutput, PeriodicError> {
-        let pbox = PeriodicBox::from_cell(cell.ok_or(PeriodicError::NoBox)?)?;
-        Ok(self.compute(atoms, params, &pbox, replicate)?)
+        let cell = PeriodicCell::from_cell(cell.ok_or(PeriodicError::NoBox)?)?;
+        Ok(self.compute_cell(atoms, params, &cell, replicate)?)
     }
 
     /// The density volume of the last computation (for tests).

@@ -1,0 +1,387 @@
+//! The periodic engine in a triclinic cell (issue 30): density sampled along the cell vectors,
+//! Marching Cubes in index space, the mesh mapped to Å with the cell matrix.
+//!
+//! Data flow: [`AtomSet`] + [`TriclinicCell`] + [`SurfaceParams`] -> images of every atom
+//! whose cutoff sphere reaches the cell ([`images`]) -> density (and colour) at the samples
+//! `origin + i/N_a a + j/N_b b + k/N_c c` ([`fill`]) -> [`super::mc::extract`] on the index
+//! grid (spacing 1 along each axis, so vertex positions are `(i + t, j, k)` and so on) ->
+//! per-cell volume in index space ([`super::measure::box_volume`]) times `|det J|` -> the mesh
+//! (replicated in index space, so copies meet exactly) mapped to Cartesian by
+//! `x = origin + J g`, `J = [a/N_a, b/N_b, c/N_c]`, normals by `J^-T` -> area of the Cartesian
+//! triangles.
+//!
+//! Definitions (DESIGN section 2, every periodic image counted): `rho(x) = sum_i sum_n
+//! exp(-|x - p_i - n M|^2 / (2 alpha_i^2))` over the pairs with `|x - p_i - n M| < q alpha_i`,
+//! every image within the cutoff (not only the minimum image), the exponential of the full
+//! squared distance in Å². The affine map sends the piecewise-linear index-space surface onto
+//! the Cartesian mesh, so the volume per cell is exactly the volume of the region `rho >= I`
+//! inside the cell bounded by that mesh and the cell faces, the same rule as the rectangular
+//! box's. Images are summed in a canonical order, so the atoms' order changes nothing.
+
+use std::cmp::Ordering;
+use std::time::Instant;
+
+use glam::{DMat3, Vec3};
+use rayon::prelude::*;
+
+use super::cell::TriclinicCell;
+use super::density::{PeriodicGrid, PeriodicVolume};
+use super::{Replicate, mc, measure, replicate_mesh};
+use crate::surface::{
+    AtomSet, GridSpec, Mesh, StageTimings, SurfaceError, SurfaceOutput, SurfaceParams,
+};
+
+/// One atom image: index-space position, Cartesian position relative to the cell origin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Image {
+    /// Position in index space (samples along a, b, c).
+    pub index: [f32; 3],
+    /// Position relative to the cell origin (Å); may lie outside the cell.
+    pub pos: Vec3,
+    /// Exponent factor `0.5 / alpha^2` (Å⁻²).
+    pub k: f32,
+    /// Cutoff radius `q alpha` (Å).
+    pub cut: f32,
+    /// Linear RGB colour (white without colours).
+    pub colour: [f32; 3],
+}
+
+/// The sampling geometry shared by the stages.
+#[derive(Debug, Clone, Copy)]
+pub struct Geometry {
+    /// The cell.
+    pub cell: TriclinicCell,
+    /// Samples along a, b, c.
+    pub dims: [u32; 3],
+    /// Index space to Cartesian (columns `a / N_a` ... in Å).
+    pub jac: DMat3,
+    /// Half-width in samples of a sphere of radius 1 Å along each index axis (the norms of
+    /// the rows of `J^-1`).
+    pub reach: [f64; 3],
+}
+
+impl Geometry {
+    /// The geometry of `cell` sampled with `dims`.
+    pub fn new(cell: TriclinicCell, dims: [u32; 3]) -> Geometry {
+        let jac = cell.index_matrix(dims);
+        let inv = jac.inverse();
+        Geometry {
+            cell,
+            dims,
+            jac,
+            reach: [inv.row(0), inv.row(1), inv.row(2)].map(|r| r.length()),
+        }
+    }
+
+    /// The grid in index space (spacing 1), as Marching Cubes and the measures read it.
+    pub fn index_grid(&self) -> PeriodicGrid {
+        PeriodicGrid {
+            origin: Vec3::ZERO,
+            dims: self.dims,
+            spacing: Vec3::ONE,
+        }
+    }
+}
+
+/// The images of `atoms` (validated) whose cutoff spheres reach the samples of the cell, in
+/// canonical order (by index-space cell, z-major, then by the bits of the image's data).
+pub fn images(atoms: &AtomSet<'_>, params: &SurfaceParams, geo: &Geometry) -> Vec<Image> {
+    let q = params.cutoff();
+    let inv = geo.cell.matrix().inverse();
+    let dims = geo.dims.map(f64::from);
+    let m = geo.cell.matrix();
+    let mut out: Vec<Image> = atoms
+        .positions
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, &p)| {
+            let alpha = atoms.radii[i] * params.radius_scale;
+            let cut = q * alpha;
+            let mut s = inv * (p - geo.cell.origin).as_dvec3();
+            for a in 0..3 {
+                s[a] -= s[a].floor();
+                if s[a] >= 1.0 {
+                    s[a] = 0.0;
+                }
+            }
+            // Reach in fractional units plus one sample of margin.
+            let r = [0, 1, 2].map(|a| cut as f64 * geo.reach[a] / dims[a] + 1.0 / dims[a]);
+            let shifts = |a: usize| {
+                let m = r[a].ceil() as i64 + 1;
+                (-m..=m)
+                    .map(|n| n as f64)
+                    .filter(move |&n| s[a] + n + r[a] >= 0.0 && s[a] + n - r[a] < 1.0)
+                    .collect::<Vec<f64>>()
+            };
+            let (xs, ys, zs) = (shifts(0), shifts(1), shifts(2));
+            let k = 0.5 / (alpha * alpha);
+            let colour = atoms.colour(i);
+            let mut v = Vec::with_capacity(xs.len() * ys.len() * zs.len());
+            for &nz in &zs {
+                for &ny in &ys {
+                    for &nx in &xs {
+                        let f = s + glam::DVec3::new(nx, ny, nz);
+                        v.push(Image {
+                            index: (f * glam::DVec3::from(dims)).as_vec3().to_array(),
+                            pos: (m * f).as_vec3(),
+                            k,
+                            cut,
+                            colour,
+                        });
+                    }
+                }
+            }
+            v
+        })
+        .collect();
+    let cell = |g: f32, n: u32| ((g.floor().max(0.0)) as u64).min(n as u64 - 1);
+    let [nx, ny, nz] = geo.dims;
+    let key = |a: &Image| {
+        (cell(a.index[2], nz) * ny as u64 + cell(a.index[1], ny)) * nx as u64 + cell(a.index[0], nx)
+    };
+    let tie = |a: &Image, b: &Image| -> Ordering {
+        (0..3)
+            .map(|k| a.pos[k].total_cmp(&b.pos[k]))
+            .chain(std::iter::once(a.k.total_cmp(&b.k)))
+            .chain(std::iter::once(a.cut.total_cmp(&b.cut)))
+            .chain((0..3).map(|k| a.colour[k].total_cmp(&b.colour[k])))
+            .find(|o| o.is_ne())
+            .unwrap_or(Ordering::Equal)
+    };
+    out.par_sort_unstable_by(|a, b| key(a).cmp(&key(b)).then_with(|| tie(a, b)));
+    out
+}
+
+/// Inclusive index range `0..n` within `half` samples of `g`, `None` when empty.
+fn span(g: f32, half: f64, n: u32) -> Option<(u32, u32)> {
+    let lo = (g as f64 - half).floor() as i64;
+    let hi = (g as f64 + half).ceil() as i64;
+    let (lo, hi) = (lo.max(0), hi.min(n as i64 - 1));
+    (lo <= hi).then_some((lo as u32, hi as u32))
+}
+
+/// Fills `vol` with the density (and colour divided by `iso` when `with_colour`) of `images`
+/// at the samples of `geo`, reusing the buffers when the grid keeps its size.
+pub fn fill(
+    vol: &mut PeriodicVolume,
+    images: &[Image],
+    geo: &Geometry,
+    iso: f32,
+    with_colour: bool,
+) {
+    let [nx, ny, nz] = geo.dims;
+    let total = nx as usize * ny as usize * nz as usize;
+    let plane = nx as usize * ny as usize;
+    if vol.values.len() != total {
+        vol.values = vec![0.0; total];
+    }
+    if !with_colour {
+        vol.colours = None;
+    } else if vol.colours.as_ref().is_none_or(|c| c.len() != total) {
+        vol.colours = Some(vec![[0.0; 3]; total]);
+    }
+    // Slabs of planes along c, each with the images that reach it (ascending, so canonical).
+    let threads = rayon::current_num_threads().max(1) as u32;
+    let slab_planes = (nz / (8 * threads)).clamp(1, 64);
+    let slab_count = nz.div_ceil(slab_planes) as usize;
+    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); slab_count];
+    for (i, img) in images.iter().enumerate() {
+        let half = img.cut as f64 * geo.reach[2] + 1.0;
+        if let Some((k0, k1)) = span(img.index[2], half, nz) {
+            for s in k0 / slab_planes..=k1 / slab_planes {
+                lists[s as usize].push(i as u32);
+            }
+        }
+    }
+    let slab_len = plane * slab_planes as usize;
+    let inv_iso = 1.0 / iso;
+    let run = |s: usize, vals: &mut [f32], cols: Option<&mut [[f32; 3]]>| {
+        let z0 = s as u32 * slab_planes;
+        let z1 = (z0 + slab_planes).min(nz) - 1;
+        fill_slab(images, &lists[s], geo, (z0, z1), vals, cols);
+    };
+    match vol.colours.as_mut() {
+        None => vol
+            .values
+            .par_chunks_mut(slab_len)
+            .enumerate()
+            .for_each(|(s, vals)| {
+                vals.fill(0.0);
+                run(s, vals, None);
+            }),
+        Some(cols) => vol
+            .values
+            .par_chunks_mut(slab_len)
+            .zip(cols.par_chunks_mut(slab_len))
+            .enumerate()
+            .for_each(|(s, (vals, cols))| {
+                vals.fill(0.0);
+                cols.fill([0.0; 3]);
+                run(s, vals, Some(&mut *cols));
+                for c in cols.iter_mut() {
+                    *c = c.map(|v| v * inv_iso);
+                }
+            }),
+    }
+}
+
+/// Adds the images `list` to the planes `z0..=z1` (`vals`, `cols` hold those planes).
+fn fill_slab(
+    images: &[Image],
+    list: &[u32],
+    geo: &Geometry,
+    (z0, z1): (u32, u32),
+    vals: &mut [f32],
+    mut cols: Option<&mut [[f32; 3]]>,
+) {
+    let [nx, ny, _] = geo.dims;
+    let plane = nx as usize * ny as usize;
+    let [u, v, w] = [geo.jac.x_axis, geo.jac.y_axis, geo.jac.z_axis].map(|c| c.as_vec3());
+    let uu = u.dot(u);
+    for &a in list {
+        let img = &images[a as usize];
+        let cut2 = img.cut * img.cut;
+        let half = |axis: usize| img.cut as f64 * geo.reach[axis] + 1.0;
+        let Some((k0, k1)) = span(img.index[2], half(2), z1 + 1) else {
+            continue;
+        };
+        let Some((j0, j1)) = span(img.index[1], half(1), ny) else {
+            continue;
+        };
+        for k in k0.max(z0)..=k1 {
+            let zoff = (k - z0) as usize * plane;
+            let ek = k as f32 * w - img.pos;
+            for j in j0..=j1 {
+                // Samples of this row: |i u + e|^2 < cut^2, a quadratic in i.
+                let e = ek + j as f32 * v;
+                let ue = u.dot(e);
+                let disc = ue * ue - uu * (e.dot(e) - cut2);
+                if disc <= 0.0 {
+                    continue;
+                }
+                let root = disc.sqrt();
+                let lo = ((-ue - root) / uu).floor() as i64;
+                let hi = ((-ue + root) / uu).ceil() as i64;
+                let (lo, hi) = (lo.max(0) as usize, hi.min(nx as i64 - 1));
+                if hi < lo as i64 {
+                    continue;
+                }
+                let row = zoff + j as usize * nx as usize;
+                for i in lo..=hi as usize {
+                    let d = e + i as f32 * u;
+                    let d2 = d.dot(d);
+                    if d2 >= cut2 {
+                        continue;
+                    }
+                    let g = (-img.k * d2).exp();
+                    vals[row + i] += g;
+                    if let Some(cols) = cols.as_deref_mut() {
+                        let c = &mut cols[row + i];
+                        for (x, &y) in c.iter_mut().zip(&img.colour) {
+                            *x += g * y;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Maps an index-space mesh to Cartesian (Å) for `geo`, `replicate` copies of the cell
+/// shifted by whole cells in index space (so vertices on shared faces coincide exactly),
+/// normals by `J^-T`, winding reversed for a left-handed cell.
+pub fn to_cartesian(mesh: Mesh, geo: &Geometry, replicate: Replicate) -> Mesh {
+    let extent = Vec3::new(geo.dims[0] as f32, geo.dims[1] as f32, geo.dims[2] as f32);
+    let mut out = replicate_mesh(mesh, extent, replicate);
+    let jac = geo.jac;
+    let normal_map = jac.inverse().transpose();
+    let origin = geo.cell.origin;
+    out.positions
+        .par_iter_mut()
+        .for_each(|p| *p = (jac * p.as_dvec3()).as_vec3() + origin);
+    out.normals.par_iter_mut().for_each(|n| {
+        let m = (normal_map * n.as_dvec3()).normalize_or_zero().as_vec3();
+        if m != Vec3::ZERO {
+            *n = m;
+        }
+    });
+    if jac.determinant() < 0.0 {
+        for t in out.indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+    }
+    out
+}
+
+/// The periodic surface of `atoms` in the triclinic `cell` (see the module docs); area (Å²)
+/// and volume (Å³) per cell times the number of images. `memory` is the byte limit for the
+/// grid; `vol` keeps the density between calls.
+pub fn compute(
+    vol: &mut PeriodicVolume,
+    memory: u64,
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+    cell: &TriclinicCell,
+    replicate: Replicate,
+) -> Result<SurfaceOutput, SurfaceError> {
+    let dims = cell.samples(params.spacing);
+    let dims64 = dims.map(u64::from);
+    let with_colour = atoms.colours.is_some();
+    let needed = crate::surface::estimate_grid_bytes(dims64, with_colour);
+    if needed > memory {
+        return Err(SurfaceError::GridTooLarge {
+            dims: dims64,
+            bytes_needed: needed,
+            bytes_available: memory,
+        });
+    }
+    let geo = Geometry::new(*cell, dims);
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
+    let t = Instant::now();
+    let list = images(atoms, params, &geo);
+    let bin_ms = ms(t);
+    let t = Instant::now();
+    fill(vol, &list, &geo, params.isovalue, with_colour);
+    drop(list);
+    let density_ms = ms(t);
+    let t = Instant::now();
+    let grid = geo.index_grid();
+    let index_mesh = mc::extract(&grid, vol, params.isovalue);
+    let volume = measure::box_volume(&index_mesh, &grid, &vol.values, params.isovalue, 0)
+        * geo.jac.determinant().abs();
+    if index_mesh.positions.len() as u64 * replicate.count() as u64 > u32::MAX as u64 {
+        return Err(SurfaceError::InvalidParameter {
+            name: "replicate count",
+            value: format!(
+                "{replicate} ({} vertices per cell)",
+                index_mesh.positions.len()
+            ),
+        });
+    }
+    let area = if replicate.is_one() {
+        None
+    } else {
+        Some(to_cartesian(index_mesh.clone(), &geo, Replicate::default()).area())
+    };
+    let mesh = to_cartesian(index_mesh, &geo, replicate);
+    let area = area.unwrap_or_else(|| mesh.area());
+    let mc_ms = ms(t);
+    let images = replicate.count() as f64;
+    Ok(SurfaceOutput {
+        grid: GridSpec {
+            origin: cell.origin,
+            spacing: cell.spacing(dims).max_element(),
+            dims,
+        },
+        mesh,
+        area: area * images,
+        volume: volume * images,
+        counts_without_mesh: None,
+        timings: StageTimings {
+            upload_ms: 0.0,
+            bin_ms,
+            density_ms,
+            mc_ms,
+        },
+    })
+}
