@@ -121,7 +121,8 @@ impl SurfaceParams {
             if !(min..=max).contains(&value) {
                 return Err(SurfaceError::OutOfRange {
                     name,
-                    value: value.to_string(),
+                    // Debug keeps 1e-45 short (Display writes every zero).
+                    value: format!("{value:?}"),
                     min,
                     max,
                 });
