@@ -22,6 +22,7 @@ mod chem;
 mod cif_lexer;
 mod cif_residues;
 mod conect;
+mod contained;
 mod dcd;
 pub mod error;
 mod fast;
@@ -41,6 +42,7 @@ mod wwpdb;
 mod xdr;
 mod xdr_reader;
 
+pub use contained::{READER_ARG, reader_main};
 pub use error::IoError;
 pub use format::{FileFormat, WwFormat, detect};
 pub use stream::{

@@ -8,7 +8,8 @@ use std::sync::{Mutex, MutexGuard};
 
 use glam::Vec3;
 
-use super::chem::{ChemReader, check_positions};
+use super::chem::check_positions;
+use super::contained::ContainedReader;
 use super::format::{FileFormat, detect};
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
@@ -117,7 +118,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     let (mut topology, first, top_reader) = match ours {
         Some(read) => (read.topology, FirstFrame::Read(read.frame), None),
         None => {
-            let mut reader = ChemReader::open(top, &top_format)?;
+            let mut reader = ContainedReader::open(top, &top_format, allow_fast)?;
             let topology = reader.read_topology(0)?;
             let positions = if topology.is_empty() {
                 Vec::new()
@@ -194,7 +195,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
                     walk = Some(w);
                     FrameSource::Xdr(reader)
                 }
-                None => FrameSource::Chem(ChemReader::open(path, &format)?),
+                None => FrameSource::Chem(ContainedReader::open(path, &format, allow_fast)?),
             }
         }
     };
@@ -437,7 +438,7 @@ impl FirstFrame {
 /// of our own read with the topology (kept in memory: the one frame of a fast-read file, the
 /// models of an mmCIF file).
 enum FrameSource {
-    Chem(ChemReader),
+    Chem(ContainedReader),
     Xdr(XdrReader),
     Memory {
         path: PathBuf,
