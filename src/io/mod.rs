@@ -31,6 +31,7 @@ mod fast_xyz;
 pub mod format;
 mod mmcif;
 mod mmcif_bonds;
+mod pdb_models;
 mod pdb_templates;
 mod prepare;
 mod quiet;

@@ -13,7 +13,7 @@ use super::contained::ContainedReader;
 use super::format::{FileFormat, detect};
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
-use super::{IoError, dcd, fast, mmcif, wwpdb, xdr};
+use super::{IoError, dcd, fast, mmcif, pdb_models, wwpdb, xdr};
 
 use crate::model::{Frame, Topology, sizing};
 
@@ -211,6 +211,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
         trajectory.apply_walk(w)?;
     }
     trajectory.mark_truncated_stream()?;
+    trajectory.check_pdb_models()?;
     // A count mismatch is reported at once, not at the first frame the user asks for.
     trajectory.check_first_frame()?;
     trajectory.probe_tail();
@@ -358,6 +359,36 @@ impl Trajectory {
         }
         self.len = frame;
         self.damage = Some(Damage { frame, error });
+        Ok(())
+    }
+
+    /// A PDB file that ends inside a model: the whole models before it are the trajectory and
+    /// the cut one is the damage (chemfiles dropped it, or read it with fewer atoms, silently);
+    /// an error when no model is whole.
+    fn check_pdb_models(&mut self) -> Result<(), IoError> {
+        let Ok(format) = detect(&self.frames_path) else {
+            return Ok(());
+        };
+        if format.base != "PDB" {
+            return Ok(());
+        }
+        let Ok((bytes, _)) = read_all(&self.frames_path, &format) else {
+            return Ok(());
+        };
+        let Some((whole, message)) = pdb_models::cut_model(&bytes) else {
+            return Ok(());
+        };
+        let error = IoError::bad_frame(&self.frames_path, whole, message);
+        if whole == 0 {
+            return Err(error);
+        }
+        if whole < self.len || (whole == self.len && self.damage.is_none()) {
+            self.len = whole;
+            self.damage = Some(Damage {
+                frame: whole,
+                error,
+            });
+        }
         Ok(())
     }
 

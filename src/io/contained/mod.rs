@@ -36,7 +36,8 @@ use glam::Vec3;
 
 use super::chem::{ChemReader, check_and_prepare, check_positions};
 use super::format::FileFormat;
-use super::{IoError, warnings};
+use super::prepare::read_all;
+use super::{IoError, pdb_models, warnings};
 use crate::model::{Frame, Topology};
 use protocol::{Garbage, Reader, TAG_ERROR, TAG_FRAME, TAG_OPEN, TAG_TOPOLOGY, TAG_WARNING};
 
@@ -85,6 +86,7 @@ fn reader_exe() -> Option<PathBuf> {
 /// documentation). The same calls as [`ChemReader`].
 pub(crate) struct ContainedReader {
     path: PathBuf,
+    format: FileFormat,
     base: &'static str,
     len: usize,
     truncated: Option<(String, bool)>,
@@ -135,6 +137,7 @@ impl ContainedReader {
             let reader = ChemReader::open(path, format)?;
             return Ok(ContainedReader {
                 path: path.to_path_buf(),
+                format: format.clone(),
                 base: format.base,
                 len: reader.len(),
                 truncated: reader.truncated().map(|(t, r)| (t.to_string(), r)),
@@ -158,6 +161,7 @@ impl ContainedReader {
         };
         let mut reader = ContainedReader {
             path: path.to_path_buf(),
+            format: format.clone(),
             base: format.base,
             len: 0,
             truncated: prepared.truncated.map(|t| (t, prepared.cut_removed)),
@@ -207,6 +211,38 @@ impl ContainedReader {
     /// Reads frame `index` and returns the topology it carries; see
     /// [`ChemReader::read_topology`].
     pub(crate) fn read_topology(&mut self, index: usize) -> Result<Topology, IoError> {
+        self.topology(index).map_err(|e| self.placed(e))
+    }
+
+    /// A PDB reader's error with the line number of the record it quotes (see
+    /// [`pdb_models::name_line`]); other errors as they are.
+    fn placed(&self, error: IoError) -> IoError {
+        if self.base != "PDB" {
+            return error;
+        }
+        let locate = |message: &str| {
+            let (bytes, _) = read_all(&self.path, &self.format).ok()?;
+            pdb_models::name_line(&bytes, message)
+        };
+        match error {
+            IoError::BadFrame {
+                path,
+                frame,
+                message,
+            } => IoError::BadFrame {
+                path,
+                frame,
+                message: locate(&message).unwrap_or(message),
+            },
+            IoError::Unreadable { path, message } => IoError::Unreadable {
+                path,
+                message: locate(&message).unwrap_or(message),
+            },
+            other => other,
+        }
+    }
+
+    fn topology(&mut self, index: usize) -> Result<Topology, IoError> {
         if let Backend::InProcess(reader) = &mut self.backend {
             return reader.read_topology(index);
         }
@@ -217,6 +253,10 @@ impl ContainedReader {
     }
 
     fn read_unchecked(&mut self, index: usize) -> Result<Frame, IoError> {
+        self.frame(index).map_err(|e| self.placed(e))
+    }
+
+    fn frame(&mut self, index: usize) -> Result<Frame, IoError> {
         if let Backend::InProcess(reader) = &mut self.backend {
             return reader.read_unchecked(index);
         }
