@@ -3,7 +3,8 @@
 //! title count is huge) gives one line of error naming the file and the frame, exit code 2 from
 //! `mdsurf surface`, and the stats rows of the frames before it; the reader process gives exactly
 //! what chemfiles gives in-process; a reader killed mid-run (the `MDSURF_READER_CRASH_AT` hook)
-//! costs only the frame it died on, and leaves no temporary file behind.
+//! costs only the frame it died on, and leaves no temporary file behind. A PDB file cut inside a
+//! model, or with a damaged record, names the line.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -237,4 +238,47 @@ fn reader_killed_mid_run_keeps_the_frames_before() {
     assert_eq!(stats_frames(dir.path()), vec![0, 1]);
     let left: Vec<_> = std::fs::read_dir(temp.path()).unwrap().collect();
     assert!(left.is_empty(), "temporary files left: {left:?}");
+}
+
+/// A multi-model PDB cut inside model 5 keeps models 0-4 and names the lines of the cut (it
+/// was read as 5 frames without a word); a damaged ATOM record's error names its line.
+#[test]
+fn cut_or_damaged_pdb_models_name_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = crate::data_support::gunzipped("1mot.pdb.gz");
+    let lines: Vec<&str> = text.lines().collect();
+    let models: Vec<usize> = (0..lines.len())
+        .filter(|&i| lines[i].starts_with("MODEL"))
+        .collect();
+    let cut = lines[..models[5] + 100].join("\n");
+    let p = write(dir.path(), "cut.pdb", cut.as_bytes());
+    let t = io::open(&p, None).expect("models 0-4 are whole");
+    assert_eq!(t.len(), 5);
+    let damage = t.damage().expect("the cut model is damage");
+    assert_eq!(damage.frame, 5);
+    let start = format!("line {}", models[5] + 1);
+    assert!(
+        damage.error.to_string().contains(&start),
+        "{}",
+        damage.error
+    );
+    let o = surface(dir.path(), &[&p], &[], &[]);
+    assert_one_line(&o, "cut.pdb", &["frame 5", &start]);
+    assert_eq!(stats_frames(dir.path()), (0..5).collect::<Vec<_>>());
+    // Model 0 cut: nothing whole, one line.
+    let p = write(
+        dir.path(),
+        "cut0.pdb",
+        lines[..models[0] + 100].join("\n").as_bytes(),
+    );
+    let e = io::open(&p, None).expect_err("no whole model");
+    assert!(e.to_string().contains("line"), "{e}");
+    // A damaged coordinate in model 3, at (1-based) line `at + 1`.
+    let at = models[3] + 50;
+    let mut damaged: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    damaged[at].replace_range(30..38, "  xx.x!y");
+    let p = write(dir.path(), "bad.pdb", damaged.join("\n").as_bytes());
+    let o = surface(dir.path(), &[&p], &[], &[]);
+    assert_one_line(&o, "bad.pdb", &["frame 3", &format!("line {}:", at + 1)]);
+    assert_eq!(stats_frames(dir.path()), vec![0, 1, 2]);
 }

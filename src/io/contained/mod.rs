@@ -124,7 +124,7 @@ struct Process {
 enum Reply {
     Open(usize),
     Frame(Frame),
-    Topology(Topology),
+    Topology(Box<Topology>),
 }
 
 impl ContainedReader {
@@ -247,7 +247,7 @@ impl ContainedReader {
             return reader.read_topology(index);
         }
         match self.request(protocol::OP_TOPOLOGY, index)? {
-            Reply::Topology(t) => Ok(t),
+            Reply::Topology(t) => Ok(*t),
             _ => Err(self.died(index, Died::Garbage)),
         }
     }
@@ -413,9 +413,9 @@ impl ContainedReader {
                 let frame = protocol::decode_frame(&mut r, index.unwrap_or(0));
                 Ok(Some(Reply::Frame(frame.map_err(garbage)?)))
             }
-            TAG_TOPOLOGY => Ok(Some(Reply::Topology(
+            TAG_TOPOLOGY => Ok(Some(Reply::Topology(Box::new(
                 protocol::decode_topology(&mut r).map_err(garbage)?,
-            ))),
+            )))),
             _ => Err(None),
         }
     }
