@@ -16,7 +16,11 @@
 //! own warnings are captured (see [`take_warnings`]) rather than printed. No byte of a file
 //! reaches the C++ readers unchecked: text is made valid UTF-8 and `.gz`/`.bz2` decompressed in
 //! Rust (`prepare`), XTC/TRR frame headers (`xdr`), TNG blocks (`tng`) and DCD headers (`dcd`)
-//! are walked first, and a damaged part ends the readable frames as [`Damage`].
+//! are walked first, and a damaged part ends the readable frames as [`Damage`]. chemfiles itself
+//! runs in a reader process (`contained`: the same executable, started as `mdsurf
+//! __read-frames`; see [`reader_main`]), never in the process that holds the user's work: a file
+//! that still crashes it costs the frame it crashed on (a one-line error naming the file and the
+//! frame), and its libraries' text never reaches the terminal.
 
 mod chem;
 mod cif_lexer;

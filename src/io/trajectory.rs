@@ -65,15 +65,19 @@ impl std::fmt::Debug for Trajectory {
 ///
 /// mmCIF files (plain or compressed) are read by our own reader (`mmcif`), never by chemfiles;
 /// large plain PDB and XYZ files by our fast readers (see `fast`); every other file by
-/// chemfiles. Setting the environment variable `MDSURF_NO_FAST_READ` sends PDB and XYZ files to
-/// chemfiles too (for timing the two paths against each other).
+/// chemfiles, in a reader process (see `contained`: a crash there is an error naming the frame;
+/// one on the last frames, probed at open, makes them [`Damage`]). Setting the environment
+/// variable `MDSURF_NO_FAST_READ` sends PDB and XYZ files to chemfiles too, and
+/// `MDSURF_IN_PROCESS_READ` runs chemfiles in this process (for timing the paths against each
+/// other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, true)
 }
 
 /// [`open`] with every file read through chemfiles, never a fast reader and never our mmCIF
-/// reader: the reference those readers are tested against (tests and benchmarks only; chemfiles'
-/// mmCIF reader crashes on some legal files).
+/// reader, and chemfiles run in this process, not in a reader process: the reference those
+/// readers are tested against (tests and benchmarks only; chemfiles' mmCIF reader crashes on
+/// some legal files, and a damaged file can crash this process).
 pub fn open_via_chemfiles(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, false)
 }
@@ -93,6 +97,8 @@ fn read_cif(path: &Path, format: &FileFormat) -> Result<(mmcif::CifRead, Option<
     Ok((mmcif::read(path, &bytes)?, truncated))
 }
 
+/// `allow_fast`: our own readers where they apply, and chemfiles in a reader process; false for
+/// the in-process chemfiles reference ([`open_via_chemfiles`]).
 fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajectory, IoError> {
     let top_format = detect(top)?;
     if traj.is_none() && !top_format.has_names {
