@@ -282,3 +282,16 @@ fn cut_or_damaged_pdb_models_name_their_line() {
     assert_one_line(&o, "bad.pdb", &["frame 3", &format!("line {}:", at + 1)]);
     assert_eq!(stats_frames(dir.path()), vec![0, 1, 2]);
 }
+
+/// A reader process that answers with garbage (the test hook) is stopped: one line naming the
+/// frame, the frames before it kept.
+#[test]
+fn reader_sending_garbage_is_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let pdb = data("adk_open.pdb");
+    let dcd = data("adk_dims.dcd");
+    let hook = [("MDSURF_READER_GARBAGE_AT", "4")];
+    let o = surface(dir.path(), &[&pdb, &dcd], &["--frames", "0:10"], &hook);
+    assert_one_line(&o, "adk_dims.dcd", &["frame 4", "invalid reply"]);
+    assert_eq!(stats_frames(dir.path()), (0..4).collect::<Vec<_>>());
+}

@@ -5,8 +5,9 @@
 //! descriptor 1 is pointed at stderr (which the parent captures) before chemfiles is touched, so
 //! a C library printing to stdout cannot corrupt the replies.
 //!
-//! Test hook: with `MDSURF_READER_CRASH_AT=K` in its environment the process aborts (SIGABRT)
-//! when asked for frame `K`, as chemfiles does on some damaged files.
+//! Test hooks: with `MDSURF_READER_CRASH_AT=K` in its environment the process aborts (SIGABRT)
+//! when asked for frame `K`, as chemfiles does on some damaged files; with
+//! `MDSURF_READER_GARBAGE_AT=K` it answers that request with bytes that are no reply.
 
 use std::ffi::OsString;
 use std::fs::File;
@@ -45,9 +46,11 @@ pub(super) fn serve(args: &[OsString]) -> i32 {
     let Some(mut out) = protocol_output() else {
         return 2;
     };
-    let crash_at: Option<u64> = std::env::var("MDSURF_READER_CRASH_AT")
-        .ok()
-        .and_then(|v| v.trim().parse().ok());
+    let hook = |name: &str| -> Option<u64> { std::env::var(name).ok()?.trim().parse().ok() };
+    let (crash_at, garbage_at) = (
+        hook("MDSURF_READER_CRASH_AT"),
+        hook("MDSURF_READER_GARBAGE_AT"),
+    );
     let reader = ChemReader::open_prepared(&path, base, copy, chemfiles, None);
     let mut reader = match reader {
         Ok(reader) => reader,
@@ -69,6 +72,10 @@ pub(super) fn serve(args: &[OsString]) -> i32 {
         };
         if crash_at == Some(index) {
             std::process::abort();
+        }
+        if garbage_at == Some(index) {
+            let _ = protocol::send(&mut out, b"?garbage");
+            continue;
         }
         let body = match usize::try_from(index) {
             Err(_) => encode_error(&IoError::bad_frame(&path, usize::MAX, "no such frame")),
