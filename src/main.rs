@@ -37,6 +37,10 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // `mdsurf __read-frames ...`: the reader process that opens files with chemfiles.
+    if let Some(code) = mdsurf::io::reader_main() {
+        return exit_without_static_destructors(code);
+    }
     quiet_vulkan_device_select();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,

@@ -28,8 +28,10 @@ pub(crate) struct ChemReader {
     inner: chemfiles::Trajectory,
     scratch: chemfiles::Frame,
     len: usize,
-    /// The temporary copy chemfiles reads, when the file needed one (see [`prepare`]).
-    copy: Option<(PathBuf, tempfile::TempDir)>,
+    /// The temporary copy (or link) chemfiles reads, when the file needed one (see [`prepare`]).
+    copy: Option<PathBuf>,
+    /// Keeps that copy alive (`None` in a reader process: its parent owns the copy).
+    _temp: Option<tempfile::TempDir>,
     /// Why the (compressed) file ends early, when it does, and whether the cut frame was left
     /// out of the copy (see [`super::prepare::Prepared::cut_removed`]).
     truncated: Option<(String, bool)>,
@@ -46,25 +48,41 @@ unsafe impl Send for ChemReader {}
 impl ChemReader {
     /// Opens `path` in `format`; fails when chemfiles cannot open it or it holds no frame.
     pub(crate) fn open(path: &Path, format: &FileFormat) -> Result<Self, IoError> {
+        let prepared = check_and_prepare(path, format)?;
+        let copy = (prepared.open_path != path).then(|| prepared.open_path.clone());
+        let truncated = prepared.truncated.map(|t| (t, prepared.cut_removed));
+        let mut reader =
+            Self::open_prepared(path, format.base, copy, &prepared.chemfiles, prepared.temp)?;
+        reader.truncated = truncated;
+        Ok(reader)
+    }
+
+    /// Opens with chemfiles what [`check_and_prepare`] made of `path`: `copy` (when set) is the
+    /// file chemfiles reads in place of `path`, in the chemfiles format `chemfiles`; `temp` keeps
+    /// it alive. Errors name `path`.
+    pub(crate) fn open_prepared(
+        path: &Path,
+        base: &'static str,
+        copy: Option<PathBuf>,
+        chemfiles: &str,
+        temp: Option<tempfile::TempDir>,
+    ) -> Result<Self, IoError> {
         warnings::install();
-        sniff(path, format.base)?;
-        let prepared = prepare(path, format)?;
-        let open_path = prepared.open_path.clone();
-        let opened = quiet::silenced(|| {
-            chemfiles::Trajectory::open_with_format(&open_path, 'r', prepared.chemfiles.as_str())
-        })
-        .map_err(|()| IoError::unreadable(path, "the reader failed on this file"))?;
+        let open_path = copy.clone().unwrap_or_else(|| path.to_path_buf());
+        let opened =
+            quiet::silenced(|| chemfiles::Trajectory::open_with_format(&open_path, 'r', chemfiles))
+                .map_err(|()| IoError::unreadable(path, "the reader failed on this file"))?;
         let inner =
             opened.map_err(|e| IoError::unreadable(path, unmask(&e.message, &open_path, path)))?;
-        let copy = prepared.temp.map(|temp| (prepared.open_path.clone(), temp));
         let mut reader = ChemReader {
             path: path.to_path_buf(),
-            base: format.base,
+            base,
             inner,
             scratch: chemfiles::Frame::new(),
             len: 0,
             copy,
-            truncated: prepared.truncated.map(|t| (t, prepared.cut_removed)),
+            _temp: temp,
+            truncated: None,
         };
         // `nsteps` panics (inside the Rust binding) if the C++ side fails.
         let steps = quiet::silenced(|| reader.inner.nsteps());
@@ -86,16 +104,6 @@ impl ChemReader {
             reader.len -= 1;
         }
         Ok(reader)
-    }
-
-    /// The file this reader reads.
-    pub(crate) fn path(&self) -> &Path {
-        &self.path
-    }
-
-    /// The format without compression (`DCD`, `GRO`).
-    pub(crate) fn base(&self) -> &'static str {
-        self.base
     }
 
     /// Number of frames.
@@ -126,7 +134,7 @@ impl ChemReader {
         })?;
         read.map_err(|e| {
             let message = match &self.copy {
-                Some((copy, _)) => unmask(&e.message, copy, &self.path),
+                Some(copy) => unmask(&e.message, copy, &self.path),
                 None => e.message.clone(),
             };
             IoError::bad_frame(&self.path, index, message)
@@ -134,27 +142,21 @@ impl ChemReader {
         Ok(&self.scratch)
     }
 
-    /// Reads frame `index` and converts it; positions are checked to be finite.
-    pub(crate) fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
+    /// Reads frame `index` and converts it, positions not checked (a reader process sends
+    /// them as they are; its parent checks them).
+    pub(crate) fn read_unchecked(&mut self, index: usize) -> Result<Frame, IoError> {
         let base = self.base;
         let raw = self.read_raw(index)?;
         let positions = to_vec3(raw.positions());
         let cell = cell_rows(raw);
         // A property that is not UTF-8 (a DCD title) panics in the binding: no time then.
         let time_ps = quiet::silenced(|| frame_time_ps(raw, base)).unwrap_or(None);
-        check_positions(&self.path, index, &positions)?;
         Ok(Frame {
             index,
             time_ps,
             positions,
             cell,
         })
-    }
-
-    /// Reads frame `index` and returns its raw positions in Å (not checked to be finite).
-    pub(crate) fn read_positions(&mut self, index: usize) -> Result<Vec<Vec3>, IoError> {
-        let raw = self.read_raw(index)?;
-        Ok(to_vec3(raw.positions()))
     }
 
     /// Reads frame `index` and returns the topology it carries (names, residues, chains, bonds;
@@ -169,16 +171,23 @@ impl ChemReader {
         })?;
         if self.base == "GRO" {
             // The plain copy when there is one (decompressed, cleaned text), else the file.
-            let text = self
-                .copy
-                .as_ref()
-                .map_or(path.as_path(), |(p, _)| p.as_path());
+            let text = self.copy.as_deref().unwrap_or(path.as_path());
             if let Some(lines) = read_gro_residues(text) {
                 apply_gro_residues(&mut topology, &lines);
             }
         }
         Ok(topology)
     }
+}
+
+/// What every chemfiles read starts with, in the process that holds the user's work: the
+/// checks of [`sniff`], then [`prepare`] (decompression, cleaned text, TNG salvage).
+pub(crate) fn check_and_prepare(
+    path: &Path,
+    format: &FileFormat,
+) -> Result<super::prepare::Prepared, IoError> {
+    sniff(path, format.base)?;
+    prepare(path, format)
 }
 
 /// Rejects files that plainly are not in `base` format, or are damaged in ways the C libraries

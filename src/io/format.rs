@@ -60,6 +60,12 @@ const FORMATS: [(&str, &str, bool); 16] = [
     ("mol2", "MOL2", true),
 ];
 
+/// The format named `base` (`GRO`, `Amber NetCDF`) as the static name [`FileFormat::base`]
+/// holds, or `None` when no format has that name.
+pub(crate) fn base_named(base: &str) -> Option<&'static str> {
+    FORMATS.iter().map(|f| f.1).find(|b| *b == base)
+}
+
 /// Checks that `path` is a readable regular file and names a known format.
 pub fn detect(path: &Path) -> Result<FileFormat, IoError> {
     check_readable(path)?;

@@ -16,12 +16,17 @@
 //! own warnings are captured (see [`take_warnings`]) rather than printed. No byte of a file
 //! reaches the C++ readers unchecked: text is made valid UTF-8 and `.gz`/`.bz2` decompressed in
 //! Rust (`prepare`), XTC/TRR frame headers (`xdr`), TNG blocks (`tng`) and DCD headers (`dcd`)
-//! are walked first, and a damaged part ends the readable frames as [`Damage`].
+//! are walked first, and a damaged part ends the readable frames as [`Damage`]. chemfiles itself
+//! runs in a reader process (`contained`: the same executable, started as `mdsurf
+//! __read-frames`; see [`reader_main`]), never in the process that holds the user's work: a file
+//! that still crashes it costs the frame it crashed on (a one-line error naming the file and the
+//! frame), and its libraries' text never reaches the terminal.
 
 mod chem;
 mod cif_lexer;
 mod cif_residues;
 mod conect;
+mod contained;
 mod dcd;
 pub mod error;
 mod fast;
@@ -30,6 +35,7 @@ mod fast_xyz;
 pub mod format;
 mod mmcif;
 mod mmcif_bonds;
+mod pdb_models;
 mod pdb_templates;
 mod prepare;
 mod quiet;
@@ -41,6 +47,7 @@ mod wwpdb;
 mod xdr;
 mod xdr_reader;
 
+pub use contained::{READER_ARG, reader_main};
 pub use error::IoError;
 pub use format::{FileFormat, WwFormat, detect};
 pub use stream::{

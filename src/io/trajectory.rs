@@ -8,11 +8,12 @@ use std::sync::{Mutex, MutexGuard};
 
 use glam::Vec3;
 
-use super::chem::{ChemReader, check_positions};
+use super::chem::check_positions;
+use super::contained::ContainedReader;
 use super::format::{FileFormat, detect};
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
-use super::{IoError, dcd, fast, mmcif, wwpdb, xdr};
+use super::{IoError, dcd, fast, mmcif, pdb_models, wwpdb, xdr};
 
 use crate::model::{Frame, Topology, sizing};
 
@@ -64,15 +65,19 @@ impl std::fmt::Debug for Trajectory {
 ///
 /// mmCIF files (plain or compressed) are read by our own reader (`mmcif`), never by chemfiles;
 /// large plain PDB and XYZ files by our fast readers (see `fast`); every other file by
-/// chemfiles. Setting the environment variable `MDSURF_NO_FAST_READ` sends PDB and XYZ files to
-/// chemfiles too (for timing the two paths against each other).
+/// chemfiles, in a reader process (see `contained`: a crash there is an error naming the frame;
+/// one on the last frames, probed at open, makes them [`Damage`]). Setting the environment
+/// variable `MDSURF_NO_FAST_READ` sends PDB and XYZ files to chemfiles too, and
+/// `MDSURF_IN_PROCESS_READ` runs chemfiles in this process (for timing the paths against each
+/// other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, true)
 }
 
 /// [`open`] with every file read through chemfiles, never a fast reader and never our mmCIF
-/// reader: the reference those readers are tested against (tests and benchmarks only; chemfiles'
-/// mmCIF reader crashes on some legal files).
+/// reader, and chemfiles run in this process, not in a reader process: the reference those
+/// readers are tested against (tests and benchmarks only; chemfiles' mmCIF reader crashes on
+/// some legal files, and a damaged file can crash this process).
 pub fn open_via_chemfiles(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, false)
 }
@@ -92,6 +97,8 @@ fn read_cif(path: &Path, format: &FileFormat) -> Result<(mmcif::CifRead, Option<
     Ok((mmcif::read(path, &bytes)?, truncated))
 }
 
+/// `allow_fast`: our own readers where they apply, and chemfiles in a reader process; false for
+/// the in-process chemfiles reference ([`open_via_chemfiles`]).
 fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajectory, IoError> {
     let top_format = detect(top)?;
     if traj.is_none() && !top_format.has_names {
@@ -117,7 +124,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     let (mut topology, first, top_reader) = match ours {
         Some(read) => (read.topology, FirstFrame::Read(read.frame), None),
         None => {
-            let mut reader = ChemReader::open(top, &top_format)?;
+            let mut reader = ContainedReader::open(top, &top_format, allow_fast)?;
             let topology = reader.read_topology(0)?;
             let positions = if topology.is_empty() {
                 Vec::new()
@@ -194,7 +201,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
                     walk = Some(w);
                     FrameSource::Xdr(reader)
                 }
-                None => FrameSource::Chem(ChemReader::open(path, &format)?),
+                None => FrameSource::Chem(ContainedReader::open(path, &format, allow_fast)?),
             }
         }
     };
@@ -210,6 +217,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
         trajectory.apply_walk(w)?;
     }
     trajectory.mark_truncated_stream()?;
+    trajectory.check_pdb_models()?;
     // A count mismatch is reported at once, not at the first frame the user asks for.
     trajectory.check_first_frame()?;
     trajectory.probe_tail();
@@ -360,6 +368,36 @@ impl Trajectory {
         Ok(())
     }
 
+    /// A PDB file that ends inside a model: the whole models before it are the trajectory and
+    /// the cut one is the damage (chemfiles dropped it, or read it with fewer atoms, silently);
+    /// an error when no model is whole.
+    fn check_pdb_models(&mut self) -> Result<(), IoError> {
+        let Ok(format) = detect(&self.frames_path) else {
+            return Ok(());
+        };
+        if format.base != "PDB" {
+            return Ok(());
+        }
+        let Ok((bytes, _)) = read_all(&self.frames_path, &format) else {
+            return Ok(());
+        };
+        let Some((whole, message)) = pdb_models::cut_model(&bytes) else {
+            return Ok(());
+        };
+        let error = IoError::bad_frame(&self.frames_path, whole, message);
+        if whole == 0 {
+            return Err(error);
+        }
+        if whole < self.len || (whole == self.len && self.damage.is_none()) {
+            self.len = whole;
+            self.damage = Some(Damage {
+                frame: whole,
+                error,
+            });
+        }
+        Ok(())
+    }
+
     /// A DCD file whose size leaves a partial frame after the last complete one was truncated:
     /// chemfiles drops that frame silently, this records it as [`Damage`].
     fn check_dcd_size(&mut self) {
@@ -437,7 +475,7 @@ impl FirstFrame {
 /// of our own read with the topology (kept in memory: the one frame of a fast-read file, the
 /// models of an mmCIF file).
 enum FrameSource {
-    Chem(ChemReader),
+    Chem(ContainedReader),
     Xdr(XdrReader),
     Memory {
         path: PathBuf,

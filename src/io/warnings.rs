@@ -14,18 +14,21 @@ static INSTALL: Once = Once::new();
 /// before touching chemfiles.
 pub(crate) fn install() {
     INSTALL.call_once(|| {
-        chemfiles::set_warning_callback(|message: &str| {
-            if let Ok(mut buffer) = BUFFER.lock() {
-                if buffer.0.iter().any(|kept| kept == message) {
-                    // Parsers repeat a warning once per odd line: keep it once.
-                } else if buffer.0.len() < MAX_KEPT {
-                    buffer.0.push(message.to_string());
-                } else {
-                    buffer.1 += 1;
-                }
-            }
-        });
+        chemfiles::set_warning_callback(push);
     });
+}
+
+/// Keeps `message` (once) in the buffer: a chemfiles warning, here or in a reader process.
+pub(crate) fn push(message: &str) {
+    if let Ok(mut buffer) = BUFFER.lock() {
+        if buffer.0.iter().any(|kept| kept == message) {
+            // Parsers repeat a warning once per odd line: keep it once.
+        } else if buffer.0.len() < MAX_KEPT {
+            buffer.0.push(message.to_string());
+        } else {
+            buffer.1 += 1;
+        }
+    }
 }
 
 /// Returns and clears the chemfiles warnings collected so far (at most 64) and how many more

@@ -36,6 +36,7 @@ mod gpu_stages;
 mod gpu_steady;
 mod gpu_table1;
 mod io_bad;
+mod io_contained;
 mod io_data;
 mod io_fast;
 mod io_hostile;
