@@ -243,7 +243,16 @@ fn build_topology(c: Columns, first: &[Vec3]) -> PyResult<Topology> {
 }
 
 /// One representation's numbers in one frame.
-type RepRow = (String, String, f64, f64, usize, (u32, u32, u32), usize, usize);
+type RepRow = (
+    String,
+    String,
+    f64,
+    f64,
+    usize,
+    (u32, u32, u32),
+    usize,
+    usize,
+);
 
 /// See the module documentation; `mdsurf.Scene` documents the arguments.
 #[pyclass(unsendable, module = "mdsurf._mdsurf", name = "SceneCore")]
@@ -297,9 +306,7 @@ impl SceneCore {
             isovalue,
             quality: quality.parse().map_err(PyValueError::new_err)?,
         };
-        params
-            .validate()
-            .map_err(|e| crate::surface_err("", e))?;
+        params.validate().map_err(|e| crate::surface_err("", e))?;
         let vertices: Option<VertexMode> = vertices
             .map(|v| v.parse().map_err(PyValueError::new_err))
             .transpose()?;
@@ -349,7 +356,9 @@ impl SceneCore {
         let mut base = Representation::new("selection", "all", RepStyle::Surface);
         base.set_params(&params);
         let from_state = state.is_some();
-        let mut reps = if let Some(state) = state {
+        let mut reps = if !surfaces {
+            Vec::new()
+        } else if let Some(state) = state {
             state.representations
         } else if let Some(expr) = select {
             let rep = Representation {
@@ -507,15 +516,16 @@ impl SceneCore {
     fn read(&mut self, index: usize, reader: &Bound<'_, PyAny>) -> PyResult<Frame> {
         let atoms = self.topology.len();
         self.frames
-            .read(index, |i| read_frame(reader, i, atoms).map_err(ReadError::Py))
+            .read(index, |i| {
+                read_frame(reader, i, atoms).map_err(ReadError::Py)
+            })
             .map_err(PyErr::from)
     }
 
     fn bound(&mut self, text: &str) -> PyResult<&BoundSelection> {
         if !self.selections.contains_key(text) {
-            let sel = Selection::parse(text).map_err(|e| {
-                PyValueError::new_err(format!("selection '{text}': {e}"))
-            })?;
+            let sel = Selection::parse(text)
+                .map_err(|e| PyValueError::new_err(format!("selection '{text}': {e}")))?;
             self.selections
                 .insert(text.to_string(), sel.bind(&self.topology));
         }
