@@ -24,6 +24,7 @@ mdsurf guesses them), bonds the file lists, radii and masses from mdsurf's eleme
 universe's guessed masses are not used, so ``center`` and ``fit`` weigh atoms as the CLI does).
 """
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -157,7 +158,10 @@ class _UniverseReader:
         if ts.frame != i:
             ts = self.trajectory[i]
         positions = np.array(ts.positions, dtype=np.float32, order="C")
-        return positions, _box_of(ts.dimensions), float(ts.time)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # "Reader has no dt information": time not needed
+            time = float(ts.time)
+        return positions, _box_of(ts.dimensions), time
 
 
 class _ArrayReader:
