@@ -237,3 +237,41 @@ def test_other_errors_are_value_errors(data, tmp_path):
         mdsurf.Scene(u, select="protein", center="resname XYZ")
     with pytest.raises(IndexError):
         mdsurf.Scene(u, select="protein").frame(1)
+
+
+MIRROR_SELECTIONS = [
+    "protein", "backbone", "chain A", "segid A", "resid 10 to 20", "element C", "element H",
+    "name CA", "type C", "water", "ion", "lipid", "ligand", "mass > 12", "residue 3",
+    "same residue as (within 4 of resid 5)",
+]
+
+
+@pytest.mark.parametrize(
+    "name", ["1hpv.pdb", "adk_oplsaa.gro", "martini_dppc_chol_bilayer.gro", "adk_open.pdb"]
+)
+def test_topology_mirrors_cli(cli, data, tmp_path, name):
+    """The topology built from the universe selects what `mdsurf select` selects in the same
+    file (names, elements, masses, residues, chains, segments), frame 0 as read."""
+    (path,) = copies(tmp_path, data, name)
+    scene = mdsurf.Scene(universe(path), whole=False, _surfaces=False)
+    for sel in MIRROR_SELECTIONS:
+        run = subprocess.run(
+            [cli, "select", str(path), sel, "--indices"], capture_output=True, text=True
+        )
+        assert run.returncode == 0, run.stderr
+        lines = run.stdout.strip().splitlines()
+        expected = [int(i) for i in lines[1].split()] if len(lines) > 1 else []
+        assert list(scene.select(sel)) == expected, sel
+
+
+def test_masses_weigh_the_centre(adk):
+    """Given masses replace mdsurf's element masses in the centring: another centre."""
+    _, _, u = adk
+    ours = mdsurf.Scene(u, select="protein", center="protein")
+    same = mdsurf.Scene(u, select="protein", center="protein", masses=u.atoms.masses)
+    other = np.where(u.atoms.ix < 1000, 100.0, 1.0)
+    theirs = mdsurf.Scene(u, select="protein", center="protein", masses=other)
+    a, b, c = ours.positions(0), same.positions(0), theirs.positions(0)
+    assert a.shape == c.shape == (u.atoms.n_atoms, 3)
+    np.testing.assert_allclose(a, b, atol=1e-3)  # MDAnalysis' guesses: the element masses
+    assert np.abs(a - c).max() > 1.0

@@ -203,6 +203,9 @@ class Scene:
         ``--fit``).
     smooth : int
         Average positions over ±``smooth`` frames (``--smooth``).
+    masses : array_like, optional
+        Mass per atom in amu for ``center`` and ``fit`` (e.g. ``universe.atoms.masses``); by
+        default mdsurf's element masses, as the command line uses for GRO and PDB files.
 
     Errors (a selection that does not parse or matches no atom, a bad state file, bad
     parameters) raise ``ValueError`` with the command line's one-line message.
@@ -223,6 +226,7 @@ class Scene:
         center=None,
         fit=None,
         smooth=0,
+        masses=None,
         _columns=None,
         _reader=None,
         _n_frames=None,
@@ -238,6 +242,8 @@ class Scene:
             columns, reader, n_frames, file = _columns, _reader, _n_frames, _file
         else:
             raise ValueError("Scene needs a universe (or use Scene.from_arrays)")
+        if masses is not None:
+            columns = dict(columns, masses=[float(m) for m in np.asarray(masses).ravel()])
         if n_frames < 1:
             raise ValueError("the trajectory has no frames")
         first, box, _ = reader(0)
@@ -314,7 +320,6 @@ class Scene:
             ("chains", chains, str),
             ("segments", segments, str),
             ("elements", elements, str),
-            ("masses", masses, float),
         ]:
             if values is not None:
                 columns[key] = [convert(v) for v in values]
@@ -322,7 +327,7 @@ class Scene:
             columns["bonds"] = [(int(a), int(b)) for a, b in np.asarray(bonds).reshape(-1, 2)]
         reader = _ArrayReader(positions, boxes, times)
         return cls(
-            None, _columns=columns, _reader=reader, _n_frames=frames, **kwargs
+            None, masses=masses, _columns=columns, _reader=reader, _n_frames=frames, **kwargs
         )
 
     def __len__(self):
@@ -373,6 +378,12 @@ class Scene:
         """Frame ``i``'s positions (N, 3) in Å after the transformations."""
         positions, _ = self._core.transformed(self._index(i), self._reader)
         return positions
+
+    def select(self, selection, frame=0):
+        """Indices (uint32) of the atoms ``selection`` (mdsurf's language) picks in ``frame``
+        after the transformations."""
+        _, indices = self._core.transformed(self._index(frame), self._reader, str(selection))
+        return indices
 
     def frame(self, i):
         """Frame ``i``: a :class:`SceneFrame` with one :class:`RepSurface` per visible surface
