@@ -48,6 +48,13 @@ fn transform_err(err: TransformError) -> PyErr {
     PyValueError::new_err(err.to_string())
 }
 
+/// Runs `f` without the GIL on this process's thread pool (the CPU engine's, see `engines`), so
+/// that a forked worker never waits on threads of its parent; `f` takes the GIL to read frames.
+fn in_pool<R: Send>(py: Python<'_>, f: impl FnOnce() -> PyResult<R> + Send) -> PyResult<R> {
+    py.detach(|| crate::engines::on_pool(f))
+        .map_err(PyRuntimeError::new_err)?
+}
+
 /// A frame could not be read (the Python reader raised) or transformed.
 enum ReadError {
     Py(PyErr),
@@ -91,7 +98,11 @@ fn cell_of(cell: Option<PyReadonlyArrayDyn<'_, f32>>) -> PyResult<Option<[Vec3; 
 
 /// Frame `index` from the Python reader: `reader(index)` returns `(positions (N, 3) float32,
 /// box (3, 3) float32 or None, time in ps or None)`.
-fn read_frame(reader: &Bound<'_, PyAny>, index: usize, atoms: usize) -> PyResult<Frame> {
+fn read_frame(reader: &Py<PyAny>, index: usize, atoms: usize) -> PyResult<Frame> {
+    Python::attach(|py| read_frame_with(reader.bind(py), index, atoms))
+}
+
+fn read_frame_with(reader: &Bound<'_, PyAny>, index: usize, atoms: usize) -> PyResult<Frame> {
     let got = reader.call1((index,))?;
     let (positions, cell, time): (
         PyReadonlyArrayDyn<'_, f32>,
@@ -276,6 +287,7 @@ impl SceneCore {
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
+        py: Python<'_>,
         columns: Columns,
         first: PyReadonlyArrayDyn<'_, f32>,
         first_box: Option<PyReadonlyArrayDyn<'_, f32>>,
@@ -320,97 +332,103 @@ impl SceneCore {
             positions: first_positions,
             cell: cell_of(first_box)?,
         };
-        let topology = build_topology(columns, &raw_first.positions)?;
-        // The options as `TransformArgs::options` makes them: a state file's when no
-        // transformation is asked for.
-        let asked = whole.is_some() || center.is_some() || fit.is_some() || smooth > 0;
-        let options = match &state {
-            Some(s) if !asked => s.trajectory.transforms(),
-            _ => TransformOptions {
-                whole,
-                center,
-                fit,
-                fit_reference: FitReference::First,
-                smooth,
-                periodic: false,
-                replicate: Default::default(),
-            },
-        };
-        let chain = TransformChain::new(&options, &topology, &raw_first, None, file)
-            .map_err(transform_err)?;
-        let summary = chain.summary();
-        let periodic = chain.periodic();
-        let mut frames = TransformedFrames::new(chain, n_frames.max(1));
-        let atoms = topology.len();
-        let first = frames
-            .read(0, |i| {
-                if i == 0 {
-                    Ok(raw_first.clone())
-                } else {
-                    read_frame(reader, i, atoms).map_err(ReadError::Py)
-                }
-            })
-            .map_err(PyErr::from)?;
-
-        // The representations, as `SceneArgs::representations` picks them.
-        let mut base = Representation::new("selection", "all", RepStyle::Surface);
-        base.set_params(&params);
-        let from_state = state.is_some();
-        let mut reps = if !surfaces {
-            Vec::new()
-        } else if let Some(state) = state {
-            state.representations
-        } else if let Some(expr) = select {
-            let rep = Representation {
-                selection: expr,
-                ..base
+        let reader = reader.clone().unbind();
+        let file = file.to_string();
+        // Everything that may run on threads runs on this process's pool (see `engines`).
+        in_pool(py, move || {
+            let file = file.as_str();
+            let topology = build_topology(columns, &raw_first.positions)?;
+            // The options as `TransformArgs::options` makes them: a state file's when no
+            // transformation is asked for.
+            let asked = whole.is_some() || center.is_some() || fit.is_some() || smooth > 0;
+            let options = match &state {
+                Some(s) if !asked => s.trajectory.transforms(),
+                _ => TransformOptions {
+                    whole,
+                    center,
+                    fit,
+                    fit_reference: FitReference::First,
+                    smooth,
+                    periodic: false,
+                    replicate: Default::default(),
+                },
             };
-            rep.validate().map_err(PyValueError::new_err)?;
-            vec![rep]
-        } else {
-            default_representations(&topology, &first, &base)
-        };
-        if !from_state || vertices.is_some() {
-            for rep in &mut reps {
-                rep.vertices = vertices.unwrap_or_default();
-            }
-        }
-        reps.retain(|r| r.style.is_surface() && r.visible);
-        let requests: Vec<RepRequest> = reps
-            .into_iter()
-            .enumerate()
-            .map(|(id, rep)| RepRequest { id: id as u64, rep })
-            .collect();
+            let chain = TransformChain::new(&options, &topology, &raw_first, None, file)
+                .map_err(transform_err)?;
+            let summary = chain.summary();
+            let periodic = chain.periodic();
+            let mut frames = TransformedFrames::new(chain, n_frames.max(1));
+            let atoms = topology.len();
+            let first = frames
+                .read(0, |i| {
+                    if i == 0 {
+                        Ok(raw_first.clone())
+                    } else {
+                        read_frame(&reader, i, atoms).map_err(ReadError::Py)
+                    }
+                })
+                .map_err(PyErr::from)?;
 
-        let mut cpu = CpuEngine::new();
-        cpu.set_keep_mesh(false);
-        let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(cpu)));
-        engine.set_periodic(periodic);
-        engine.reset(&topology, &RadiusOverrides::default());
-        engine.bind(&topology, &requests).map_err(scene_err)?;
-        if surfaces && requests.is_empty() {
-            return Err(PyValueError::new_err(
-                "no visible surface representation to compute (the state file hides them all)",
-            ));
-        }
-        for RepRequest { id, rep } in &requests {
-            if let Some(layer) = engine.layer(*id)
-                && !layer.is_dynamic()
-                && layer.atoms(&first).is_empty()
-            {
-                return Err(PyValueError::new_err(format!(
-                    "{file}: selection '{}' of representation '{}' matches no atom",
-                    rep.selection, rep.name
-                )));
+            // The representations, as `SceneArgs::representations` picks them.
+            let mut base = Representation::new("selection", "all", RepStyle::Surface);
+            base.set_params(&params);
+            let from_state = state.is_some();
+            let mut reps = if !surfaces {
+                Vec::new()
+            } else if let Some(state) = state {
+                state.representations
+            } else if let Some(expr) = select {
+                let rep = Representation {
+                    selection: expr,
+                    ..base
+                };
+                rep.validate().map_err(PyValueError::new_err)?;
+                vec![rep]
+            } else {
+                default_representations(&topology, &first, &base)
+            };
+            if !from_state || vertices.is_some() {
+                for rep in &mut reps {
+                    rep.vertices = vertices.unwrap_or_default();
+                }
             }
-        }
-        Ok(SceneCore {
-            topology,
-            engine,
-            frames,
-            reps: requests,
-            selections: HashMap::new(),
-            summary,
+            reps.retain(|r| r.style.is_surface() && r.visible);
+            let requests: Vec<RepRequest> = reps
+                .into_iter()
+                .enumerate()
+                .map(|(id, rep)| RepRequest { id: id as u64, rep })
+                .collect();
+
+            let mut cpu = CpuEngine::new();
+            cpu.set_keep_mesh(false);
+            let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(cpu)));
+            engine.set_periodic(periodic);
+            engine.reset(&topology, &RadiusOverrides::default());
+            engine.bind(&topology, &requests).map_err(scene_err)?;
+            if surfaces && requests.is_empty() {
+                return Err(PyValueError::new_err(
+                    "no visible surface representation to compute (the state file hides them all)",
+                ));
+            }
+            for RepRequest { id, rep } in &requests {
+                if let Some(layer) = engine.layer(*id)
+                    && !layer.is_dynamic()
+                    && layer.atoms(&first).is_empty()
+                {
+                    return Err(PyValueError::new_err(format!(
+                        "{file}: selection '{}' of representation '{}' matches no atom",
+                        rep.selection, rep.name
+                    )));
+                }
+            }
+            Ok(SceneCore {
+                topology,
+                engine,
+                frames,
+                reps: requests,
+                selections: HashMap::new(),
+                summary,
+            })
         })
     }
 
@@ -456,31 +474,34 @@ impl SceneCore {
         &mut self,
         py: Python<'_>,
         index: usize,
-        reader: &Bound<'_, PyAny>,
+        reader: Py<PyAny>,
     ) -> PyResult<(Vec<RepRow>, Option<f64>)> {
-        let frame = Arc::new(self.read(index, reader)?);
-        let (engine, topology, reps) = (&mut self.engine, &self.topology, &self.reps);
-        let computed = py
-            .detach(|| engine.frame(topology, index, &frame, reps))
-            .map_err(scene_err)?;
-        let rows = computed
-            .layers
-            .iter()
-            .map(|l| {
-                let o = &l.output;
-                (
-                    l.rep.name.clone(),
-                    l.rep.selection.clone(),
-                    o.area,
-                    o.volume,
-                    l.particles.positions.len(),
-                    (o.grid.dims[0], o.grid.dims[1], o.grid.dims[2]),
-                    o.vertex_count(),
-                    o.triangle_count(),
-                )
-            })
-            .collect();
-        Ok((rows, frame.time_ps))
+        let this = &mut *self;
+        in_pool(py, || {
+            let frame = Arc::new(this.read(index, &reader)?);
+            let computed = this
+                .engine
+                .frame(&this.topology, index, &frame, &this.reps)
+                .map_err(scene_err)?;
+            let rows = computed
+                .layers
+                .iter()
+                .map(|l| {
+                    let o = &l.output;
+                    (
+                        l.rep.name.clone(),
+                        l.rep.selection.clone(),
+                        o.area,
+                        o.volume,
+                        l.particles.positions.len(),
+                        (o.grid.dims[0], o.grid.dims[1], o.grid.dims[2]),
+                        o.vertex_count(),
+                        o.triangle_count(),
+                    )
+                })
+                .collect();
+            Ok((rows, frame.time_ps))
+        })
     }
 
     /// Frame `index` through the transformations: positions (N, 3) float32 in Å, and, when
@@ -491,29 +512,32 @@ impl SceneCore {
         &mut self,
         py: Python<'py>,
         index: usize,
-        reader: &Bound<'py, PyAny>,
+        reader: Py<PyAny>,
         selection: Option<&str>,
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray1<u32>>>)> {
-        let frame = self.read(index, reader)?;
-        let indices = selection
-            .map(|text| -> PyResult<_> {
-                let bound = self.bound(text)?;
-                Ok(PyArray1::from_vec(py, bound.indices(&frame)))
-            })
-            .transpose()?;
+        let this = &mut *self;
+        let (frame, indices) = in_pool(py, || {
+            let frame = this.read(index, &reader)?;
+            let indices = selection
+                .map(|text| this.bound(text).map(|b| b.indices(&frame)))
+                .transpose()?;
+            Ok((frame, indices))
+        })?;
         let rows: Vec<[f32; 3]> = frame.positions.iter().map(|p| p.to_array()).collect();
+        let indices = indices.map(|i| PyArray1::from_vec(py, i));
         Ok((arrays::array_f32(py, &rows), indices))
     }
 
     /// Checks that `selection` parses (a `ValueError` naming it otherwise) and whether it
     /// depends on positions.
-    fn check_selection(&mut self, selection: &str) -> PyResult<bool> {
-        Ok(self.bound(selection)?.is_dynamic())
+    fn check_selection(&mut self, py: Python<'_>, selection: &str) -> PyResult<bool> {
+        let this = &mut *self;
+        in_pool(py, || Ok(this.bound(selection)?.is_dynamic()))
     }
 }
 
 impl SceneCore {
-    fn read(&mut self, index: usize, reader: &Bound<'_, PyAny>) -> PyResult<Frame> {
+    fn read(&mut self, index: usize, reader: &Py<PyAny>) -> PyResult<Frame> {
         let atoms = self.topology.len();
         self.frames
             .read(index, |i| {

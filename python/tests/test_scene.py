@@ -275,3 +275,24 @@ def test_masses_weigh_the_centre(adk):
     assert a.shape == c.shape == (u.atoms.n_atoms, 3)
     np.testing.assert_allclose(a, b, atol=1e-3)  # MDAnalysis' guesses: the element masses
     assert np.abs(a - c).max() > 1.0
+
+
+def test_gaussian_surface_workers_equal_serial(adk):
+    """Blocks of frames in forked workers (after the parent computed on its threads), with
+    smoothing reading frames outside each block: the serial numbers."""
+    _, _, u = adk
+    for smooth in (0, 1):
+        serial = GaussianSurface(u, select="protein", engine="cpu", smooth=smooth).run(stop=4)
+        forked = GaussianSurface(u, select="protein", engine="cpu", smooth=smooth).run(
+            stop=4, backend="multiprocessing", n_workers=2
+        )
+        np.testing.assert_array_equal(forked.results.area, serial.results.area)
+        np.testing.assert_array_equal(forked.results.volume, serial.results.volume)
+
+
+def test_scene_leaves_the_trajectory_where_it_was(adk):
+    _, _, u = adk
+    u.trajectory[5]
+    scene = mdsurf.Scene(u, select="protein", smooth=2)
+    assert u.trajectory.ts.frame == 5
+    assert len(scene) == 10

@@ -193,9 +193,10 @@ class GaussianSurface(AnalysisBase):
         self.results.volume = np.full(self.n_frames, np.nan)
 
     def _single_frame(self):
+        # The time step is updated in place by any read: its frame is taken first.
+        frame = self._ts.frame
         scene = self._scene()
         trajectory = self._ag.universe.trajectory
-        frame = self._ts.frame
         positions, picked = scene._core.transformed(frame, scene._reader, self._select)
         if trajectory.ts.frame != frame:
             trajectory[frame]  # smoothing read its neighbours: back to this frame

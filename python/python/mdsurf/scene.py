@@ -246,10 +246,24 @@ class Scene:
             columns = dict(columns, masses=[float(m) for m in np.asarray(masses).ravel()])
         if n_frames < 1:
             raise ValueError("the trajectory has no frames")
-        first, box, _ = reader(0)
         self._reader = reader
         self._n_frames = n_frames
-        self._core = _mdsurf.SceneCore(
+        # Reading frame 0 (and its smoothing window) moves the universe's trajectory: it is put
+        # back where it was.
+        current = None if universe is None else universe.trajectory.ts.frame
+        try:
+            self._core = self._build(columns, n_frames, reader, file, select, state, spacing,
+                                     radius_scale, isovalue, quality, vertices, whole, center,
+                                     fit, smooth, _surfaces)
+        finally:
+            if current is not None and universe.trajectory.ts.frame != current:
+                universe.trajectory[current]
+
+    @staticmethod
+    def _build(columns, n_frames, reader, file, select, state, spacing, radius_scale, isovalue,
+               quality, vertices, whole, center, fit, smooth, surfaces):
+        first, box, _ = reader(0)
+        return _mdsurf.SceneCore(
             columns,
             _f32(first, "positions"),
             None if box is None else _f32(box, "box"),
@@ -267,7 +281,7 @@ class Scene:
             fit=None if fit is None else str(fit),
             smooth=int(smooth),
             file=file,
-            surfaces=_surfaces,
+            surfaces=surfaces,
         )
 
     @classmethod
