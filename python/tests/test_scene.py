@@ -161,6 +161,16 @@ def test_default_representations_equal_cli(cli, data, tmp_path):
     assert_rows_equal(scene.run(), rows)
 
 
+def test_default_representations_of_a_membrane_equal_cli(cli, data, tmp_path):
+    """A coarse-grained membrane trajectory: macromolecule and the coarser lipid surface (the
+    hidden solvent is not computed), molecules made whole."""
+    gro, xtc = copies(tmp_path, data, "YiiP_lipids.gro.gz", "YiiP_lipids.xtc")
+    rows = cli_rows(cli, tmp_path, gro, xtc, "--frames", "0:3")
+    scene = mdsurf.Scene(mda.Universe(str(gro), str(xtc)))
+    assert scene.representations == ["macromolecule", "lipids"]
+    assert_rows_equal(scene.run(0, 3), rows)
+
+
 def test_from_arrays_equals_universe(data):
     u = universe(data / "1hpv.pdb")
     scene = mdsurf.Scene.from_arrays(
