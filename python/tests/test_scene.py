@@ -247,6 +247,8 @@ def test_other_errors_are_value_errors(data, tmp_path):
         mdsurf.Scene(u, select="protein", center="resname XYZ")
     with pytest.raises(IndexError):
         mdsurf.Scene(u, select="protein").frame(1)
+    with pytest.raises(TypeError, match="select="):
+        mdsurf.Scene(u.select_atoms("protein"))
 
 
 MIRROR_SELECTIONS = [

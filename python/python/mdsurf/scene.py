@@ -234,6 +234,11 @@ class Scene:
         _surfaces=True,
     ):
         if universe is not None:
+            if getattr(universe, "universe", universe) is not universe:
+                raise TypeError(
+                    "Scene takes the whole Universe (as the command line takes the file); "
+                    "pick atoms with select=, e.g. Scene(u, select='protein')"
+                )
             columns = universe_columns(universe)
             reader = _UniverseReader(universe)
             n_frames = len(universe.trajectory)
