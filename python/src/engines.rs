@@ -84,6 +84,13 @@ fn pool() -> Result<Arc<ThreadPool>, String> {
     Ok(this_process(&mut guard, || Arc::new(pool)).clone())
 }
 
+/// Runs `f` on this process's thread pool: every parallel step (transformations, selections,
+/// the CPU engine) runs there, never on rayon's global pool, which a forked child inherits
+/// without its threads.
+pub fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> Result<R, String> {
+    Ok(pool()?.install(f))
+}
+
 /// The engine `backend` resolves to, in words, and whether it is the GPU. Opens the GPU when
 /// the choice needs it.
 pub fn describe(backend: Backend) -> Result<(bool, String), String> {

@@ -10,6 +10,7 @@
 
 mod arrays;
 mod engines;
+mod scene;
 mod topology;
 
 use mdsurf::surface::{AtomSet, Quality, SurfaceError, SurfaceOutput, SurfaceParams, VertexMode};
@@ -266,6 +267,7 @@ fn _mdsurf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(measure, m)?)?;
     m.add_function(wrap_pyfunction!(engine_info, m)?)?;
     m.add_function(wrap_pyfunction!(_gpu_opened, m)?)?;
+    m.add_class::<scene::SceneCore>()?;
     topology::register(m)?;
     Ok(())
 }

@@ -12,7 +12,10 @@ that cannot start (``backend="gpu"``) raises ``RuntimeError``.
 The GPU device is opened lazily, in the process that first computes with ``backend="gpu"`` or
 ``"auto"`` (never at import), so the package works in forked workers (``multiprocessing``, Dask).
 
-``mdsurf.analysis.GaussianSurface`` is an MDAnalysis analysis (serial, multiprocessing, dask).
+``mdsurf.Scene`` measures the representations of ``mdsurf surface`` (``select=``, ``state=`` or
+the defaults) frame by frame, through the command line's frame transformations (whole
+molecules, ``center``, ``fit``, ``smooth``). ``mdsurf.analysis.GaussianSurface`` is an
+MDAnalysis analysis (serial, multiprocessing, dask).
 """
 
 import os
@@ -30,6 +33,7 @@ from ._mdsurf import Grid, Surface, element_radius, guess_element  # noqa: E402
 
 __all__ = [
     "Grid",
+    "Scene",
     "Surface",
     "element_radius",
     "engine_info",
@@ -165,3 +169,6 @@ def engine_info(backend="auto"):
     For example ``"cpu (no usable GPU: ...)"`` or ``"gpu (NVIDIA H100 (Vulkan))"``.
     """
     return _mdsurf.engine_info(str(backend))
+
+
+from .scene import Scene  # noqa: E402

@@ -12,7 +12,7 @@ without one, Dask's process scheduler runs them on this machine::
 
     u = mda.Universe("adk_open.pdb", "adk_dims.dcd")
     with LocalCluster(n_workers=2) as cluster, Client(cluster):
-        surf = GaussianSurface(u.select_atoms("protein")).run(backend="dask", n_workers=2)
+        surf = GaussianSurface(u, select="protein").run(backend="dask", n_workers=2)
     print(surf.results.area, surf.results.volume)
 """
 
@@ -22,6 +22,7 @@ from MDAnalysis.analysis.base import AnalysisBase
 from MDAnalysis.analysis.results import ResultsGroup
 
 from . import _f32, _mdsurf, topology_radii
+from .scene import Scene
 
 __all__ = ["GaussianSurface", "atomgroup_radii"]
 
@@ -68,19 +69,36 @@ def _default_client():
 class GaussianSurface(AnalysisBase):
     """Area and volume of the Gaussian density surface of ``atomgroup`` in every frame.
 
+    Frames go through the transformations of ``mdsurf surface``: molecules split by the
+    periodic box are made whole by default when the frames have a box (``whole=False`` turns
+    it off), and ``center``, ``fit`` and ``smooth`` act as ``--center``, ``--fit`` and
+    ``--smooth``. So ``GaussianSurface(u, select="protein", engine="cpu")`` gives the numbers of
+    ``mdsurf surface --select protein --backend cpu``.
+
     Parameters
     ----------
-    atomgroup : MDAnalysis.AtomGroup
-        The atoms whose surface is measured.
+    atomgroup : MDAnalysis.AtomGroup or MDAnalysis.Universe
+        The atoms whose surface is measured (all atoms of a universe).
+    select : str, optional
+        Instead of ``atomgroup``'s atoms, those this selection in mdsurf's selection language
+        picks in each (transformed) frame, e.g. ``"protein"``, ``"within 5 of resname LIG"``.
+        A selection that does not parse or picks no atom in the first frame raises
+        ``ValueError``.
     radii : array_like, optional
-        Radius in Å per atom of ``atomgroup``; by default the radii ``mdsurf surface`` gives
-        the same file (:func:`atomgroup_radii`).
+        Radius in Å per atom of ``atomgroup`` (per atom of the universe with ``select``); by
+        default the radii ``mdsurf surface`` gives the same file (:func:`atomgroup_radii`).
     spacing, radius_scale, isovalue, quality, vertices
         Surface parameters as in :func:`mdsurf.surface` (defaults H = 1 Å, R = 1, I = 0.5,
         quality "medium").
     engine : str
         The surface engine: "cpu", "gpu" or "auto" (the ``backend`` of :func:`mdsurf.surface`;
         named ``engine`` here because ``run(backend=...)`` is MDAnalysis's parallel backend).
+    whole : bool, optional
+        Make molecules whole (default: on when the frames have a box).
+    center, fit : str, optional
+        Selections (mdsurf's language) to centre in the box and to fit onto the first frame.
+    smooth : int
+        Average positions over ±``smooth`` frames.
 
     Results
     -------
@@ -106,16 +124,38 @@ class GaussianSurface(AnalysisBase):
         quality="medium",
         engine="auto",
         vertices="interpolated",
+        select=None,
+        whole=None,
+        center=None,
+        fit=None,
+        smooth=0,
         **kwargs,
     ):
+        atomgroup = atomgroup.atoms
         super().__init__(atomgroup.universe.trajectory, **kwargs)
         self._ag = atomgroup
+        self._select = None if select is None else str(select)
+        self._transforms = dict(
+            whole=None if whole is None else bool(whole),
+            center=None if center is None else str(center),
+            fit=None if fit is None else str(fit),
+            smooth=int(smooth),
+        )
+        core = self._scene()
+        if self._select is not None:
+            dynamic = core._core.check_selection(self._select)
+            if not dynamic:
+                _, picked = core._core.transformed(0, core._reader, self._select)
+                if len(picked) == 0:
+                    raise ValueError(f"selection '{self._select}' matches no atom")
+        count = len(atomgroup) if self._select is None else atomgroup.universe.atoms.n_atoms
         if radii is None:
-            radii = atomgroup_radii(atomgroup)
+            radii = core.radii if self._select is not None else core.radii[atomgroup.ix]
         radii = _f32(radii, "radii")
-        if radii.shape != (len(atomgroup),):
+        if radii.shape != (count,):
+            who = "per atom" if self._select is None else "per atom of the universe"
             raise ValueError(
-                f"radii must be an array of shape ({len(atomgroup)},), one per atom, "
+                f"radii must be an array of shape ({count},), one {who}, "
                 f"got shape {radii.shape}"
             )
         self._radii = radii
@@ -134,13 +174,43 @@ class GaussianSurface(AnalysisBase):
             *self._settings.values(),
         )
 
+    def _scene(self):
+        """The frame reader through the transformations (built once per process)."""
+        core = getattr(self, "_core", None)
+        if core is None:
+            core = Scene(self._ag.universe, _surfaces=False, **self._transforms)
+            self._core = core
+        return core
+
+    def __getstate__(self):
+        # The native scene is rebuilt in each worker.
+        state = self.__dict__.copy()
+        state.pop("_core", None)
+        return state
+
     def _prepare(self):
         self.results.area = np.full(self.n_frames, np.nan)
         self.results.volume = np.full(self.n_frames, np.nan)
 
     def _single_frame(self):
-        positions = np.asarray(self._ag.positions, dtype=np.float32)[np.newaxis]
-        area, volume = _mdsurf.measure(positions, self._radii, *self._settings.values())
+        # The time step is updated in place by any read: its frame is taken first.
+        frame = self._ts.frame
+        scene = self._scene()
+        trajectory = self._ag.universe.trajectory
+        positions, picked = scene._core.transformed(frame, scene._reader, self._select)
+        if trajectory.ts.frame != frame:
+            trajectory[frame]  # smoothing read its neighbours: back to this frame
+        if picked is None:
+            picked = self._ag.ix
+            radii = self._radii
+        else:
+            radii = self._radii[picked]
+        if len(picked) == 0:
+            area, volume = [0.0], [0.0]
+        else:
+            area, volume = _mdsurf.measure(
+                positions[picked][np.newaxis], radii, *self._settings.values()
+            )
         self.results.area[self._frame_index] = area[0]
         self.results.volume[self._frame_index] = volume[0]
         global _frames_measured

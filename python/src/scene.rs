@@ -1,0 +1,558 @@
+//! `mdsurf._mdsurf.SceneCore`: the command line's frame path for Python callers. A topology
+//! built from arrays (as the crate's readers build it: elements guessed where the file gives
+//! none, radii and masses from the element table, residues as runs), the transformation chain
+//! of `mdsurf surface` (whole molecules by default when the frames have a box, `--center`,
+//! `--fit`, `--smooth`), and the representations of `--select`, `--state` or the defaults,
+//! computed per frame by [`SceneEngine::frame`] on the CPU engine. The Python wrapper
+//! (`mdsurf.Scene`, `mdsurf.analysis.GaussianSurface`) reads the frames and hands them in
+//! through a callable.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::Vec3;
+use mdsurf::model::sizing::fit_untyped_radii;
+use mdsurf::model::{Frame, RadiusOverrides, Topology, elements};
+use mdsurf::scene::defaults::default_representations;
+use mdsurf::scene::representation::{RepStyle, Representation};
+use mdsurf::scene::state_file::StateFile;
+use mdsurf::scene::{BoundSelection, RepRequest, SceneBackend, SceneEngine, SceneError, Selection};
+use mdsurf::surface::{CpuEngine, SurfaceEngine, SurfaceParams, VertexMode};
+use mdsurf::transform::{
+    FitReference, TransformChain, TransformError, TransformOptions, TransformedFrames,
+};
+use numpy::{PyArray1, PyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+
+use crate::arrays;
+
+/// The Python exception for a scene error: a selection that does not bind, particles that do
+/// not fit the topology, or a surface input the engine refuses is a `ValueError`; a grid too
+/// large a `MemoryError`; anything else a `RuntimeError`. The message is the error's one line.
+pub fn scene_err(err: SceneError) -> PyErr {
+    use mdsurf::surface::SurfaceError as S;
+    let msg = err.to_string();
+    match &err {
+        SceneError::Bind(_) | SceneError::Particles { .. } => PyValueError::new_err(msg),
+        SceneError::Surface { source, .. } => match source {
+            S::GridTooLarge { .. } => PyMemoryError::new_err(msg),
+            S::Gpu(_) => PyRuntimeError::new_err(msg),
+            _ => PyValueError::new_err(msg),
+        },
+        SceneError::Periodic { .. } => PyValueError::new_err(msg),
+    }
+}
+
+fn transform_err(err: TransformError) -> PyErr {
+    PyValueError::new_err(err.to_string())
+}
+
+/// Runs `f` without the GIL on this process's thread pool (the CPU engine's, see `engines`), so
+/// that a forked worker never waits on threads of its parent; `f` takes the GIL to read frames.
+fn in_pool<R: Send>(py: Python<'_>, f: impl FnOnce() -> PyResult<R> + Send) -> PyResult<R> {
+    py.detach(|| crate::engines::on_pool(f))
+        .map_err(PyRuntimeError::new_err)?
+}
+
+/// A frame could not be read (the Python reader raised) or transformed.
+enum ReadError {
+    Py(PyErr),
+    Transform(TransformError),
+}
+
+impl From<TransformError> for ReadError {
+    fn from(e: TransformError) -> Self {
+        ReadError::Transform(e)
+    }
+}
+
+impl From<ReadError> for PyErr {
+    fn from(e: ReadError) -> Self {
+        match e {
+            ReadError::Py(e) => e,
+            ReadError::Transform(e) => transform_err(e),
+        }
+    }
+}
+
+/// A (3, 3) box (rows a, b, c in Å), or `None` for no box (absent, or all zero).
+fn cell_of(cell: Option<PyReadonlyArrayDyn<'_, f32>>) -> PyResult<Option<[Vec3; 3]>> {
+    let Some(cell) = cell else {
+        return Ok(None);
+    };
+    if cell.shape() != [3, 3] {
+        return Err(PyValueError::new_err(format!(
+            "a box must be a (3, 3) array of edge vectors, got shape {:?}",
+            cell.shape()
+        )));
+    }
+    let a = cell.as_array();
+    let row = |i: usize| Vec3::new(a[[i, 0]], a[[i, 1]], a[[i, 2]]);
+    let rows = [row(0), row(1), row(2)];
+    if rows.iter().all(|r| *r == Vec3::ZERO) {
+        return Ok(None);
+    }
+    Ok(Some(rows))
+}
+
+/// Frame `index` from the Python reader: `reader(index)` returns `(positions (N, 3) float32,
+/// box (3, 3) float32 or None, time in ps or None)`.
+fn read_frame(reader: &Py<PyAny>, index: usize, atoms: usize) -> PyResult<Frame> {
+    Python::attach(|py| read_frame_with(reader.bind(py), index, atoms))
+}
+
+fn read_frame_with(reader: &Bound<'_, PyAny>, index: usize, atoms: usize) -> PyResult<Frame> {
+    let got = reader.call1((index,))?;
+    let (positions, cell, time): (
+        PyReadonlyArrayDyn<'_, f32>,
+        Option<PyReadonlyArrayDyn<'_, f32>>,
+        Option<f64>,
+    ) = got.extract()?;
+    let positions = arrays::positions(&positions)?;
+    if positions.len() != atoms {
+        return Err(PyValueError::new_err(format!(
+            "frame {index} has {} atoms but the topology has {atoms}",
+            positions.len()
+        )));
+    }
+    Ok(Frame {
+        index,
+        time_ps: time,
+        positions,
+        cell: cell_of(cell)?,
+    })
+}
+
+/// Fails unless `list` (when given) has one entry per atom.
+fn per_atom<T>(list: Option<Vec<T>>, what: &str, atoms: usize) -> PyResult<Option<Vec<T>>> {
+    match list {
+        Some(l) if l.len() != atoms => Err(PyValueError::new_err(format!(
+            "{what} has {} entries for {atoms} atoms",
+            l.len()
+        ))),
+        other => Ok(other),
+    }
+}
+
+/// The per-atom columns a topology is built from (any but `names` may be missing).
+#[derive(FromPyObject, Default)]
+#[pyo3(from_item_all)]
+struct Columns {
+    names: Vec<String>,
+    #[pyo3(default)]
+    resnames: Option<Vec<String>>,
+    #[pyo3(default)]
+    resids: Option<Vec<i64>>,
+    /// Which residue each atom belongs to as the reader grouped them (MDAnalysis' resindex): a
+    /// new residue starts where it changes, as where number, name, chain or segment change.
+    #[pyo3(default)]
+    residues: Option<Vec<i64>>,
+    #[pyo3(default)]
+    chains: Option<Vec<String>>,
+    #[pyo3(default)]
+    segments: Option<Vec<String>>,
+    #[pyo3(default)]
+    elements: Option<Vec<String>>,
+    #[pyo3(default)]
+    types: Option<Vec<String>>,
+    #[pyo3(default)]
+    masses: Option<Vec<f32>>,
+    #[pyo3(default)]
+    charges: Option<Vec<f32>>,
+    #[pyo3(default)]
+    serials: Option<Vec<i64>>,
+    #[pyo3(default)]
+    b_factors: Option<Vec<f32>>,
+    #[pyo3(default)]
+    occupancies: Option<Vec<f32>>,
+    #[pyo3(default)]
+    bonds: Option<Vec<(i64, i64)>>,
+}
+
+/// The topology of `columns` as the crate's readers leave it: elements canonical (invalid ones
+/// guessed from atom and residue names), radii and missing masses from the element table,
+/// residues numbered as runs, untyped particles sized from `first` (positions of frame 0).
+fn build_topology(c: Columns, first: &[Vec3]) -> PyResult<Topology> {
+    let n = c.names.len();
+    if n == 0 {
+        return Err(PyValueError::new_err("the topology has no atoms"));
+    }
+    if first.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "frame 0 has {} atoms but the topology has {n}",
+            first.len()
+        )));
+    }
+    let resnames = per_atom(c.resnames, "resnames", n)?;
+    let resids = per_atom(c.resids, "resids", n)?;
+    let residues = per_atom(c.residues, "residues", n)?;
+    let has_residues = resnames.is_some() || resids.is_some() || residues.is_some();
+    let labels = |v: Option<Vec<String>>| v.unwrap_or_else(|| vec![String::new(); n]);
+    let elements = per_atom(c.elements, "elements", n)?
+        .map(|v| {
+            v.iter()
+                .map(|e| elements::canonical_symbol(e).unwrap_or(""))
+                .collect::<Vec<_>>()
+        })
+        .unwrap_or_else(|| vec![""; n]);
+    let mut top = Topology {
+        names: c.names.into(),
+        elements: elements.into(),
+        residue_names: labels(resnames).into(),
+        residue_ids: resids.unwrap_or_else(|| vec![0; n]),
+        chains: labels(per_atom(c.chains, "chains", n)?).into(),
+        segments: labels(per_atom(c.segments, "segments", n)?).into(),
+        b_factors: per_atom(c.b_factors, "b_factors", n)?.unwrap_or_default(),
+        occupancies: per_atom(c.occupancies, "occupancies", n)?.unwrap_or_default(),
+        masses: per_atom(c.masses, "masses", n)?.unwrap_or_default(),
+        charges: per_atom(c.charges, "charges", n)?.unwrap_or_default(),
+        serials: per_atom(c.serials, "serials", n)?.unwrap_or_default(),
+        ..Topology::default()
+    };
+    if let Some(types) = per_atom(c.types, "types", n)? {
+        top.types = types.into();
+    }
+    if let Some(bonds) = c.bonds {
+        top.bonds = bonds
+            .into_iter()
+            .map(|(a, b)| {
+                let ok = |x: i64| (0..n as i64).contains(&x);
+                if ok(a) && ok(b) {
+                    Ok([a as u32, b as u32])
+                } else {
+                    Err(PyValueError::new_err(format!(
+                        "bond ({a}, {b}) names an atom outside 0..{n}"
+                    )))
+                }
+            })
+            .collect::<PyResult<_>>()?;
+    }
+    // Residues as runs of atoms with the same (number, name, chain, segment) and reader
+    // residue, as the crate's chemfiles conversion numbers them; atoms of a file without
+    // residues are residues of their own.
+    let group = residues.unwrap_or_else(|| vec![0; n]);
+    let mut next = 0u32;
+    top.residue_index = (0..n)
+        .map(|i| {
+            let same = has_residues
+                && i > 0
+                && group[i] == group[i - 1]
+                && top.residue_ids[i] == top.residue_ids[i - 1]
+                && top.residue_names[i] == top.residue_names[i - 1]
+                && top.chains[i] == top.chains[i - 1]
+                && top.segments[i] == top.segments[i - 1];
+            if i > 0 && !same {
+                next += 1;
+            }
+            next
+        })
+        .collect();
+    top.complete_elements_and_radii();
+    fit_untyped_radii(&mut top, first);
+    Ok(top)
+}
+
+/// One representation's numbers in one frame.
+type RepRow = (
+    String,
+    String,
+    f64,
+    f64,
+    usize,
+    (u32, u32, u32),
+    usize,
+    usize,
+);
+
+/// See the module documentation; `mdsurf.Scene` documents the arguments.
+#[pyclass(unsendable, module = "mdsurf._mdsurf", name = "SceneCore")]
+pub struct SceneCore {
+    topology: Topology,
+    engine: SceneEngine,
+    frames: TransformedFrames,
+    reps: Vec<RepRequest>,
+    /// Selections bound for [`SceneCore::transformed`], by text.
+    selections: HashMap<String, BoundSelection>,
+    summary: String,
+}
+
+#[pymethods]
+impl SceneCore {
+    #[new]
+    #[pyo3(signature = (
+        columns, first, first_box, n_frames, reader, select = None, state = None,
+        spacing = 1.0, radius_scale = 1.0, isovalue = 0.5, quality = "medium", vertices = None,
+        whole = None, center = None, fit = None, smooth = 0, file = "", surfaces = true
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        columns: Columns,
+        first: PyReadonlyArrayDyn<'_, f32>,
+        first_box: Option<PyReadonlyArrayDyn<'_, f32>>,
+        n_frames: usize,
+        reader: &Bound<'_, PyAny>,
+        select: Option<String>,
+        state: Option<String>,
+        spacing: f32,
+        radius_scale: f32,
+        isovalue: f32,
+        quality: &str,
+        vertices: Option<&str>,
+        whole: Option<bool>,
+        center: Option<String>,
+        fit: Option<String>,
+        smooth: usize,
+        file: &str,
+        surfaces: bool,
+    ) -> PyResult<Self> {
+        if select.is_some() && state.is_some() {
+            return Err(PyValueError::new_err(
+                "give select or state, not both (as --select and --state)",
+            ));
+        }
+        let params = SurfaceParams {
+            spacing,
+            radius_scale,
+            isovalue,
+            quality: quality.parse().map_err(PyValueError::new_err)?,
+        };
+        params.validate().map_err(|e| crate::surface_err("", e))?;
+        let vertices: Option<VertexMode> = vertices
+            .map(|v| v.parse().map_err(PyValueError::new_err))
+            .transpose()?;
+        let state = state
+            .map(|p| StateFile::load(std::path::Path::new(&p)).map_err(PyValueError::new_err))
+            .transpose()?;
+        let first_positions = arrays::positions(&first)?;
+        let raw_first = Frame {
+            index: 0,
+            time_ps: None,
+            positions: first_positions,
+            cell: cell_of(first_box)?,
+        };
+        let reader = reader.clone().unbind();
+        let file = file.to_string();
+        // Everything that may run on threads runs on this process's pool (see `engines`).
+        in_pool(py, move || {
+            let file = file.as_str();
+            let topology = build_topology(columns, &raw_first.positions)?;
+            // The options as `TransformArgs::options` makes them: a state file's when no
+            // transformation is asked for.
+            let asked = whole.is_some() || center.is_some() || fit.is_some() || smooth > 0;
+            let options = match &state {
+                Some(s) if !asked => s.trajectory.transforms(),
+                _ => TransformOptions {
+                    whole,
+                    center,
+                    fit,
+                    fit_reference: FitReference::First,
+                    smooth,
+                    periodic: false,
+                    replicate: Default::default(),
+                },
+            };
+            let chain = TransformChain::new(&options, &topology, &raw_first, None, file)
+                .map_err(transform_err)?;
+            let summary = chain.summary();
+            let periodic = chain.periodic();
+            let mut frames = TransformedFrames::new(chain, n_frames.max(1));
+            let atoms = topology.len();
+            let first = frames
+                .read(0, |i| {
+                    if i == 0 {
+                        Ok(raw_first.clone())
+                    } else {
+                        read_frame(&reader, i, atoms).map_err(ReadError::Py)
+                    }
+                })
+                .map_err(PyErr::from)?;
+
+            // The representations, as `SceneArgs::representations` picks them.
+            let mut base = Representation::new("selection", "all", RepStyle::Surface);
+            base.set_params(&params);
+            let from_state = state.is_some();
+            let mut reps = if !surfaces {
+                Vec::new()
+            } else if let Some(state) = state {
+                state.representations
+            } else if let Some(expr) = select {
+                let rep = Representation {
+                    selection: expr,
+                    ..base
+                };
+                rep.validate().map_err(PyValueError::new_err)?;
+                vec![rep]
+            } else {
+                default_representations(&topology, &first, &base)
+            };
+            if !from_state || vertices.is_some() {
+                for rep in &mut reps {
+                    rep.vertices = vertices.unwrap_or_default();
+                }
+            }
+            reps.retain(|r| r.style.is_surface() && r.visible);
+            let requests: Vec<RepRequest> = reps
+                .into_iter()
+                .enumerate()
+                .map(|(id, rep)| RepRequest { id: id as u64, rep })
+                .collect();
+
+            let mut cpu = CpuEngine::new();
+            cpu.set_keep_mesh(false);
+            let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(cpu)));
+            engine.set_periodic(periodic);
+            engine.reset(&topology, &RadiusOverrides::default());
+            engine.bind(&topology, &requests).map_err(scene_err)?;
+            if surfaces && requests.is_empty() {
+                return Err(PyValueError::new_err(
+                    "no visible surface representation to compute (the state file hides them all)",
+                ));
+            }
+            for RepRequest { id, rep } in &requests {
+                if let Some(layer) = engine.layer(*id)
+                    && !layer.is_dynamic()
+                    && layer.atoms(&first).is_empty()
+                {
+                    return Err(PyValueError::new_err(format!(
+                        "{file}: selection '{}' of representation '{}' matches no atom",
+                        rep.selection, rep.name
+                    )));
+                }
+            }
+            Ok(SceneCore {
+                topology,
+                engine,
+                frames,
+                reps: requests,
+                selections: HashMap::new(),
+                summary,
+            })
+        })
+    }
+
+    /// The visible surface representations: (name, selection) in order.
+    fn representations(&self) -> Vec<(String, String)> {
+        self.reps
+            .iter()
+            .map(|r| (r.rep.name.clone(), r.rep.selection.clone()))
+            .collect()
+    }
+
+    /// What the transformation chain does, e.g. `whole (bonds guessed from distances)`.
+    #[getter]
+    fn transforms(&self) -> String {
+        self.summary.clone()
+    }
+
+    /// Number of atoms.
+    #[getter]
+    fn n_atoms(&self) -> usize {
+        self.topology.len()
+    }
+
+    /// Radius of every atom in Å, as the command line assigns them.
+    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+        PyArray1::from_slice(py, &self.topology.radii)
+    }
+
+    /// Element of every atom (given, else guessed; empty for beads and unknown particles).
+    fn elements(&self) -> Vec<String> {
+        self.topology.elements.to_strings()
+    }
+
+    /// Mass of every atom in amu (given, else from the element).
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f32>> {
+        PyArray1::from_slice(py, &self.topology.masses)
+    }
+
+    /// Frame `index` through the transformations and every representation: a list of
+    /// (name, selection, area Å², volume Å³, atoms, grid dims, vertices, triangles), and the
+    /// frame's time in ps.
+    fn frame(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        reader: Py<PyAny>,
+    ) -> PyResult<(Vec<RepRow>, Option<f64>)> {
+        let this = &mut *self;
+        in_pool(py, || {
+            let frame = Arc::new(this.read(index, &reader)?);
+            let computed = this
+                .engine
+                .frame(&this.topology, index, &frame, &this.reps)
+                .map_err(scene_err)?;
+            let rows = computed
+                .layers
+                .iter()
+                .map(|l| {
+                    let o = &l.output;
+                    (
+                        l.rep.name.clone(),
+                        l.rep.selection.clone(),
+                        o.area,
+                        o.volume,
+                        l.particles.positions.len(),
+                        (o.grid.dims[0], o.grid.dims[1], o.grid.dims[2]),
+                        o.vertex_count(),
+                        o.triangle_count(),
+                    )
+                })
+                .collect();
+            Ok((rows, frame.time_ps))
+        })
+    }
+
+    /// Frame `index` through the transformations: positions (N, 3) float32 in Å, and, when
+    /// `selection` is given, the indices of the atoms it picks in that frame (uint32).
+    #[pyo3(signature = (index, reader, selection = None))]
+    #[allow(clippy::type_complexity)]
+    fn transformed<'py>(
+        &mut self,
+        py: Python<'py>,
+        index: usize,
+        reader: Py<PyAny>,
+        selection: Option<&str>,
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray1<u32>>>)> {
+        let this = &mut *self;
+        let (frame, indices) = in_pool(py, || {
+            let frame = this.read(index, &reader)?;
+            let indices = selection
+                .map(|text| this.bound(text).map(|b| b.indices(&frame)))
+                .transpose()?;
+            Ok((frame, indices))
+        })?;
+        let rows: Vec<[f32; 3]> = frame.positions.iter().map(|p| p.to_array()).collect();
+        let indices = indices.map(|i| PyArray1::from_vec(py, i));
+        Ok((arrays::array_f32(py, &rows), indices))
+    }
+
+    /// Checks that `selection` parses (a `ValueError` naming it otherwise) and whether it
+    /// depends on positions.
+    fn check_selection(&mut self, py: Python<'_>, selection: &str) -> PyResult<bool> {
+        let this = &mut *self;
+        in_pool(py, || Ok(this.bound(selection)?.is_dynamic()))
+    }
+}
+
+impl SceneCore {
+    fn read(&mut self, index: usize, reader: &Py<PyAny>) -> PyResult<Frame> {
+        let atoms = self.topology.len();
+        self.frames
+            .read(index, |i| {
+                read_frame(reader, i, atoms).map_err(ReadError::Py)
+            })
+            .map_err(PyErr::from)
+    }
+
+    fn bound(&mut self, text: &str) -> PyResult<&BoundSelection> {
+        if !self.selections.contains_key(text) {
+            let sel = Selection::parse(text)
+                .map_err(|e| PyValueError::new_err(format!("selection '{text}': {e}")))?;
+            self.selections
+                .insert(text.to_string(), sel.bind(&self.topology));
+        }
+        Ok(&self.selections[text])
+    }
+}
