@@ -3,6 +3,10 @@
 
 use glam::Vec3;
 
+/// Boxes narrower than this (Å) in any direction are placeholders, not periodic boxes (PDB's
+/// `CRYST1 1 1 1`): neither the transforms nor `within` selections wrap across them.
+pub const MIN_BOX_WIDTH: f32 = 4.0;
+
 pub mod beads;
 pub mod colour;
 pub mod colour_data;

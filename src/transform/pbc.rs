@@ -4,8 +4,9 @@
 
 use glam::{Mat3, Vec3};
 
-/// Boxes narrower than this (Å) in any direction are not treated as periodic boxes.
-pub const MIN_WIDTH: f32 = 4.0;
+/// Boxes narrower than this (Å) in any direction are not treated as periodic boxes (the
+/// model's [`crate::model::MIN_BOX_WIDTH`], which `within` selections use too).
+pub const MIN_WIDTH: f32 = crate::model::MIN_BOX_WIDTH;
 
 /// A periodic box with its inverse, for converting between Cartesian (Å) and fractional
 /// coordinates.

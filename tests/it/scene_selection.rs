@@ -237,3 +237,18 @@ fn select_command_prints_count_and_indices() {
          (did you mean resname?)"
     );
 }
+
+#[test]
+fn within_ignores_a_placeholder_box() {
+    // 5a7u.pdb (an NMR model) carries `CRYST1 1 1 1`: no periodic box, so `within` measures
+    // plain distances, as the transforms and MDAnalysis treat it.
+    let (trajectory, frame) = open("5a7u.pdb");
+    assert!(frame.cell.is_some(), "the file has its placeholder box");
+    let mut no_box = frame.clone();
+    no_box.cell = None;
+    for text in ["within 4 of resid 5", "within 6 of (name CA and resid 10)"] {
+        let with = count(&trajectory, &frame, text);
+        assert_eq!(with, count(&trajectory, &no_box, text), "{text}");
+        assert!(with < trajectory.topology().len() / 4, "{text}: {with}");
+    }
+}

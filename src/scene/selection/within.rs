@@ -123,6 +123,10 @@ impl Periodic {
             volume / e[2].cross(e[0]).length(),
             volume / e[0].cross(e[1]).length(),
         );
+        // A placeholder box (`CRYST1 1 1 1`) is not periodic.
+        if widths.min_element() < crate::model::MIN_BOX_WIDTH {
+            return None;
+        }
         Some(Periodic {
             edges: e.map(Vec3A::from),
             to_fraction: Mat3A::from(Mat3::from_cols(e[0], e[1], e[2]).inverse()),
