@@ -3,6 +3,7 @@
 //! `render_to_rgba` (optionally turning the camera per image, or in stereo) and writes PNGs, or
 //! one H.264 MP4 movie (`-o movie.mp4`), atomically.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -56,6 +57,9 @@ pub struct RenderArgs {
     /// A `.mp4` name writes all images as one H.264 movie instead (even --size needed).
     #[arg(short = 'o', long = "output", value_name = "PNG|MP4")]
     pub output: PathBuf,
+    /// Print only errors (no per-image lines, progress bar or summaries).
+    #[arg(short, long)]
+    pub quiet: bool,
     /// Also write each rendered frame's area and volume per surface representation, as
     /// `mdsurf surface --stats` does (same columns).
     #[arg(long, value_name = "FILE.csv")]
@@ -408,7 +412,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         &first_frame,
         (&params, args.params.radius_set()),
         &options,
-        false,
+        args.quiet,
     )?;
     if let Some(state) = &choice.state {
         // The state file's look replaces the look flags.
@@ -443,14 +447,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // The GPU engine computes on the render device and its buffers are drawn in place, as in
     // the window; otherwise the mesh comes back to the host and is uploaded (the CPU engine,
     // or the periodic one: never a second GPU device).
-    let mut engine = match in_place_engine(args.backend, &reader, &gpu)? {
+    let mut engine = match in_place_engine(args.backend, &reader, &gpu, args.quiet)? {
         Some(e) => SceneEngine::new(SceneBackend::Gpu(Box::new(e))),
         None => {
             let host = match reader.chain().periodic() {
                 Some(_) => args.backend,
                 None => Backend::Cpu,
             };
-            host_scene(host, reader.chain(), false)?
+            host_scene(host, reader.chain(), args.quiet)?
         }
     };
     if let SceneBackend::Host(e) = engine.backend_mut() {
@@ -469,7 +473,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("nothing to draw: every representation is hidden");
     }
     choice.print_defaults();
-    if args.transforms.any() {
+    if args.transforms.any() && !args.quiet {
         reader.print_summary();
     }
     let mut scene = GpuScene::new();
@@ -493,6 +497,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
     let mut stats_frame = None;
+    // On a terminal, a long run shows one progress bar instead of a line per image.
+    let bar = (std::io::stderr().is_terminal()
+        && block.len() > super::surface::PROGRESS_BAR_FRAMES
+        && !args.quiet)
+        .then(|| super::surface::progress_bar(block.len()));
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;
@@ -631,22 +640,32 @@ pub fn run(args: RenderArgs) -> Result<()> {
             Some(m) => m.push(&image)?,
             None => write_png(path, &image)?,
         }
-        eprintln!(
-            "frame {f}: {}; read {read_ms:.1} ms, total {:.1} ms -> {}",
-            if summary.is_empty() {
-                "atoms only".to_string()
-            } else {
-                summary.join("; ")
-            },
-            ms_since(t0),
-            path.display()
-        );
+        match &bar {
+            Some(bar) => bar.inc(1),
+            None if !args.quiet => eprintln!(
+                "frame {f}: {}; read {read_ms:.1} ms, total {:.1} ms -> {}",
+                if summary.is_empty() {
+                    "atoms only".to_string()
+                } else {
+                    summary.join("; ")
+                },
+                ms_since(t0),
+                path.display()
+            ),
+            None => {}
+        }
+    }
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
     }
     if let Some(stats) = stats {
         stats.finish()?;
     }
     if let Some(m) = movie {
         let s = m.finish()?;
+        if args.quiet {
+            return Ok(());
+        }
         eprintln!(
             "movie: {} frames, {:.2} s at {} frames/s, {:.1} kB -> {}",
             s.frames,
@@ -665,6 +684,7 @@ fn in_place_engine(
     backend: Backend,
     reader: &FrameReader,
     gpu: &HeadlessGpu,
+    quiet: bool,
 ) -> Result<Option<GpuEngine>> {
     if backend == Backend::Cpu || reader.chain().periodic().is_some() {
         return Ok(None);
@@ -673,14 +693,16 @@ fn in_place_engine(
         .context("--backend gpu: cannot start the GPU engine")?;
     Ok(match picked {
         Picked::Gpu(e) => {
-            eprintln!(
-                "backend: gpu ({}), drawn in place",
-                e.context().adapter_name
-            );
+            if !quiet {
+                eprintln!(
+                    "backend: gpu ({}), drawn in place",
+                    e.context().adapter_name
+                );
+            }
             Some(*e)
         }
         Picked::Cpu { why } => {
-            if let Some(why) = why {
+            if let Some(why) = why.filter(|_| !quiet) {
                 eprintln!("backend: cpu ({why})");
             }
             None

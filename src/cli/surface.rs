@@ -29,7 +29,7 @@ use super::scene_args::{SceneArgs, bind_scene};
 use super::transform_args::{FrameReader, TransformArgs, host_scene};
 
 /// Above this many frames on a terminal, a progress bar replaces the per-frame lines.
-const PROGRESS_BAR_FRAMES: usize = 20;
+pub(crate) const PROGRESS_BAR_FRAMES: usize = 20;
 
 /// Arguments of `mdsurf surface`.
 #[derive(clap::Args, Debug)]
@@ -369,7 +369,7 @@ fn summary_line(r: &StatsRow, with_rep: bool) -> String {
     )
 }
 
-fn progress_bar(len: usize) -> ProgressBar {
+pub(crate) fn progress_bar(len: usize) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);
     if let Ok(style) =
         ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")

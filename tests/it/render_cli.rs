@@ -200,3 +200,34 @@ fn a_membrane_renders_side_on() {
     let (w, h) = render("top.png", &["--view", "0,0"]);
     assert!((w as f32) < 1.3 * h as f32, "--view 0,0 {w} x {h}");
 }
+
+#[test]
+fn quiet_render_prints_nothing_and_still_writes() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (gro, xtc) = (demo("md_1u19.gro"), demo("md_1u19.xtc"));
+    let pattern = dir.path().join("q_{frame}.png");
+    let o = pattern.to_str().expect("utf-8 path");
+    let args = [
+        "render",
+        &gro,
+        &xtc,
+        "--frames",
+        "0:2",
+        "-o",
+        o,
+        "--size",
+        "64x48",
+        "--backend",
+        "cpu",
+    ];
+    let loud = mdsurf(&args);
+    assert!(loud.status.success());
+    assert!(String::from_utf8_lossy(&loud.stderr).contains("frame 1"));
+    let quiet = mdsurf(&[&args[..], &["-q"]].concat());
+    assert!(quiet.status.success());
+    assert_eq!(String::from_utf8_lossy(&quiet.stderr), "");
+    assert!(dir.path().join("q_1.png").exists());
+}
