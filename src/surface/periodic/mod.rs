@@ -235,26 +235,11 @@ impl PeriodicEngine {
         pbox: &PeriodicBox,
         replicate: Replicate,
     ) -> Result<SurfaceOutput, SurfaceError> {
-        params.validate()?;
-        atoms.validate()?;
-        if replicate.validate().is_err() {
-            return Err(SurfaceError::InvalidParameter {
-                name: "replicate count",
-                value: replicate.to_string(),
-            });
-        }
+        check_inputs(atoms, params, replicate)?;
         let dims = pbox.samples(params.spacing);
-        let dims64 = dims.map(u64::from);
         let with_colour = atoms.colours.is_some();
-        let needed = super::estimate_grid_bytes(dims64, with_colour);
         let available = self.memory_limit.unwrap_or_else(available_memory_bytes);
-        if needed > available {
-            return Err(SurfaceError::GridTooLarge {
-                dims: dims64,
-                bytes_needed: needed,
-                bytes_available: available,
-            });
-        }
+        check_grid(dims, with_colour, available)?;
         let grid = density::PeriodicGrid::new(pbox, dims);
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
 
@@ -270,35 +255,29 @@ impl PeriodicEngine {
         let mut mesh = mc::extract(&grid, &self.volume, params.isovalue);
         let area = mesh.area();
         let volume = measure::box_volume(&mesh, &grid, &self.volume.values, params.isovalue, 0);
-        let images = replicate.count() as f64;
-        if mesh.positions.len() as u64 * replicate.count() as u64 > u32::MAX as u64 {
-            return Err(SurfaceError::InvalidParameter {
-                name: "replicate count",
-                value: format!("{replicate} ({} vertices per box)", mesh.positions.len()),
-            });
-        }
+        check_replicas(mesh.positions.len(), replicate, "box")?;
         for p in &mut mesh.positions {
             *p += pbox.origin;
         }
         let mesh = replicate_mesh(mesh, grid.extent(), replicate);
-        let mc_ms = ms(t);
-        Ok(SurfaceOutput {
-            grid: GridSpec {
-                origin: pbox.origin,
-                spacing: grid.spacing.max_element(),
-                dims,
-            },
+        let timings = StageTimings {
+            upload_ms: 0.0,
+            bin_ms,
+            density_ms,
+            mc_ms: ms(t),
+        };
+        let grid = GridSpec {
+            origin: pbox.origin,
+            spacing: grid.spacing.max_element(),
+            dims,
+        };
+        Ok(periodic_output(
+            grid,
             mesh,
-            area: area * images,
-            volume: volume * images,
-            counts_without_mesh: None,
-            timings: StageTimings {
-                upload_ms: 0.0,
-                bin_ms,
-                density_ms,
-                mc_ms,
-            },
-        })
+            [area, volume],
+            replicate,
+            timings,
+        ))
     }
 
     /// The surface of `atoms` in the triclinic `cell` (any cell, rectangular ones included,
@@ -311,14 +290,7 @@ impl PeriodicEngine {
         cell: &TriclinicCell,
         replicate: Replicate,
     ) -> Result<SurfaceOutput, SurfaceError> {
-        params.validate()?;
-        atoms.validate()?;
-        if replicate.validate().is_err() {
-            return Err(SurfaceError::InvalidParameter {
-                name: "replicate count",
-                value: replicate.to_string(),
-            });
-        }
+        check_inputs(atoms, params, replicate)?;
         let memory = self.memory_limit.unwrap_or_else(available_memory_bytes);
         triclinic::compute(&mut self.volume, memory, atoms, params, cell, replicate)
     }
@@ -385,4 +357,74 @@ pub fn replicate_mesh(mesh: Mesh, extent: Vec3, replicate: Replicate) -> Mesh {
         }
     }
     out
+}
+/// Checks what every periodic surface needs: parameters, atoms and a sane image count.
+fn check_inputs(
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+    replicate: Replicate,
+) -> Result<(), SurfaceError> {
+    params.validate()?;
+    atoms.validate()?;
+    if replicate.validate().is_err() {
+        return Err(SurfaceError::InvalidParameter {
+            name: "replicate count",
+            value: replicate.to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// Refuses a grid of `dims` samples that does not fit in `available` bytes.
+pub(super) fn check_grid(
+    dims: [u32; 3],
+    with_colour: bool,
+    available: u64,
+) -> Result<(), SurfaceError> {
+    let dims64 = dims.map(u64::from);
+    let needed = super::estimate_grid_bytes(dims64, with_colour);
+    if needed > available {
+        return Err(SurfaceError::GridTooLarge {
+            dims: dims64,
+            bytes_needed: needed,
+            bytes_available: available,
+        });
+    }
+    Ok(())
+}
+
+/// Refuses `replicate` copies of a mesh of `vertices` vertices per `unit` (box or cell) when
+/// they would pass 32-bit vertex indices.
+pub(super) fn check_replicas(
+    vertices: usize,
+    replicate: Replicate,
+    unit: &str,
+) -> Result<(), SurfaceError> {
+    if vertices as u64 * replicate.count() as u64 > u32::MAX as u64 {
+        return Err(SurfaceError::InvalidParameter {
+            name: "replicate count",
+            value: format!("{replicate} ({vertices} vertices per {unit})"),
+        });
+    }
+    Ok(())
+}
+
+/// A periodic surface's output: `[area, volume]` of one box or cell (Å², Å³) times the images
+/// shown.
+pub(super) fn periodic_output(
+    grid: GridSpec,
+    mesh: Mesh,
+    [area, volume]: [f64; 2],
+    replicate: Replicate,
+    timings: StageTimings,
+) -> SurfaceOutput {
+    let images = replicate.count() as f64;
+    SurfaceOutput {
+        grid,
+        mesh,
+        area: area * images,
+        volume: volume * images,
+        counts_without_mesh: None,
+        timings,
+    }
 }

@@ -325,16 +325,8 @@ pub fn compute(
     replicate: Replicate,
 ) -> Result<SurfaceOutput, SurfaceError> {
     let dims = cell.samples(params.spacing);
-    let dims64 = dims.map(u64::from);
     let with_colour = atoms.colours.is_some();
-    let needed = crate::surface::estimate_grid_bytes(dims64, with_colour);
-    if needed > memory {
-        return Err(SurfaceError::GridTooLarge {
-            dims: dims64,
-            bytes_needed: needed,
-            bytes_available: memory,
-        });
-    }
+    super::check_grid(dims, with_colour, memory)?;
     let geo = Geometry::new(*cell, dims);
     let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
@@ -349,15 +341,7 @@ pub fn compute(
     let index_mesh = mc::extract(&grid, vol, params.isovalue);
     let volume = measure::box_volume(&index_mesh, &grid, &vol.values, params.isovalue, 0)
         * geo.jac.determinant().abs();
-    if index_mesh.positions.len() as u64 * replicate.count() as u64 > u32::MAX as u64 {
-        return Err(SurfaceError::InvalidParameter {
-            name: "replicate count",
-            value: format!(
-                "{replicate} ({} vertices per cell)",
-                index_mesh.positions.len()
-            ),
-        });
-    }
+    super::check_replicas(index_mesh.positions.len(), replicate, "cell")?;
     let area = if replicate.is_one() {
         None
     } else {
@@ -365,23 +349,22 @@ pub fn compute(
     };
     let mesh = to_cartesian(index_mesh, &geo, replicate);
     let area = area.unwrap_or_else(|| mesh.area());
-    let mc_ms = ms(t);
-    let images = replicate.count() as f64;
-    Ok(SurfaceOutput {
-        grid: GridSpec {
-            origin: cell.origin,
-            spacing: cell.spacing(dims).max_element(),
-            dims,
-        },
+    let timings = StageTimings {
+        upload_ms: 0.0,
+        bin_ms,
+        density_ms,
+        mc_ms: ms(t),
+    };
+    let grid = GridSpec {
+        origin: cell.origin,
+        spacing: cell.spacing(dims).max_element(),
+        dims,
+    };
+    Ok(super::periodic_output(
+        grid,
         mesh,
-        area: area * images,
-        volume: volume * images,
-        counts_without_mesh: None,
-        timings: StageTimings {
-            upload_ms: 0.0,
-            bin_ms,
-            density_ms,
-            mc_ms,
-        },
-    })
+        [area, volume],
+        replicate,
+        timings,
+    ))
 }
