@@ -1,0 +1,239 @@
+//! Cavities: the connected components of a mesh whose triangles wind towards an enclosed void
+//! (negative signed volume) and that lie inside an outer component (ray parity).
+
+use glam::{DVec3, Vec3};
+
+use super::MeasureError;
+use super::cells::CellList;
+use crate::surface::{AtomSet, Mesh, SurfaceParams};
+
+/// One connected component of a mesh (triangles sharing vertices).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Component {
+    /// Its triangles (indices into the mesh's triangles).
+    pub triangles: Vec<u32>,
+    /// Its vertices (indices into the mesh's vertices), ascending.
+    pub vertices: Vec<u32>,
+    /// Area in Å².
+    pub area: f64,
+    /// Signed enclosed volume in Å³ (divergence theorem): positive for an outer surface,
+    /// negative for the wall of a void.
+    pub volume: f64,
+    /// Centroid of the enclosed region (Å).
+    pub centroid: DVec3,
+}
+
+/// Union-find root of `i`, with path halving.
+fn root(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let up = parent[parent[i as usize] as usize];
+        parent[i as usize] = up;
+        i = up;
+    }
+    i
+}
+
+/// The connected components of `mesh` (vertices shared by index: the Marching Cubes mesh has one
+/// vertex per crossed grid edge), largest area first. Fails on an index past the vertices.
+pub fn components(mesh: &Mesh) -> Result<Vec<Component>, MeasureError> {
+    let n = mesh.positions.len();
+    if let Some(&bad) = mesh.indices.iter().find(|&&i| i as usize >= n) {
+        return Err(MeasureError::IndexOutOfRange {
+            what: "mesh vertex",
+            index: bad as usize,
+            len: n,
+        });
+    }
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    for t in mesh.indices.chunks_exact(3) {
+        let r0 = root(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let r = root(&mut parent, v);
+            if r != r0 {
+                let (lo, hi) = (r.min(r0), r.max(r0));
+                parent[hi as usize] = lo;
+            }
+        }
+    }
+    // Component number of each root, in order of first triangle.
+    let mut number = vec![u32::MAX; n];
+    let mut out: Vec<Component> = Vec::new();
+    for (k, t) in mesh.indices.chunks_exact(3).enumerate() {
+        let r = root(&mut parent, t[0]) as usize;
+        if number[r] == u32::MAX {
+            number[r] = out.len() as u32;
+            out.push(Component {
+                triangles: Vec::new(),
+                vertices: Vec::new(),
+                area: 0.0,
+                volume: 0.0,
+                centroid: DVec3::ZERO,
+            });
+        }
+        out[number[r] as usize].triangles.push(k as u32);
+    }
+    for v in 0..n as u32 {
+        let r = root(&mut parent, v) as usize;
+        if number[r] != u32::MAX {
+            out[number[r] as usize].vertices.push(v);
+        }
+    }
+    for c in &mut out {
+        measure(mesh, c);
+    }
+    out.sort_by(|a, b| b.area.total_cmp(&a.area));
+    Ok(out)
+}
+
+/// Fills the area, signed volume and centroid of `c`, relative to its first vertex for
+/// precision.
+fn measure(mesh: &Mesh, c: &mut Component) {
+    let p = |i: u32| mesh.positions[i as usize].as_dvec3();
+    let origin = c.vertices.first().map_or(DVec3::ZERO, |&v| p(v));
+    let (mut area, mut volume, mut moment) = (0.0, 0.0, DVec3::ZERO);
+    for &t in &c.triangles {
+        let t = 3 * t as usize;
+        let [a, b, d] = [0, 1, 2].map(|k| p(mesh.indices[t + k]) - origin);
+        area += 0.5 * (b - a).cross(d - a).length();
+        let v = a.dot(b.cross(d)) / 6.0;
+        volume += v;
+        moment += v * (a + b + d) / 4.0;
+    }
+    c.area = area;
+    c.volume = volume;
+    c.centroid = origin
+        + if volume != 0.0 {
+            moment / volume
+        } else {
+            DVec3::ZERO
+        };
+}
+
+/// True when `point` is inside the closed component `c` of `mesh`: a ray from it crosses the
+/// component's triangles an odd number of times.
+pub fn contains(mesh: &Mesh, c: &Component, point: DVec3) -> bool {
+    // An irrational direction, so the ray practically never grazes an edge of the grid mesh.
+    let dir = DVec3::new(0.577_215_664_9, 0.318_309_886_2, 0.752_000_123_4).normalize();
+    let p = |i: u32| mesh.positions[i as usize].as_dvec3();
+    let mut crossings = 0u32;
+    for &t in &c.triangles {
+        let t = 3 * t as usize;
+        let [a, b, d] = [0, 1, 2].map(|k| p(mesh.indices[t + k]));
+        // Moller-Trumbore.
+        let (e1, e2) = (b - a, d - a);
+        let h = dir.cross(e2);
+        let det = e1.dot(h);
+        if det.abs() < 1e-14 {
+            continue;
+        }
+        let s = point - a;
+        let u = s.dot(h) / det;
+        if !(0.0..=1.0).contains(&u) {
+            continue;
+        }
+        let q = s.cross(e1);
+        let v = dir.dot(q) / det;
+        if v < 0.0 || u + v > 1.0 {
+            continue;
+        }
+        if e2.dot(q) / det > 0.0 {
+            crossings += 1;
+        }
+    }
+    crossings % 2 == 1
+}
+
+/// Options of [`cavities()`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CavityOptions {
+    /// Cavities smaller than this (Å³) are left out (0: none).
+    pub min_volume: f64,
+    /// An atom lines a cavity when one of its vertices is within `(sqrt(2 ln(1/I)) +
+    /// lining_margin) * alpha` of it (alpha = r R; the first term is the radius of the atom's
+    /// isolated sphere). Units of alpha; default 0.35.
+    pub lining_margin: f32,
+}
+
+impl Default for CavityOptions {
+    fn default() -> Self {
+        CavityOptions {
+            min_volume: 0.0,
+            lining_margin: 0.35,
+        }
+    }
+}
+
+/// An enclosed void of a surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cavity {
+    /// Volume of the void in Å³ (positive).
+    pub volume: f64,
+    /// Area of its wall in Å².
+    pub area: f64,
+    /// Centroid of the void (Å).
+    pub centroid: DVec3,
+    /// Largest distance from the centroid to a vertex of the wall (Å).
+    pub radius: f64,
+    /// Vertices of its wall.
+    pub vertex_count: usize,
+    /// Atoms (indices into the atom set) lining it, ascending.
+    pub lining_atoms: Vec<u32>,
+}
+
+/// The cavities of `mesh` (computed from `atoms` under `params`, the parameters the engine
+/// used), largest first: components with negative signed volume inside a component with
+/// positive volume, at least `options.min_volume` Å³.
+///
+/// Fails on invalid atoms, parameters or options, or an index past the vertices.
+pub fn cavities(
+    mesh: &Mesh,
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+    options: &CavityOptions,
+) -> Result<Vec<Cavity>, MeasureError> {
+    params.validate()?;
+    atoms.validate()?;
+    for (name, value) in [
+        ("minimum cavity volume", options.min_volume),
+        ("lining margin", f64::from(options.lining_margin)),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(MeasureError::InvalidOption { name, value });
+        }
+    }
+    let parts = components(mesh)?;
+    let reach = (2.0 * (1.0 / params.isovalue).ln()).max(0.0).sqrt() + options.lining_margin;
+    let cells = CellList::new(atoms, params, reach);
+    let mut out = Vec::new();
+    for c in parts.iter().filter(|c| c.volume < -options.min_volume.max(0.0)) {
+        let Some(&first) = c.vertices.first() else {
+            continue;
+        };
+        let probe = mesh.positions[first as usize].as_dvec3();
+        let enclosed = parts
+            .iter()
+            .any(|o| o.volume > 0.0 && contains(mesh, o, probe));
+        if !enclosed {
+            continue;
+        }
+        let mut lining = Vec::new();
+        let mut radius = 0.0f64;
+        for &v in &c.vertices {
+            let p: Vec3 = mesh.positions[v as usize];
+            radius = radius.max(p.as_dvec3().distance(c.centroid));
+            cells.for_each_near(p, |a| lining.push(a));
+        }
+        lining.sort_unstable();
+        lining.dedup();
+        out.push(Cavity {
+            volume: -c.volume,
+            area: c.area,
+            centroid: c.centroid,
+            radius,
+            vertex_count: c.vertices.len(),
+            lining_atoms: lining,
+        });
+    }
+    out.sort_by(|a, b| b.volume.total_cmp(&a.volume));
+    Ok(out)
+}

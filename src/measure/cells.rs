@@ -1,0 +1,148 @@
+//! A cell list over atoms for the per-vertex questions of [`super`]: which atoms' Gaussians
+//! reach a point (and with what weight), and which atoms lie within a distance of it. Atoms are
+//! stored sorted by cell, x fastest, coordinates in separate arrays, so the three cells of a
+//! row along x are one contiguous run.
+
+use glam::Vec3;
+
+use crate::surface::{AtomSet, SurfaceParams};
+
+/// Atoms sorted into cubic cells at least as wide as the longest reach asked about.
+pub(crate) struct CellList {
+    origin: Vec3,
+    cell: f32,
+    dims: [i64; 3],
+    /// Start of each cell's run in the sorted arrays (one more entry than cells).
+    starts: Vec<u32>,
+    /// Sorted atoms: index into the atom set, coordinates, `1 / (2 alpha^2)`, squared cutoff
+    /// `(q alpha)^2` and squared lining reach.
+    index: Vec<u32>,
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    inv_two_alpha2: Vec<f32>,
+    cutoff2: Vec<f32>,
+    reach2: Vec<f32>,
+}
+
+impl CellList {
+    /// The cell list of `atoms` (already validated, not empty) under `params`; `reach` (units
+    /// of alpha) is the lining distance of [`CellList::for_each_near`].
+    pub(crate) fn new(atoms: &AtomSet<'_>, params: &SurfaceParams, reach: f32) -> CellList {
+        let n = atoms.len();
+        let alpha = |i: usize| atoms.radii[i] * params.radius_scale;
+        let q = params.cutoff();
+        let widest = (0..n).fold(0.0f32, |m, i| m.max(alpha(i)));
+        let (lo, hi) = atoms.positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let extent = (hi - lo).max(Vec3::splat(1e-3));
+        // Cells at least as wide as any cutoff or reach, and not many more cells than atoms.
+        let mut cell = (widest * q.max(reach)).max(1e-3);
+        let count = |cell: f32| {
+            let d = (extent / cell).floor() + 1.0;
+            (d.x as f64) * (d.y as f64) * (d.z as f64)
+        };
+        while count(cell) > (4 * n + 64) as f64 {
+            cell *= 1.25;
+        }
+        let d = (extent / cell).floor() + 1.0;
+        let dims = [d.x as i64, d.y as i64, d.z as i64];
+        let cell_of = |p: Vec3| {
+            let c = ((p - lo) / cell).floor();
+            let clamp = |v: f32, d: i64| (v as i64).clamp(0, d - 1);
+            (clamp(c.x, dims[0]) + dims[0] * (clamp(c.y, dims[1]) + dims[1] * clamp(c.z, dims[2])))
+                as usize
+        };
+        let cells = (dims[0] * dims[1] * dims[2]) as usize;
+        let mut starts = vec![0u32; cells + 1];
+        let of: Vec<usize> = atoms.positions.iter().map(|p| cell_of(*p)).collect();
+        for &c in &of {
+            starts[c + 1] += 1;
+        }
+        for c in 0..cells {
+            starts[c + 1] += starts[c];
+        }
+        let mut fill = starts.clone();
+        let mut index = vec![0u32; n];
+        for (i, &c) in of.iter().enumerate() {
+            index[fill[c] as usize] = i as u32;
+            fill[c] += 1;
+        }
+        let pick = |f: &dyn Fn(usize) -> f32| index.iter().map(|&i| f(i as usize)).collect();
+        CellList {
+            origin: lo,
+            cell,
+            dims,
+            x: pick(&|i| atoms.positions[i].x),
+            y: pick(&|i| atoms.positions[i].y),
+            z: pick(&|i| atoms.positions[i].z),
+            inv_two_alpha2: pick(&|i| 1.0 / (2.0 * alpha(i) * alpha(i))),
+            cutoff2: pick(&|i| (q * alpha(i)).powi(2)),
+            reach2: pick(&|i| (reach * alpha(i)).powi(2)),
+            starts,
+            index,
+        }
+    }
+
+    /// Calls `visit(run start, run end)` for the runs of sorted atoms in the 27 cells around `p`.
+    fn runs(&self, p: Vec3, mut visit: impl FnMut(usize, usize)) {
+        let c = ((p - self.origin) / self.cell).floor();
+        let c = [c.x as i64, c.y as i64, c.z as i64];
+        let range = |k: usize| (c[k] - 1).max(0)..=(c[k] + 1).min(self.dims[k] - 1);
+        let (xs, xe) = (*range(0).start(), *range(0).end());
+        if xs > xe {
+            return;
+        }
+        for z in range(2) {
+            for y in range(1) {
+                let row = self.dims[0] * (y + self.dims[1] * z);
+                let start = self.starts[(row + xs) as usize] as usize;
+                let end = self.starts[(row + xe + 1) as usize] as usize;
+                if start < end {
+                    visit(start, end);
+                }
+            }
+        }
+    }
+
+    /// Calls `visit(atom, weight)` for every atom whose Gaussian reaches `p` (within its
+    /// cutoff), with the Gaussian's value there.
+    pub(crate) fn for_each_gaussian(&self, p: Vec3, mut visit: impl FnMut(u32, f32)) {
+        self.runs(p, |start, end| {
+            for s in start..end {
+                let d2 = (self.x[s] - p.x).powi(2) + (self.y[s] - p.y).powi(2)
+                    + (self.z[s] - p.z).powi(2);
+                if d2 < self.cutoff2[s] {
+                    visit(self.index[s], (-d2 * self.inv_two_alpha2[s]).exp());
+                }
+            }
+        });
+    }
+
+    /// Calls `visit(atom)` for every atom within its lining reach of `p`.
+    pub(crate) fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        self.runs(p, |start, end| {
+            for s in start..end {
+                let d2 = (self.x[s] - p.x).powi(2) + (self.y[s] - p.y).powi(2)
+                    + (self.z[s] - p.z).powi(2);
+                if d2 < self.reach2[s] {
+                    visit(self.index[s]);
+                }
+            }
+        });
+    }
+}
+
+/// Index of the atom of `positions` nearest `p` (the first of equals); `positions` not empty.
+pub(crate) fn nearest(positions: &[Vec3], p: Vec3) -> u32 {
+    let mut best = (f32::INFINITY, 0u32);
+    for (i, q) in positions.iter().enumerate() {
+        let d = q.distance_squared(p);
+        if d < best.0 {
+            best = (d, i as u32);
+        }
+    }
+    best.1
+}
