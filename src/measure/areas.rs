@@ -47,7 +47,7 @@ pub fn atom_areas(
     params.validate()?;
     atoms.validate()?;
     let shares = vertex_areas(mesh)?;
-    let cells = CellList::new(atoms, params, 0.0);
+    let cells = CellList::new(atoms, params);
     // Per chunk of vertices: (atom, area) pairs, in vertex order.
     let pairs: Vec<Vec<(u32, f64)>> = mesh
         .positions

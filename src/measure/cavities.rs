@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 
 use super::MeasureError;
-use super::cells::CellList;
+use super::cells::{CellList, nearest};
 use crate::surface::{AtomSet, Mesh, SurfaceParams};
 
 /// One connected component of a mesh (triangles sharing vertices).
@@ -148,17 +148,18 @@ pub fn contains(mesh: &Mesh, c: &Component, point: DVec3) -> bool {
 pub struct CavityOptions {
     /// Cavities smaller than this (Å³) are left out (0: none).
     pub min_volume: f64,
-    /// An atom lines a cavity when one of its vertices is within `(sqrt(2 ln(1/I)) +
-    /// lining_margin) * alpha` of it (alpha = r R; the first term is the radius of the atom's
-    /// isolated sphere). Units of alpha; default 0.35.
-    pub lining_margin: f32,
+    /// An atom lines a cavity when, at one of the cavity's vertices, its Gaussian is at least
+    /// this fraction of the largest Gaussian there (the atoms the wall's area is mostly split
+    /// among, see [`super::atom_areas`]). Between 0 and 1; default 0.5 (for equal widths: within
+    /// `sqrt(2 ln 2) alpha^2 / d` further than the nearest atom, about 0.9 Å at 3.5 Å).
+    pub lining_fraction: f32,
 }
 
 impl Default for CavityOptions {
     fn default() -> Self {
         CavityOptions {
             min_volume: 0.0,
-            lining_margin: 0.35,
+            lining_fraction: 0.5,
         }
     }
 }
@@ -195,15 +196,14 @@ pub fn cavities(
     atoms.validate()?;
     for (name, value) in [
         ("minimum cavity volume", options.min_volume),
-        ("lining margin", f64::from(options.lining_margin)),
+        ("lining fraction", f64::from(options.lining_fraction)),
     ] {
-        if !(value.is_finite() && value >= 0.0) {
+        if !(value.is_finite() && value >= 0.0) || (name == "lining fraction" && value > 1.0) {
             return Err(MeasureError::InvalidOption { name, value });
         }
     }
     let parts = components(mesh)?;
-    let reach = (2.0 * (1.0 / params.isovalue).ln()).max(0.0).sqrt() + options.lining_margin;
-    let cells = CellList::new(atoms, params, reach);
+    let cells = CellList::new(atoms, params);
     let mut out = Vec::new();
     for c in parts.iter().filter(|c| c.volume < -options.min_volume.max(0.0)) {
         let Some(&first) = c.vertices.first() else {
@@ -217,11 +217,20 @@ pub fn cavities(
             continue;
         }
         let mut lining = Vec::new();
+        let mut here: Vec<(u32, f32)> = Vec::new();
         let mut radius = 0.0f64;
         for &v in &c.vertices {
             let p: Vec3 = mesh.positions[v as usize];
             radius = radius.max(p.as_dvec3().distance(c.centroid));
-            cells.for_each_near(p, |a| lining.push(a));
+            here.clear();
+            cells.for_each_gaussian(p, |a, w| here.push((a, w)));
+            let largest = here.iter().fold(0.0f32, |m, &(_, w)| m.max(w));
+            if largest > 0.0 {
+                let floor = options.lining_fraction * largest;
+                lining.extend(here.iter().filter(|&&(_, w)| w >= floor).map(|&(a, _)| a));
+            } else {
+                lining.push(nearest(atoms.positions, p));
+            }
         }
         lining.sort_unstable();
         lining.dedup();

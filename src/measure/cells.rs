@@ -15,20 +15,18 @@ pub(crate) struct CellList {
     /// Start of each cell's run in the sorted arrays (one more entry than cells).
     starts: Vec<u32>,
     /// Sorted atoms: index into the atom set, coordinates, `1 / (2 alpha^2)`, squared cutoff
-    /// `(q alpha)^2` and squared lining reach.
+    /// `(q alpha)^2`.
     index: Vec<u32>,
     x: Vec<f32>,
     y: Vec<f32>,
     z: Vec<f32>,
     inv_two_alpha2: Vec<f32>,
     cutoff2: Vec<f32>,
-    reach2: Vec<f32>,
 }
 
 impl CellList {
-    /// The cell list of `atoms` (already validated, not empty) under `params`; `reach` (units
-    /// of alpha) is the lining distance of [`CellList::for_each_near`].
-    pub(crate) fn new(atoms: &AtomSet<'_>, params: &SurfaceParams, reach: f32) -> CellList {
+    /// The cell list of `atoms` (already validated, not empty) under `params`.
+    pub(crate) fn new(atoms: &AtomSet<'_>, params: &SurfaceParams) -> CellList {
         let n = atoms.len();
         let alpha = |i: usize| atoms.radii[i] * params.radius_scale;
         let q = params.cutoff();
@@ -38,8 +36,8 @@ impl CellList {
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
         );
         let extent = (hi - lo).max(Vec3::splat(1e-3));
-        // Cells at least as wide as any cutoff or reach, and not many more cells than atoms.
-        let mut cell = (widest * q.max(reach)).max(1e-3);
+        // Cells at least as wide as any cutoff, and not many more cells than atoms.
+        let mut cell = (widest * q).max(1e-3);
         let count = |cell: f32| {
             let d = (extent / cell).floor() + 1.0;
             (d.x as f64) * (d.y as f64) * (d.z as f64)
@@ -80,7 +78,6 @@ impl CellList {
             z: pick(&|i| atoms.positions[i].z),
             inv_two_alpha2: pick(&|i| 1.0 / (2.0 * alpha(i) * alpha(i))),
             cutoff2: pick(&|i| (q * alpha(i)).powi(2)),
-            reach2: pick(&|i| (reach * alpha(i)).powi(2)),
             starts,
             index,
         }
@@ -116,19 +113,6 @@ impl CellList {
                     + (self.z[s] - p.z).powi(2);
                 if d2 < self.cutoff2[s] {
                     visit(self.index[s], (-d2 * self.inv_two_alpha2[s]).exp());
-                }
-            }
-        });
-    }
-
-    /// Calls `visit(atom)` for every atom within its lining reach of `p`.
-    pub(crate) fn for_each_near(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        self.runs(p, |start, end| {
-            for s in start..end {
-                let d2 = (self.x[s] - p.x).powi(2) + (self.y[s] - p.y).powi(2)
-                    + (self.z[s] - p.z).powi(2);
-                if d2 < self.reach2[s] {
-                    visit(self.index[s]);
                 }
             }
         });

@@ -28,9 +28,10 @@
 //!   from alone to the complex.
 //! - **Cavities** ([`cavities()`]): the mesh's connected components (triangles sharing a vertex);
 //!   a component whose signed volume is negative (its triangles wind towards the void) is an
-//!   enclosed void. Volume (positive), area, centroid of the enclosed region, and the atoms
-//!   lining it: atoms within `(sqrt(2 ln(1/I)) + 0.35) alpha_i` of one of its vertices (the
-//!   radius of the atom's own isolated sphere plus a third of a width).
+//!   enclosed void when it lies inside a component of positive volume (ray parity). Volume
+//!   (positive), area, centroid of the enclosed region, and the atoms lining it: at some vertex
+//!   of the void's wall, the atom's Gaussian is at least half the largest Gaussian there
+//!   ([`CavityOptions::lining_fraction`]).
 //! - **Tracking** ([`CavityTracker`]): a cavity keeps its id while its centroid and its previous
 //!   self's are within the larger of their bounding radii; births, deaths, merges and splits are
 //!   reported as [`CavityEvent`]s.
