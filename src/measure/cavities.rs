@@ -113,7 +113,7 @@ fn measure(mesh: &Mesh, c: &mut Component) {
 /// component's triangles an odd number of times.
 pub fn contains(mesh: &Mesh, c: &Component, point: DVec3) -> bool {
     // An irrational direction, so the ray practically never grazes an edge of the grid mesh.
-    let dir = DVec3::new(0.577_215_664_9, 0.318_309_886_2, 0.752_000_123_4).normalize();
+    let dir = DVec3::new(0.573_218_871_3, 0.309_472_118_6, 0.752_000_123_4).normalize();
     let p = |i: u32| mesh.positions[i as usize].as_dvec3();
     let mut crossings = 0u32;
     for &t in &c.triangles {
@@ -205,7 +205,10 @@ pub fn cavities(
     let parts = components(mesh)?;
     let cells = CellList::new(atoms, params);
     let mut out = Vec::new();
-    for c in parts.iter().filter(|c| c.volume < -options.min_volume.max(0.0)) {
+    for c in parts
+        .iter()
+        .filter(|c| c.volume < -options.min_volume.max(0.0))
+    {
         let Some(&first) = c.vertices.first() else {
             continue;
         };

@@ -51,9 +51,7 @@ pub struct ResidueCsv(Table);
 
 impl Default for ResidueCsv {
     fn default() -> Self {
-        ResidueCsv(Table::new(
-            "frame,rep,chain,resid,resname,area_A2,exposure",
-        ))
+        ResidueCsv(Table::new("frame,rep,chain,resid,resname,area_A2,exposure"))
     }
 }
 

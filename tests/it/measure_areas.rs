@@ -86,7 +86,11 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     let out = CpuEngine::new().compute(&atoms, &params).expect("surface");
     let areas = atom_areas(&out.mesh, &atoms, &params).expect("areas");
     let sum: f64 = areas.iter().sum();
-    assert!(close(sum, out.mesh.area(), 1e-9), "{sum} vs {}", out.mesh.area());
+    assert!(
+        close(sum, out.mesh.area(), 1e-9),
+        "{sum} vs {}",
+        out.mesh.area()
+    );
     assert!(areas.iter().all(|a| *a >= 0.0));
     // Residues: 2 chains of 99, the areas sum to the same total.
     let residues = residue_areas(&top, Some(&idx), &areas).expect("residues");
@@ -102,8 +106,9 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
 
     // Exposure: a residue never has much more area than alone.
     let mut engine = CpuEngine::new();
-    let table = ExposureTable::from_isolated_residues(&mut engine, &top, Some(&idx), &atoms, &params)
-        .expect("exposure table");
+    let table =
+        ExposureTable::from_isolated_residues(&mut engine, &top, Some(&idx), &atoms, &params)
+            .expect("exposure table");
     assert_eq!(table.entries().count(), 20, "amino acids of 1hpv");
     for r in &residues {
         let e = table.exposure(r).expect("every name has a maximum");
@@ -137,7 +142,12 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     atoms_csv.write(&path).expect("write");
     let text = std::fs::read_to_string(&path).expect("read");
     assert_eq!(text.lines().count(), 1 + idx.len());
-    assert!(text.lines().nth(1).expect("row").starts_with("0,protein,1,N,A,1,PRO,"));
+    assert!(
+        text.lines()
+            .nth(1)
+            .expect("row")
+            .starts_with("0,protein,1,N,A,1,PRO,")
+    );
 }
 
 /// Pearson correlation of two equally long series.
@@ -239,7 +249,12 @@ fn measure_interface_of_touching_spheres_is_positive_and_symmetric() {
         ab.area_a, ab.area_b, ab.area_complex, ab.buried
     );
     assert!(ab.buried > 10.0, "buried {} Å²", ab.buried);
-    assert!(close(ab.buried, ba.buried, 1e-6), "{} vs {}", ab.buried, ba.buried);
+    assert!(
+        close(ab.buried, ba.buried, 1e-6),
+        "{} vs {}",
+        ab.buried,
+        ba.buried
+    );
     assert!(close(ab.area_a, ba.area_b, 1e-9));
     let sum = |v: &[f64]| v.iter().sum::<f64>();
     // Each ball loses area; the per-atom sums hold.

@@ -67,7 +67,9 @@ fn void_volume(atoms: &[Vec3], centre: Vec3, p: &SurfaceParams) -> f64 {
         .map(|u| {
             let u = u.as_dvec3().normalize();
             let (mut lo, mut hi) = (0.0f64, f64::from(SHELL_RADIUS));
-            assert!(density(atoms, alpha, q, c) < iso && density(atoms, alpha, q, c + hi * u) > iso);
+            assert!(
+                density(atoms, alpha, q, c) < iso && density(atoms, alpha, q, c + hi * u) > iso
+            );
             while hi - lo > 1e-6 {
                 let mid = 0.5 * (lo + hi);
                 if density(atoms, alpha, q, c + mid * u) < iso {
@@ -111,7 +113,11 @@ fn measure_hollow_shell_has_one_cavity_of_the_right_volume() {
         cavity.volume,
         100.0 * dev
     );
-    assert!(dev.abs() < 0.02, "{:.1} vs {reference:.1} Å³", cavity.volume);
+    assert!(
+        dev.abs() < 0.02,
+        "{:.1} vs {reference:.1} Å³",
+        cavity.volume
+    );
     assert!(cavity.centroid.distance(centre.as_dvec3()) < 0.05);
     assert!(cavity.area > 0.0 && cavity.radius < f64::from(SHELL_RADIUS));
     // Every shell atom faces the void; the lining is most of them.
@@ -125,7 +131,11 @@ fn measure_hollow_shell_has_one_cavity_of_the_right_volume() {
         min_volume: cavity.volume * 1.01,
         ..CavityOptions::default()
     };
-    assert!(cavities(&out.mesh, &atoms, &p, &options).expect("ok").is_empty());
+    assert!(
+        cavities(&out.mesh, &atoms, &p, &options)
+            .expect("ok")
+            .is_empty()
+    );
     let bad = CavityOptions {
         min_volume: f64::NAN,
         ..CavityOptions::default()
@@ -172,7 +182,8 @@ fn measure_cavity_keeps_its_id_when_moved_and_dies_when_filled() {
         top.residue_index.push(k as u32 / 10);
     }
     let mut csv = CavityCsv::new();
-    csv.push(1, "shell", &top, None, &t1.cavities).expect("rows");
+    csv.push(1, "shell", &top, None, &t1.cavities)
+        .expect("rows");
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("cavities.csv");
     csv.write(&path).expect("write");
@@ -183,7 +194,11 @@ fn measure_cavity_keeps_its_id_when_moved_and_dies_when_filled() {
         "frame,rep,cavity_id,volume_A3,area_A2,cx,cy,cz,lining"
     );
     assert_eq!(lines.len(), 2);
-    assert!(lines[1].starts_with(&format!("1,shell,{id},")), "{}", lines[1]);
+    assert!(
+        lines[1].starts_with(&format!("1,shell,{id},")),
+        "{}",
+        lines[1]
+    );
     assert!(lines[1].contains("A:LEU1 A:LEU2 "), "{}", lines[1]);
 }
 
@@ -202,7 +217,10 @@ fn blob(volume: f64, centre: [f64; 3], radius: f64) -> Cavity {
 #[test]
 fn measure_tracker_reports_merges_and_splits() {
     let mut t = CavityTracker::new();
-    let u = t.update(0, &[blob(10.0, [0.0; 3], 1.0), blob(20.0, [3.0, 0.0, 0.0], 1.0)]);
+    let u = t.update(
+        0,
+        &[blob(10.0, [0.0; 3], 1.0), blob(20.0, [3.0, 0.0, 0.0], 1.0)],
+    );
     let (small, big) = (u.cavities[0].id, u.cavities[1].id);
     // One cavity of radius 3 between them: both overlap it; it keeps the larger's id.
     let u = t.update(1, &[blob(40.0, [1.5, 0.0, 0.0], 3.0)]);
@@ -215,7 +233,10 @@ fn measure_tracker_reports_merges_and_splits() {
         }]
     );
     // It splits again: the larger part keeps the id, the other is new.
-    let u = t.update(2, &[blob(5.0, [0.0; 3], 1.0), blob(30.0, [3.0, 0.0, 0.0], 1.0)]);
+    let u = t.update(
+        2,
+        &[blob(5.0, [0.0; 3], 1.0), blob(30.0, [3.0, 0.0, 0.0], 1.0)],
+    );
     assert_eq!(u.cavities[1].id, big);
     let part = u.cavities[0].id;
     assert!(part != big && part != small);
