@@ -109,38 +109,40 @@ fn measure(mesh: &Mesh, c: &mut Component) {
         };
 }
 
-/// True when `point` is inside the closed component `c` of `mesh`: a ray from it crosses the
-/// component's triangles an odd number of times.
-pub fn contains(mesh: &Mesh, c: &Component, point: DVec3) -> bool {
-    // An irrational direction, so the ray practically never grazes an edge of the grid mesh.
-    let dir = DVec3::new(0.573_218_871_3, 0.309_472_118_6, 0.752_000_123_4).normalize();
+/// For each of `points`, true when it is inside the closed component `c` of `mesh`: a ray
+/// along +x from it crosses the component's triangles an odd number of times. The ray starts a
+/// few thousandths of an Å off the point in y and z, off the grid planes that hold the mesh's
+/// vertices, so it practically never meets an edge. One pass over the triangles for all points.
+pub fn contains(mesh: &Mesh, c: &Component, points: &[DVec3]) -> Vec<bool> {
+    let offset = DVec3::new(0.0, 1.372_9e-3, 2.913_7e-3);
+    let starts: Vec<DVec3> = points.iter().map(|p| *p + offset).collect();
+    let mut inside = vec![false; points.len()];
     let p = |i: u32| mesh.positions[i as usize].as_dvec3();
-    let mut crossings = 0u32;
     for &t in &c.triangles {
         let t = 3 * t as usize;
         let [a, b, d] = [0, 1, 2].map(|k| p(mesh.indices[t + k]));
-        // Moller-Trumbore.
-        let (e1, e2) = (b - a, d - a);
-        let h = dir.cross(e2);
-        let det = e1.dot(h);
-        if det.abs() < 1e-14 {
+        let (ylo, yhi) = (a.y.min(b.y).min(d.y), a.y.max(b.y).max(d.y));
+        let (zlo, zhi) = (a.z.min(b.z).min(d.z), a.z.max(b.z).max(d.z));
+        let det = (b.y - a.y) * (d.z - a.z) - (d.y - a.y) * (b.z - a.z);
+        if det == 0.0 {
             continue;
         }
-        let s = point - a;
-        let u = s.dot(h) / det;
-        if !(0.0..=1.0).contains(&u) {
-            continue;
-        }
-        let q = s.cross(e1);
-        let v = dir.dot(q) / det;
-        if v < 0.0 || u + v > 1.0 {
-            continue;
-        }
-        if e2.dot(q) / det > 0.0 {
-            crossings += 1;
+        for (q, flag) in starts.iter().zip(inside.iter_mut()) {
+            if q.y < ylo || q.y > yhi || q.z < zlo || q.z > zhi {
+                continue;
+            }
+            // Barycentric coordinates of q in the triangle's projection on the yz plane.
+            let u = ((q.y - a.y) * (d.z - a.z) - (d.y - a.y) * (q.z - a.z)) / det;
+            let v = ((b.y - a.y) * (q.z - a.z) - (q.y - a.y) * (b.z - a.z)) / det;
+            if u < 0.0 || v < 0.0 || u + v > 1.0 {
+                continue;
+            }
+            if a.x + u * (b.x - a.x) + v * (d.x - a.x) > q.x {
+                *flag = !*flag;
+            }
         }
     }
-    crossings % 2 == 1
+    inside
 }
 
 /// Options of [`cavities()`].
@@ -204,21 +206,25 @@ pub fn cavities(
     }
     let parts = components(mesh)?;
     let cells = CellList::new(atoms, params);
-    let mut out = Vec::new();
-    for c in parts
+    // Candidate voids and a point on each; they count when inside an outer component.
+    let voids: Vec<&Component> = parts
         .iter()
-        .filter(|c| c.volume < -options.min_volume.max(0.0))
-    {
-        let Some(&first) = c.vertices.first() else {
-            continue;
-        };
-        let probe = mesh.positions[first as usize].as_dvec3();
-        let enclosed = parts
-            .iter()
-            .any(|o| o.volume > 0.0 && contains(mesh, o, probe));
-        if !enclosed {
-            continue;
+        .filter(|c| c.volume < -options.min_volume && !c.vertices.is_empty())
+        .collect();
+    let probes: Vec<DVec3> = voids
+        .iter()
+        .map(|c| mesh.positions[c.vertices[0] as usize].as_dvec3())
+        .collect();
+    let mut enclosed = vec![false; voids.len()];
+    if !voids.is_empty() {
+        for outer in parts.iter().filter(|o| o.volume > 0.0) {
+            for (e, inside) in enclosed.iter_mut().zip(contains(mesh, outer, &probes)) {
+                *e |= inside;
+            }
         }
+    }
+    let mut out = Vec::new();
+    for (c, _) in voids.iter().zip(&enclosed).filter(|(_, e)| **e) {
         let mut lining = Vec::new();
         let mut here: Vec<(u32, f32)> = Vec::new();
         let mut radius = 0.0f64;
