@@ -4,12 +4,8 @@
 use rayon::prelude::*;
 
 use super::MeasureError;
-use super::cells::{CellList, nearest};
+use super::cells::{Batch, CellList, nearest};
 use crate::surface::{AtomSet, Mesh, SurfaceOutput, SurfaceParams};
-
-/// Vertices per parallel task; the tasks' sums are added in order, so the result does not
-/// depend on the thread count.
-const CHUNK: usize = 4096;
 
 /// Area in Å² of each triangle-vertex share: `vertex_areas[v]` is a third of the area of every
 /// triangle using vertex `v` (f64). Fails on an index past the vertices.
@@ -48,33 +44,51 @@ pub fn atom_areas(
     atoms.validate()?;
     let shares = vertex_areas(mesh)?;
     let cells = CellList::new(atoms, params);
-    // Per chunk of vertices: (atom, area) pairs, in vertex order.
-    let pairs: Vec<Vec<(u32, f64)>> = mesh
+    // Vertices grouped by cell (in cell order, then vertex order), so that each group gathers
+    // its candidate atoms once; per group the (atom, area) pairs, summed in group order at the
+    // end, so the result does not depend on the thread count.
+    let keys: Vec<u32> = mesh
         .positions
-        .par_chunks(CHUNK)
-        .zip(shares.par_chunks(CHUNK))
-        .map(|(positions, shares)| {
-            let mut out = Vec::with_capacity(positions.len() * 8);
-            let mut here: Vec<(u32, f32)> = Vec::with_capacity(32);
-            for (&p, &share) in positions.iter().zip(shares) {
-                if share == 0.0 {
-                    continue;
+        .par_iter()
+        .map(|p| cells.key(*p).unwrap_or(u32::MAX))
+        .collect();
+    let mut order: Vec<u32> = (0..mesh.positions.len() as u32)
+        .filter(|&v| shares[v as usize] != 0.0)
+        .collect();
+    order.par_sort_unstable_by_key(|&v| (keys[v as usize], v));
+    let groups: Vec<&[u32]> = order
+        .chunk_by(|&a, &b| keys[a as usize] == keys[b as usize])
+        .collect();
+    let pairs: Vec<Vec<(u32, f64)>> = groups
+        .par_iter()
+        .map_init(
+            || (Batch::default(), Vec::<(u32, f32)>::with_capacity(32)),
+            |(batch, here), group| {
+                let mut out = Vec::with_capacity(group.len() * 8);
+                let key = keys[group[0] as usize];
+                if key != u32::MAX {
+                    cells.gather(key, batch);
                 }
-                here.clear();
-                let mut total = 0.0f64;
-                cells.for_each_gaussian(p, |atom, w| {
-                    here.push((atom, w));
-                    total += f64::from(w);
-                });
-                if total > 0.0 {
-                    let scale = share / total;
-                    out.extend(here.iter().map(|&(a, w)| (a, f64::from(w) * scale)));
-                } else {
-                    out.push((nearest(atoms.positions, p), share));
+                for &v in *group {
+                    let (p, share) = (mesh.positions[v as usize], shares[v as usize]);
+                    here.clear();
+                    let mut total = 0.0f64;
+                    if key != u32::MAX {
+                        batch.for_each_gaussian(p, |atom, w| {
+                            here.push((atom, w));
+                            total += f64::from(w);
+                        });
+                    }
+                    if total > 0.0 {
+                        let scale = share / total;
+                        out.extend(here.iter().map(|&(a, w)| (a, f64::from(w) * scale)));
+                    } else {
+                        out.push((nearest(atoms.positions, p), share));
+                    }
                 }
-            }
-            out
-        })
+                out
+            },
+        )
         .collect();
     let mut areas = vec![0.0f64; atoms.len()];
     for (atom, area) in pairs.iter().flatten() {

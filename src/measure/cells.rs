@@ -1,9 +1,10 @@
 //! A cell list over atoms for the per-vertex question of [`super`]: which atoms' Gaussians
-//! reach a point, and with what weight. Cells are half the longest cutoff wide; atoms are
-//! stored sorted by cell, x fastest, coordinates in separate arrays, so the cells of a row
-//! along x that can hold a contributor are one contiguous run, and rows whose (y, z) rectangle
-//! is beyond the longest cutoff are skipped (about half the candidates of cells one cutoff
-//! wide). Distances are computed over a run in batches the compiler vectorises.
+//! reach a point, and with what weight. Cells are half the longest cutoff wide and the grid
+//! reaches one cutoff beyond the atoms; atoms are stored sorted by cell, x fastest, coordinates
+//! in separate arrays, so the cells of a row along x are one contiguous run. Points are either
+//! asked about one at a time ([`CellList::for_each_gaussian`], rows beyond the cutoff skipped)
+//! or by cell: [`CellList::gather`] collects once the atoms that reach a cell's box and
+//! [`Batch::for_each_gaussian`] tests each point of the cell against them.
 
 use glam::Vec3;
 
@@ -39,15 +40,17 @@ impl CellList {
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
         );
+        // The grid reaches one cutoff beyond the atoms: a point outside it has no contributor.
+        let reach = widest * q;
+        let (lo, hi) = (lo - reach, hi + reach);
         let extent = (hi - lo).max(Vec3::splat(1e-3));
         // Cells half as wide as the longest cutoff, and not many more cells than atoms.
-        let reach = widest * q;
         let mut cell = (reach / 2.0).max(1e-3);
         let count = |cell: f32| {
             let d = (extent / cell).floor() + 1.0;
             (d.x as f64) * (d.y as f64) * (d.z as f64)
         };
-        while count(cell) > (4 * n + 64) as f64 {
+        while count(cell) > (8 * n + 512) as f64 {
             cell *= 1.25;
         }
         let d = (extent / cell).floor() + 1.0;
@@ -150,6 +153,107 @@ impl CellList {
                 s += n;
             }
         });
+    }
+}
+
+impl CellList {
+    /// The cell holding `p`, or `None` when `p` is off the grid (no atom reaches it).
+    pub(crate) fn key(&self, p: Vec3) -> Option<u32> {
+        let c = ((p - self.origin) / self.cell).floor();
+        let c = [c.x, c.y, c.z];
+        if (0..3).any(|k| !(c[k] >= 0.0 && (c[k] as i64) < self.dims[k])) {
+            return None;
+        }
+        let [x, y, z] = c.map(|v| v as i64);
+        Some((x + self.dims[0] * (y + self.dims[1] * z)) as u32)
+    }
+
+    /// Fills `out` with the atoms whose cutoff sphere reaches cell `key`'s box (a key from
+    /// [`CellList::key`]), for the points of that cell.
+    pub(crate) fn gather(&self, key: u32, out: &mut Batch) {
+        out.clear();
+        let key = key as i64;
+        let c = [
+            key % self.dims[0],
+            (key / self.dims[0]) % self.dims[1],
+            key / (self.dims[0] * self.dims[1]),
+        ];
+        let box_lo = self.origin + self.cell * Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+        let box_hi = box_lo + self.cell;
+        let k = (self.reach / self.cell).ceil() as i64;
+        let range = |a: usize| ((c[a] - k).max(0), (c[a] + k).min(self.dims[a] - 1));
+        let ((xs, xe), (ys, ye), (zs, ze)) = (range(0), range(1), range(2));
+        let gap = |d: i64| ((d.abs() - 1).max(0) as f32) * self.cell;
+        let reach2 = self.reach * self.reach;
+        for z in zs..=ze {
+            for y in ys..=ye {
+                if gap(y - c[1]).powi(2) + gap(z - c[2]).powi(2) >= reach2 {
+                    continue;
+                }
+                let row = self.dims[0] * (y + self.dims[1] * z);
+                let start = self.starts[(row + xs) as usize] as usize;
+                let end = self.starts[(row + xe + 1) as usize] as usize;
+                for s in start..end {
+                    let a = Vec3::new(self.x[s], self.y[s], self.z[s]);
+                    let d = (box_lo - a).max(a - box_hi).max(Vec3::ZERO);
+                    if d.length_squared() < self.cutoff2[s] {
+                        out.index.push(self.index[s]);
+                        out.x.push(a.x);
+                        out.y.push(a.y);
+                        out.z.push(a.z);
+                        out.inv_two_alpha2.push(self.inv_two_alpha2[s]);
+                        out.cutoff2.push(self.cutoff2[s]);
+                    }
+                }
+            }
+        }
+        out.d2.resize(out.index.len(), 0.0);
+    }
+}
+
+/// The atoms that may reach the points of one cell ([`CellList::gather`]), in separate arrays.
+#[derive(Default)]
+pub(crate) struct Batch {
+    index: Vec<u32>,
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    inv_two_alpha2: Vec<f32>,
+    cutoff2: Vec<f32>,
+    d2: Vec<f32>,
+}
+
+impl Batch {
+    fn clear(&mut self) {
+        for v in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.inv_two_alpha2,
+            &mut self.cutoff2,
+        ] {
+            v.clear();
+        }
+        self.index.clear();
+    }
+
+    /// Calls `visit(atom, weight)` for every gathered atom whose Gaussian reaches `p` (a point
+    /// of the gathered cell), with the Gaussian's value there. The distances are computed in
+    /// one loop the compiler vectorises, then filtered.
+    pub(crate) fn for_each_gaussian(&mut self, p: Vec3, mut visit: impl FnMut(u32, f32)) {
+        let n = self.index.len();
+        let (x, y, z, d2) = (&self.x[..n], &self.y[..n], &self.z[..n], &mut self.d2[..n]);
+        for k in 0..n {
+            d2[k] = (x[k] - p.x).powi(2) + (y[k] - p.y).powi(2) + (z[k] - p.z).powi(2);
+        }
+        let hits = d2
+            .iter()
+            .zip(&self.cutoff2[..n])
+            .enumerate()
+            .filter(|(_, (d, c))| d < c);
+        for (k, (&d, _)) in hits {
+            visit(self.index[k], (-d * self.inv_two_alpha2[k]).exp());
+        }
     }
 }
 
