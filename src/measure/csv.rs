@@ -242,3 +242,38 @@ pub fn lining_residues(
         })
         .collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn measure_fields_are_quoted_only_when_needed() {
+        assert_eq!(field("protein"), "protein");
+        assert_eq!(field("a,b"), "\"a,b\"");
+        assert_eq!(field("say \"hi\""), "\"say \"\"hi\"\"\"");
+    }
+
+    #[test]
+    fn measure_lining_residues_are_labelled_once_in_order() {
+        let mut top = Topology::default();
+        for (name, chain, resid, index) in [
+            ("GLY", "A", 13, 1),
+            ("LEU", "A", 12, 0),
+            ("GLY", "A", 13, 1),
+            ("SOL", "", 7, 2),
+        ] {
+            top.names.push("X");
+            top.residue_names.push(name);
+            top.chains.push(chain);
+            top.residue_ids.push(resid);
+            top.residue_index.push(index);
+        }
+        let labels = lining_residues(&top, None, &[3, 2, 0, 1]).expect("labels");
+        assert_eq!(labels, ["A:LEU12", "A:GLY13", "SOL7"]);
+        let labels = lining_residues(&top, Some(&[3, 1]), &[1, 0]).expect("subset");
+        assert_eq!(labels, ["A:LEU12", "SOL7"]);
+        assert!(lining_residues(&top, Some(&[3, 1]), &[2]).is_err());
+        assert!(lining_residues(&top, None, &[9]).is_err());
+    }
+}

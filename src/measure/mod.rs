@@ -44,10 +44,12 @@ pub mod interface;
 pub mod residues;
 pub mod tracking;
 
-pub use areas::{atom_areas, atom_areas_of};
+pub use areas::{atom_areas, atom_areas_of, vertex_areas};
 pub use cavities::{Cavity, CavityOptions, Component, cavities, components};
-pub use csv::{AtomCsv, CavityCsv, ResidueCsv};
-pub use interface::{ContactResidue, InterfaceResult, contact_residues, interface};
+pub use csv::{AtomCsv, CavityCsv, ResidueCsv, lining_residues};
+pub use interface::{
+    CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
+};
 pub use residues::{ExposureTable, ResidueArea, residue_areas, residue_label};
 pub use tracking::{CavityEvent, CavityTracker, TrackUpdate, TrackedCavity};
 

@@ -216,6 +216,21 @@ fn measure_interface_of_separated_groups_is_zero() {
     // The engine is back on its own grid.
     let alone = engine.compute(&set(&a_pos, &a_rad), &params).expect("A");
     assert_ne!(alone.grid, r.grid);
+    // A forced grid that does not hold B's padded box, or has another spacing, is refused.
+    let a_grid = alone.grid;
+    assert!(engine.set_grid(Some(a_grid)));
+    assert!(engine.compute(&set(&b_pos, &b_rad), &params).is_err());
+    let coarse = SurfaceParams {
+        spacing: 2.0,
+        ..params
+    };
+    assert!(engine.compute(&set(&a_pos, &a_rad), &coarse).is_err());
+    // Forced to its own grid, A's surface is the same.
+    let again = engine
+        .compute(&set(&a_pos, &a_rad), &params)
+        .expect("A forced");
+    assert_eq!(again.mesh, alone.mesh);
+    engine.set_grid(None);
 }
 
 /// Atoms on a cubic lattice of 1.5 Å filling a ball of `radius` Å around `centre`, radius
