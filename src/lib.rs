@@ -14,6 +14,7 @@ pub mod export;
 pub mod gpu;
 #[cfg(feature = "app")]
 pub mod io;
+pub mod measure;
 pub mod model;
 pub mod render;
 pub mod scene;

@@ -5,6 +5,8 @@
 
 use std::time::Instant;
 
+use glam::Vec3;
+
 use super::analytic::AnalyticField;
 use super::bin::{bin_atoms, bin_atoms_overlapping};
 use super::brick_mc::march_bricks;
@@ -54,6 +56,8 @@ pub struct CpuEngine {
     measure_only: bool,
     /// Vertex placement and measurement ([`VertexMode`], interpolated by default).
     vertices: VertexMode,
+    /// The grid every surface uses instead of its atoms' own ([`SurfaceEngine::set_grid`]).
+    forced_grid: Option<GridSpec>,
 }
 
 impl std::fmt::Debug for CpuEngine {
@@ -139,7 +143,11 @@ impl CpuEngine {
     ) -> Result<GridSpec, SurfaceError> {
         params.validate()?;
         atoms.validate()?;
-        let grid = GridSpec::for_atoms(atoms.positions, atoms.radii, params)?;
+        let own = GridSpec::for_atoms(atoms.positions, atoms.radii, params)?;
+        let grid = match self.forced_grid {
+            Some(forced) => check_forced_grid(&forced, &own, atoms, params)?,
+            None => own,
+        };
         // The sparse path stores at most the density of every sample (colours go per vertex).
         let needed = grid.estimated_bytes(self.dense_for(&grid) && atoms.colours.is_some());
         let available = self.memory_limit.unwrap_or_else(available_memory_bytes);
@@ -169,6 +177,11 @@ impl SurfaceEngine for CpuEngine {
 
     fn vertices(&self) -> VertexMode {
         self.vertices
+    }
+
+    fn set_grid(&mut self, grid: Option<GridSpec>) -> bool {
+        self.forced_grid = grid;
+        true
     }
 
     fn compute(
@@ -284,4 +297,44 @@ impl CpuEngine {
             counts_without_mesh,
         })
     }
+}
+
+/// `forced` when it can stand for `own` (the grid the atoms would get): same spacing, and it
+/// holds the atoms' bounding box padded as [`GridSpec::for_atoms`] pads it, so the density is
+/// below the isovalue on its boundary and the surface is closed.
+fn check_forced_grid(
+    forced: &GridSpec,
+    own: &GridSpec,
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+) -> Result<GridSpec, SurfaceError> {
+    let bad = |why: String| SurfaceError::InvalidParameter {
+        name: "forced grid",
+        value: why,
+    };
+    if forced.spacing != params.spacing || forced.dims.contains(&0) {
+        return Err(bad(format!(
+            "spacing {} Å and {:?} samples for H = {} Å",
+            forced.spacing, forced.dims, params.spacing
+        )));
+    }
+    // The atoms' padded box: `own` starts at its low corner and ends at or past its high one.
+    let hi = atoms
+        .positions
+        .iter()
+        .fold(Vec3::splat(f32::NEG_INFINITY), |m, p| m.max(*p));
+    let max_radius = atoms.radii.iter().fold(0.0f32, |m, &r| m.max(r));
+    let pad = params.cutoff() * params.radius_scale * max_radius + params.spacing;
+    let needed_far = hi + Vec3::splat(pad);
+    let tolerance = 1e-3 * params.spacing;
+    let forced_far = forced.point(forced.dims[0] - 1, forced.dims[1] - 1, forced.dims[2] - 1);
+    let inside = own.origin.cmpge(forced.origin - tolerance).all()
+        && needed_far.cmple(forced_far + tolerance).all();
+    if !inside {
+        return Err(bad(format!(
+            "{:?} to {:?} Å does not hold the atoms' padded box {:?} to {:?} Å",
+            forced.origin, forced_far, own.origin, needed_far
+        )));
+    }
+    Ok(*forced)
 }

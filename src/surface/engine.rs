@@ -172,4 +172,14 @@ pub trait SurfaceEngine {
     fn vertices(&self) -> VertexMode {
         VertexMode::Interpolated
     }
+
+    /// Makes later surfaces use `grid` (origin, spacing and sample counts) instead of the grid
+    /// their atoms would get, so that several surfaces share one grid (the buried area of an
+    /// interface compares A, B and A with B on the union's grid); `None` goes back to the
+    /// default. The grid must hold every atom's padded bounding box (see
+    /// [`GridSpec::for_atoms`]) and have the spacing of the parameters, or `compute` fails.
+    /// Returns `false` when this engine cannot force a grid (the default; then nothing changes).
+    fn set_grid(&mut self, _grid: Option<GridSpec>) -> bool {
+        false
+    }
 }

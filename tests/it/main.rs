@@ -46,6 +46,8 @@ mod io_mutants;
 mod io_roundtrip;
 mod io_stream;
 mod io_xdr;
+mod measure_areas;
+mod measure_cavities;
 mod render_cli;
 mod render_gpu_surface;
 mod render_images;

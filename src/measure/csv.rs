@@ -1,0 +1,279 @@
+//! CSV tables of the measurements, one row per frame, representation and residue (atom,
+//! cavity), filled frame by frame and written atomically ([`crate::export::atomic`]) at the end.
+//! Areas in Å², volumes in Å³, coordinates in Å; text fields are quoted when they hold a comma,
+//! a quote or a line break.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::residues::{residue_label, topology_atoms};
+use super::{ExposureTable, MeasureError, ResidueArea, TrackedCavity};
+use crate::export::ExportError;
+use crate::export::atomic::write_atomic;
+use crate::model::Topology;
+
+/// `text` as one CSV field.
+fn field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// A table being filled: a header and formatted rows.
+#[derive(Debug, Clone)]
+struct Table {
+    header: &'static str,
+    rows: String,
+}
+
+impl Table {
+    fn new(header: &'static str) -> Table {
+        Table {
+            header,
+            rows: String::new(),
+        }
+    }
+
+    fn write(&self, path: &Path) -> Result<(), ExportError> {
+        write_atomic(path, |w| {
+            writeln!(w, "{}", self.header)?;
+            w.write_all(self.rows.as_bytes())
+        })
+    }
+}
+
+/// Per-residue areas: `frame,rep,chain,resid,resname,area_A2,exposure` (exposure empty when
+/// no table or the table lacks the residue's name).
+#[derive(Debug, Clone)]
+pub struct ResidueCsv(Table);
+
+impl Default for ResidueCsv {
+    fn default() -> Self {
+        ResidueCsv(Table::new("frame,rep,chain,resid,resname,area_A2,exposure"))
+    }
+}
+
+impl ResidueCsv {
+    /// An empty table.
+    pub fn new() -> ResidueCsv {
+        ResidueCsv::default()
+    }
+
+    /// Adds the residues of one frame of representation `rep`.
+    pub fn push(
+        &mut self,
+        frame: usize,
+        rep: &str,
+        residues: &[ResidueArea],
+        exposure: Option<&ExposureTable>,
+    ) {
+        let rep = field(rep);
+        for r in residues {
+            let chain = if r.chain.trim().is_empty() {
+                &r.segment
+            } else {
+                &r.chain
+            };
+            let e = exposure
+                .and_then(|t| t.exposure(r))
+                .map_or(String::new(), |e| format!("{e:.4}"));
+            let _ = writeln!(
+                self.0.rows,
+                "{frame},{rep},{},{},{},{:.3},{e}",
+                field(chain.trim()),
+                r.resid,
+                field(r.resname.trim()),
+                r.area
+            );
+        }
+    }
+
+    /// Writes the table to `path` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
+        self.0.write(path)
+    }
+}
+
+/// Per-atom areas: `frame,rep,serial,name,chain,resid,resname,area_A2`.
+#[derive(Debug, Clone)]
+pub struct AtomCsv(Table);
+
+impl Default for AtomCsv {
+    fn default() -> Self {
+        AtomCsv(Table::new(
+            "frame,rep,serial,name,chain,resid,resname,area_A2",
+        ))
+    }
+}
+
+impl AtomCsv {
+    /// An empty table.
+    pub fn new() -> AtomCsv {
+        AtomCsv::default()
+    }
+
+    /// Adds the atoms of one frame of representation `rep`: `atom_areas` (Å²) of the topology
+    /// atoms `atom_indices` (`None`: all). Fails on mismatched lengths or indices past the
+    /// topology.
+    pub fn push(
+        &mut self,
+        frame: usize,
+        rep: &str,
+        topology: &Topology,
+        atom_indices: Option<&[u32]>,
+        atom_areas: &[f64],
+    ) -> Result<(), MeasureError> {
+        let indices = topology_atoms(topology, atom_indices, atom_areas.len(), "atom areas")?;
+        let rep = field(rep);
+        let text = |l: &crate::model::Labels, i: usize| field(l.get(i).unwrap_or("").trim());
+        for (&atom, area) in indices.iter().zip(atom_areas) {
+            let i = atom as usize;
+            let _ = writeln!(
+                self.0.rows,
+                "{frame},{rep},{},{},{},{},{},{area:.3}",
+                topology.serials.get(i).copied().unwrap_or(i as i64 + 1),
+                text(&topology.names, i),
+                text(&topology.chains, i),
+                topology.residue_ids.get(i).copied().unwrap_or(0),
+                text(&topology.residue_names, i),
+            );
+        }
+        Ok(())
+    }
+
+    /// Writes the table to `path` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
+        self.0.write(path)
+    }
+}
+
+/// Cavities: `frame,rep,cavity_id,volume_A3,area_A2,cx,cy,cz,lining` with the lining residues
+/// as `A:LEU12 A:GLY13` (topology order).
+#[derive(Debug, Clone)]
+pub struct CavityCsv(Table);
+
+impl Default for CavityCsv {
+    fn default() -> Self {
+        CavityCsv(Table::new(
+            "frame,rep,cavity_id,volume_A3,area_A2,cx,cy,cz,lining",
+        ))
+    }
+}
+
+impl CavityCsv {
+    /// An empty table.
+    pub fn new() -> CavityCsv {
+        CavityCsv::default()
+    }
+
+    /// Adds the tracked cavities of one frame of representation `rep`, whose atom set holds
+    /// the topology atoms `atom_indices` (`None`: all). Fails on a lining atom past the set or
+    /// an index past the topology.
+    pub fn push(
+        &mut self,
+        frame: usize,
+        rep: &str,
+        topology: &Topology,
+        atom_indices: Option<&[u32]>,
+        cavities: &[TrackedCavity],
+    ) -> Result<(), MeasureError> {
+        let rep = field(rep);
+        for t in cavities {
+            let c = &t.cavity;
+            let lining = lining_residues(topology, atom_indices, &c.lining_atoms)?;
+            let _ = writeln!(
+                self.0.rows,
+                "{frame},{rep},{},{:.3},{:.3},{:.3},{:.3},{:.3},{}",
+                t.id,
+                c.volume,
+                c.area,
+                c.centroid.x,
+                c.centroid.y,
+                c.centroid.z,
+                field(&lining.join(" "))
+            );
+        }
+        Ok(())
+    }
+
+    /// Writes the table to `path` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
+        self.0.write(path)
+    }
+}
+
+/// Labels (`A:LEU12`) of the residues of `atoms` (indices into an atom set holding the
+/// topology atoms `atom_indices`, `None`: all), once each, in topology order.
+pub fn lining_residues(
+    topology: &Topology,
+    atom_indices: Option<&[u32]>,
+    atoms: &[u32],
+) -> Result<Vec<String>, MeasureError> {
+    let n = atom_indices.map_or(topology.len(), <[u32]>::len);
+    let top = topology.len().min(topology.residue_index.len());
+    let mut residues: Vec<(u32, usize)> = Vec::with_capacity(atoms.len());
+    for &a in atoms {
+        let atom = match atom_indices {
+            Some(ix) => ix.get(a as usize).copied(),
+            None => Some(a),
+        }
+        .filter(|&t| (t as usize) < top)
+        .ok_or(MeasureError::IndexOutOfRange {
+            what: "lining atom",
+            index: a as usize,
+            len: n,
+        })?;
+        residues.push((topology.residue_index[atom as usize], atom as usize));
+    }
+    residues.sort_unstable();
+    residues.dedup_by_key(|r| r.0);
+    let text = |l: &crate::model::Labels, i: usize| l.get(i).unwrap_or("").to_string();
+    Ok(residues
+        .into_iter()
+        .map(|(_, i)| {
+            residue_label(
+                &text(&topology.chains, i),
+                &text(&topology.segments, i),
+                &text(&topology.residue_names, i),
+                topology.residue_ids.get(i).copied().unwrap_or(0),
+            )
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn measure_fields_are_quoted_only_when_needed() {
+        assert_eq!(field("protein"), "protein");
+        assert_eq!(field("a,b"), "\"a,b\"");
+        assert_eq!(field("say \"hi\""), "\"say \"\"hi\"\"\"");
+    }
+
+    #[test]
+    fn measure_lining_residues_are_labelled_once_in_order() {
+        let mut top = Topology::default();
+        for (name, chain, resid, index) in [
+            ("GLY", "A", 13, 1),
+            ("LEU", "A", 12, 0),
+            ("GLY", "A", 13, 1),
+            ("SOL", "", 7, 2),
+        ] {
+            top.names.push("X");
+            top.residue_names.push(name);
+            top.chains.push(chain);
+            top.residue_ids.push(resid);
+            top.residue_index.push(index);
+        }
+        let labels = lining_residues(&top, None, &[3, 2, 0, 1]).expect("labels");
+        assert_eq!(labels, ["A:LEU12", "A:GLY13", "SOL7"]);
+        let labels = lining_residues(&top, Some(&[3, 1]), &[1, 0]).expect("subset");
+        assert_eq!(labels, ["A:LEU12", "SOL7"]);
+        assert!(lining_residues(&top, Some(&[3, 1]), &[2]).is_err());
+        assert!(lining_residues(&top, None, &[9]).is_err());
+    }
+}

@@ -1,0 +1,95 @@
+//! What scientists publish about a surface (issue 32): area per atom and per residue, the
+//! exposure of each residue, the area buried between two groups, and cavities tracked from frame
+//! to frame, with CSV writers. It sits after the surface engine in the data flow: it reads a
+//! [`Mesh`](crate::surface::Mesh) (or a [`SurfaceOutput`](crate::surface::SurfaceOutput)), the
+//! [`AtomSet`](crate::surface::AtomSet) and [`SurfaceParams`](crate::surface::SurfaceParams) it
+//! was computed from, and the [`Topology`](crate::model::Topology) for residue names; it never
+//! imports the app or the command line. Units: lengths in Å, areas in Å², volumes in Å³.
+//!
+//! The rules (docs/measure.md gives the reasons):
+//!
+//! - **Area per atom** ([`atom_areas`]): each triangle's area goes one third to each of its
+//!   three vertices; a vertex's share goes to the atoms in proportion to each atom's Gaussian
+//!   `exp(-|v - p_i|^2 / (2 alpha_i^2))` at the vertex, over the atoms with
+//!   `|v - p_i| < q alpha_i` (the density's own terms and cutoff, DESIGN section 2). A vertex
+//!   no atom reaches (impossible on a surface the engine made) goes to the atom nearest it. The
+//!   per-atom areas sum to the mesh's area ([`Mesh::area`](crate::surface::Mesh::area)), in
+//!   f64. [`atom_areas_of`] rescales them to [`SurfaceOutput::area`], which differs from the flat
+//!   triangles' area with refined vertices. Pass the parameters the engine used: with refined
+//!   vertices, `engine.vertices().effective(&params)`.
+//! - **Area per residue** ([`residue_areas`]): the sum over the residue's atoms in the set.
+//! - **Exposure** ([`ExposureTable`]): a residue's area over the largest area that a residue of
+//!   the same name has alone (its atoms only, same radii and parameters), over up to
+//!   [`ExposureTable::SAMPLES`] residues of that name in the structure the table is built from.
+//!   1 is as exposed as an isolated residue; values a little above 1 are possible.
+//! - **Buried area** ([`interface()`]): `(area(A) + area(B) - area(A and B)) / 2`, the three
+//!   surfaces on the union's grid ([`SurfaceEngine::set_grid`](crate::surface::SurfaceEngine::set_grid)).
+//!   Contact residues ([`contact_residues`]) lose more than a threshold (default 1 Å²) of area
+//!   from alone to the complex.
+//! - **Cavities** ([`cavities()`]): the mesh's connected components (triangles sharing a vertex);
+//!   a component whose signed volume is negative (its triangles wind towards the void) is an
+//!   enclosed void when it lies inside a component of positive volume (ray parity). Volume
+//!   (positive), area, centroid of the enclosed region, and the atoms lining it: at some vertex
+//!   of the void's wall, the atom's Gaussian is at least half the largest Gaussian there
+//!   ([`CavityOptions::lining_fraction`]).
+//! - **Tracking** ([`CavityTracker`]): a cavity keeps its id while its centroid and its previous
+//!   self's are within the larger of their bounding radii; births, deaths, merges and splits are
+//!   reported as [`CavityEvent`]s.
+
+pub mod areas;
+pub mod cavities;
+mod cells;
+pub mod csv;
+pub mod interface;
+pub mod residues;
+pub mod tracking;
+
+pub use areas::{atom_areas, atom_areas_of, vertex_areas};
+pub use cavities::{Cavity, CavityOptions, Component, cavities, components};
+pub use csv::{AtomCsv, CavityCsv, ResidueCsv, lining_residues};
+pub use interface::{
+    CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
+};
+pub use residues::{ExposureTable, ResidueArea, residue_areas, residue_label};
+pub use tracking::{CavityEvent, CavityTracker, TrackUpdate, TrackedCavity};
+
+use crate::surface::SurfaceError;
+
+/// Why a measurement could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum MeasureError {
+    /// The atoms or parameters were invalid, or a surface could not be computed.
+    #[error(transparent)]
+    Surface(#[from] SurfaceError),
+    /// Two inputs that must have one entry per atom differ in length.
+    #[error("{got} {what} given for {expected} atoms")]
+    LengthMismatch {
+        /// What was given (`atom areas`, `atom indices`).
+        what: &'static str,
+        /// Number of atoms.
+        expected: usize,
+        /// Length given.
+        got: usize,
+    },
+    /// An index points past the end of what it indexes.
+    #[error("{what} {index} is out of range (there are {len})")]
+    IndexOutOfRange {
+        /// What the index is (`mesh vertex`, `topology atom`).
+        what: &'static str,
+        /// The index.
+        index: usize,
+        /// Number of items.
+        len: usize,
+    },
+    /// The engine measured the surface without keeping its mesh.
+    #[error("the surface was measured without keeping its mesh; per-atom areas need the mesh")]
+    NoMesh,
+    /// A threshold or option was not a finite non-negative number.
+    #[error("{name} must be a finite non-negative number, got {value}")]
+    InvalidOption {
+        /// Which option.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+}

@@ -1,0 +1,208 @@
+//! Area per residue (the sum over its atoms) and exposure (its area over the largest area a
+//! residue of its name has alone).
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+
+use super::MeasureError;
+use crate::model::Topology;
+use crate::surface::{AtomSet, SurfaceEngine, SurfaceParams};
+
+/// The area of one residue of a surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResidueArea {
+    /// Index of the residue in the topology ([`Topology::residue_index`]).
+    pub residue: u32,
+    /// Chain identifier (empty when the file has none).
+    pub chain: String,
+    /// Segment name (empty when the file has none).
+    pub segment: String,
+    /// Residue number as written in the file.
+    pub resid: i64,
+    /// Residue name (`LEU`).
+    pub resname: String,
+    /// Atoms of the residue in the atom set.
+    pub atoms: usize,
+    /// Area in Å² (the sum of its atoms' areas).
+    pub area: f64,
+}
+
+impl ResidueArea {
+    /// `A:LEU12` (chain, else segment, then name and number; `LEU12` with neither).
+    pub fn label(&self) -> String {
+        residue_label(&self.chain, &self.segment, &self.resname, self.resid)
+    }
+}
+
+/// `A:LEU12`: the chain (else the segment) and a colon when there is one, then name and number.
+pub fn residue_label(chain: &str, segment: &str, resname: &str, resid: i64) -> String {
+    let chain = if chain.trim().is_empty() {
+        segment.trim()
+    } else {
+        chain.trim()
+    };
+    if chain.is_empty() {
+        format!("{}{resid}", resname.trim())
+    } else {
+        format!("{chain}:{}{resid}", resname.trim())
+    }
+}
+
+/// The topology atoms an atom set holds: `atom_indices`, or all of them for `None`; checked
+/// against the topology and against `len`, the number of per-atom values given.
+pub(crate) fn topology_atoms(
+    topology: &Topology,
+    atom_indices: Option<&[u32]>,
+    len: usize,
+    what: &'static str,
+) -> Result<Vec<u32>, MeasureError> {
+    let indices: Vec<u32> = match atom_indices {
+        Some(ix) => ix.to_vec(),
+        None => (0..topology.len() as u32).collect(),
+    };
+    if indices.len() != len {
+        return Err(MeasureError::LengthMismatch {
+            what,
+            expected: indices.len(),
+            got: len,
+        });
+    }
+    let n = topology.len().min(topology.residue_index.len());
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+        return Err(MeasureError::IndexOutOfRange {
+            what: "topology atom",
+            index: bad as usize,
+            len: n,
+        });
+    }
+    Ok(indices)
+}
+
+/// One residue's description from the topology atom `atom` (in range).
+fn describe(topology: &Topology, atom: usize) -> ResidueArea {
+    let text = |l: &crate::model::Labels| l.get(atom).unwrap_or("").to_string();
+    ResidueArea {
+        residue: topology.residue_index[atom],
+        chain: text(&topology.chains),
+        segment: text(&topology.segments),
+        resid: topology.residue_ids.get(atom).copied().unwrap_or(0),
+        resname: text(&topology.residue_names),
+        atoms: 0,
+        area: 0.0,
+    }
+}
+
+/// Area per residue in Å²: the sum of `atom_areas` (one per atom of the set, whose topology
+/// atoms are `atom_indices`, or all atoms for `None`) over each residue's atoms, residues in
+/// topology order, only those with atoms in the set.
+///
+/// Fails when `atom_areas` and the indices differ in length or an index is past the topology.
+pub fn residue_areas(
+    topology: &Topology,
+    atom_indices: Option<&[u32]>,
+    atom_areas: &[f64],
+) -> Result<Vec<ResidueArea>, MeasureError> {
+    let indices = topology_atoms(topology, atom_indices, atom_areas.len(), "atom areas")?;
+    let mut by_residue: BTreeMap<u32, ResidueArea> = BTreeMap::new();
+    for (&atom, &area) in indices.iter().zip(atom_areas) {
+        let atom = atom as usize;
+        let r = by_residue
+            .entry(topology.residue_index[atom])
+            .or_insert_with(|| describe(topology, atom));
+        r.atoms += 1;
+        r.area += area;
+    }
+    Ok(by_residue.into_values().collect())
+}
+
+/// The largest area (Å²) a residue of each name has alone, the denominator of exposure.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ExposureTable {
+    max_area: BTreeMap<String, f64>,
+}
+
+impl ExposureTable {
+    /// Residues of each name whose isolated surfaces are computed (the first ones in topology
+    /// order); the table keeps the largest area.
+    pub const SAMPLES: usize = 5;
+
+    /// A table from given areas (Å² per residue name).
+    pub fn from_areas(areas: impl IntoIterator<Item = (String, f64)>) -> ExposureTable {
+        ExposureTable {
+            max_area: areas.into_iter().collect(),
+        }
+    }
+
+    /// The table of a structure: for each residue name among the set's atoms, the largest
+    /// surface area (`SurfaceOutput::area`, Å²) of the first [`Self::SAMPLES`] residues of
+    /// that name, each computed alone (its atoms in the set, their radii) with `engine` and
+    /// `params`. Build it once per representation (from its first frame) and reuse it.
+    ///
+    /// Fails on mismatched lengths, indices past the topology, or a surface that fails.
+    pub fn from_isolated_residues(
+        engine: &mut dyn SurfaceEngine,
+        topology: &Topology,
+        atom_indices: Option<&[u32]>,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+    ) -> Result<ExposureTable, MeasureError> {
+        atoms.validate()?;
+        let indices = topology_atoms(topology, atom_indices, atoms.len(), "atom positions")?;
+        // Set members of each residue, residues in order.
+        let mut members: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+        for (k, &atom) in indices.iter().enumerate() {
+            members
+                .entry(topology.residue_index[atom as usize])
+                .or_default()
+                .push(k);
+        }
+        let mut done: BTreeMap<String, usize> = BTreeMap::new();
+        let mut table = ExposureTable::default();
+        let (mut pos, mut radii): (Vec<Vec3>, Vec<f32>) = (Vec::new(), Vec::new());
+        for set in members.values() {
+            let name = topology
+                .residue_names
+                .get(indices[set[0]] as usize)
+                .unwrap_or("")
+                .trim()
+                .to_string();
+            let seen = done.entry(name.clone()).or_default();
+            if *seen >= Self::SAMPLES {
+                continue;
+            }
+            *seen += 1;
+            pos.clear();
+            radii.clear();
+            pos.extend(set.iter().map(|&k| atoms.positions[k]));
+            radii.extend(set.iter().map(|&k| atoms.radii[k]));
+            let alone = AtomSet {
+                positions: &pos,
+                radii: &radii,
+                colours: None,
+            };
+            let area = engine.compute(&alone, params)?.area;
+            let best = table.max_area.entry(name).or_insert(0.0);
+            *best = best.max(area);
+        }
+        Ok(table)
+    }
+
+    /// The largest isolated area (Å²) of residues named `resname`, if the table has it.
+    pub fn max_area(&self, resname: &str) -> Option<f64> {
+        self.max_area.get(resname.trim()).copied()
+    }
+
+    /// Exposure of `residue`: its area over [`Self::max_area`] of its name (`None` when the
+    /// table lacks the name or its area is 0).
+    pub fn exposure(&self, residue: &ResidueArea) -> Option<f64> {
+        self.max_area(&residue.resname)
+            .filter(|&m| m > 0.0)
+            .map(|m| residue.area / m)
+    }
+
+    /// Residue names and their largest isolated areas (Å²), by name.
+    pub fn entries(&self) -> impl Iterator<Item = (&str, f64)> + '_ {
+        self.max_area.iter().map(|(k, v)| (k.as_str(), *v))
+    }
+}
