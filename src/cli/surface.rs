@@ -20,6 +20,7 @@ use mdsurf::scene::SceneBackend;
 use mdsurf::surface::SurfaceParams;
 
 use super::chunk::{ChunkSpec, check_chunk_count};
+use super::measure_args::{MeasureArgs, Measurer};
 
 use super::common::{
     Backend, FrameRange, InputArgs, ParamArgs, System, check_colour_frames, ms_since,
@@ -57,6 +58,8 @@ pub struct SurfaceArgs {
     /// Per-frame statistics CSV (area, volume, counts, timings).
     #[arg(long, value_name = "STATS.csv")]
     pub stats: Option<PathBuf>,
+    #[command(flatten)]
+    pub measure: MeasureArgs,
     /// Print only errors (no per-frame lines, progress bar or final summary).
     #[arg(short, long)]
     pub quiet: bool,
@@ -97,6 +100,15 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         .chain(args.input.traj.clone())
         .collect();
     refuse_shared_paths(output.as_ref(), args.stats.as_deref(), &inputs)?;
+    for path in args.measure.outputs() {
+        check_parent_dir(path)?;
+        refuse_shared_paths(None, Some(path), &inputs)?;
+    }
+    if chunk.is_some() && !args.measure.outputs().is_empty() {
+        bail!(
+            "--chunk writes stats parts only: run the per-residue, cavity and interface tables in one process"
+        );
+    }
 
     let state = args.scene.load_state()?;
     let transforms = args.transforms.options(state.as_ref());
@@ -133,8 +145,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     reps.retain(|r| r.style.is_surface());
     let mut engine = host_scene(args.backend, reader.chain(), args.quiet)?;
     if let SceneBackend::Host(e) = engine.backend_mut() {
-        // Without -o only area, volume and counts are reported: the mesh need not be built.
-        e.set_keep_mesh(output.is_some());
+        // Without -o or a measurement of the mesh only area, volume and counts are reported:
+        // the mesh need not be built.
+        e.set_keep_mesh(output.is_some() || args.measure.needs_meshes());
         if reader.chain().periodic().is_none() {
             set_vertex_mode(e.as_mut(), args.params.vertex_mode());
         }
@@ -151,6 +164,13 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if layers.is_empty() {
         bail!("no visible surface representation to compute (the state file hides them all)");
     }
+    let mut measurer = Measurer::new(
+        &args.measure,
+        topology,
+        &first,
+        &options.radius_overrides,
+        &params,
+    )?;
     // A .glb without {frame} takes every frame as an animation.
     let animate = output
         .as_ref()
@@ -258,6 +278,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                     export::write_mesh(&out.path_for(index, &layer.rep.name), mesh)?;
                 }
             }
+            measurer
+                .frame(topology, &frame, &computed, &engine, args.quiet)
+                .map_err(|e| anyhow!("{files}: {e:#}"))?;
             let rows = StatsRow::of_scene(&computed, read_ms);
             Ok(rows)
         })();
@@ -297,6 +320,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         if movie.frames() > 0 {
             movie.finish()?;
         }
+    }
+    if ok_frames > 0 {
+        measurer.finish()?;
     }
     if let Some(err) = failure {
         if ok_frames == 0 {

@@ -21,6 +21,7 @@ mod cli_bench;
 mod cli_chunks;
 mod cli_errors;
 mod cli_gpu;
+mod cli_measure;
 mod cli_surface;
 mod colour_data;
 mod export_atomic;

@@ -1,0 +1,331 @@
+//! `mdsurf surface`'s measurements beyond one area and volume per representation
+//! ([`mdsurf::measure`]): areas per atom and per residue (`--per-atom`, `--per-residue`, with
+//! each residue's exposure), enclosed cavities tracked over the frames (`--cavities`), and the
+//! buried area between two selections (`--interface A B`, rows in `--interface-csv`). Each frame
+//! of the scene engine is handed to [`Measurer::frame`]; the CSVs are written atomically at the
+//! end, with the rows of every frame that was computed.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+use mdsurf::measure::{
+    self, AtomCsv, CavityCsv, CavityOptions, CavityTracker, ExposureTable, ResidueCsv, Side,
+};
+use mdsurf::model::{Frame, RadiusOverrides, Topology};
+use mdsurf::scene::layer::Layer;
+use mdsurf::scene::representation::{RepStyle, Representation};
+use mdsurf::scene::{LayerResult, SceneEngine, SceneFrame};
+use mdsurf::surface::{AtomSet, CpuEngine, SurfaceParams};
+
+/// Measurement flags of `mdsurf surface`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct MeasureArgs {
+    /// Area per residue (Å²) and exposure (area over the residue type's area alone) of every
+    /// surface representation and frame: frame,rep,chain,resid,resname,area_A2,exposure.
+    #[arg(long, value_name = "FILE.csv")]
+    pub per_residue: Option<PathBuf>,
+    /// Area per atom (Å²): frame,rep,serial,name,chain,resid,resname,area_A2.
+    #[arg(long, value_name = "FILE.csv")]
+    pub per_atom: Option<PathBuf>,
+    /// Enclosed cavities of every surface representation, tracked over frames:
+    /// frame,rep,cavity_id,volume_A3,area_A2,cx,cy,cz,lining.
+    #[arg(long, value_name = "FILE.csv")]
+    pub cavities: Option<PathBuf>,
+    /// Smallest cavity reported, in Å³ (smaller voids are mostly gaps between a few atoms).
+    #[arg(long, value_name = "A3", default_value_t = 1.0, value_parser = parse_volume)]
+    pub min_cavity_volume: f64,
+    /// Buried area between two selections, (area(A) + area(B) - area(A or B)) / 2, the three
+    /// surfaces on one grid (CPU engine, the command's H, R, I and quality).
+    #[arg(long, num_args = 2, value_names = ["SEL_A", "SEL_B"])]
+    pub interface: Option<Vec<String>>,
+    /// Where the interface rows go: frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,
+    /// contacts_a,contacts_b (the residues that lose more than 1 Å² each). Without it the
+    /// buried area is printed per frame.
+    #[arg(long, value_name = "FILE.csv", requires = "interface")]
+    pub interface_csv: Option<PathBuf>,
+}
+
+impl MeasureArgs {
+    /// True when the surfaces' meshes are needed on the host.
+    pub fn needs_meshes(&self) -> bool {
+        self.per_residue.is_some() || self.per_atom.is_some() || self.cavities.is_some()
+    }
+
+    /// The output files asked for.
+    pub fn outputs(&self) -> Vec<&Path> {
+        [
+            &self.per_residue,
+            &self.per_atom,
+            &self.cavities,
+            &self.interface_csv,
+        ]
+        .into_iter()
+        .filter_map(|p| p.as_deref())
+        .collect()
+    }
+}
+
+/// A volume in Å³: finite and not negative.
+fn parse_volume(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}': expected a volume in Å³, 0 or more")),
+    }
+}
+
+/// The two sides of `--interface`, bound to the topology.
+struct Interface {
+    sides: [Layer; 2],
+    engine: CpuEngine,
+    params: SurfaceParams,
+    rows: String,
+}
+
+/// Collects the measurements frame by frame.
+pub struct Measurer {
+    args: MeasureArgs,
+    residues: ResidueCsv,
+    atoms: AtomCsv,
+    cavities: CavityCsv,
+    trackers: HashMap<String, CavityTracker>,
+    exposure: HashMap<String, ExposureTable>,
+    interface: Option<Interface>,
+}
+
+impl Measurer {
+    /// Checks the flags against the system (selections bind and pick atoms in `first`) and
+    /// starts empty tables.
+    pub fn new(
+        args: &MeasureArgs,
+        topology: &Topology,
+        first: &Frame,
+        radius_overrides: &RadiusOverrides,
+        params: &SurfaceParams,
+    ) -> Result<Measurer> {
+        let interface = match args.interface.as_deref() {
+            Some([a, b]) => {
+                let side = |name: &str, sel: &str| -> Result<Layer> {
+                    let mut rep = Representation::new(name, sel, RepStyle::Surface);
+                    rep.set_params(params);
+                    rep.validate().map_err(|e| anyhow!("--interface: {e}"))?;
+                    let layer = Layer::new(rep, topology, radius_overrides)
+                        .map_err(|e| anyhow!("--interface: {e}"))?;
+                    if layer.atoms(first).is_empty() {
+                        bail!("--interface: selection '{sel}' matches no atom");
+                    }
+                    Ok(layer)
+                };
+                Some(Interface {
+                    sides: [side("A", a)?, side("B", b)?],
+                    engine: CpuEngine::new(),
+                    params: *params,
+                    rows: String::new(),
+                })
+            }
+            Some(_) => bail!("--interface takes two selections"),
+            None => None,
+        };
+        Ok(Measurer {
+            args: args.clone(),
+            residues: ResidueCsv::new(),
+            atoms: AtomCsv::new(),
+            cavities: CavityCsv::new(),
+            trackers: HashMap::new(),
+            exposure: HashMap::new(),
+            interface,
+        })
+    }
+
+    /// Measures one computed frame (`frame`: its transformed coordinates); `scene` gives each
+    /// representation's atoms. Errors name the frame and representation.
+    pub fn frame(
+        &mut self,
+        topology: &Topology,
+        frame: &Frame,
+        computed: &SceneFrame,
+        scene: &SceneEngine,
+        quiet: bool,
+    ) -> Result<()> {
+        let index = computed.frame;
+        if self.args.needs_meshes() {
+            for layer in computed.surfaces() {
+                let atoms = layer_atoms(scene, layer, frame)?;
+                self.surface(topology, index, layer, atoms.as_deref())
+                    .with_context(|| {
+                        format!("frame {index}: representation '{}'", layer.rep.name)
+                    })?;
+            }
+        }
+        if let Some(interface) = self.interface.as_mut() {
+            let line = interface
+                .frame(topology, frame, computed.time_ps, index)
+                .with_context(|| format!("frame {index}: --interface"))?;
+            if self.args.interface_csv.is_none() && !quiet {
+                eprintln!("{line}");
+            }
+        }
+        Ok(())
+    }
+
+    /// Per-atom, per-residue and cavity rows of one surface representation.
+    fn surface(
+        &mut self,
+        topology: &Topology,
+        index: usize,
+        layer: &LayerResult,
+        atom_indices: Option<&[u32]>,
+    ) -> Result<()> {
+        let p = &layer.particles;
+        let atoms = AtomSet {
+            positions: &p.positions,
+            radii: &p.radii,
+            colours: None,
+        };
+        // The parameters the engine computed with (refined vertices run at quality max).
+        let params = layer.rep.vertices.effective(&layer.rep.params());
+        let name = &layer.rep.name;
+        if self.args.per_residue.is_some() || self.args.per_atom.is_some() {
+            let areas = measure::atom_areas_of(&layer.output, &atoms, &params)?;
+            if self.args.per_atom.is_some() {
+                self.atoms
+                    .push(index, name, topology, atom_indices, &areas)?;
+            }
+            if self.args.per_residue.is_some() {
+                let residues = measure::residue_areas(topology, atom_indices, &areas)?;
+                if !self.exposure.contains_key(name) {
+                    let mut engine = CpuEngine::new();
+                    let table = ExposureTable::from_isolated_residues(
+                        &mut engine,
+                        topology,
+                        atom_indices,
+                        &atoms,
+                        &params,
+                    )?;
+                    self.exposure.insert(name.clone(), table);
+                }
+                self.residues
+                    .push(index, name, &residues, self.exposure.get(name));
+            }
+        }
+        if self.args.cavities.is_some() {
+            let options = CavityOptions {
+                min_volume: self.args.min_cavity_volume,
+                ..CavityOptions::default()
+            };
+            let found = measure::cavities(&layer.output.mesh, &atoms, &params, &options)?;
+            let tracked = self
+                .trackers
+                .entry(name.clone())
+                .or_default()
+                .update(index, &found);
+            self.cavities
+                .push(index, name, topology, atom_indices, &tracked.cavities)?;
+        }
+        Ok(())
+    }
+
+    /// Writes every table asked for (atomically).
+    pub fn finish(self) -> Result<()> {
+        let a = &self.args;
+        if let Some(path) = &a.per_residue {
+            self.residues.write(path)?;
+        }
+        if let Some(path) = &a.per_atom {
+            self.atoms.write(path)?;
+        }
+        if let Some(path) = &a.cavities {
+            self.cavities.write(path)?;
+        }
+        if let (Some(path), Some(interface)) = (&a.interface_csv, &self.interface) {
+            let text = format!(
+                "frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,contacts_a,contacts_b\n{}",
+                interface.rows
+            );
+            mdsurf::export::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        }
+        Ok(())
+    }
+}
+
+impl Interface {
+    /// The buried area of frame `index`: appends a CSV row and returns a one-line summary.
+    fn frame(
+        &mut self,
+        topology: &Topology,
+        frame: &Frame,
+        time_ps: Option<f64>,
+        index: usize,
+    ) -> Result<String> {
+        let [a, b] = &mut self.sides;
+        let (fa, fb) = (a.frame(topology, frame)?, b.frame(topology, frame)?);
+        if fa.positions.is_empty() || fb.positions.is_empty() {
+            bail!("a side matches no atom in this frame");
+        }
+        let (ia, ib) = (a.atoms(frame), b.atoms(frame));
+        let result = measure::interface(
+            &mut self.engine,
+            &fa.atom_set(),
+            &fb.atom_set(),
+            &self.params,
+        )?;
+        let contacts = measure::contact_residues(
+            topology,
+            Some(&ia),
+            Some(&ib),
+            &result,
+            measure::CONTACT_THRESHOLD,
+        )?;
+        let side = |s: Side| -> String {
+            let labels: Vec<String> = contacts
+                .iter()
+                .filter(|c| c.side == s)
+                .map(|c| c.residue.label())
+                .collect();
+            labels.join(" ")
+        };
+        use std::fmt::Write;
+        let _ = writeln!(
+            self.rows,
+            "{index},{},{:.4},{:.4},{:.4},{:.4},{},{}",
+            time_ps.map(|t| t.to_string()).unwrap_or_default(),
+            result.area_a,
+            result.area_b,
+            result.area_complex,
+            result.buried,
+            side(Side::A),
+            side(Side::B),
+        );
+        Ok(format!(
+            "frame {index}: buried area {:.1} Å² (A {:.1}, B {:.1}, together {:.1} Å²)",
+            result.buried, result.area_a, result.area_b, result.area_complex
+        ))
+    }
+}
+
+/// The topology atoms behind `layer`'s particles (`None`: every atom); beads have none.
+fn layer_atoms(
+    scene: &SceneEngine,
+    layer: &LayerResult,
+    frame: &Frame,
+) -> Result<Option<Vec<u32>>> {
+    if layer.beads {
+        bail!(
+            "representation '{}': per-atom, per-residue and cavity measurements need atoms, not beads",
+            layer.rep.name
+        );
+    }
+    let Some(bound) = scene.layer(layer.id) else {
+        bail!("representation '{}' is not bound", layer.rep.name);
+    };
+    let atoms = bound.atoms(frame);
+    if atoms.len() != layer.particles.positions.len() {
+        bail!(
+            "representation '{}': {} atoms selected but {} particles",
+            layer.rep.name,
+            atoms.len(),
+            layer.particles.positions.len()
+        );
+    }
+    Ok(Some(atoms))
+}
