@@ -109,15 +109,4 @@ pub fn estimate_grid_bytes(dims: [u64; 3], with_colour: bool) -> u64 {
     volumes.saturating_add(volumes / 4)
 }
 
-/// Memory the engine may use in bytes: `MemAvailable` from `/proc/meminfo` on Linux, else
-/// `u64::MAX` (no limit known).
-pub fn available_memory_bytes() -> u64 {
-    std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|text| {
-            let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-            Some(kib.saturating_mul(1024))
-        })
-        .unwrap_or(u64::MAX)
-}
+pub use super::memory::available_memory_bytes;

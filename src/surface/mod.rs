@@ -13,6 +13,7 @@ pub mod engine;
 pub mod grid;
 pub mod marching_cubes;
 pub mod mc_vertex;
+pub mod memory;
 pub mod mesh;
 pub mod params;
 pub mod periodic;

@@ -300,3 +300,26 @@ fn truncated_dcd_processes_the_good_frames_then_fails() {
     let csv = Csv::read(&d.join("stats.csv"));
     assert_eq!(csv.rows.len(), bad - 80);
 }
+
+#[test]
+fn an_address_space_limit_is_a_memory_budget_not_a_crash() {
+    // Under `prlimit --as` (as `ulimit -v` or a batch system sets it) a grid past the limit is
+    // refused in one line; before, MemAvailable alone was consulted and the allocation aborted.
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new("prlimit")
+        .arg("--as=800000000")
+        .arg(env!("CARGO_BIN_EXE_mdsurf"))
+        .args(["surface", &data("1hpv.pdb"), "--spacing", "0.05"])
+        .args(["--backend", "cpu", "--stats", "s.csv", "-q"])
+        .current_dir(dir.path())
+        .output()
+        .expect("prlimit (util-linux) runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("grid") && stderr.contains("available") && stderr.contains("1hpv.pdb"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("s.csv").exists());
+}
