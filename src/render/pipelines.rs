@@ -1,6 +1,8 @@
 //! The render pipelines, built once per device from shaders/render_scene.wgsl and
 //! shaders/render_post.wgsl: opaque mesh, transparent mesh (weighted blended OIT), sphere
-//! impostors, cylinders, the transparency resolve and the anaglyph composition.
+//! impostors, cylinders, the transparency resolve and the anaglyph composition; and from
+//! shaders/render_ao.wgsl and shaders/render_look.wgsl the ambient occlusion and the look
+//! (outlines, shadows) passes.
 
 use super::scene::{CylinderInstance, SphereInstance};
 use super::targets::{ACCUM_FORMAT, COLOUR_FORMAT, DEPTH_FORMAT, REVEAL_FORMAT};
@@ -18,11 +20,18 @@ pub const AO_WGSL: &str = concat!(
     include_str!("../../shaders/render_ao.wgsl")
 );
 
+/// WGSL of the look pass: outlines and shadows (after the shared view uniform).
+pub const LOOK_WGSL: &str = concat!(
+    include_str!("../../shaders/render_view.wgsl"),
+    include_str!("../../shaders/render_look.wgsl")
+);
+
 /// Every render shader as `(file name, full source)`, for validation.
 pub const ALL: &[(&str, &str)] = &[
     ("render_scene.wgsl", SCENE_WGSL),
     ("render_post.wgsl", POST_WGSL),
     ("render_ao.wgsl", AO_WGSL),
+    ("render_look.wgsl", LOOK_WGSL),
 ];
 
 /// Vertices per cylinder instance (12 segments, two triangles each; see `vs_cylinder`).
@@ -33,6 +42,8 @@ pub(crate) struct Pipelines {
     pub post_layout: wgpu::BindGroupLayout,
     pub depth_layout: wgpu::BindGroupLayout,
     pub ambient_occlusion: wgpu::RenderPipeline,
+    /// Outlines and shadows (shaders/render_look.wgsl).
+    pub look: wgpu::RenderPipeline,
     pub mesh_opaque: wgpu::RenderPipeline,
     pub mesh_oit: wgpu::RenderPipeline,
     /// The opaque and transparent mesh pipelines for one interleaved vertex buffer
@@ -168,6 +179,10 @@ impl Pipelines {
         let ao = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("render_ao.wgsl"),
             source: wgpu::ShaderSource::Wgsl(AO_WGSL.into()),
+        });
+        let look_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render_look.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(LOOK_WGSL.into()),
         });
         let depth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ao depth"),
@@ -366,7 +381,32 @@ impl Pipelines {
                 targets: &multiply,
             },
         );
+        // Outline colour over the shaded image: colour = src + dst * (1 - src alpha); the alpha
+        // likewise, so a background pixel under an outline gets the outline's coverage.
+        let over_premultiplied = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let look_target = [colour_target(Some(wgpu::BlendState {
+            color: over_premultiplied,
+            alpha: over_premultiplied,
+        }))];
+        let look = pipeline(
+            device,
+            PipelineSpec {
+                label: "look",
+                module: &look_module,
+                layout: &ao_pl,
+                vs: "vs_fullscreen",
+                fs: "fs_look",
+                buffers: &[],
+                depth: None,
+                targets: &look_target,
+            },
+        );
         Pipelines {
+            look,
             view_layout,
             post_layout,
             depth_layout,

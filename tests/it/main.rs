@@ -48,6 +48,7 @@ mod io_xdr;
 mod render_cli;
 mod render_gpu_surface;
 mod render_images;
+mod render_look;
 mod render_movie;
 mod render_refined;
 mod render_stereo;
