@@ -1,5 +1,6 @@
-// The figure look of the renderer (src/render/renderer.rs), one full-screen pass after the
-// ambient occlusion and before the transparent surface, reading only the depth buffer:
+// The figure look of the renderer (src/render/renderer.rs): one full-screen pass after the
+// opaque scene and before the transparent surface, reading only the depth buffer, that does the
+// ambient occlusion (render_ao.wgsl), and:
 // - silhouette outlines: a pixel is drawn in the outline colour where a neighbour `look.x`
 //   pixels away is nearer by a depth jump (relative to the depth), so the line lies just outside
 //   each silhouette, and where the surface bends sharply (the slopes on both sides differ by more
@@ -9,38 +10,12 @@
 //   depth buffer; a ray that passes behind a nearer surface is blocked. Only what is on screen
 //   casts shadows.
 // Output: premultiplied outline colour and a coverage alpha; blended with (one, 1 - src alpha)
-// the image becomes dst * shade * (1 - o) + colour * o, and the alpha of a background pixel
-// under an outline becomes o (transparent backgrounds).
+// the image becomes dst * occlusion * shade * (1 - o) + colour * o, and the alpha of a
+// background pixel under an outline becomes o (transparent backgrounds).
 
-// View (twin of `ViewUniform` in src/render/renderer.rs) comes from render_view.wgsl,
-// prepended by src/render/pipelines.rs.
-
-@group(0) @binding(0) var<uniform> u: View;
-@group(1) @binding(0) var depth_tex: texture_depth_2d;
-
-struct FullscreenOut {
-    @builtin(position) clip: vec4<f32>,
-};
-
-// One triangle that covers the viewport.
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> FullscreenOut {
-    let x = f32((vi << 1u) & 2u);
-    let y = f32(vi & 2u);
-    var o: FullscreenOut;
-    o.clip = vec4<f32>(x * 2.0 - 1.0, 1.0 - y * 2.0, 0.0, 1.0);
-    return o;
-}
-
-// Distance from the eye in Å for a depth-buffer value (0 near, 1 far).
-fn eye_distance(d: f32) -> f32 {
-    let n = u.misc.y;
-    let f = u.misc.z;
-    if (u.fog.w > 0.5) {
-        return n + d * (f - n);
-    }
-    return n * f / (f - d * (f - n));
-}
+// src/render/pipelines.rs prepends render_view.wgsl and render_ao.wgsl (the view uniform `u`,
+// `depth_tex`, the full-screen triangle, eye_distance, ambient_occlusion, pixel_noise): this one
+// pass also does the ambient occlusion when the look is on.
 
 // Depth at pixel `q`, clamped into the viewport.
 fn depth_at(q: vec2<i32>) -> f32 {
@@ -65,60 +40,80 @@ fn pixel_size(z: f32) -> f32 {
     return z / px_per_a;
 }
 
-// Outline coverage 0..1 at pixel `p` of depth `d0`.
-fn outline(p: vec2<i32>, d0: f32) -> f32 {
-    let r = u.look.x;
-    if (r <= 0.0) {
+// Depths of the four neighbours `k` pixels away: -x, +x, -y, +y.
+struct Cross {
+    k: i32,
+    d: vec4<f32>,
+};
+
+fn cross_at(p: vec2<i32>, k: i32) -> Cross {
+    var c: Cross;
+    c.k = k;
+    c.d = vec4<f32>(
+        depth_at(p - vec2<i32>(k, 0)),
+        depth_at(p + vec2<i32>(k, 0)),
+        depth_at(p - vec2<i32>(0, k)),
+        depth_at(p + vec2<i32>(0, k)),
+    );
+    return c;
+}
+
+// Crease strength 0..1 of the depths `zm`, `z0`, `zp` (Å) `span` Å apart: the slopes on the two
+// sides differ by more than about 60 degrees.
+fn crease(zm: f32, z0: f32, zp: f32, span: f32, jump: f32) -> f32 {
+    if (abs(zm - z0) >= jump || abs(zp - z0) >= jump) {
         return 0.0;
     }
-    let background = d0 >= 1.0;
+    let bend = abs(atan((zp - z0) / span) - atan((z0 - zm) / span));
+    return smoothstep(1.0, 1.4, bend);
+}
+
+// Outline coverage 0..1 at a pixel of depth `d0` with neighbours `c` at the outline width.
+fn outline(d0: f32, c: Cross) -> f32 {
+    if (u.look.x <= 0.0) {
+        return 0.0;
+    }
+    if (d0 >= 1.0) {
+        // Background next to anything drawn: just outside the silhouette.
+        return select(0.0, 1.0, min(min(c.d.x, c.d.y), min(c.d.z, c.d.w)) < 1.0);
+    }
     let z0 = eye_distance(d0);
     let pix = pixel_size(z0);
     // A jump is more than 1.5 % of the depth plus a slope of 3 over the offset.
-    let jump = 0.015 * z0 + 3.0 * r * pix;
-    var o = 0.0;
-    for (var k = 0u; k < 4u; k = k + 1u) {
-        let angle = f32(k) * 0.7853982;
-        let dir = vec2<f32>(cos(angle), sin(angle));
-        let off = vec2<i32>(round(dir * max(r, 1.0)));
-        let dm = depth_at(p - off);
-        let dp = depth_at(p + off);
-        if (background) {
-            // Background next to anything drawn: the silhouette.
-            o = max(o, select(0.0, 1.0, min(dm, dp) < 1.0));
-            continue;
-        }
-        let zm = select(eye_distance(dm), 1e30, dm >= 1.0);
-        let zp = select(eye_distance(dp), 1e30, dp >= 1.0);
-        // A nearer neighbour across a jump: this pixel is just behind its silhouette.
-        o = max(o, smoothstep(jump, 2.0 * jump, z0 - min(zm, zp)));
-        if (abs(zm - z0) < jump && abs(zp - z0) < jump) {
-            // A crease: the slopes on the two sides differ by more than about 60 degrees.
-            let span = length(vec2<f32>(off)) * pix;
-            let bend = abs(atan((zp - z0) / span) - atan((z0 - zm) / span));
-            o = max(o, smoothstep(1.0, 1.4, bend));
-        }
-    }
-    return o;
+    let jump = 0.015 * z0 + 3.0 * f32(c.k) * pix;
+    let far = vec4<f32>(1e30);
+    let z = select(
+        vec4<f32>(eye_distance(c.d.x), eye_distance(c.d.y), eye_distance(c.d.z),
+                  eye_distance(c.d.w)),
+        far,
+        c.d >= vec4<f32>(1.0),
+    );
+    // A nearer neighbour across a jump: this pixel is just behind its silhouette.
+    let nearest = min(min(z.x, z.y), min(z.z, z.w));
+    var o = smoothstep(jump, 2.0 * jump, z0 - nearest);
+    let span = f32(c.k) * pix;
+    o = max(o, crease(z.x, z0, z.y, span, jump));
+    return max(o, crease(z.z, z0, z.w, span, jump));
 }
 
 // Rays per pixel and steps per ray of the shadow test.
-const SHADOW_RAYS: u32 = 3u;
-const SHADOW_STEPS: u32 = 6u;
+const SHADOW_RAYS: u32 = 2u;
+const SHADOW_STEPS: u32 = 4u;
 
-// Fraction 0..1 of the key light blocked at pixel `p` of depth `d0`, times how much of the
-// pixel's light the key light gives.
-fn shadow(p: vec2<i32>, d0: f32, noise: f32) -> f32 {
+// Fraction 0..1 of the light blocked at pixel `p` of depth `d0` with neighbours `c`: the share
+// of the key light blocked, times the key light's share of the pixel's light.
+fn shadow(p: vec2<i32>, d0: f32, c: Cross, noise: f32) -> f32 {
     if (u.look.y <= 0.0 || d0 >= 1.0) {
         return 0.0;
     }
-    let c = vec2<f32>(p) + 0.5;
-    let pos = view_position(c, d0);
+    let centre = vec2<f32>(p) + 0.5;
+    let pos = view_position(centre, d0);
     // Normal from the depth buffer: on each axis the side with the smaller step.
-    let xl = view_position(c - vec2<f32>(1.0, 0.0), depth_at(p - vec2<i32>(1, 0)));
-    let xr = view_position(c + vec2<f32>(1.0, 0.0), depth_at(p + vec2<i32>(1, 0)));
-    let yu = view_position(c - vec2<f32>(0.0, 1.0), depth_at(p - vec2<i32>(0, 1)));
-    let yd = view_position(c + vec2<f32>(0.0, 1.0), depth_at(p + vec2<i32>(0, 1)));
+    let k = f32(c.k);
+    let xl = view_position(centre - vec2<f32>(k, 0.0), c.d.x);
+    let xr = view_position(centre + vec2<f32>(k, 0.0), c.d.y);
+    let yu = view_position(centre - vec2<f32>(0.0, k), c.d.z);
+    let yd = view_position(centre + vec2<f32>(0.0, k), c.d.w);
     let dx = select(xr - pos, pos - xl, abs(pos.z - xl.z) < abs(xr.z - pos.z));
     let dy = select(yd - pos, pos - yu, abs(pos.z - yu.z) < abs(yd.z - pos.z));
     // Pixel rows grow downwards, view-space y upwards: dy x dx points towards the eye.
@@ -131,33 +126,33 @@ fn shadow(p: vec2<i32>, d0: f32, noise: f32) -> f32 {
     let pix = pixel_size(-pos.z);
     let start = pos + n * (2.0 * pix + 0.05);
     // Two directions across the light for a cone of about 8 degrees (a soft penumbra).
-    let a = normalize(cross(l, select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0),
-                                       abs(l.x) > 0.9)));
+    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(l.x) > 0.9);
+    let a = normalize(cross(l, helper));
     let b = cross(l, a);
     let reach = u.look.z;
     let thickness = 0.5 * reach;
+    let bias = 0.1 + pix;
     var blocked = 0.0;
-    for (var k = 0u; k < SHADOW_RAYS; k = k + 1u) {
-        let phi = (f32(k) + noise) * 6.2831853 / f32(SHADOW_RAYS);
+    for (var r = 0u; r < SHADOW_RAYS; r = r + 1u) {
+        let phi = (f32(r) + noise) * 6.2831853 / f32(SHADOW_RAYS);
         let dir = normalize(l + 0.14 * (cos(phi) * a + sin(phi) * b));
         var hit = 0.0;
         for (var s = 0u; s < SHADOW_STEPS; s = s + 1u) {
-            let t = (f32(s) + fract(noise + f32(k) * 0.618034)) / f32(SHADOW_STEPS);
+            let t = (f32(s) + fract(noise + f32(r) * 0.618034)) / f32(SHADOW_STEPS);
             // Denser steps near the surface, where the contact shadows are.
             let q = start + dir * (t * t * reach + pix);
             let clip = u.proj * vec4<f32>(q, 1.0);
             let ndc = clip.xy / clip.w;
-            let qp = u.viewport.xy + vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * u.viewport.zw;
-            if (any(qp < u.viewport.xy) || any(qp >= u.viewport.xy + u.viewport.zw)) {
+            let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+            if (any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0))) {
                 break;
             }
-            let dq = textureLoad(depth_tex, vec2<i32>(qp), 0);
+            let dq = textureLoad(depth_tex, vec2<i32>(u.viewport.xy + uv * u.viewport.zw), 0);
             if (dq >= 1.0) {
                 continue;
             }
             // How far the drawn surface lies in front of the ray point (Å).
             let behind = -q.z - eye_distance(dq);
-            let bias = 0.1 + pix;
             hit = max(hit, smoothstep(bias, 2.0 * bias, behind)
                 * (1.0 - smoothstep(0.5 * thickness, thickness, behind)));
         }
@@ -173,9 +168,14 @@ fn shadow(p: vec2<i32>, d0: f32, noise: f32) -> f32 {
 fn fs_look(i: FullscreenOut) -> @location(0) vec4<f32> {
     let p = vec2<i32>(i.clip.xy);
     let d0 = textureLoad(depth_tex, p, 0);
-    // Interleaved gradient noise turns the shadow rays per pixel.
-    let noise = fract(52.9829189 * fract(0.06711056 * i.clip.x + 0.00583715 * i.clip.y));
-    let o = outline(p, d0);
-    let lit = 1.0 - u.look.y * shadow(p, d0, noise);
+    let noise = pixel_noise(i.clip.xy);
+    var occlusion = 1.0;
+    if (u.ao.x > 0.0) {
+        occlusion = ambient_occlusion(p, d0, noise);
+    }
+    // One set of neighbours for the outline and the shadow's normal.
+    let c = cross_at(p, max(i32(round(u.look.x)), 1));
+    let o = outline(d0, c);
+    let lit = occlusion * (1.0 - u.look.y * shadow(p, d0, c, noise));
     return vec4<f32>(u.outline_colour.rgb * o, 1.0 - lit * (1.0 - o));
 }

@@ -16,6 +16,7 @@ use mdsurf::scene::representation::Representation;
 use super::bench::BenchArgs;
 use super::bench_table::peak_rss_bytes;
 use super::common::demo_files;
+use super::look_args::LookPreset;
 
 /// Runs the viewer benchmark the arguments ask for and prints its report.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -43,7 +44,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         frames: args.frames as usize,
         play_fps: args.play_fps,
         base,
-        render: RenderSettings::default(),
+        render: {
+            let mut render = RenderSettings::default();
+            if args.look == LookPreset::Figure {
+                render.figure();
+            }
+            render
+        },
         density_gather: args.density_gather.into(),
     };
     let atoms = source.topology().len();
@@ -86,6 +93,10 @@ fn format_report(
     [
         format!("viewer benchmark on {adapter}"),
         format!("  input              {name} ({atoms} atoms)"),
+        format!(
+            "  look               outlines {} px, shadows {}",
+            opts.render.outline_width, opts.render.shadows
+        ),
         format!("  representations    {}", r.reps.join(", ")),
         format!(
             "  picture            {} x {} pixels, timeline at {} fps for {} frames",

@@ -20,6 +20,7 @@ pub struct LookArgs {
     /// Preset look: default (as the window) or figure (outlines and shadows added); the other
     /// look flags change the preset.
     #[arg(
+        id = "look_preset",
         long = "look",
         value_enum,
         value_name = "PRESET",

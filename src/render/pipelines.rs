@@ -20,9 +20,11 @@ pub const AO_WGSL: &str = concat!(
     include_str!("../../shaders/render_ao.wgsl")
 );
 
-/// WGSL of the look pass: outlines and shadows (after the shared view uniform).
+/// WGSL of the look pass: ambient occlusion, outlines and shadows in one pass (after the shared
+/// view uniform and the ambient occlusion's functions).
 pub const LOOK_WGSL: &str = concat!(
     include_str!("../../shaders/render_view.wgsl"),
+    include_str!("../../shaders/render_ao.wgsl"),
     include_str!("../../shaders/render_look.wgsl")
 );
 

@@ -389,16 +389,14 @@ impl Renderer {
                 self.draw_mesh(&mut rp, &scene.surfaces[k], false);
             }
         }
-        // Full-screen passes over the opaque image that read its depth: ambient occlusion, then
-        // outlines and shadows.
-        let depth_passes = [
-            (
-                settings.ambient_occlusion > 0.0,
-                &self.pipelines.ambient_occlusion,
-            ),
-            (settings.has_look_pass(), &self.pipelines.look),
-        ];
-        if depth_passes.iter().any(|(on, _)| *on) {
+        // One full-screen pass over the opaque image that reads its depth: the look pass
+        // (ambient occlusion, outlines and shadows) or the ambient occlusion alone.
+        let depth_pass = if settings.has_look_pass() {
+            Some(&self.pipelines.look)
+        } else {
+            (settings.ambient_occlusion > 0.0).then_some(&self.pipelines.ambient_occlusion)
+        };
+        if let Some(pipeline) = depth_pass {
             let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("scene depth"),
                 layout: &self.pipelines.depth_layout,
@@ -407,18 +405,16 @@ impl Renderer {
                     resource: wgpu::BindingResource::TextureView(&targets.depth_view),
                 }],
             });
-            for (_, pipeline) in depth_passes.iter().filter(|(on, _)| *on) {
-                let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("depth post pass"),
-                    color_attachments: &[Some(colour_attachment(pass.target, None))],
-                    ..Default::default()
-                });
-                rp.set_viewport(x, y, w, h, 0.0, 1.0);
-                rp.set_pipeline(pipeline);
-                rp.set_bind_group(0, view_group, &[]);
-                rp.set_bind_group(1, &depth_group, &[]);
-                rp.draw(0..3, 0..1);
-            }
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("depth post pass"),
+                color_attachments: &[Some(colour_attachment(pass.target, None))],
+                ..Default::default()
+            });
+            rp.set_viewport(x, y, w, h, 0.0, 1.0);
+            rp.set_pipeline(pipeline);
+            rp.set_bind_group(0, view_group, &[]);
+            rp.set_bind_group(1, &depth_group, &[]);
+            rp.draw(0..3, 0..1);
         }
         if transparent_layers.is_empty() {
             return;
