@@ -17,6 +17,12 @@
 // `depth_tex`, the full-screen triangle, eye_distance, ambient_occlusion, pixel_noise): this one
 // pass also does the ambient occlusion when the look is on.
 
+// The parts this pipeline draws (set per pipeline by src/render/pipelines.rs, so a CPU driver
+// compiles only those; the uniforms' strengths still scale them).
+override LOOK_AO: bool = true;
+override LOOK_OUTLINE: bool = true;
+override LOOK_SHADOWS: bool = true;
+
 // Depth at pixel `q`, clamped into the viewport.
 fn depth_at(q: vec2<i32>) -> f32 {
     let lo = vec2<i32>(u.viewport.xy);
@@ -64,8 +70,11 @@ fn crease(zm: f32, z0: f32, zp: f32, span: f32, jump: f32) -> f32 {
     if (abs(zm - z0) >= jump || abs(zp - z0) >= jump) {
         return 0.0;
     }
-    let bend = abs(atan((zp - z0) / span) - atan((z0 - zm) / span));
-    return smoothstep(1.0, 1.4, bend);
+    // Cosine of the angle between the steps before and after (no atan: cheaper on CPUs).
+    let a = vec2<f32>(span, z0 - zm);
+    let b = vec2<f32>(span, zp - z0);
+    let cos_bend = dot(a, b) * inverseSqrt(dot(a, a) * dot(b, b));
+    return 1.0 - smoothstep(0.17, 0.54, cos_bend);
 }
 
 // Outline coverage 0..1 at a pixel of depth `d0` with neighbours `c` at the outline width.
@@ -97,7 +106,7 @@ fn outline(d0: f32, c: Cross) -> f32 {
 }
 
 // Rays per pixel and steps per ray of the shadow test.
-const SHADOW_RAYS: u32 = 2u;
+const SHADOW_RAYS: u32 = 1u;
 const SHADOW_STEPS: u32 = 4u;
 
 // Fraction 0..1 of the light blocked at pixel `p` of depth `d0` with neighbours `c`: the share
@@ -169,13 +178,20 @@ fn fs_look(i: FullscreenOut) -> @location(0) vec4<f32> {
     let p = vec2<i32>(i.clip.xy);
     let d0 = textureLoad(depth_tex, p, 0);
     let noise = pixel_noise(i.clip.xy);
-    var occlusion = 1.0;
-    if (u.ao.x > 0.0) {
-        occlusion = ambient_occlusion(p, d0, noise);
+    var lit = 1.0;
+    if (LOOK_AO) {
+        lit = ambient_occlusion(p, d0, noise);
     }
-    // One set of neighbours for the outline and the shadow's normal.
-    let c = cross_at(p, max(i32(round(u.look.x)), 1));
-    let o = outline(d0, c);
-    let lit = occlusion * (1.0 - u.look.y * shadow(p, d0, c, noise));
+    var o = 0.0;
+    if (LOOK_OUTLINE || LOOK_SHADOWS) {
+        // One set of neighbours for the outline and the shadow's normal.
+        let c = cross_at(p, max(i32(round(u.look.x)), 1));
+        if (LOOK_OUTLINE) {
+            o = outline(d0, c);
+        }
+        if (LOOK_SHADOWS) {
+            lit = lit * (1.0 - u.look.y * shadow(p, d0, c, noise));
+        }
+    }
     return vec4<f32>(u.outline_colour.rgb * o, 1.0 - lit * (1.0 - o));
 }

@@ -16,7 +16,6 @@ use mdsurf::scene::representation::Representation;
 use super::bench::BenchArgs;
 use super::bench_table::peak_rss_bytes;
 use super::common::demo_files;
-use super::look_args::LookPreset;
 
 /// Runs the viewer benchmark the arguments ask for and prints its report.
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -46,9 +45,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         base,
         render: {
             let mut render = RenderSettings::default();
-            if args.look == LookPreset::Figure {
-                render.figure();
-            }
+            args.look.apply(&mut render);
             render
         },
         density_gather: args.density_gather.into(),

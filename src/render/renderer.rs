@@ -391,10 +391,16 @@ impl Renderer {
         }
         // One full-screen pass over the opaque image that reads its depth: the look pass
         // (ambient occlusion, outlines and shadows) or the ambient occlusion alone.
+        let ao = settings.ambient_occlusion > 0.0;
         let depth_pass = if settings.has_look_pass() {
-            Some(&self.pipelines.look)
+            Some(self.pipelines.look.get(
+                device,
+                ao,
+                settings.outline_width > 0.0,
+                settings.shadows > 0.0,
+            ))
         } else {
-            (settings.ambient_occlusion > 0.0).then_some(&self.pipelines.ambient_occlusion)
+            ao.then(|| self.pipelines.ambient_occlusion.clone())
         };
         if let Some(pipeline) = depth_pass {
             let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -411,7 +417,7 @@ impl Renderer {
                 ..Default::default()
             });
             rp.set_viewport(x, y, w, h, 0.0, 1.0);
-            rp.set_pipeline(pipeline);
+            rp.set_pipeline(&pipeline);
             rp.set_bind_group(0, view_group, &[]);
             rp.set_bind_group(1, &depth_group, &[]);
             rp.draw(0..3, 0..1);
