@@ -6,9 +6,9 @@
 //   each silhouette, and where the surface bends sharply (the slopes on both sides differ by more
 //   than about 60 degrees); the inside of a smooth surface is left alone;
 // - soft shadows from the key light (`light_dir`, the light that shade() in render_scene.wgsl
-//   uses): a few jittered rays march `look.z` Å from each pixel towards the light through the
-//   depth buffer; a ray that passes behind a nearer surface is blocked. Only what is on screen
-//   casts shadows.
+//   uses): a ray, turned per pixel within a cone of about 8 degrees, marches `look.z` Å from
+//   each pixel towards the light through the depth buffer in jittered steps; a ray that passes
+//   behind a nearer surface is blocked. Only what is on screen casts shadows.
 // Output: premultiplied outline colour and a coverage alpha; blended with (one, 1 - src alpha)
 // the image becomes dst * occlusion * shade * (1 - o) + colour * o, and the alpha of a
 // background pixel under an outline becomes o (transparent backgrounds).
@@ -105,18 +105,16 @@ fn outline(d0: f32, c: Cross) -> f32 {
     return max(o, crease(z.z, z0, z.w, span, jump));
 }
 
-// Rays per pixel and steps per ray of the shadow test.
-const SHADOW_RAYS: u32 = 1u;
+// Steps along the shadow ray.
 const SHADOW_STEPS: u32 = 4u;
 
 // Fraction 0..1 of the light blocked at pixel `p` of depth `d0` with neighbours `c`: the share
-// of the key light blocked, times the key light's share of the pixel's light.
+// of the key light blocked, times the key light's share of the pixel's light. Written without
+// branches or early exits: a CPU driver runs a fragment shader's lanes together, and divergent
+// loops with texture loads cost it far more than the arithmetic saved.
 fn shadow(p: vec2<i32>, d0: f32, c: Cross, noise: f32) -> f32 {
-    if (u.look.y <= 0.0 || d0 >= 1.0) {
-        return 0.0;
-    }
     let centre = vec2<f32>(p) + 0.5;
-    let pos = view_position(centre, d0);
+    let pos = view_position(centre, min(d0, 0.999999));
     // Normal from the depth buffer: on each axis the side with the smaller step.
     let k = f32(c.k);
     let xl = view_position(centre - vec2<f32>(k, 0.0), c.d.x);
@@ -126,51 +124,40 @@ fn shadow(p: vec2<i32>, d0: f32, c: Cross, noise: f32) -> f32 {
     let dx = select(xr - pos, pos - xl, abs(pos.z - xl.z) < abs(xr.z - pos.z));
     let dy = select(yd - pos, pos - yu, abs(pos.z - yu.z) < abs(yd.z - pos.z));
     // Pixel rows grow downwards, view-space y upwards: dy x dx points towards the eye.
-    let n = normalize(cross(dy, dx));
+    let n = normalize(cross(dy, dx) + vec3<f32>(0.0, 0.0, 1e-12));
     let l = normalize(u.light_dir.xyz);
-    let ndotl = dot(n, l);
-    if (ndotl <= 0.0) {
-        return 0.0;
-    }
+    let ndotl = max(dot(n, l), 0.0);
     let pix = pixel_size(-pos.z);
     let start = pos + n * (2.0 * pix + 0.05);
-    // Two directions across the light for a cone of about 8 degrees (a soft penumbra).
+    // The ray leans off the light by up to about 8 degrees, turned per pixel (a soft penumbra).
     let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(l.x) > 0.9);
     let a = normalize(cross(l, helper));
     let b = cross(l, a);
+    let phi = noise * 6.2831853;
+    let dir = normalize(l + 0.14 * (cos(phi) * a + sin(phi) * b));
     let reach = u.look.z;
     let thickness = 0.5 * reach;
     let bias = 0.1 + pix;
-    var blocked = 0.0;
-    for (var r = 0u; r < SHADOW_RAYS; r = r + 1u) {
-        let phi = (f32(r) + noise) * 6.2831853 / f32(SHADOW_RAYS);
-        let dir = normalize(l + 0.14 * (cos(phi) * a + sin(phi) * b));
-        var hit = 0.0;
-        for (var s = 0u; s < SHADOW_STEPS; s = s + 1u) {
-            let t = (f32(s) + fract(noise + f32(r) * 0.618034)) / f32(SHADOW_STEPS);
-            // Denser steps near the surface, where the contact shadows are.
-            let q = start + dir * (t * t * reach + pix);
-            let clip = u.proj * vec4<f32>(q, 1.0);
-            let ndc = clip.xy / clip.w;
-            let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
-            if (any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0))) {
-                break;
-            }
-            let dq = textureLoad(depth_tex, vec2<i32>(u.viewport.xy + uv * u.viewport.zw), 0);
-            if (dq >= 1.0) {
-                continue;
-            }
-            // How far the drawn surface lies in front of the ray point (Å).
-            let behind = -q.z - eye_distance(dq);
-            hit = max(hit, smoothstep(bias, 2.0 * bias, behind)
-                * (1.0 - smoothstep(0.5 * thickness, thickness, behind)));
-        }
-        blocked = blocked + hit;
+    var hit = 0.0;
+    for (var s = 0u; s < SHADOW_STEPS; s = s + 1u) {
+        let t = (f32(s) + fract(noise * 1.618034)) / f32(SHADOW_STEPS);
+        // Denser steps near the surface, where the contact shadows are.
+        let q = start + dir * (t * t * reach + pix);
+        let clip = u.proj * vec4<f32>(q, 1.0);
+        let uv = vec2<f32>(0.5, -0.5) * clip.xy / clip.w + 0.5;
+        let inside = all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0));
+        let qp = clamp(u.viewport.xy + uv * u.viewport.zw, u.viewport.xy,
+                       u.viewport.xy + u.viewport.zw - 1.0);
+        let dq = textureLoad(depth_tex, vec2<i32>(qp), 0);
+        // How far the drawn surface lies in front of the ray point (Å); background: never.
+        let behind = select(-q.z - eye_distance(dq), -1.0, dq >= 1.0 || !inside);
+        hit = max(hit, smoothstep(bias, 2.0 * bias, behind)
+            * (1.0 - smoothstep(0.5 * thickness, thickness, behind)));
     }
     // The key light's share of the light here (shade() in render_scene.wgsl: key 0.75 n.l over
     // about 0.3 of fill and ambient).
     let key = 0.75 * ndotl;
-    return blocked / f32(SHADOW_RAYS) * key / (key + 0.3);
+    return select(hit * key / (key + 0.3), 0.0, d0 >= 1.0);
 }
 
 @fragment
