@@ -214,3 +214,35 @@ fn render_transparent_writes_alpha() {
     let opaque = alphas.iter().filter(|&&a| a == 255).count();
     assert!(opaque > 2000, "{opaque} opaque pixels");
 }
+
+#[test]
+fn render_look_state_file_keeps_old_files_and_round_trips() {
+    use mdsurf::scene::state_file::{LookState, StateFile};
+    // A look section without the new fields loads and leaves the flags' values alone.
+    let old = StateFile::parse(
+        "version = 1\n[look]\nbackground = \"light\"\nambient_occlusion = 0.5\n",
+        "old.toml",
+    )
+    .expect("old file loads");
+    let mut s = RenderSettings::default();
+    s.figure();
+    old.look.apply(&mut s).expect("apply");
+    assert_eq!(s.outline_width, mdsurf::render::settings::FIGURE_OUTLINE_PX);
+    // The new fields round-trip.
+    let look = RenderSettings {
+        outline_width: 3.0,
+        outline_colour: [1.0, 0.5, 0.0],
+        shadows: 0.4,
+        transparent_background: true,
+        ..Default::default()
+    };
+    let mut state = StateFile::new(Vec::new());
+    state.look = LookState::from_settings(&look);
+    let back = StateFile::parse(&state.to_toml(), "saved.toml").expect("parse");
+    let mut s = RenderSettings::default();
+    back.look.apply(&mut s).expect("apply");
+    assert_eq!(s, look);
+    // Out-of-range values are refused.
+    let bad = StateFile::parse("version = 1\n[look]\nshadows = 2.0\n", "bad.toml");
+    assert!(bad.is_err_and(|e| e.contains("look.shadows")));
+}
