@@ -115,32 +115,35 @@ const SHADOW_STEPS: u32 = 4u;
 fn shadow(p: vec2<i32>, d0: f32, c: Cross, noise: f32) -> f32 {
     let centre = vec2<f32>(p) + 0.5;
     let pos = view_position(centre, min(d0, 0.999999));
-    // Normal from the depth buffer: on each axis the side with the smaller step.
+    // Normal from the depth buffer: on each axis the side with the smaller depth step (chosen
+    // on the stored depths, so only two neighbours are turned into positions).
     let k = f32(c.k);
-    let xl = view_position(centre - vec2<f32>(k, 0.0), c.d.x);
-    let xr = view_position(centre + vec2<f32>(k, 0.0), c.d.y);
-    let yu = view_position(centre - vec2<f32>(0.0, k), c.d.z);
-    let yd = view_position(centre + vec2<f32>(0.0, k), c.d.w);
-    let dx = select(xr - pos, pos - xl, abs(pos.z - xl.z) < abs(xr.z - pos.z));
-    let dy = select(yd - pos, pos - yu, abs(pos.z - yu.z) < abs(yd.z - pos.z));
+    let left = abs(d0 - c.d.x) < abs(c.d.y - d0);
+    let up = abs(d0 - c.d.z) < abs(c.d.w - d0);
+    let sx = select(k, -k, left);
+    let sy = select(k, -k, up);
+    let px = view_position(centre + vec2<f32>(sx, 0.0), select(c.d.y, c.d.x, left));
+    let py = view_position(centre + vec2<f32>(0.0, sy), select(c.d.w, c.d.z, up));
+    let dx = (px - pos) * sign(sx);
+    let dy = (py - pos) * sign(sy);
     // Pixel rows grow downwards, view-space y upwards: dy x dx points towards the eye.
     let n = normalize(cross(dy, dx) + vec3<f32>(0.0, 0.0, 1e-12));
     let l = normalize(u.light_dir.xyz);
     let ndotl = max(dot(n, l), 0.0);
     let pix = pixel_size(-pos.z);
     let start = pos + n * (2.0 * pix + 0.05);
-    // The ray leans off the light by up to about 8 degrees, turned per pixel (a soft penumbra).
+    // The ray leans off the light by up to about 8 degrees, per pixel (a soft penumbra).
     let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(l.x) > 0.9);
     let a = normalize(cross(l, helper));
     let b = cross(l, a);
-    let phi = noise * 6.2831853;
-    let dir = normalize(l + 0.14 * (cos(phi) * a + sin(phi) * b));
+    let jitter = vec2<f32>(noise, fract(noise * 1.618034)) * 2.0 - 1.0;
+    let dir = normalize(l + 0.1 * (jitter.x * a + jitter.y * b));
     let reach = u.look.z;
     let thickness = 0.5 * reach;
     let bias = 0.1 + pix;
     var hit = 0.0;
     for (var s = 0u; s < SHADOW_STEPS; s = s + 1u) {
-        let t = (f32(s) + fract(noise * 1.618034)) / f32(SHADOW_STEPS);
+        let t = (f32(s) + fract(noise * 2.618034)) / f32(SHADOW_STEPS);
         // Denser steps near the surface, where the contact shadows are.
         let q = start + dir * (t * t * reach + pix);
         let clip = u.proj * vec4<f32>(q, 1.0);
