@@ -35,13 +35,12 @@ fn eye_distance(d: f32) -> f32 {
 
 const SAMPLES: u32 = 16u;
 
-@fragment
-fn fs_ambient_occlusion(i: FullscreenOut) -> @location(0) vec4<f32> {
-    let p = vec2<i32>(i.clip.xy);
+// Occlusion factor 0..1 (1: open) at pixel `p` of depth `d0`; `noise` 0..1 turns the pattern.
+// Also called by fs_look in render_look.wgsl, which appends to this file.
+fn ambient_occlusion(p: vec2<i32>, d0: f32, noise: f32) -> f32 {
     let dims = vec2<i32>(textureDimensions(depth_tex));
-    let d0 = textureLoad(depth_tex, p, 0);
     if (d0 >= 1.0) {
-        return vec4<f32>(1.0);
+        return 1.0;
     }
     let z0 = eye_distance(d0);
     let reach = u.ao.y;
@@ -51,8 +50,6 @@ fn fs_ambient_occlusion(i: FullscreenOut) -> @location(0) vec4<f32> {
         px_per_a = px_per_a / max(z0, 1e-3);
     }
     let radius = clamp(reach * px_per_a, 2.0, 48.0);
-    // Interleaved gradient noise rotates the sample pattern per pixel.
-    let noise = fract(52.9829189 * fract(0.06711056 * i.clip.x + 0.00583715 * i.clip.y));
     var occlusion = 0.0;
     for (var k = 0u; k < SAMPLES; k = k + 1u) {
         let t = (f32(k) + 0.5) / f32(SAMPLES);
@@ -69,6 +66,17 @@ fn fs_ambient_occlusion(i: FullscreenOut) -> @location(0) vec4<f32> {
         let range = 1.0 - smoothstep(reach, 3.0 * reach, dz);
         occlusion = occlusion + near * range;
     }
-    let a = 1.0 - u.ao.x * clamp(occlusion / f32(SAMPLES) * 2.2, 0.0, 1.0);
+    return 1.0 - u.ao.x * clamp(occlusion / f32(SAMPLES) * 2.2, 0.0, 1.0);
+}
+
+// Interleaved gradient noise 0..1 of a pixel (rotates sample patterns per pixel).
+fn pixel_noise(clip: vec2<f32>) -> f32 {
+    return fract(52.9829189 * fract(0.06711056 * clip.x + 0.00583715 * clip.y));
+}
+
+@fragment
+fn fs_ambient_occlusion(i: FullscreenOut) -> @location(0) vec4<f32> {
+    let p = vec2<i32>(i.clip.xy);
+    let a = ambient_occlusion(p, textureLoad(depth_tex, p, 0), pixel_noise(i.clip.xy));
     return vec4<f32>(a, a, a, 1.0);
 }

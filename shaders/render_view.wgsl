@@ -1,7 +1,8 @@
-// Shared by the render passes that read the view (render_scene, render_ao): the per-frame view
+// Shared by the render passes that read the view (render_scene, render_ao, render_look): the
+// per-frame view
 // uniform. src/render/pipelines.rs prepends this file to each of them, so it is written once.
 
-// Twin of `ViewUniform` in src/render/renderer.rs (240 bytes).
+// Twin of `ViewUniform` in src/render/renderer.rs (352 bytes).
 struct View {
     view: mat4x4<f32>,
     proj: mat4x4<f32>,
@@ -19,4 +20,12 @@ struct View {
     misc: vec4<f32>,
     // x: ambient occlusion strength, y: its reach (Å), z: viewport height (px), w: unused.
     ao: vec4<f32>,
+    // Inverse of `proj`: clip space back to view space (Å).
+    inv_proj: mat4x4<f32>,
+    // The viewport in the render target: x, y, width, height (px).
+    viewport: vec4<f32>,
+    // x: outline width (px, 0 = off), y: shadow strength 0..1, z: shadow reach (Å), w: unused.
+    look: vec4<f32>,
+    // rgb: linear outline colour.
+    outline_colour: vec4<f32>,
 };

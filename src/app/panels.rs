@@ -356,7 +356,8 @@ fn data_colour_ui(ui: &mut egui::Ui, d: &mut crate::model::DataColours) {
     };
 }
 
-/// Stick radius, background, projection, depth cue, stereo, turntable (opacity and atom styles
+/// Stick radius, background, projection, depth cue, ambient occlusion, outlines, shadows, stereo,
+/// turntable (opacity and atom styles
 /// are per representation, in [`surface_ui`]).
 pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     let mut out = Vec::new();
@@ -370,6 +371,8 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     });
     ui.add(egui::Slider::new(&mut s.depth_cue, 0.0..=1.0).text("depth cue"));
     ui.add(egui::Slider::new(&mut s.ambient_occlusion, 0.0..=1.0).text("ambient occlusion"));
+    ui.add(egui::Slider::new(&mut s.outline_width, 0.0..=4.0).text("outline (px)"));
+    ui.add(egui::Slider::new(&mut s.shadows, 0.0..=1.0).text("shadows"));
     egui::ComboBox::from_label("stereo")
         .selected_text(s.stereo.name())
         .show_ui(ui, |ui| {

@@ -106,6 +106,10 @@ pub struct BenchArgs {
     #[arg(long, value_name = "N", requires = "viewer",
           value_parser = clap::value_parser!(u32).range(2..=1_000_000))]
     pub jitter_frames: Option<u32>,
+    /// With --viewer: the look drawn (--look figure, --outline, --shadows; the window's by
+    /// default), to time what outlines and shadows cost.
+    #[command(flatten)]
+    pub look: super::look_args::LookArgs,
 }
 
 /// Parses the viewer benchmark's timeline speed (0.5 to 240 frames per second).

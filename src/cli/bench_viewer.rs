@@ -43,7 +43,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         frames: args.frames as usize,
         play_fps: args.play_fps,
         base,
-        render: RenderSettings::default(),
+        render: {
+            let mut render = RenderSettings::default();
+            args.look.apply(&mut render);
+            render
+        },
         density_gather: args.density_gather.into(),
     };
     let atoms = source.topology().len();
@@ -86,6 +90,10 @@ fn format_report(
     [
         format!("viewer benchmark on {adapter}"),
         format!("  input              {name} ({atoms} atoms)"),
+        format!(
+            "  look               outlines {} px, shadows {}",
+            opts.render.outline_width, opts.render.shadows
+        ),
         format!("  representations    {}", r.reps.join(", ")),
         format!(
             "  picture            {} x {} pixels, timeline at {} fps for {} frames",

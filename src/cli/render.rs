@@ -116,6 +116,8 @@ pub struct RenderArgs {
     /// same images as one run.
     #[arg(long, value_name = "I/N|slurm")]
     pub chunk: Option<ChunkSpec>,
+    #[command(flatten)]
+    pub look: super::look_args::LookArgs,
 }
 
 /// Stereo eye flags shared by `mdsurf render` and the viewer.
@@ -401,6 +403,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         depth_cue: args.depth_cue,
         ..RenderSettings::default()
     };
+    args.look.apply(&mut settings);
     let options = args.input.particles.options_for(&system.trajectory)?;
     check_colour_frames(&options, &frames)?;
     let topology = system.trajectory.topology().clone();

@@ -19,7 +19,7 @@ pub mod targets;
 pub use atoms::{atom_instances, guess_bonds};
 pub use camera::{Camera, Projection, bounding_sphere};
 pub use headless::HeadlessGpu;
-pub use pipelines::{AO_WGSL, POST_WGSL, SCENE_WGSL};
+pub use pipelines::{AO_WGSL, LOOK_WGSL, POST_WGSL, SCENE_WGSL};
 
 /// Every render shader as `(file name, full source)` as the device compiles it.
 pub const SHADERS: &[(&str, &str)] = pipelines::ALL;

@@ -1,6 +1,8 @@
 //! The render pipelines, built once per device from shaders/render_scene.wgsl and
 //! shaders/render_post.wgsl: opaque mesh, transparent mesh (weighted blended OIT), sphere
-//! impostors, cylinders, the transparency resolve and the anaglyph composition.
+//! impostors, cylinders, the transparency resolve and the anaglyph composition; and from
+//! shaders/render_ao.wgsl and shaders/render_look.wgsl the ambient occlusion and the look
+//! (outlines, shadows) passes.
 
 use super::scene::{CylinderInstance, SphereInstance};
 use super::targets::{ACCUM_FORMAT, COLOUR_FORMAT, DEPTH_FORMAT, REVEAL_FORMAT};
@@ -18,11 +20,20 @@ pub const AO_WGSL: &str = concat!(
     include_str!("../../shaders/render_ao.wgsl")
 );
 
+/// WGSL of the look pass: ambient occlusion, outlines and shadows in one pass (after the shared
+/// view uniform and the ambient occlusion's functions).
+pub const LOOK_WGSL: &str = concat!(
+    include_str!("../../shaders/render_view.wgsl"),
+    include_str!("../../shaders/render_ao.wgsl"),
+    include_str!("../../shaders/render_look.wgsl")
+);
+
 /// Every render shader as `(file name, full source)`, for validation.
 pub const ALL: &[(&str, &str)] = &[
     ("render_scene.wgsl", SCENE_WGSL),
     ("render_post.wgsl", POST_WGSL),
     ("render_ao.wgsl", AO_WGSL),
+    ("render_look.wgsl", LOOK_WGSL),
 ];
 
 /// Vertices per cylinder instance (12 segments, two triangles each; see `vs_cylinder`).
@@ -33,6 +44,8 @@ pub(crate) struct Pipelines {
     pub post_layout: wgpu::BindGroupLayout,
     pub depth_layout: wgpu::BindGroupLayout,
     pub ambient_occlusion: wgpu::RenderPipeline,
+    /// Ambient occlusion, outlines and shadows (shaders/render_look.wgsl), made on first use.
+    pub look: LookPipelines,
     pub mesh_opaque: wgpu::RenderPipeline,
     pub mesh_oit: wgpu::RenderPipeline,
     /// The opaque and transparent mesh pipelines for one interleaved vertex buffer
@@ -45,6 +58,69 @@ pub(crate) struct Pipelines {
     pub anaglyph: wgpu::RenderPipeline,
     /// The luminance (grey) anaglyph composition.
     pub anaglyph_grey: wgpu::RenderPipeline,
+}
+
+/// The look pass's pipelines, one per combination of its parts (ambient occlusion, outlines,
+/// shadows), each compiled with only its parts (WGSL override constants: a CPU driver such as
+/// lavapipe runs every instruction of a shader whatever its uniforms say).
+pub(crate) struct LookPipelines {
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+    made: std::sync::Mutex<[Option<wgpu::RenderPipeline>; 8]>,
+}
+
+impl LookPipelines {
+    /// The pipeline with the parts asked for, compiled on first use.
+    pub fn get(
+        &self,
+        device: &wgpu::Device,
+        ao: bool,
+        outline: bool,
+        shadows: bool,
+    ) -> wgpu::RenderPipeline {
+        let key = usize::from(ao) | usize::from(outline) << 1 | usize::from(shadows) << 2;
+        let mut made = self
+            .made
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some(p) = &made[key] {
+            return p.clone();
+        }
+        let _compiling = crate::gpu::context::compile_lock();
+        // Outline colour over the shaded image: colour = src + dst * (1 - src alpha); the alpha
+        // likewise, so a background pixel under an outline gets the outline's coverage.
+        let over_premultiplied = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let target = [colour_target(Some(wgpu::BlendState {
+            color: over_premultiplied,
+            alpha: over_premultiplied,
+        }))];
+        let flag = |on: bool| if on { 1.0 } else { 0.0 };
+        let constants = [
+            ("LOOK_AO", flag(ao)),
+            ("LOOK_OUTLINE", flag(outline)),
+            ("LOOK_SHADOWS", flag(shadows)),
+        ];
+        let p = pipeline(
+            device,
+            PipelineSpec {
+                label: "look",
+                module: &self.module,
+                layout: &self.layout,
+                vs: "vs_fullscreen",
+                fs: "fs_look",
+                buffers: &[],
+                depth: None,
+                targets: &target,
+                constants: &constants,
+            },
+        );
+        made[key] = Some(p.clone());
+        p
+    }
 }
 
 fn vec3_buffer(location: u32) -> [wgpu::VertexAttribute; 1] {
@@ -95,6 +171,8 @@ struct PipelineSpec<'a> {
     buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     depth: Option<wgpu::DepthStencilState>,
     targets: &'a [Option<wgpu::ColorTargetState>],
+    /// Values of the shader's pipeline-overridable constants.
+    constants: &'a [(&'a str, f64)],
 }
 
 fn pipeline(device: &wgpu::Device, s: PipelineSpec<'_>) -> wgpu::RenderPipeline {
@@ -117,7 +195,10 @@ fn pipeline(device: &wgpu::Device, s: PipelineSpec<'_>) -> wgpu::RenderPipeline 
         fragment: Some(wgpu::FragmentState {
             module: s.module,
             entry_point: Some(s.fs),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: s.constants,
+                ..Default::default()
+            },
             targets: s.targets,
         }),
         multiview_mask: None,
@@ -168,6 +249,10 @@ impl Pipelines {
         let ao = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("render_ao.wgsl"),
             source: wgpu::ShaderSource::Wgsl(AO_WGSL.into()),
+        });
+        let look_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render_look.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(LOOK_WGSL.into()),
         });
         let depth_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("ao depth"),
@@ -256,6 +341,7 @@ impl Pipelines {
             buffers,
             depth,
             targets,
+            constants: &[],
         };
         let mesh_opaque = pipeline(
             device,
@@ -333,6 +419,7 @@ impl Pipelines {
             buffers: &[],
             depth: None,
             targets,
+            constants: &[],
         };
         let resolve = pipeline(device, post_spec("oit resolve", "fs_oit_resolve", &over));
         let anaglyph = pipeline(device, post_spec("anaglyph", "fs_anaglyph", &opaque_target));
@@ -364,9 +451,15 @@ impl Pipelines {
                 buffers: &[],
                 depth: None,
                 targets: &multiply,
+                constants: &[],
             },
         );
         Pipelines {
+            look: LookPipelines {
+                module: look_module,
+                layout: ao_pl,
+                made: std::sync::Mutex::new(Default::default()),
+            },
             view_layout,
             post_layout,
             depth_layout,

@@ -10,7 +10,7 @@ use super::scene::{GpuScene, SurfaceLayer};
 
 /// Surfaces at least this opaque are drawn in the opaque pass.
 const OPAQUE: f32 = 0.999;
-use super::settings::{RenderSettings, Stereo};
+use super::settings::{MAX_OUTLINE_PX, RenderSettings, Stereo};
 use super::targets::RenderTargets;
 
 /// Per-view uniforms. Twin of `View` in shaders/render_view.wgsl.
@@ -26,9 +26,13 @@ pub(crate) struct ViewUniform {
     surface_colour: [f32; 4],
     misc: [f32; 4],
     ao: [f32; 4],
+    inv_proj: [[f32; 4]; 4],
+    viewport: [f32; 4],
+    look: [f32; 4],
+    outline_colour: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<ViewUniform>() == 240);
+const _: () = assert!(std::mem::size_of::<ViewUniform>() == 352);
 
 impl ViewUniform {
     /// Uniforms for `camera` seen through `view` and `proj` (the camera's own matrices, or one
@@ -50,6 +54,7 @@ impl ViewUniform {
             0.0
         };
         let light = Vec3::new(-0.4, 0.6, 0.7).normalize();
+        let oc = settings.outline_colour;
         let (single, sc) = match settings.surface_colour {
             Some(c) => (1.0, c),
             None => (0.0, [1.0; 3]),
@@ -74,12 +79,23 @@ impl ViewUniform {
                 viewport[3] as f32,
                 0.0,
             ],
+            inv_proj: proj.inverse().to_cols_array_2d(),
+            viewport: viewport.map(|v| v as f32),
+            look: [
+                settings.outline_width.clamp(0.0, MAX_OUTLINE_PX),
+                settings.shadows.clamp(0.0, 1.0),
+                SHADOW_REACH,
+                0.0,
+            ],
+            outline_colour: [oc[0], oc[1], oc[2], 1.0],
         }
     }
 }
 
 /// Reach of the screen-space ambient occlusion in Å (about one atom diameter).
 pub const AO_RADIUS: f32 = 3.0;
+/// How far towards the key light the screen-space shadow rays look for an occluder, in Å.
+pub const SHADOW_REACH: f32 = 12.0;
 
 /// Draws scenes on one wgpu device. Create once; reuse for every frame and image.
 pub struct Renderer {
@@ -317,7 +333,11 @@ impl Renderer {
             r: bg[0] as f64,
             g: bg[1] as f64,
             b: bg[2] as f64,
-            a: 1.0,
+            a: if settings.transparent_background {
+                0.0
+            } else {
+                1.0
+            },
         });
         // Surface layers split by their opacity: opaque ones in the opaque pass, see-through
         // ones in the order-independent transparency pass, invisible ones not at all.
@@ -369,9 +389,22 @@ impl Renderer {
                 self.draw_mesh(&mut rp, &scene.surfaces[k], false);
             }
         }
-        if settings.ambient_occlusion > 0.0 {
+        // One full-screen pass over the opaque image that reads its depth: the look pass
+        // (ambient occlusion, outlines and shadows) or the ambient occlusion alone.
+        let ao = settings.ambient_occlusion > 0.0;
+        let depth_pass = if settings.has_look_pass() {
+            Some(self.pipelines.look.get(
+                device,
+                ao,
+                settings.outline_width > 0.0,
+                settings.shadows > 0.0,
+            ))
+        } else {
+            ao.then(|| self.pipelines.ambient_occlusion.clone())
+        };
+        if let Some(pipeline) = depth_pass {
             let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("ao depth"),
+                label: Some("scene depth"),
                 layout: &self.pipelines.depth_layout,
                 entries: &[wgpu::BindGroupEntry {
                     binding: 0,
@@ -379,12 +412,12 @@ impl Renderer {
                 }],
             });
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("ambient occlusion"),
+                label: Some("depth post pass"),
                 color_attachments: &[Some(colour_attachment(pass.target, None))],
                 ..Default::default()
             });
             rp.set_viewport(x, y, w, h, 0.0, 1.0);
-            rp.set_pipeline(&self.pipelines.ambient_occlusion);
+            rp.set_pipeline(&pipeline);
             rp.set_bind_group(0, view_group, &[]);
             rp.set_bind_group(1, &depth_group, &[]);
             rp.draw(0..3, 0..1);

@@ -192,6 +192,17 @@ pub struct RenderSettings {
     /// Distance from the camera to the stereo focal (zero-parallax) plane in Å, or `None` to
     /// follow the camera's target.
     pub focal_distance: Option<f32>,
+    /// Silhouette outline width in pixels (0: off): lines where the depth jumps (relative to the
+    /// depth) or the surface turns sharply; smooth surfaces are not darkened inside.
+    pub outline_width: f32,
+    /// Linear RGB colour of the outlines.
+    pub outline_colour: [f32; 3],
+    /// Strength of the soft shadows cast by the key light, 0 (off) to 1 (the key light fully
+    /// blocked in shadow). Screen-space: only what is on screen casts shadows.
+    pub shadows: f32,
+    /// Background pixels get alpha 0 (PNG with a transparent background); what is drawn keeps
+    /// alpha 1 (edges of outlines and see-through surfaces may be fractional).
+    pub transparent_background: bool,
 }
 
 impl Default for RenderSettings {
@@ -209,7 +220,78 @@ impl Default for RenderSettings {
             stereo: Stereo::Off,
             eye_separation: DEFAULT_EYE_SEPARATION,
             focal_distance: None,
+            outline_width: 0.0,
+            outline_colour: [0.0; 3],
+            shadows: 0.0,
+            transparent_background: false,
         }
+    }
+}
+
+/// Outline width of the figure look, in pixels (see [`RenderSettings::figure`]).
+pub const FIGURE_OUTLINE_PX: f32 = 2.0;
+/// Shadow strength of the figure look.
+pub const FIGURE_SHADOWS: f32 = 0.5;
+/// Largest outline width in pixels.
+pub const MAX_OUTLINE_PX: f32 = 16.0;
+
+/// Checks an outline width in pixels: finite, 0 (off) to [`MAX_OUTLINE_PX`].
+pub fn check_outline_width(px: f32) -> Result<f32, String> {
+    if px.is_finite() && (0.0..=MAX_OUTLINE_PX).contains(&px) {
+        Ok(px)
+    } else {
+        Err(format!(
+            "bad outline width {px}: expected pixels from 0 (off) to {MAX_OUTLINE_PX}"
+        ))
+    }
+}
+
+/// Checks a shadow strength: finite, 0 (off) to 1.
+pub fn check_shadows(s: f32) -> Result<f32, String> {
+    if s.is_finite() && (0.0..=1.0).contains(&s) {
+        Ok(s)
+    } else {
+        Err(format!("bad shadow strength {s}: expected 0 (off) to 1"))
+    }
+}
+
+/// Parses a linear RGB colour: `black`, `white`, `grey`, `#rrggbb` (sRGB hex, turned linear)
+/// or `r,g,b` (linear, each 0..1).
+pub fn parse_linear_rgb(s: &str) -> Result<[f32; 3], String> {
+    let t = s.trim().to_ascii_lowercase();
+    let srgb = |v: f32| {
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let bad = || format!("bad colour '{s}': expected black, white, grey, #rrggbb or r,g,b (0..1)");
+    match t.as_str() {
+        "black" => return Ok([0.0; 3]),
+        "white" => return Ok([1.0; 3]),
+        "grey" | "gray" => return Ok([srgb(0.5); 3]),
+        _ => {}
+    }
+    if let Some(hex) = t.strip_prefix('#') {
+        if hex.len() != 6 || !hex.is_ascii() {
+            return Err(bad());
+        }
+        let mut c = [0.0; 3];
+        for (i, v) in c.iter_mut().enumerate() {
+            let byte = u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).map_err(|_| bad())?;
+            *v = srgb(byte as f32 / 255.0);
+        }
+        return Ok(c);
+    }
+    let parts: Vec<f32> = t
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    match parts[..] {
+        [r, g, b] if [r, g, b].iter().all(|v| (0.0..=1.0).contains(v)) => Ok([r, g, b]),
+        _ => Err(bad()),
     }
 }
 
@@ -217,6 +299,19 @@ impl RenderSettings {
     /// True when the surface needs the transparency passes.
     pub fn surface_is_transparent(&self) -> bool {
         self.show_surface && self.surface_opacity < 0.999
+    }
+
+    /// Turns on the figure look: black outlines of [`FIGURE_OUTLINE_PX`] pixels and shadows of
+    /// strength [`FIGURE_SHADOWS`]; ambient occlusion and depth cue stay as they are.
+    pub fn figure(&mut self) {
+        self.outline_width = FIGURE_OUTLINE_PX;
+        self.outline_colour = [0.0; 3];
+        self.shadows = FIGURE_SHADOWS;
+    }
+
+    /// True when the look pass (outlines or shadows) runs.
+    pub fn has_look_pass(&self) -> bool {
+        self.outline_width > 0.0 || self.shadows > 0.0
     }
 }
 

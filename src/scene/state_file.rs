@@ -151,6 +151,18 @@ pub struct LookState {
     /// to the camera's target.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub focal_distance: Option<f32>,
+    /// Silhouette outline width in pixels (0: off); absent: as the command line says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outline_width: Option<f32>,
+    /// Outline colour, linear RGB 0..1; absent: as the command line says (black).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outline_colour: Option<[f32; 3]>,
+    /// Key-light shadow strength 0..1 (0: off); absent: as the command line says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadows: Option<f32>,
+    /// Transparent PNG background; absent: as the command line says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transparent_background: Option<bool>,
 }
 
 impl Default for LookState {
@@ -172,6 +184,12 @@ impl LookState {
             stereo: settings.stereo.to_string(),
             eye_separation: settings.eye_separation,
             focal_distance: settings.focal_distance,
+            // Written only when on, so a saved default look leaves `--look figure` alone.
+            outline_width: (settings.outline_width > 0.0).then_some(settings.outline_width),
+            outline_colour: (settings.outline_width > 0.0 && settings.outline_colour != [0.0; 3])
+                .then_some(settings.outline_colour),
+            shadows: (settings.shadows > 0.0).then_some(settings.shadows),
+            transparent_background: settings.transparent_background.then_some(true),
         }
     }
 
@@ -201,6 +219,23 @@ impl LookState {
         settings.ambient_occlusion = self.ambient_occlusion;
         settings.depth_cue = self.depth_cue;
         settings.eye_separation = self.eye_separation;
+        if let Some(px) = self.outline_width {
+            settings.outline_width = crate::render::settings::check_outline_width(px)
+                .map_err(|e| format!("look.outline_width: {e}"))?;
+        }
+        if let Some(c) = self.outline_colour {
+            if !c.iter().all(|v| (0.0..=1.0).contains(v)) {
+                return Err(format!("look.outline_colour = {c:?} is outside 0..1"));
+            }
+            settings.outline_colour = c;
+        }
+        if let Some(v) = self.shadows {
+            settings.shadows = crate::render::settings::check_shadows(v)
+                .map_err(|e| format!("look.shadows: {e}"))?;
+        }
+        if let Some(t) = self.transparent_background {
+            settings.transparent_background = t;
+        }
         Ok(())
     }
 }

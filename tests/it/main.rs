@@ -52,6 +52,7 @@ mod measure_cavities;
 mod render_cli;
 mod render_gpu_surface;
 mod render_images;
+mod render_look;
 mod render_movie;
 mod render_refined;
 mod render_stereo;
