@@ -90,7 +90,7 @@ pub struct BenchArgs {
     pub viewer: bool,
     /// With --viewer: the picture's size in pixels.
     #[arg(long, value_name = "WxH", default_value = "1920x1080", requires = "viewer",
-          value_parser = super::render::parse_size)]
+          value_parser = super::render_args::parse_size)]
     pub size: [u32; 2],
     /// With --viewer: timeline frames to play (a shorter trajectory loops).
     #[arg(long, value_name = "N", default_value_t = 240, requires = "viewer",

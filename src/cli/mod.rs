@@ -10,6 +10,8 @@ pub mod look_args;
 pub mod measure_args;
 pub mod merge;
 pub mod render;
+pub mod render_args;
+pub mod render_output;
 pub mod scene_args;
 pub mod select;
 pub mod surface;
