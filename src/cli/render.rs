@@ -21,8 +21,10 @@ use mdsurf::export::video::{Mp4Movie, check_even_size, is_mp4};
 use mdsurf::export::{StatsRow, StatsWriter};
 use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
+use mdsurf::scene::movie::Shot;
 use mdsurf::scene::representation::{RepStyle, Representation};
-use mdsurf::scene::{LayerResult, SceneBackend, SceneEngine};
+use mdsurf::scene::state_file::{CameraState, StateFile};
+use mdsurf::scene::{LayerResult, SceneBackend, SceneEngine, SceneFrame};
 
 use super::chunk::ChunkSpec;
 use super::common::{Backend, System, check_colour_frames, ms_since, set_vertex_mode};
@@ -40,94 +42,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let first = args.frames.map_or(args.frame, |r| r.start);
     let (system, _) = System::open(&args.input, first)?;
     let len = system.len();
-    let mut frames = match args.frames {
-        Some(r) => r.indices(len),
-        None if args.frame < len => vec![args.frame],
-        None => bail!(
-            "{}: no frame {} (it has {len})",
-            system.frames_path.display(),
-            args.frame
-        ),
-    };
-    if frames.is_empty() {
-        bail!(
-            "{}: --frames selects no frame (it has {len})",
-            system.frames_path.display()
-        );
-    }
-    if args.frames.is_none() && args.turntable.is_some_and(|d| d != 0.0) {
-        let images = (360.0 / args.turntable.unwrap_or(1.0).abs())
-            .round()
-            .max(1.0) as usize;
-        frames = vec![frames[0]; images];
-    }
-    // A state file's camera script makes the images unless --frames or --turntable do.
-    let script = state
-        .as_ref()
-        .and_then(|s| Some((s, s.movie.as_ref()?)))
-        .filter(|_| args.frames.is_none() && args.turntable.is_none());
-    let shots = match script {
-        Some((state, script)) => {
-            let opacity = |name: &str| {
-                state
-                    .representations
-                    .iter()
-                    .find(|r| r.name == name)
-                    .map(|r| r.opacity)
-            };
-            let shots = script.shots(args.frame, len, opacity).map_err(|e| {
-                let file = args.scene.state.as_deref().unwrap_or(Path::new("state"));
-                anyhow!("{}: {e}", file.display())
-            })?;
-            frames = shots.iter().map(|s| s.frame).collect();
-            shots
-        }
-        None => Vec::new(),
-    };
-    let fps = args.fps.or(script.map(|(_, s)| s.fps)).unwrap_or(24.0);
+    let Images { frames, shots, fps } = images(&args, state.as_ref(), len, &system.frames_path)?;
     let movie_out = is_mp4(&args.output);
-    let paths = if movie_out {
-        if args.chunk.is_some() {
-            bail!(
-                "-o {}: --chunk renders PNG sequences only; render the movie in one run",
-                args.output.display()
-            );
-        }
-        check_even_size(&args.output, args.size)?;
-        vec![args.output.clone(); frames.len()]
-    } else {
-        if args.fps.is_some() || args.video_quality.is_some() {
-            bail!(
-                "-o {}: --fps and --video-quality apply to a movie; give the output a .mp4 name",
-                args.output.display()
-            );
-        }
-        output_paths(&args.output, &frames)?
-    };
-    // Like `surface`, a missing output folder is refused before any work (never created).
-    if let Some(first) = paths.first() {
-        super::surface::check_parent_dir(first)?;
-    }
-    if let Some(stats) = &args.stats {
-        super::surface::check_parent_dir(stats)?;
-        if chunk.is_some() {
-            bail!(
-                "--stats {}: a chunk renders part of the frames; run `mdsurf surface --chunk` for their stats",
-                stats.display()
-            );
-        }
-        if paths.iter().any(|p| p == stats) {
-            bail!(
-                "-o {} and --stats {} are the same file: give them different names",
-                args.output.display(),
-                stats.display()
-            );
-        }
-        let inputs: Vec<PathBuf> = std::iter::once(args.input.top.clone())
-            .chain(args.input.traj.clone())
-            .collect();
-        super::surface::refuse_shared_paths(None, Some(stats), &inputs)?;
-    }
+    let paths = output_files(&args, &frames, movie_out)?;
     // The images this process writes; the camera is still fitted to the run's first frame.
     if let Some(c) = chunk {
         super::chunk::check_chunk_count(c, frames.len())?;
@@ -283,22 +200,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             .map_err(|e| anyhow!("{files}: {e}"))?;
         // The script's fades: a representation faded out is not drawn.
         let shot = shots.get(i);
-        let drawn: Vec<(&LayerResult, Representation)> = computed
-            .layers
-            .iter()
-            .filter_map(|l| {
-                let mut rep = l.rep.clone();
-                if let Some((_, o)) =
-                    shot.and_then(|s| s.opacity.iter().find(|(n, _)| *n == rep.name))
-                {
-                    if *o <= 0.0 {
-                        return None;
-                    }
-                    rep.opacity = *o;
-                }
-                Some((l.as_ref(), rep))
-            })
-            .collect();
+        let drawn = faded_layers(&computed.layers, shot);
         scene.show_layers(
             &gpu.device,
             &gpu.queue,
@@ -318,41 +220,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
             })
             .collect();
         if i == 0 {
-            // The camera is fitted to the first frame's atoms and surfaces (read back once
-            // when they stayed on the GPU); a membrane is seen from the side.
-            let mut points = Vec::new();
-            let (mut lipids, mut protein) = (Vec::new(), Vec::new());
-            for l in &computed.layers {
-                if l.rep.selection == LIPID {
-                    lipids.extend_from_slice(&l.particles.positions);
-                } else if l.rep.selection == MACROMOLECULE {
-                    protein.extend_from_slice(&l.particles.positions);
-                }
-                if l.is_surface() {
-                    let mesh = engine
-                        .read_mesh(f, l)
-                        .map_err(|e| anyhow!("{files}: {e}"))?;
-                    points.extend_from_slice(&mesh.positions);
-                } else {
-                    points.extend_from_slice(&l.particles.positions);
-                }
-            }
-            let (centre, radius) = bounding_sphere(points.iter()).ok_or_else(|| {
-                anyhow!("frame {f}: nothing to draw (empty surfaces and no atoms)")
-            })?;
             let state_camera = choice.state.as_ref().and_then(|s| s.camera);
-            if state_camera.is_none() && args.view.is_none() {
-                // A membrane is drawn from the side, its normal up (as the window opens it).
-                orient_to_layer(&mut camera, &lipids, &protein);
-            }
-            camera.fit_sphere(centre, radius);
-            if let Some(cam) = state_camera {
-                cam.apply(&mut camera);
-            }
-            if let Some([yaw, pitch]) = args.view {
-                camera.yaw = yaw.to_radians();
-                camera.pitch = pitch.to_radians();
-            }
+            fit_camera(&mut camera, &mut engine, &computed, state_camera, args.view)
+                .map_err(|e| anyhow!("{files}: {e}"))?;
         }
         if !block.contains(&i) {
             // Frame 0 of a later chunk: computed only to fit the camera.
@@ -428,6 +298,186 @@ pub fn run(args: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The layers of `layers` as `shot` shows them: a representation the camera script faded
+/// takes the faded opacity, and is not drawn at 0.
+fn faded_layers<'a>(
+    layers: &'a [Arc<LayerResult>],
+    shot: Option<&Shot>,
+) -> Vec<(&'a LayerResult, Representation)> {
+    layers
+        .iter()
+        .filter_map(|l| {
+            let mut rep = l.rep.clone();
+            if let Some((_, o)) = shot.and_then(|s| s.opacity.iter().find(|(n, _)| *n == rep.name))
+            {
+                if *o <= 0.0 {
+                    return None;
+                }
+                rep.opacity = *o;
+            }
+            Some((l.as_ref(), rep))
+        })
+        .collect()
+}
+
+/// Fits `camera` to the first frame's atoms and surfaces (their meshes read back once when
+/// they stayed on the GPU): a membrane is seen from the side, unless the state file's camera
+/// (`state_camera`) or `--view` says where to look.
+fn fit_camera(
+    camera: &mut Camera,
+    engine: &mut SceneEngine,
+    computed: &SceneFrame,
+    state_camera: Option<CameraState>,
+    view: Option<[f32; 2]>,
+) -> Result<()> {
+    let mut points = Vec::new();
+    let (mut lipids, mut protein) = (Vec::new(), Vec::new());
+    for l in &computed.layers {
+        if l.rep.selection == LIPID {
+            lipids.extend_from_slice(&l.particles.positions);
+        } else if l.rep.selection == MACROMOLECULE {
+            protein.extend_from_slice(&l.particles.positions);
+        }
+        if l.is_surface() {
+            let mesh = engine.read_mesh(computed.frame, l)?;
+            points.extend_from_slice(&mesh.positions);
+        } else {
+            points.extend_from_slice(&l.particles.positions);
+        }
+    }
+    let (centre, radius) = bounding_sphere(points.iter()).ok_or_else(|| {
+        anyhow!(
+            "frame {}: nothing to draw (empty surfaces and no atoms)",
+            computed.frame
+        )
+    })?;
+    if state_camera.is_none() && view.is_none() {
+        // A membrane is drawn from the side, its normal up (as the window opens it).
+        orient_to_layer(camera, &lipids, &protein);
+    }
+    camera.fit_sphere(centre, radius);
+    if let Some(cam) = state_camera {
+        cam.apply(camera);
+    }
+    if let Some([yaw, pitch]) = view {
+        camera.yaw = yaw.to_radians();
+        camera.pitch = pitch.to_radians();
+    }
+    Ok(())
+}
+
+/// The images of a run: the trajectory frame of each, the camera script's shot of each (empty
+/// without a script) and the movie's frame rate.
+struct Images {
+    frames: Vec<usize>,
+    shots: Vec<Shot>,
+    fps: f64,
+}
+
+/// Which images `args` ask for: `--frames`, one frame, a turntable of it, or the state file's
+/// camera script (unless --frames or --turntable choose the images); `frames_path` names the
+/// trajectory in errors.
+fn images(
+    args: &RenderArgs,
+    state: Option<&StateFile>,
+    len: usize,
+    frames_path: &Path,
+) -> Result<Images> {
+    let mut frames = match args.frames {
+        Some(r) => r.indices(len),
+        None if args.frame < len => vec![args.frame],
+        None => bail!(
+            "{}: no frame {} (it has {len})",
+            frames_path.display(),
+            args.frame
+        ),
+    };
+    if frames.is_empty() {
+        bail!(
+            "{}: --frames selects no frame (it has {len})",
+            frames_path.display()
+        );
+    }
+    if args.frames.is_none() && args.turntable.is_some_and(|d| d != 0.0) {
+        let images = (360.0 / args.turntable.unwrap_or(1.0).abs())
+            .round()
+            .max(1.0) as usize;
+        frames = vec![frames[0]; images];
+    }
+    let script = state
+        .and_then(|s| Some((s, s.movie.as_ref()?)))
+        .filter(|_| args.frames.is_none() && args.turntable.is_none());
+    let shots = match script {
+        Some((state, script)) => {
+            let opacity = |name: &str| {
+                state
+                    .representations
+                    .iter()
+                    .find(|r| r.name == name)
+                    .map(|r| r.opacity)
+            };
+            let shots = script.shots(args.frame, len, opacity).map_err(|e| {
+                let file = args.scene.state.as_deref().unwrap_or(Path::new("state"));
+                anyhow!("{}: {e}", file.display())
+            })?;
+            frames = shots.iter().map(|s| s.frame).collect();
+            shots
+        }
+        None => Vec::new(),
+    };
+    let fps = args.fps.or(script.map(|(_, s)| s.fps)).unwrap_or(24.0);
+    Ok(Images { frames, shots, fps })
+}
+
+/// The file of every image (one movie for all with `movie_out`), checked before any work: a
+/// known format, no two images in one file, existing folders, and a `--stats` file that is
+/// neither an image nor an input.
+fn output_files(args: &RenderArgs, frames: &[usize], movie_out: bool) -> Result<Vec<PathBuf>> {
+    let paths = if movie_out {
+        if args.chunk.is_some() {
+            bail!(
+                "-o {}: --chunk renders PNG sequences only; render the movie in one run",
+                args.output.display()
+            );
+        }
+        check_even_size(&args.output, args.size)?;
+        vec![args.output.clone(); frames.len()]
+    } else {
+        if args.fps.is_some() || args.video_quality.is_some() {
+            bail!(
+                "-o {}: --fps and --video-quality apply to a movie; give the output a .mp4 name",
+                args.output.display()
+            );
+        }
+        output_paths(&args.output, frames)?
+    };
+    // Like `surface`, a missing output folder is refused before any work (never created).
+    if let Some(first) = paths.first() {
+        super::surface::check_parent_dir(first)?;
+    }
+    if let Some(stats) = &args.stats {
+        super::surface::check_parent_dir(stats)?;
+        if args.chunk.is_some() {
+            bail!(
+                "--stats {}: a chunk renders part of the frames; run `mdsurf surface --chunk` for their stats",
+                stats.display()
+            );
+        }
+        if paths.iter().any(|p| p == stats) {
+            bail!(
+                "-o {} and --stats {} are the same file: give them different names",
+                args.output.display(),
+                stats.display()
+            );
+        }
+        let inputs: Vec<PathBuf> = std::iter::once(args.input.top.clone())
+            .chain(args.input.traj.clone())
+            .collect();
+        super::surface::refuse_shared_paths(None, Some(stats), &inputs)?;
+    }
+    Ok(paths)
 }
 
 /// The GPU engine on `gpu`'s device when `backend` picks it and the surfaces are not periodic
