@@ -292,7 +292,21 @@ fn run(
         if on_gpu {
             channel.wait_taken(&stop);
         }
-        let reply = match compute(&mut scene, &mut cache, &request) {
+        // A panic (a bug, never a user's file) fails this request only: the window keeps its
+        // last good frame and the next request starts over from a fresh cache.
+        let computed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            compute(&mut scene, &mut cache, &request)
+        }))
+        .unwrap_or_else(|panic| {
+            cache.source = None;
+            cache.frames.clear();
+            cache.order.clear();
+            Err(format!(
+                "frame {frame}: internal error: {}",
+                panic_text(&*panic)
+            ))
+        });
+        let reply = match computed {
             Ok(c) => {
                 scene.hold_shown(&c.scene);
                 Reply::Done(Box::new(c))
@@ -312,6 +326,16 @@ fn run(
         channel.sent += 1;
         notify();
     }
+}
+
+/// The message of a caught panic, on one line.
+fn panic_text(panic: &(dyn std::any::Any + Send)) -> String {
+    let text = panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic".into());
+    text.replace('\n', " ")
 }
 
 /// Frame `req.frame` of the request's source, from the cache or read (with the read time in

@@ -111,3 +111,51 @@ fn a_failed_frame_is_reported_and_the_next_one_computes() {
         }
     }
 }
+
+/// A source whose frame `at` panics (a bug somewhere below the worker, not a user's file).
+struct PanicsAt {
+    inner: Trajectory,
+    at: usize,
+}
+
+impl FrameSource for PanicsAt {
+    fn topology(&self) -> &mdsurf::model::Topology {
+        self.inner.topology()
+    }
+    fn len(&self) -> usize {
+        self.inner.len()
+    }
+    fn read_frame(&self, index: usize) -> Result<Arc<mdsurf::model::Frame>, String> {
+        assert_ne!(index, self.at, "injected bug at frame {index}");
+        FrameSource::read_frame(&self.inner, index)
+    }
+    fn name(&self) -> String {
+        "panics".into()
+    }
+}
+
+#[test]
+fn a_panic_on_the_compute_thread_fails_one_frame_and_the_worker_goes_on() {
+    let source: Arc<dyn FrameSource> = Arc::new(PanicsAt {
+        inner: rhodopsin(),
+        at: 1,
+    });
+    let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
+    for frame in [0, 1, 2] {
+        worker.submit(Request::single(
+            1,
+            frame,
+            source.clone(),
+            SurfaceParams::default(),
+            ParticleOptions::default(),
+        ));
+        match worker.recv_timeout(Duration::from_secs(60)) {
+            Some(Reply::Failed { message, .. }) if frame == 1 => {
+                assert!(message.contains("frame 1: internal error"), "{message}");
+                assert!(message.contains("injected bug") && !message.contains('\n'));
+            }
+            Some(Reply::Done(c)) if frame != 1 => assert!(c.triangle_count() > 0),
+            other => panic!("frame {frame}: {other:?}"),
+        }
+    }
+}
