@@ -6,6 +6,7 @@ pub mod bench_table;
 pub mod bench_viewer;
 pub mod chunk;
 pub mod common;
+pub mod interrupt;
 pub mod look_args;
 pub mod measure_args;
 pub mod merge;

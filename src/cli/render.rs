@@ -6,7 +6,6 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -28,8 +27,9 @@ use mdsurf::scene::{LayerResult, SceneBackend, SceneEngine, SceneFrame};
 
 use super::chunk::ChunkSpec;
 use super::common::{Backend, System, check_colour_frames, ms_since, set_vertex_mode};
+use super::interrupt::{catch_interrupts, interrupted};
 pub use super::render_args::{RenderArgs, StereoArgs};
-use super::render_output::{INTERRUPTED, catch_interrupts, output_paths};
+use super::render_output::output_paths;
 use super::scene_args::bind_scene;
 use super::transform_args::{FrameReader, host_scene};
 
@@ -158,14 +158,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // exit) on any frame leaves no movie file.
     let mut movie = if movie_out {
         let quality = args.video_quality.unwrap_or_default();
-        let movie = Mp4Movie::create(&args.output, args.size, fps, quality)?;
-        catch_interrupts();
-        Some(movie)
+        Some(Mp4Movie::create(&args.output, args.size, fps, quality)?)
     } else {
         None
     };
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
     let mut stats_frame = None;
+    catch_interrupts();
     // On a terminal, a long run shows one progress bar instead of a line per image.
     let bar = (std::io::stderr().is_terminal()
         && block.len() > super::surface::PROGRESS_BAR_FRAMES
@@ -178,15 +177,20 @@ pub fn run(args: RenderArgs) -> Result<()> {
         if i > 0 && i < block.start {
             continue;
         }
-        if let Some(m) = &movie
-            && INTERRUPTED.load(Ordering::SeqCst)
-        {
-            bail!(
-                "{}: interrupted after {} of {} frames; no movie written",
-                m.path().display(),
-                m.frames(),
-                frames.len()
-            );
+        if interrupted() {
+            match &movie {
+                Some(m) => bail!(
+                    "{}: interrupted after {} of {} frames; no movie written",
+                    m.path().display(),
+                    m.frames(),
+                    frames.len()
+                ),
+                None => bail!(
+                    "interrupted by a signal after {} of {} images (those written are kept)",
+                    i.saturating_sub(block.start),
+                    block.len()
+                ),
+            }
         }
         let t0 = Instant::now();
         let frame = if i == 0 {

@@ -1,33 +1,8 @@
-//! Where `mdsurf render`'s images go (`{frame}` and `{image}` patterns, checked before any
-//! work) and how an interrupted movie is caught, so that it leaves no half-written file.
+//! Where `mdsurf render`'s images go: `{frame}` and `{image}` patterns, checked before any work.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Result, bail};
-
-/// Set by the first SIGINT or SIGTERM while a movie is being written: the frame loop stops with
-/// an error and the movie's temporary file is removed (a second signal ends the process).
-pub(crate) static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-extern "C" fn on_interrupt(signal: libc::c_int) {
-    INTERRUPTED.store(true, Ordering::SeqCst);
-    // SAFETY: `signal` is async-signal-safe; the default action makes a second signal fatal.
-    unsafe {
-        libc::signal(signal, libc::SIG_DFL);
-    }
-}
-
-/// Catches SIGINT and SIGTERM so that an interrupted movie is cleaned up, not left half-written.
-pub(crate) fn catch_interrupts() {
-    #[cfg(unix)]
-    // SAFETY: the handler only stores to an atomic and calls `signal`, both async-signal-safe.
-    unsafe {
-        let handler = on_interrupt as extern "C" fn(libc::c_int) as libc::sighandler_t;
-        libc::signal(libc::SIGINT, handler);
-        libc::signal(libc::SIGTERM, handler);
-    }
-}
 
 /// `pattern` for trajectory frame `frame` and image number `image`: `{frame}` is the frame
 /// index, `{frame:0N}` the frame index zero-padded to N digits, `{image}` the image number with

@@ -20,6 +20,7 @@ use mdsurf::scene::SceneBackend;
 use mdsurf::surface::SurfaceParams;
 
 use super::chunk::{ChunkSpec, check_chunk_count};
+use super::interrupt::{catch_interrupts, interrupted};
 use super::measure_args::{MeasureArgs, Measurer};
 
 use super::common::{
@@ -259,7 +260,15 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let t_all = Instant::now();
     let mut failure = None;
     let mut ok_frames = 0usize;
+    catch_interrupts();
     for &index in &frames {
+        if interrupted() {
+            failure = Some(anyhow!(
+                "interrupted by a signal before frame {index} of {}",
+                system.frames_path.display()
+            ));
+            break;
+        }
         let rows = (|| -> Result<Vec<StatsRow>> {
             let t0 = Instant::now();
             let frame = match first.take().filter(|_| index == first_index) {

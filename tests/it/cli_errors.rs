@@ -323,3 +323,46 @@ fn an_address_space_limit_is_a_memory_budget_not_a_crash() {
     );
     assert!(!dir.path().join("s.csv").exists());
 }
+
+#[test]
+fn ctrl_c_keeps_the_frames_done_and_leaves_no_temporary_file() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("stats.csv"), OLD).unwrap();
+    // adk with its water at a fine grid: about a second per frame, ten frames.
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_mdsurf"))
+        .args(["surface", &data("adk_oplsaa.gro"), &data("adk_oplsaa.xtc")])
+        .args(["--select", "all", "--spacing", "0.3", "--backend", "cpu"])
+        .args(["--stats", "stats.csv", "-o", "mesh_{frame}.ply"])
+        .current_dir(dir.path())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start mdsurf");
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    for line in lines.by_ref() {
+        if line.unwrap().starts_with("frame") {
+            break;
+        }
+    }
+    // SAFETY: sends SIGINT to the child we started (its pid is valid until we wait on it).
+    unsafe {
+        libc::kill(child.id() as libc::pid_t, libc::SIGINT);
+    }
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(2), "{rest:?}");
+    let last = rest.last().map(String::as_str).unwrap_or("");
+    assert!(
+        last.contains("interrupted") && last.contains("processed"),
+        "{rest:?}"
+    );
+    let rows = Csv::read(&dir.path().join("stats.csv")).rows.len();
+    assert!((1..10).contains(&rows), "{rows} rows");
+    let names: Vec<String> = fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.ends_with(".tmp")), "{names:?}");
+    assert_eq!(names.iter().filter(|n| n.ends_with(".ply")).count(), rows);
+}
