@@ -69,6 +69,13 @@ impl PartHeader {
         if count == 0 || index >= count || selection[2] == 0 {
             return None;
         }
+        // Checked before anything is allocated from them: a run has at most MAX_RUN_FRAMES
+        // frames and no more chunks than frames (a hostile or damaged header is not a header).
+        let [a, b, step] = selection;
+        let frames = b.saturating_sub(a).div_ceil(step);
+        if frames > MAX_RUN_FRAMES || count > frames.max(1) {
+            return None;
+        }
         Some(PartHeader {
             index,
             count,
@@ -77,12 +84,15 @@ impl PartHeader {
         })
     }
 
-    /// Every frame index of the whole run.
+    /// Every frame index of the whole run (at most [`MAX_RUN_FRAMES`]).
     pub fn frames(&self) -> Vec<usize> {
         let [a, b, s] = self.selection;
         (a..b).step_by(s).collect()
     }
 }
+
+/// Most frames a run's header may name (a billion-frame selection is damage, not a run).
+pub const MAX_RUN_FRAMES: usize = 100_000_000;
 
 /// A value with its whitespace replaced, so the header stays `key=value` words.
 fn clean(text: &str) -> String {
@@ -229,6 +239,7 @@ pub fn merge_parts(stats: &Path) -> Result<MergeSummary, MergeError> {
     if !missing.is_empty() {
         let absent: Vec<String> = (0..header.count)
             .filter(|i| !present.contains(i))
+            .take(8)
             .map(|i| {
                 part_path(stats, i, header.count)
                     .file_name()
@@ -452,6 +463,21 @@ mod tests {
             Path::new("s.part-00003-of-12345")
         );
         assert_eq!(ranges(&[1, 2, 3, 7, 9, 10].into()), "1-3, 7, 9-10");
+    }
+
+    #[test]
+    fn hostile_headers_are_refused_before_anything_is_allocated() {
+        let good = header(1, "0.5").line();
+        // A selection of 2^64 frames, more chunks than frames, a zero step.
+        for (from, to) in [
+            ("frames=0:4:1", "frames=0:18446744073709551615:1"),
+            ("chunk=1/2", "chunk=1/4294967296"),
+            ("frames=0:4:1", "frames=0:4:0"),
+        ] {
+            assert!(good.contains(from), "{good}");
+            let bad = good.replace(from, to);
+            assert_eq!(PartHeader::parse(&bad), None, "{bad}");
+        }
     }
 
     #[test]
