@@ -42,6 +42,8 @@ pub enum Action {
     ToggleHelp,
     /// Close the shortcut list.
     CloseHelp,
+    /// Show or hide the console under the viewport.
+    ToggleConsole,
 }
 
 /// One keyboard shortcut.
@@ -163,6 +165,11 @@ pub const SHORTCUTS: &[Shortcut] = &[
         Action::ToggleHelp,
     ),
     key(Key::Escape, "Close this list", Action::CloseHelp),
+    key(
+        Key::Backtick,
+        "Show or hide the console",
+        Action::ToggleConsole,
+    ),
 ];
 
 impl Shortcut {
@@ -291,6 +298,7 @@ impl Action {
                 vec![Command::ShowShortcuts(false)]
             }
             Action::CloseHelp => Vec::new(),
+            Action::ToggleConsole => vec![Command::ToggleConsole],
         }
     }
 }

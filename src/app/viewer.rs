@@ -69,6 +69,8 @@ pub struct Viewer {
     transforms: super::trajectory_panel::TransformDraft,
     /// True while the keyboard shortcut list is shown.
     shortcuts_shown: bool,
+    /// The console under the viewport.
+    console: super::console_ui::ConsoleState,
 }
 
 impl Viewer {
@@ -100,6 +102,7 @@ impl Viewer {
             device: None,
             transforms: Default::default(),
             shortcuts_shown: false,
+            console: Default::default(),
         }
     }
 
@@ -132,6 +135,11 @@ impl Viewer {
     /// The state behind the window (for tests).
     pub fn core(&self) -> &AppCore {
         &self.core
+    }
+
+    /// The console's state (for tests).
+    pub fn console(&self) -> &super::console_ui::ConsoleState {
+        &self.console
     }
 
     /// True while the keyboard shortcut list is shown.
@@ -261,6 +269,7 @@ impl Viewer {
                     }
                 }
                 Command::ShowShortcuts(shown) => self.shortcuts_shown = shown,
+                Command::ToggleConsole => self.console.toggle(),
                 _ => {}
             }
         }
@@ -427,6 +436,11 @@ impl Viewer {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
                 }
             });
+            ui.menu_button("View", |ui| {
+                if ui.add(entry("Console", Action::ToggleConsole)).clicked() {
+                    out.push(Command::ToggleConsole);
+                }
+            });
             ui.menu_button("Help", |ui| {
                 if ui
                     .add(entry(super::keys::OVERLAY_TITLE, Action::ToggleHelp))
@@ -521,6 +535,11 @@ impl eframe::App for Viewer {
             );
             cmds.extend(plot_ui(ui, h, cur, len));
         });
+        if self.console.open {
+            egui::Panel::bottom("console").show(ui, |ui| {
+                cmds.extend(super::console_ui::console_ui(ui, &mut self.console, &self.core));
+            });
+        }
         egui::CentralPanel::default().show(ui, |ui| {
             let (view_cmds, size) = viewport_ui(ui, self.gpu_texture());
             cmds.extend(view_cmds);
