@@ -35,6 +35,8 @@ pub struct Script {
     pub quit: bool,
     /// Write the process's anonymous memory after each frame shown to this CSV (a leak check).
     pub memory_log: Option<PathBuf>,
+    /// Console commands run first (`--script FILE`): the file and its (line number, line)s.
+    pub commands: Option<(PathBuf, Vec<(usize, String)>)>,
 }
 
 /// Where a scripted run reports failure (read after the window closes).

@@ -248,3 +248,69 @@ fn commands_typed_into_the_console_change_the_app() {
     enter(&mut h, "rep head delete");
     assert_eq!(h.state().core().reps.len(), reps);
 }
+
+/// `mdsurf TOP TRAJ --script FILE --quit` under Xvfb: the script adds a representation, goes to
+/// frame 2 and takes a screenshot; the PNG exists and is not uniform. A bad line stops the run
+/// with the file and line. Skipped without Xvfb or a wgpu adapter unless `REQUIRE_GPU=1`.
+#[test]
+fn script_runs_in_the_real_window() {
+    let skip = |reason: &str| {
+        if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") {
+            panic!("REQUIRE_GPU=1 but {reason}");
+        }
+        eprintln!("note: skipping the --script window test: {reason}");
+    };
+    if std::process::Command::new("xvfb-run")
+        .arg("--help")
+        .output()
+        .is_err()
+    {
+        return skip("xvfb-run is not installed");
+    }
+    if let Err(e) = mdsurf::render::HeadlessGpu::new() {
+        return skip(&format!("no wgpu adapter: {e}"));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("shot.png");
+    let script = dir.path().join("s.mdsurf");
+    std::fs::write(
+        &script,
+        format!(
+            "# add a representation, go to frame 2, screenshot\n\
+             rep add \"resid 1 to 20\" spheres as head\n\
+             frame 2\n\
+             select \"name CA\"\n\
+             screenshot \"{}\" 400x300\n",
+            shot.display()
+        ),
+    )
+    .unwrap();
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
+    let run = |script: &std::path::Path| {
+        let (_one_server_at_a_time, mut xvfb) = crate::xvfb_support::xvfb_run();
+        xvfb.arg(env!("CARGO_BIN_EXE_mdsurf"))
+            .arg(demo.join("md_1u19.gro"))
+            .arg(demo.join("md_1u19.xtc"))
+            .arg("--script")
+            .arg(script)
+            .args(["--quit", "--cpu"])
+            .env("XDG_RUNTIME_DIR", dir.path())
+            .output()
+            .expect("run xvfb-run")
+    };
+    let out = run(&script);
+    let log = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "exit {}: {log}", out.status);
+    assert!(log.contains("last frame 2"), "{log}");
+    assert!(log.contains("s.mdsurf:4: "), "the select count is not printed: {log}");
+    let image = mdsurf::render::RgbaImage::read_png(&shot).unwrap_or_else(|e| panic!("{e}: {log}"));
+    assert_eq!((image.width, image.height), (400, 300));
+    assert!(image.distinct_colours() > 10, "uniform screenshot: {log}");
+
+    // An error in the middle: one line naming the file and line, exit status not 0.
+    std::fs::write(&script, "frame 1\nrep 9 hide\nframe 2\n").unwrap();
+    let out = run(&script);
+    let log = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{log}");
+    assert!(log.contains("s.mdsurf:2: no representation 9"), "{log}");
+}

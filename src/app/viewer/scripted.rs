@@ -93,6 +93,9 @@ impl Viewer {
         if let Some(e) = self.core.error.clone().filter(|_| self.script.quit) {
             return self.finish_script(ctx, Some(e));
         }
+        if self.script.commands.is_some() {
+            return self.step_commands(ctx);
+        }
         let want = self
             .script
             .play_frames
@@ -164,8 +167,51 @@ impl Viewer {
         self.script.play_frames = Some(0);
     }
 
+    /// Runs the next line of `--script FILE` once the current frame is on screen; the first
+    /// error ends the scripted run with one line naming the file and line.
+    fn step_commands(&mut self, ctx: &egui::Context) {
+        let shown = self.core.shown.as_ref().map(|s| s.computed.frame);
+        if self.loading.is_some()
+            || self.core.computing()
+            || shown != Some(self.core.timeline.current)
+        {
+            return;
+        }
+        let Some((path, lines)) = self.script.commands.as_mut() else {
+            return;
+        };
+        if lines.is_empty() {
+            self.script.commands = None;
+            return;
+        }
+        let (number, line) = lines.remove(0);
+        let at = format!("{}:{number}", path.display());
+        let result = crate::app::console::parse(&line)
+            .and_then(|c| c.map(|c| c.resolve(&self.core)).transpose());
+        match result {
+            Ok(outcome) => {
+                let outcome = outcome.unwrap_or_default();
+                if let Some(text) = outcome.output {
+                    eprintln!("{at}: {text}");
+                }
+                for cmd in outcome.commands {
+                    self.apply(ctx, cmd);
+                }
+                if let Some(e) = self.core.error.clone() {
+                    self.finish_script(ctx, Some(format!("{at}: {e}")));
+                }
+            }
+            Err(e) => {
+                let e = format!("{at}: {e}");
+                self.core.error = Some(e.clone());
+                self.finish_script(ctx, Some(e));
+            }
+        }
+    }
+
     pub(super) fn scripted(&self) -> bool {
-        self.script.play_frames.is_some_and(|n| n > 0)
+        self.script.commands.is_some()
+            || self.script.play_frames.is_some_and(|n| n > 0)
             || self.script.screenshot.is_some()
             || self.script.quit
     }
