@@ -209,9 +209,12 @@ fn selection(w: &Word) -> Result<String, ConsoleError> {
 }
 
 fn number<T: std::str::FromStr>(w: &Word, what: &str) -> Result<T, ConsoleError> {
-    w.text
-        .parse()
-        .or_else(|_| perr(w.column, format!("{what}: expected a number, got '{}'", w.text)))
+    w.text.parse().or_else(|_| {
+        perr(
+            w.column,
+            format!("{what}: expected a number, got '{}'", w.text),
+        )
+    })
 }
 
 fn value<T: std::str::FromStr<Err = E>, E: std::fmt::Display>(w: &Word) -> Result<T, ConsoleError> {
@@ -219,7 +222,12 @@ fn value<T: std::str::FromStr<Err = E>, E: std::fmt::Display>(w: &Word) -> Resul
 }
 
 fn size(w: &Word) -> Result<[u32; 2], ConsoleError> {
-    let bad = || perr(w.column, format!("size: expected WIDTHxHEIGHT, got '{}'", w.text));
+    let bad = || {
+        perr(
+            w.column,
+            format!("size: expected WIDTHxHEIGHT, got '{}'", w.text),
+        )
+    };
     let Some((a, b)) = w.text.split_once(['x', 'X']) else {
         return bad();
     };
@@ -240,7 +248,9 @@ pub fn parse(line: &str) -> Result<Option<ConsoleCommand>, ConsoleError> {
     }
     let end = line.chars().count() + 1;
     let need = |i: usize, what: &str| -> Result<&Word, ConsoleError> {
-        words.get(i).map_or_else(|| perr(end, format!("expected {what}")), Ok)
+        words
+            .get(i)
+            .map_or_else(|| perr(end, format!("expected {what}")), Ok)
     };
     let max = |n: usize| -> Result<(), ConsoleError> {
         match words.get(n) {
@@ -324,7 +334,12 @@ pub fn parse(line: &str) -> Result<Option<ConsoleCommand>, ConsoleError> {
             match verb.text.as_str() {
                 "save" => ConsoleCommand::ViewSave(path),
                 "open" => ConsoleCommand::ViewOpen(path),
-                other => return perr(verb.column, format!("expected 'save' or 'open', got '{other}'")),
+                other => {
+                    return perr(
+                        verb.column,
+                        format!("expected 'save' or 'open', got '{other}'"),
+                    );
+                }
             }
         }
         "screenshot" => {
@@ -340,7 +355,12 @@ pub fn parse(line: &str) -> Result<Option<ConsoleCommand>, ConsoleError> {
             max(2)?;
             ConsoleCommand::Help(words.get(1).map(|w| w.text.clone()))
         }
-        other => return perr(first.column, format!("unknown command '{other}' (try 'help')")),
+        other => {
+            return perr(
+                first.column,
+                format!("unknown command '{other}' (try 'help')"),
+            );
+        }
     };
     Ok(Some(cmd))
 }
@@ -448,7 +468,9 @@ impl ConsoleCommand {
                 }
                 return Ok(one(Command::Timeline(TimelineCmd::Seek(*f))));
             }
-            ConsoleCommand::Play => return Ok(one(Command::Timeline(TimelineCmd::SetPlaying(true)))),
+            ConsoleCommand::Play => {
+                return Ok(one(Command::Timeline(TimelineCmd::SetPlaying(true))));
+            }
             ConsoleCommand::Pause => {
                 return Ok(one(Command::Timeline(TimelineCmd::SetPlaying(false))));
             }

@@ -539,7 +539,11 @@ impl eframe::App for Viewer {
         });
         if self.console.open {
             egui::Panel::bottom("console").show(ui, |ui| {
-                cmds.extend(super::console_ui::console_ui(ui, &mut self.console, &self.core));
+                cmds.extend(super::console_ui::console_ui(
+                    ui,
+                    &mut self.console,
+                    &self.core,
+                ));
             });
         }
         egui::CentralPanel::default().show(ui, |ui| {

@@ -67,7 +67,10 @@ fn every_command_parses() {
         ok("rep 2 radius-scale 1.2"),
         C::Rep(n(2), RepEdit::RadiusScale(1.2))
     );
-    assert_eq!(ok("rep 2 isovalue 0.5"), C::Rep(n(2), RepEdit::Isovalue(0.5)));
+    assert_eq!(
+        ok("rep 2 isovalue 0.5"),
+        C::Rep(n(2), RepEdit::Isovalue(0.5))
+    );
     assert_eq!(
         ok("rep 2 quality high"),
         C::Rep(n(2), RepEdit::Quality(Quality::High))
@@ -86,8 +89,14 @@ fn every_command_parses() {
         C::Rep(n(2), RepEdit::Select("resname POPC".into()))
     );
     assert_eq!(ok("rep 2 hide"), C::Rep(n(2), RepEdit::Hide));
-    assert_eq!(ok("rep prot show"), C::Rep(RepRef::Name("prot".into()), RepEdit::Show));
-    assert_eq!(ok(r#"rep "my rep" delete"#), C::Rep(RepRef::Name("my rep".into()), RepEdit::Delete));
+    assert_eq!(
+        ok("rep prot show"),
+        C::Rep(RepRef::Name("prot".into()), RepEdit::Show)
+    );
+    assert_eq!(
+        ok(r#"rep "my rep" delete"#),
+        C::Rep(RepRef::Name("my rep".into()), RepEdit::Delete)
+    );
     assert_eq!(ok("frame 10"), C::Frame(10));
     assert_eq!(ok("play"), C::Play);
     assert_eq!(ok("  pause  "), C::Pause);
@@ -97,12 +106,18 @@ fn every_command_parses() {
         C::Fit(Some("protein and name CA".into()))
     );
     assert_eq!(ok("view save view.toml"), C::ViewSave("view.toml".into()));
-    assert_eq!(ok(r#"view open "my view.toml""#), C::ViewOpen("my view.toml".into()));
+    assert_eq!(
+        ok(r#"view open "my view.toml""#),
+        C::ViewOpen("my view.toml".into())
+    );
     assert_eq!(
         ok("screenshot out.png 3840x2160"),
         C::Screenshot("out.png".into(), Some([3840, 2160]))
     );
-    assert_eq!(ok("screenshot out.png"), C::Screenshot("out.png".into(), None));
+    assert_eq!(
+        ok("screenshot out.png"),
+        C::Screenshot("out.png".into(), None)
+    );
     assert_eq!(
         ok(r#"select "within 5 of resname LIG""#),
         C::Select("within 5 of resname LIG".into())
@@ -146,9 +161,18 @@ fn tab_completes_words_and_names() {
     assert_eq!(complete("p", &names), None, "play and pause");
     assert_eq!(complete("pl", &names).as_deref(), Some("play "));
     assert_eq!(complete("rep li", &names).as_deref(), Some("rep lipids "));
-    assert_eq!(complete("rep 2 rad", &names).as_deref(), Some("rep 2 radius-scale "));
-    assert_eq!(complete(r#"rep add "all" sp"#, &names).as_deref(), Some(r#"rep add "all" spheres "#));
-    assert_eq!(complete("rep 1 color resi", &names).as_deref(), Some("rep 1 color residue-"));
+    assert_eq!(
+        complete("rep 2 rad", &names).as_deref(),
+        Some("rep 2 radius-scale ")
+    );
+    assert_eq!(
+        complete(r#"rep add "all" sp"#, &names).as_deref(),
+        Some(r#"rep add "all" spheres "#)
+    );
+    assert_eq!(
+        complete("rep 1 color resi", &names).as_deref(),
+        Some("rep 1 color residue-")
+    );
     assert_eq!(complete("view o", &names).as_deref(), Some("view open "));
 }
 
@@ -156,7 +180,11 @@ fn tab_completes_words_and_names() {
 fn scripts_name_the_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("s.mdsurf");
-    std::fs::write(&path, "# setup\nrep add \"all\" spheres\n\nframe 2\nframe x\n").unwrap();
+    std::fs::write(
+        &path,
+        "# setup\nrep add \"all\" spheres\n\nframe 2\nframe x\n",
+    )
+    .unwrap();
     let e = read_script(&path).unwrap_err();
     assert!(e.contains("s.mdsurf:5: column 7"), "{e}");
     std::fs::write(&path, "# setup\nrep add \"all\" spheres\n\nframe 2\n").unwrap();
@@ -215,11 +243,19 @@ fn commands_typed_into_the_console_change_the_app() {
     h.key_press_modifiers(Modifiers::NONE, Key::Backtick);
     h.step();
     h.step();
-    assert!(h.state().console().open, "the backtick did not open the console");
+    assert!(
+        h.state().console().open,
+        "the backtick did not open the console"
+    );
     let reps = h.state().core().reps.len();
     enter(&mut h, r#"rep add "resid 1 to 5" spheres as head"#);
     let core = h.state().core();
-    assert_eq!(core.reps.len(), reps + 1, "{:?}", h.state().console().output);
+    assert_eq!(
+        core.reps.len(),
+        reps + 1,
+        "{:?}",
+        h.state().console().output
+    );
     let rep = core.reps.last().unwrap();
     assert_eq!((rep.name.as_str(), rep.style), ("head", RepStyle::Spheres));
     assert_eq!(rep.selection, "resid 1 to 5");
@@ -233,7 +269,10 @@ fn commands_typed_into_the_console_change_the_app() {
     assert!(out.back().unwrap().starts_with("6 atoms"), "{out:?}");
     enter(&mut h, "frame 99");
     let out = &h.state().console().output;
-    assert!(out.back().unwrap().starts_with("error: frame 99"), "{out:?}");
+    assert!(
+        out.back().unwrap().starts_with("error: frame 99"),
+        "{out:?}"
+    );
     assert_eq!(h.state().core().timeline.current, 3);
     // Up recalls the last line; Enter runs it again.
     h.key_press(Key::ArrowUp);
@@ -302,7 +341,10 @@ fn script_runs_in_the_real_window() {
     let log = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(out.status.success(), "exit {}: {log}", out.status);
     assert!(log.contains("last frame 2"), "{log}");
-    assert!(log.contains("s.mdsurf:4: "), "the select count is not printed: {log}");
+    assert!(
+        log.contains("s.mdsurf:4: "),
+        "the select count is not printed: {log}"
+    );
     let image = mdsurf::render::RgbaImage::read_png(&shot).unwrap_or_else(|e| panic!("{e}: {log}"));
     assert_eq!((image.width, image.height), (400, 300));
     assert!(image.distinct_colours() > 10, "uniform screenshot: {log}");
