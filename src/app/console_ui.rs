@@ -96,6 +96,16 @@ impl ConsoleState {
     }
 }
 
+/// The console as a panel under the viewport, when open.
+pub fn console_panel(ui: &mut egui::Ui, state: &mut ConsoleState, core: &AppCore) -> Vec<Command> {
+    if !state.open {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    egui::Panel::bottom("console").show(ui, |ui| out = console_ui(ui, state, core));
+    out
+}
+
 /// The console panel's contents (output above, the text field below).
 pub fn console_ui(ui: &mut egui::Ui, state: &mut ConsoleState, core: &AppCore) -> Vec<Command> {
     let id = egui::Id::NULL.with(INPUT_ID);

@@ -23,21 +23,7 @@ use crate::render::write_png;
 use crate::scene::state_file::{CameraState, LookState, StateFile, TrajectoryState};
 
 mod scripted;
-
-/// What a scripted run does (all optional).
-#[derive(Debug, Clone, Default)]
-pub struct Script {
-    /// Frames to play (each computed and shown) before the screenshot.
-    pub play_frames: Option<usize>,
-    /// Screenshot written through the app's screenshot path.
-    pub screenshot: Option<PathBuf>,
-    /// Close the window when done.
-    pub quit: bool,
-    /// Write the process's anonymous memory after each frame shown to this CSV (a leak check).
-    pub memory_log: Option<PathBuf>,
-    /// Console commands run first (`--script FILE`): the file and its (line number, line)s.
-    pub commands: Option<(PathBuf, Vec<(usize, String)>)>,
-}
+pub use scripted::Script;
 
 /// Where a scripted run reports failure (read after the window closes).
 pub type ScriptResult = Arc<Mutex<Option<String>>>;
@@ -537,15 +523,8 @@ impl eframe::App for Viewer {
             );
             cmds.extend(plot_ui(ui, h, cur, len));
         });
-        if self.console.open {
-            egui::Panel::bottom("console").show(ui, |ui| {
-                cmds.extend(super::console_ui::console_ui(
-                    ui,
-                    &mut self.console,
-                    &self.core,
-                ));
-            });
-        }
+        let console = super::console_ui::console_panel(ui, &mut self.console, &self.core);
+        cmds.extend(console);
         egui::CentralPanel::default().show(ui, |ui| {
             let (view_cmds, size) = viewport_ui(ui, self.gpu_texture());
             cmds.extend(view_cmds);

@@ -2,12 +2,29 @@
 //! export (seek each frame, wait for its surface, render offscreen, write the numbered PNG) and
 //! the scripted run (`--play-frames N --screenshot FILE --quit`).
 
-use super::{Script, Viewer};
+use std::path::PathBuf;
+
+use super::Viewer;
 use crate::app::device_loss;
 use crate::app::state::Command;
 use crate::app::timeline::TimelineCmd;
 use crate::render::colour_bar::draw_colour_bar;
 use crate::render::write_png;
+
+/// What a scripted run does (all optional).
+#[derive(Debug, Clone, Default)]
+pub struct Script {
+    /// Frames to play (each computed and shown) before the screenshot.
+    pub play_frames: Option<usize>,
+    /// Screenshot written through the app's screenshot path.
+    pub screenshot: Option<PathBuf>,
+    /// Close the window when done.
+    pub quit: bool,
+    /// Write the process's anonymous memory after each frame shown to this CSV (a leak check).
+    pub memory_log: Option<PathBuf>,
+    /// Console commands run first (`--script FILE`): the file and its (line number, line)s.
+    pub commands: Option<(PathBuf, Vec<(usize, String)>)>,
+}
 
 /// This process's anonymous resident memory in KiB (`RssAnon` in `/proc/self/status`; Linux).
 fn anonymous_memory_kib() -> Option<u64> {
