@@ -155,6 +155,11 @@ pub const SHORTCUTS: &[Shortcut] = &[
         Action::ToggleRep(8),
     ),
     key(
+        Key::Backtick,
+        "Show or hide the console",
+        Action::ToggleConsole,
+    ),
+    key(
         Key::Questionmark,
         "Show or hide this list of shortcuts",
         Action::ToggleHelp,
@@ -165,11 +170,6 @@ pub const SHORTCUTS: &[Shortcut] = &[
         Action::ToggleHelp,
     ),
     key(Key::Escape, "Close this list", Action::CloseHelp),
-    key(
-        Key::Backtick,
-        "Show or hide the console",
-        Action::ToggleConsole,
-    ),
 ];
 
 impl Shortcut {
