@@ -241,6 +241,7 @@ mod tests {
             screenshot: Some("s.png".into()),
             quit: true,
             memory_log: None,
+            ..Default::default()
         };
         let args: Vec<String> = reopen_args(
             &session,

@@ -42,6 +42,8 @@ pub enum Action {
     ToggleHelp,
     /// Close the shortcut list.
     CloseHelp,
+    /// Show or hide the console under the viewport.
+    ToggleConsole,
 }
 
 /// One keyboard shortcut.
@@ -151,6 +153,11 @@ pub const SHORTCUTS: &[Shortcut] = &[
         Key::Num9,
         "Show or hide representation 9",
         Action::ToggleRep(8),
+    ),
+    key(
+        Key::Backtick,
+        "Show or hide the console",
+        Action::ToggleConsole,
     ),
     key(
         Key::Questionmark,
@@ -291,6 +298,7 @@ impl Action {
                 vec![Command::ShowShortcuts(false)]
             }
             Action::CloseHelp => Vec::new(),
+            Action::ToggleConsole => vec![Command::ToggleConsole],
         }
     }
 }

@@ -60,6 +60,8 @@ pub enum Command {
     ResetCamera,
     /// Fit the scene, keeping the direction.
     FitCamera,
+    /// Fit this sphere (centre, radius in Å), keeping the direction (console `fit "SEL"`).
+    FitSphere(glam::Vec3, f32),
     /// Perspective or orthographic.
     SetProjection(Projection),
     /// Rotate the camera about its target (radians right, up).
@@ -90,6 +92,8 @@ pub enum Command {
     DismissError,
     /// Show (`true`) or hide the keyboard shortcut list (window layer; see `app::keys`).
     ShowShortcuts(bool),
+    /// Show or hide the console under the viewport (window layer; see `app::console_ui`).
+    ToggleConsole,
 }
 
 /// The latest surface on screen plus what produced it.
@@ -356,6 +360,10 @@ impl AppCore {
                 self.fit_camera();
             }
             Command::FitCamera => self.fit_camera(),
+            Command::FitSphere(centre, radius) => {
+                self.camera.fit_sphere(centre, radius);
+                self.fit_pending = false;
+            }
             Command::SetProjection(p) => self.camera.projection = p,
             Command::Orbit(dx, dy) => self.camera.orbit(dx, dy),
             Command::Pan(dx, dy) => self.camera.pan(dx, dy),

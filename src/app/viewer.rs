@@ -23,19 +23,7 @@ use crate::render::write_png;
 use crate::scene::state_file::{CameraState, LookState, StateFile, TrajectoryState};
 
 mod scripted;
-
-/// What a scripted run does (all optional).
-#[derive(Debug, Clone, Default)]
-pub struct Script {
-    /// Frames to play (each computed and shown) before the screenshot.
-    pub play_frames: Option<usize>,
-    /// Screenshot written through the app's screenshot path.
-    pub screenshot: Option<PathBuf>,
-    /// Close the window when done.
-    pub quit: bool,
-    /// Write the process's anonymous memory after each frame shown to this CSV (a leak check).
-    pub memory_log: Option<PathBuf>,
-}
+pub use scripted::Script;
 
 /// Where a scripted run reports failure (read after the window closes).
 pub type ScriptResult = Arc<Mutex<Option<String>>>;
@@ -69,6 +57,8 @@ pub struct Viewer {
     transforms: super::trajectory_panel::TransformDraft,
     /// True while the keyboard shortcut list is shown.
     shortcuts_shown: bool,
+    /// The console under the viewport.
+    console: super::console_ui::ConsoleState,
 }
 
 impl Viewer {
@@ -100,6 +90,7 @@ impl Viewer {
             device: None,
             transforms: Default::default(),
             shortcuts_shown: false,
+            console: Default::default(),
         }
     }
 
@@ -132,6 +123,11 @@ impl Viewer {
     /// The state behind the window (for tests).
     pub fn core(&self) -> &AppCore {
         &self.core
+    }
+
+    /// The console's state (for tests).
+    pub fn console(&self) -> &super::console_ui::ConsoleState {
+        &self.console
     }
 
     /// True while the keyboard shortcut list is shown.
@@ -261,6 +257,7 @@ impl Viewer {
                     }
                 }
                 Command::ShowShortcuts(shown) => self.shortcuts_shown = shown,
+                Command::ToggleConsole => self.console.toggle(),
                 _ => {}
             }
         }
@@ -427,6 +424,11 @@ impl Viewer {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
                 }
             });
+            ui.menu_button("View", |ui| {
+                if ui.add(entry("Console", Action::ToggleConsole)).clicked() {
+                    out.push(Command::ToggleConsole);
+                }
+            });
             ui.menu_button("Help", |ui| {
                 if ui
                     .add(entry(super::keys::OVERLAY_TITLE, Action::ToggleHelp))
@@ -521,6 +523,8 @@ impl eframe::App for Viewer {
             );
             cmds.extend(plot_ui(ui, h, cur, len));
         });
+        let console = super::console_ui::console_panel(ui, &mut self.console, &self.core);
+        cmds.extend(console);
         egui::CentralPanel::default().show(ui, |ui| {
             let (view_cmds, size) = viewport_ui(ui, self.gpu_texture());
             cmds.extend(view_cmds);

@@ -41,6 +41,10 @@ pub struct ViewArgs {
     /// Scripted run: then close the window (exit status 0 when everything worked).
     #[arg(long)]
     pub quit: bool,
+    /// Run the console commands of this file first (one per line, `#` comments; see
+    /// docs/usage.md), stopping at the first error.
+    #[arg(long, value_name = "FILE")]
+    pub script: Option<PathBuf>,
     /// Scripted run: write the anonymous memory (KiB) after each frame shown to this CSV.
     #[arg(long, value_name = "FILE", hide = true)]
     pub memory_log: Option<PathBuf>,
@@ -61,6 +65,13 @@ pub struct ViewArgs {
 
 /// Runs the viewer.
 pub fn run(args: ViewArgs) -> Result<()> {
+    let commands = match &args.script {
+        Some(path) => Some((
+            path.clone(),
+            app::console::read_script(path).map_err(anyhow::Error::msg)?,
+        )),
+        None => None,
+    };
     let params = args.params.params()?;
     let particles = args.particles.options()?;
     let state = args.scene.load_state()?;
@@ -102,6 +113,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
             screenshot: args.screenshot,
             quit: args.quit,
             memory_log: args.memory_log,
+            commands,
         },
         backend: if args.cpu {
             app::Backend::Cpu

@@ -7,6 +7,7 @@ mod gpu_support;
 mod surface_common;
 mod xvfb_support;
 
+mod app_console;
 mod app_gpu_worker;
 mod app_keys;
 mod app_membrane_view;

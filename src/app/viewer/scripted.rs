@@ -2,12 +2,29 @@
 //! export (seek each frame, wait for its surface, render offscreen, write the numbered PNG) and
 //! the scripted run (`--play-frames N --screenshot FILE --quit`).
 
-use super::{Script, Viewer};
+use std::path::PathBuf;
+
+use super::Viewer;
 use crate::app::device_loss;
 use crate::app::state::Command;
 use crate::app::timeline::TimelineCmd;
 use crate::render::colour_bar::draw_colour_bar;
 use crate::render::write_png;
+
+/// What a scripted run does (all optional).
+#[derive(Debug, Clone, Default)]
+pub struct Script {
+    /// Frames to play (each computed and shown) before the screenshot.
+    pub play_frames: Option<usize>,
+    /// Screenshot written through the app's screenshot path.
+    pub screenshot: Option<PathBuf>,
+    /// Close the window when done.
+    pub quit: bool,
+    /// Write the process's anonymous memory after each frame shown to this CSV (a leak check).
+    pub memory_log: Option<PathBuf>,
+    /// Console commands run first (`--script FILE`): the file and its (line number, line)s.
+    pub commands: Option<(PathBuf, Vec<(usize, String)>)>,
+}
 
 /// This process's anonymous resident memory in KiB (`RssAnon` in `/proc/self/status`; Linux).
 fn anonymous_memory_kib() -> Option<u64> {
@@ -93,6 +110,9 @@ impl Viewer {
         if let Some(e) = self.core.error.clone().filter(|_| self.script.quit) {
             return self.finish_script(ctx, Some(e));
         }
+        if self.script.commands.is_some() {
+            return self.step_commands(ctx);
+        }
         let want = self
             .script
             .play_frames
@@ -164,8 +184,51 @@ impl Viewer {
         self.script.play_frames = Some(0);
     }
 
+    /// Runs the next line of `--script FILE` once the current frame is on screen; the first
+    /// error ends the scripted run with one line naming the file and line.
+    fn step_commands(&mut self, ctx: &egui::Context) {
+        let shown = self.core.shown.as_ref().map(|s| s.computed.frame);
+        if self.loading.is_some()
+            || self.core.computing()
+            || shown != Some(self.core.timeline.current)
+        {
+            return;
+        }
+        let Some((path, lines)) = self.script.commands.as_mut() else {
+            return;
+        };
+        if lines.is_empty() {
+            self.script.commands = None;
+            return;
+        }
+        let (number, line) = lines.remove(0);
+        let at = format!("{}:{number}", path.display());
+        let result = crate::app::console::parse(&line)
+            .and_then(|c| c.map(|c| c.resolve(&self.core)).transpose());
+        match result {
+            Ok(outcome) => {
+                let outcome = outcome.unwrap_or_default();
+                if let Some(text) = outcome.output {
+                    eprintln!("{at}: {text}");
+                }
+                for cmd in outcome.commands {
+                    self.apply(ctx, cmd);
+                }
+                if let Some(e) = self.core.error.clone() {
+                    self.finish_script(ctx, Some(format!("{at}: {e}")));
+                }
+            }
+            Err(e) => {
+                let e = format!("{at}: {e}");
+                self.core.error = Some(e.clone());
+                self.finish_script(ctx, Some(e));
+            }
+        }
+    }
+
     pub(super) fn scripted(&self) -> bool {
-        self.script.play_frames.is_some_and(|n| n > 0)
+        self.script.commands.is_some()
+            || self.script.play_frames.is_some_and(|n| n > 0)
             || self.script.screenshot.is_some()
             || self.script.quit
     }
