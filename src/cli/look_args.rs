@@ -4,6 +4,8 @@
 use mdsurf::render::RenderSettings;
 use mdsurf::render::settings::{check_outline_width, check_shadows, parse_linear_rgb};
 
+use super::render_args::parse_f32;
+
 /// A preset look.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum LookPreset {
@@ -40,12 +42,6 @@ pub struct LookArgs {
     /// Transparent background: background pixels of the PNG get alpha 0.
     #[arg(long = "transparent")]
     pub transparent: bool,
-}
-
-fn parse_f32(s: &str, what: &str) -> Result<f32, String> {
-    s.trim()
-        .parse()
-        .map_err(|_| format!("bad {what} '{s}': expected a number"))
 }
 
 fn parse_outline(s: &str) -> Result<f32, String> {

@@ -113,7 +113,8 @@ pub struct StereoArgs {
     pub focal: Option<f32>,
 }
 
-fn parse_f32(s: &str, what: &str) -> Result<f32, String> {
+/// A number for flag `what`, or one line naming the value.
+pub(crate) fn parse_f32(s: &str, what: &str) -> Result<f32, String> {
     s.trim()
         .parse()
         .map_err(|_| format!("bad {what} '{s}': expected a number"))
