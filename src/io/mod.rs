@@ -35,6 +35,7 @@ mod fast_xyz;
 pub mod format;
 mod mmcif;
 mod mmcif_bonds;
+mod native;
 mod pdb_models;
 mod pdb_templates;
 mod prepare;

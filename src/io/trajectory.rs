@@ -11,6 +11,7 @@ use glam::Vec3;
 use super::chem::check_positions;
 use super::contained::ContainedReader;
 use super::format::{FileFormat, detect};
+use super::native::{self, NativeFrames};
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
 use super::{IoError, dcd, fast, mmcif, pdb_models, wwpdb, xdr};
@@ -121,9 +122,21 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     } else {
         allow_fast.then(|| fast::read(top, &top_format)).flatten()
     };
-    let (mut topology, first, top_reader) = match ours {
-        Some(read) => (read.topology, FirstFrame::Read(read.frame), None),
-        None => {
+    let native_top = allow_fast.then(|| native::opener(&top_format)).flatten();
+    let (mut topology, first, top_reader) = match (ours, native_top) {
+        (Some(read), _) => (read.topology, FirstFrame::Read(read.frame), None),
+        (None, Some(open)) => {
+            let opened = open(top, prepare(top, &top_format)?)?;
+            let mut frames = opened.frames;
+            let topology = opened.topology.unwrap_or_default();
+            let first = match (frames.len(), frames.damage()) {
+                (0, Some(damage)) => return Err(damage.clone()),
+                _ => frames.read_frame(0)?,
+            };
+            let source = FrameSource::Native(frames);
+            (topology, FirstFrame::Read(first), Some(source))
+        }
+        (None, None) => {
             let mut reader = ContainedReader::open(top, &top_format, allow_fast)?;
             let topology = reader.read_topology(0)?;
             let positions = if topology.is_empty() {
@@ -131,7 +144,8 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
             } else {
                 reader.read_positions(0)?
             };
-            (topology, FirstFrame::Positions(positions), Some(reader))
+            let source = FrameSource::Chem(reader);
+            (topology, FirstFrame::Positions(positions), Some(source))
         }
     };
     if topology.is_empty() {
@@ -150,7 +164,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     sizing::fit_untyped_radii(&mut topology, first.positions());
     let mut walk = None;
     let reader = match (traj, top_reader, first) {
-        (None, Some(reader), _) => FrameSource::Chem(reader),
+        (None, Some(reader), _) => reader,
         (None, None, first) => {
             let (later, truncated) = later_models.unwrap_or_default();
             let mut frames = vec![first.into_frame()];
@@ -201,7 +215,10 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
                     walk = Some(w);
                     FrameSource::Xdr(reader)
                 }
-                None => FrameSource::Chem(ContainedReader::open(path, &format, allow_fast)?),
+                None => match allow_fast.then(|| native::opener(&format)).flatten() {
+                    Some(open) => FrameSource::Native(open(path, prepare(path, &format)?)?.frames),
+                    None => FrameSource::Chem(ContainedReader::open(path, &format, allow_fast)?),
+                },
             }
         }
     };
@@ -216,6 +233,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     if let Some(w) = walk {
         trajectory.apply_walk(w)?;
     }
+    trajectory.apply_native_damage()?;
     trajectory.mark_truncated_stream()?;
     trajectory.check_pdb_models()?;
     // A count mismatch is reported at once, not at the first frame the user asks for.
@@ -344,6 +362,23 @@ impl Trajectory {
             self.len = frame;
             self.damage = Some(Damage { frame, error });
         }
+        Ok(())
+    }
+
+    /// Limits the readable frames to those our reader found sound when it indexed the file.
+    fn apply_native_damage(&mut self) -> Result<(), IoError> {
+        let found = match &*self.lock() {
+            FrameSource::Native(reader) => reader.damage().map(|e| (reader.len(), e.clone())),
+            _ => None,
+        };
+        let Some((frame, error)) = found else {
+            return Ok(());
+        };
+        if frame == 0 {
+            return Err(error);
+        }
+        self.len = self.len.min(frame);
+        self.damage = Some(Damage { frame, error });
         Ok(())
     }
 
@@ -476,6 +511,7 @@ impl FirstFrame {
 /// models of an mmCIF file).
 enum FrameSource {
     Chem(ContainedReader),
+    Native(Box<dyn NativeFrames>),
     Xdr(XdrReader),
     Memory {
         path: PathBuf,
@@ -490,6 +526,7 @@ impl FrameSource {
     fn path(&self) -> &Path {
         match self {
             FrameSource::Chem(r) => r.path(),
+            FrameSource::Native(r) => r.path(),
             FrameSource::Xdr(r) => r.path(),
             FrameSource::Memory { path, .. } => path,
         }
@@ -498,6 +535,7 @@ impl FrameSource {
     fn base(&self) -> &'static str {
         match self {
             FrameSource::Chem(r) => r.base(),
+            FrameSource::Native(r) => r.base(),
             FrameSource::Xdr(r) => r.base(),
             FrameSource::Memory { base, .. } => base,
         }
@@ -506,6 +544,7 @@ impl FrameSource {
     fn len(&self) -> usize {
         match self {
             FrameSource::Chem(r) => r.len(),
+            FrameSource::Native(r) => r.len(),
             FrameSource::Xdr(r) => r.len(),
             FrameSource::Memory { frames, .. } => frames.len(),
         }
@@ -515,13 +554,18 @@ impl FrameSource {
         match self {
             FrameSource::Chem(r) => r.truncated(),
             FrameSource::Memory { truncated, .. } => truncated.as_deref().map(|t| (t, false)),
-            FrameSource::Xdr(_) => None,
+            FrameSource::Xdr(_) | FrameSource::Native(_) => None,
         }
     }
 
     fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
         match self {
             FrameSource::Chem(r) => r.read_frame(index),
+            FrameSource::Native(r) => {
+                let frame = r.read_frame(index)?;
+                check_positions(r.path(), index, &frame.positions)?;
+                Ok(frame)
+            }
             FrameSource::Xdr(r) => r.read_frame(index),
             FrameSource::Memory { path, frames, .. } => {
                 let Some(frame) = frames.get(index) else {
