@@ -443,7 +443,20 @@ impl System {
     /// Opens `input`, reads `first_frame` to size beads, and builds the particles.
     /// Returns the system and that frame.
     pub fn open(input: &InputArgs, first_frame: usize) -> Result<(System, Frame)> {
-        let trajectory = io::open(&input.top, input.traj.as_deref())?;
+        System::open_or_follow(input, None, first_frame)
+    }
+
+    /// [`System::open`], with the frames coming from a running simulation when `live` says
+    /// where it is (then `input.traj` is `None`).
+    pub fn open_or_follow(
+        input: &InputArgs,
+        live: Option<&io::LiveOptions>,
+        first_frame: usize,
+    ) -> Result<(System, Frame)> {
+        let trajectory = match live {
+            Some(live) => io::open_live(&input.top, live)?,
+            None => io::open(&input.top, input.traj.as_deref())?,
+        };
         let options = input.particles.options_for(&trajectory)?;
         let frames_path = trajectory.path().to_path_buf();
         if trajectory.is_empty() {

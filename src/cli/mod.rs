@@ -7,6 +7,7 @@ pub mod bench_viewer;
 pub mod chunk;
 pub mod common;
 pub mod interrupt;
+pub mod live_args;
 pub mod look_args;
 pub mod measure_args;
 pub mod merge;

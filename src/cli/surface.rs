@@ -15,12 +15,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use mdsurf::export::glb::GlbAnimation;
 use mdsurf::export::stats_merge::{PartHeader, part_path};
 use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
+use mdsurf::io::IoError;
 
 use mdsurf::scene::SceneBackend;
 use mdsurf::surface::SurfaceParams;
 
 use super::chunk::{ChunkSpec, check_chunk_count};
 use super::interrupt::{catch_interrupts, interrupted};
+use super::live_args::LiveArgs;
 use super::measure_args::{MeasureArgs, Measurer};
 
 use super::common::{
@@ -38,6 +40,8 @@ pub(crate) const PROGRESS_BAR_FRAMES: usize = 20;
 pub struct SurfaceArgs {
     #[command(flatten)]
     pub input: InputArgs,
+    #[command(flatten)]
+    pub live: LiveArgs,
     /// Frames to process, START:STOP:STEP (STOP exclusive, parts optional), or one index.
     #[arg(long, value_name = "START:STOP:STEP")]
     pub frames: Option<FrameRange>,
@@ -111,11 +115,17 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         );
     }
 
+    let live = args.live.options(args.input.traj.as_deref())?;
+    if live.is_some() && chunk.is_some() {
+        bail!(
+            "--chunk splits a trajectory's frames: a running simulation (--imd) has no fixed frames to split"
+        );
+    }
     let state = args.scene.load_state()?;
     let transforms = args.transforms.options(state.as_ref());
 
     let start_frame = args.frames.map(|r| r.start).unwrap_or(0);
-    let (system, _) = System::open(&args.input, start_frame)?;
+    let (system, _) = System::open_or_follow(&args.input, live.as_ref(), start_frame)?;
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
     let first_index = start_frame.min(system.len() - 1);
     let first = reader.read_frame(first_index)?;
@@ -251,9 +261,12 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         }
     }
 
-    let bar =
-        (std::io::stderr().is_terminal() && frames.len() > PROGRESS_BAR_FRAMES && !args.quiet)
-            .then(|| progress_bar(frames.len()));
+    // A running simulation has no known length: one line per frame, no bar.
+    let bar = (std::io::stderr().is_terminal()
+        && frames.len() > PROGRESS_BAR_FRAMES
+        && !args.quiet
+        && live.is_none())
+    .then(|| progress_bar(frames.len()));
     // The loop's first frame is usually the one read above: it is taken, not read again (a
     // million atoms: a copy and a check of every position).
     let mut first = Some(Arc::new(first));
@@ -309,7 +322,15 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                 }
             }
             Err(err) => {
-                failure = Some(err);
+                // The end of a running simulation is the end of the run, not a failure.
+                match err.downcast_ref::<IoError>() {
+                    Some(end @ IoError::LiveEnded { .. }) if ok_frames > 0 => {
+                        if !args.quiet {
+                            eprintln!("{end}");
+                        }
+                    }
+                    _ => failure = Some(err),
+                }
                 break;
             }
         }

@@ -43,6 +43,17 @@ pub enum IoError {
         /// What the parser said (one line).
         message: String,
     },
+    /// A live simulation's stream ended (the run finished, the engine was killed, or the
+    /// connection dropped): the frames before stay readable.
+    #[error("{}: the simulation stream ended after {frames} frames ({reason})", path.display())]
+    LiveEnded {
+        /// `imd://HOST:PORT`.
+        path: PathBuf,
+        /// Frames received.
+        frames: usize,
+        /// Why it ended (one line).
+        reason: String,
+    },
     /// A frame index past the end of the trajectory was asked for.
     #[error("{}: frame {frame} does not exist (the trajectory has {len} frames)", path.display())]
     FrameOutOfRange {

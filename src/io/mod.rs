@@ -33,6 +33,8 @@ mod fast;
 mod fast_pdb;
 mod fast_xyz;
 pub mod format;
+pub mod imd;
+mod live;
 mod mmcif;
 mod mmcif_bonds;
 mod native;
@@ -51,8 +53,9 @@ mod xdr_reader;
 pub use contained::{READER_ARG, reader_main};
 pub use error::IoError;
 pub use format::{FileFormat, WwFormat, detect};
+pub use live::{LIVE_FRAMES_UNBOUNDED, LiveOptions};
 pub use stream::{
     FrameHook, FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions,
 };
-pub use trajectory::{Damage, Trajectory, open, open_via_chemfiles, reads_fast};
+pub use trajectory::{Damage, Trajectory, open, open_live, open_via_chemfiles, reads_fast};
 pub use warnings::take_warnings;

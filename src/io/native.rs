@@ -53,6 +53,7 @@ pub(crate) fn opener(format: &FileFormat) -> Option<Opener> {
     if std::env::var_os("MDSURF_NO_NATIVE_READ").is_some() {
         return None;
     }
+    #[allow(clippy::match_single_binding)] // until the first reader registers
     match format.base {
         _ => None,
     }

@@ -11,6 +11,7 @@ use glam::Vec3;
 use super::chem::check_positions;
 use super::contained::ContainedReader;
 use super::format::{FileFormat, detect};
+use super::live::{LiveFrames, LiveOptions};
 use super::native::{self, NativeFrames};
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
@@ -73,6 +74,29 @@ impl std::fmt::Debug for Trajectory {
 /// other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, true)
+}
+
+/// Opens the structure `top` (a file with atom names, as for [`open`]) with its frames coming
+/// from the simulation running at `options.address` over IMD (see `live`): frame `i` is the
+/// `i`-th step the engine sent, read waits for it, and [`Trajectory::len`] is
+/// [`LIVE_FRAMES_UNBOUNDED`](super::LIVE_FRAMES_UNBOUNDED) (the run's end shows as [`IoError::LiveEnded`]). The engine must
+/// send the coordinates of every atom of `top` (GROMACS: `IMD-group = System`). IMD version 2
+/// sends no box or time: frames carry the box of `top`, and times counted from its time.
+pub fn open_live(top: &Path, options: &LiveOptions) -> Result<Trajectory, IoError> {
+    let structure = open(top, None)?;
+    let start = structure.read_frame(0)?;
+    let frames = LiveFrames::connect(options, structure.topology.len(), &start)?;
+    let source = FrameSource::Native(Box::new(frames));
+    let trajectory = Trajectory {
+        frames_path: source.path().to_path_buf(),
+        len: source.len(),
+        reader: Mutex::new(source),
+        damage: None,
+        ..structure
+    };
+    // Waits for the first frame: a wrong atom count is reported at once.
+    trajectory.check_first_frame()?;
+    Ok(trajectory)
 }
 
 /// [`open`] with every file read through chemfiles, never a fast reader and never our mmCIF
@@ -263,6 +287,11 @@ impl Trajectory {
     /// Number of readable frames (frames from [`Trajectory::damage`] on are not counted).
     pub fn len(&self) -> usize {
         self.len
+    }
+
+    /// True when the frames come from a running simulation ([`open_live`]).
+    pub fn is_live(&self) -> bool {
+        self.lock().base() == "IMD"
     }
 
     /// True when there is no readable frame (never the case for an opened trajectory).

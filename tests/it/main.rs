@@ -48,6 +48,7 @@ mod io_mutants;
 mod io_roundtrip;
 mod io_stream;
 mod io_xdr;
+mod live_imd;
 mod measure_areas;
 mod measure_cavities;
 mod render_cli;

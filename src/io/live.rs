@@ -1,0 +1,280 @@
+//! Frames from a running simulation ([`imd`](super::imd)), served as a trajectory: a thread
+//! receives every step the engine sends as soon as it arrives (so the simulation never waits on
+//! us) into a ring of the last frames, and [`LiveFrames::read_frame`] hands frame `i` out when
+//! it has arrived, waiting for it when it has not. Frames are numbered from 0 in the order they
+//! arrive; frames older than the ring are gone (one line says so). When the connection ends
+//! (the run finished, the engine was killed, the network dropped) the frames received stay
+//! readable and the next one is [`IoError::LiveEnded`].
+
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use super::IoError;
+use super::imd::{ImdClient, ImdError, leave};
+use super::native::NativeFrames;
+use glam::Vec3;
+
+use crate::model::Frame;
+
+/// How many frames a live trajectory claims to have when the run's length is not known: the
+/// consumers' loops end at [`IoError::LiveEnded`] long before.
+pub const LIVE_FRAMES_UNBOUNDED: usize = 1_000_000;
+
+/// How to follow a simulation.
+#[derive(Debug, Clone)]
+pub struct LiveOptions {
+    /// `HOST:PORT` of the engine's IMD socket.
+    pub address: String,
+    /// Frames kept for reading back (the oldest are dropped first); at least 1.
+    pub ring_frames: usize,
+    /// Ask the engine to send one frame every this many steps (`None`: its default).
+    pub rate_steps: Option<u32>,
+    /// How long to keep trying to connect (the engine may still be starting).
+    pub connect_timeout: Duration,
+    /// How long to wait for the next frame before giving up on the engine.
+    pub frame_timeout: Duration,
+    /// The simulation's time step in ps: with it, a frame's time is its step (from the energy
+    /// record the engine sends before the coordinates) times this. IMD version 2 sends no time.
+    pub timestep_ps: Option<f64>,
+}
+
+impl LiveOptions {
+    /// Defaults for `address`: a ring of 256 frames, the engine's rate, 30 s to connect and
+    /// 10 minutes between frames (a large system on a slow machine may take that long).
+    pub fn new(address: &str) -> LiveOptions {
+        LiveOptions {
+            address: address.to_string(),
+            ring_frames: 256,
+            rate_steps: None,
+            connect_timeout: Duration::from_secs(30),
+            frame_timeout: Duration::from_secs(600),
+            timestep_ps: None,
+        }
+    }
+}
+
+/// What the receiving thread and the readers share.
+#[derive(Default)]
+struct Received {
+    /// The last frames, oldest first.
+    ring: VecDeque<Frame>,
+    /// Frames received so far (the newest has index `count - 1`).
+    count: usize,
+    /// Set when the connection ended, with why.
+    ended: Option<ImdError>,
+    /// Set by the reader side to make the thread stop.
+    stop: bool,
+}
+
+struct Shared {
+    received: Mutex<Received>,
+    arrived: Condvar,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, Received> {
+        self.received
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
+
+/// A running simulation as a source of frames.
+pub(crate) struct LiveFrames {
+    /// `imd://HOST:PORT`, for messages.
+    path: PathBuf,
+    shared: Arc<Shared>,
+    /// A handle on the socket, to unblock the receiving thread on drop.
+    socket: Option<std::net::TcpStream>,
+    thread: Option<JoinHandle<()>>,
+    /// Frames kept.
+    ring_frames: usize,
+    /// Longest wait for a frame.
+    frame_timeout: Duration,
+}
+
+impl LiveFrames {
+    /// Connects to the engine (see [`ImdClient::connect`]) and starts receiving frames of
+    /// `atoms` atoms. IMD version 2 sends neither box nor time: every frame gets the box of
+    /// `start`, the structure the run started from (exact at constant volume; under pressure
+    /// coupling the box breathes and this is the starting one), and with a time step, the time
+    /// of `start` plus the steps since the first frame (engines number steps differently:
+    /// GROMACS 2022 reports step + 1 with the coordinates of step, so only differences count).
+    pub(crate) fn connect(
+        options: &LiveOptions,
+        atoms: usize,
+        start: &Frame,
+    ) -> Result<LiveFrames, IoError> {
+        let path = PathBuf::from(format!("imd://{}", options.address));
+        let fail = |e: ImdError| IoError::unreadable(&path, e.to_string());
+        let mut client = ImdClient::connect(
+            &options.address,
+            options.connect_timeout,
+            options.frame_timeout,
+        )
+        .map_err(fail)?;
+        if let Some(steps) = options.rate_steps {
+            client.set_rate(steps).map_err(fail)?;
+        }
+        let socket = client.socket().ok();
+        let shared = Arc::new(Shared {
+            received: Mutex::new(Received::default()),
+            arrived: Condvar::new(),
+        });
+        let ring_frames = options.ring_frames.max(1);
+        let expected = Expected {
+            atoms,
+            cell: start.cell,
+            timestep_ps: options.timestep_ps,
+            start_ps: start.time_ps.unwrap_or(0.0),
+        };
+        let thread = {
+            let shared = Arc::clone(&shared);
+            std::thread::Builder::new()
+                .name("mdsurf-imd".into())
+                .spawn(move || receive(client, &expected, ring_frames, &shared))
+                .map_err(|e| IoError::unreadable(&path, format!("cannot start a thread: {e}")))?
+        };
+        Ok(LiveFrames {
+            path,
+            shared,
+            socket,
+            thread: Some(thread),
+            ring_frames,
+            frame_timeout: options.frame_timeout,
+        })
+    }
+}
+
+/// What every frame of a run has in common.
+struct Expected {
+    /// Atoms per frame.
+    atoms: usize,
+    /// The box every frame gets (Å).
+    cell: Option<[Vec3; 3]>,
+    /// Time step (ps), to turn steps into times.
+    timestep_ps: Option<f64>,
+    /// Time of the first frame (ps): the structure's.
+    start_ps: f64,
+}
+
+/// The receiving thread: every step into the ring (of `ring_frames` frames) until the
+/// connection ends or the reader side stops it.
+fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, shared: &Shared) {
+    let mut first_step = None;
+    loop {
+        let result = client.next_step(expected.atoms);
+        let mut received = shared.lock();
+        if received.stop {
+            return;
+        }
+        match result {
+            Ok(step) => {
+                let index = received.count;
+                let step_number = step.energies.map(|e| i64::from(e.step));
+                let first = *first_step.get_or_insert(step_number);
+                let time_ps = match (step_number, first, expected.timestep_ps) {
+                    (Some(now), Some(first), Some(dt)) => {
+                        Some(expected.start_ps + (now - first) as f64 * dt)
+                    }
+                    _ => None,
+                };
+                received.ring.push_back(Frame {
+                    index,
+                    time_ps,
+                    positions: step.positions,
+                    cell: expected.cell,
+                });
+                while received.ring.len() > ring_frames {
+                    received.ring.pop_front();
+                }
+                received.count += 1;
+                shared.arrived.notify_all();
+            }
+            Err(error) => {
+                received.ended = Some(error);
+                shared.arrived.notify_all();
+                return;
+            }
+        }
+    }
+}
+
+impl NativeFrames for LiveFrames {
+    fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn base(&self) -> &'static str {
+        "IMD"
+    }
+
+    fn len(&self) -> usize {
+        LIVE_FRAMES_UNBOUNDED
+    }
+
+    fn damage(&self) -> Option<&IoError> {
+        None
+    }
+
+    fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
+        let mut received = self.shared.lock();
+        loop {
+            let oldest = received.count - received.ring.len();
+            if index < oldest {
+                return Err(IoError::bad_frame(
+                    &self.path,
+                    index,
+                    format!(
+                        "no longer held (frames {oldest} to {} are; the last {} are kept)",
+                        received.count - 1,
+                        self.ring_frames
+                    ),
+                ));
+            }
+            if index < received.count {
+                return Ok(received.ring[index - oldest].clone());
+            }
+            if let Some(reason) = &received.ended {
+                return Err(IoError::LiveEnded {
+                    path: self.path.clone(),
+                    frames: received.count,
+                    reason: reason.to_string(),
+                });
+            }
+            let (guard, wait) = self
+                .shared
+                .arrived
+                .wait_timeout(received, self.frame_timeout)
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            received = guard;
+            if wait.timed_out() && index >= received.count && received.ended.is_none() {
+                return Err(IoError::bad_frame(
+                    &self.path,
+                    index,
+                    format!(
+                        "no frame from the simulation for {} s",
+                        self.frame_timeout.as_secs()
+                    ),
+                ));
+            }
+        }
+    }
+}
+
+impl Drop for LiveFrames {
+    fn drop(&mut self) {
+        self.shared.lock().stop = true;
+        // Tell the engine we leave (it goes on running); closing the socket ends the thread's
+        // wait for the next message.
+        if let Some(socket) = &self.socket {
+            leave(socket);
+        }
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
