@@ -59,6 +59,9 @@ pub struct ViewOptions {
     pub camera: Option<crate::scene::state_file::CameraState>,
     /// Per-frame transformations (whole, centre, fit, smooth) of the frames shown.
     pub transforms: crate::transform::TransformOptions,
+    /// Frames from a running simulation (`--imd`) instead of the trajectory file; the
+    /// structure file of `files` holds its atoms.
+    pub live: Option<crate::io::LiveOptions>,
 }
 
 /// Which surface engine the window uses: [`Backend::Gpu`] uses the GPU engine on the window's
@@ -177,7 +180,10 @@ pub fn create_viewer(
         device.0.attach(&s.device, move || ctx.request_repaint());
         viewer.watch_device(device.0, device.1);
     }
-    viewer.open(&cc.egui_ctx, top, traj);
+    match options.live.clone() {
+        Some(live) => viewer.open_live(&cc.egui_ctx, top, live),
+        None => viewer.open(&cc.egui_ctx, top, traj),
+    }
     viewer
 }
 

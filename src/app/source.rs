@@ -33,6 +33,15 @@ pub trait FrameSource: Send + Sync {
     fn periodic(&self) -> Option<crate::transform::Replicate> {
         None
     }
+    /// True when the frames come from a running simulation: [`FrameSource::len`] grows as
+    /// they arrive.
+    fn is_live(&self) -> bool {
+        false
+    }
+    /// For a running simulation whose stream has ended: why, in one line.
+    fn live_ended(&self) -> Option<String> {
+        None
+    }
 }
 
 /// Frames held in memory.
@@ -177,6 +186,12 @@ impl FrameSource for StreamedSource {
     fn periodic(&self) -> Option<crate::transform::Replicate> {
         self.periodic
     }
+    fn is_live(&self) -> bool {
+        self.streamer.trajectory().is_live()
+    }
+    fn live_ended(&self) -> Option<String> {
+        self.streamer.trajectory().live_ended()
+    }
 }
 
 /// Opens `top` (and `traj`) from disk as a shared source read ahead by a [`StreamedSource`].
@@ -202,7 +217,27 @@ pub fn open_files_with(
             message: "the reader crashed on this file".into(),
         })
     });
-    let trajectory = opened.map_err(|e| e.to_string())?;
+    streamed(opened.map_err(|e| e.to_string())?, top, transforms)
+}
+
+/// Like [`open_files_with`], with the frames coming from the simulation running at
+/// `live.address` as they arrive (see [`crate::io::open_live`]); `top` holds its atoms.
+pub fn open_live_with(
+    top: &std::path::Path,
+    live: &crate::io::LiveOptions,
+    transforms: &TransformOptions,
+) -> Result<Arc<dyn FrameSource>, String> {
+    let trajectory = crate::io::open_live(top, live).map_err(|e| e.to_string())?;
+    streamed(trajectory, top, transforms)
+}
+
+/// `trajectory` read ahead by a [`StreamedSource`], its frames transformed as `transforms`
+/// ask.
+fn streamed(
+    trajectory: Trajectory,
+    top: &std::path::Path,
+    transforms: &TransformOptions,
+) -> Result<Arc<dyn FrameSource>, String> {
     let chain = transform_chain(&trajectory, top, transforms)?;
     Ok(Arc::new(StreamedSource::transformed(
         trajectory,

@@ -199,6 +199,10 @@ impl AppCore {
             source.len()
         );
         self.timeline = Timeline::new(source.len());
+        if source.is_live() {
+            // A running simulation opens on its newest frame, and follows it.
+            self.timeline.current = source.len().saturating_sub(1);
+        }
         if !self.keep_reps_on_load || self.reps.is_empty() {
             // Static selections only: the class counts need no coordinates.
             let topology = source.topology();
@@ -388,6 +392,40 @@ impl AppCore {
         self.generation += 1;
         self.history.clear();
         self.request_current();
+    }
+
+    /// For a running simulation: takes in the frames that arrived since the last call, and
+    /// moves to the newest when the newest was shown. Returns true when frames arrived.
+    pub fn follow_live(&mut self) -> bool {
+        let Some(source) = self.source.clone().filter(|s| s.is_live()) else {
+            return false;
+        };
+        let len = source.len();
+        if len == self.timeline.len {
+            if let Some(end) = source.live_ended()
+                && self.status != end
+            {
+                self.status = end;
+            }
+            return false;
+        }
+        self.status = format!(
+            "{}: {} atoms, live: {len} frames received",
+            source.name(),
+            source.topology().len()
+        );
+        let at_newest = self.timeline.current + 1 >= self.timeline.len;
+        self.timeline.len = len;
+        if at_newest && len > 0 {
+            self.timeline.current = len - 1;
+            self.request_current();
+        }
+        true
+    }
+
+    /// True when the data comes from a running simulation.
+    pub fn is_live(&self) -> bool {
+        self.source.as_ref().is_some_and(|s| s.is_live())
     }
 
     /// Asks the worker for the current frame unless it is already on screen or on its way.

@@ -13,7 +13,7 @@ use super::export::{MovieJob, MoviePlan, export_ui};
 use super::panels::{SurfaceDraft, look_ui, readouts_ui, surface_ui};
 use super::plot::plot_ui;
 use super::recent::{Recent, RecentEntry};
-use super::source::{FrameSource, open_files_with};
+use super::source::{FrameSource, open_files_with, open_live_with};
 use super::state::{AppCore, Command};
 use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
@@ -145,6 +145,21 @@ impl Viewer {
         std::thread::spawn(move || {
             let result = open_files_with(&top, traj.as_deref(), &transforms);
             let _ = tx.send((result, RecentEntry { top, traj }));
+            ctx.request_repaint();
+        });
+        self.loading = Some(rx);
+    }
+
+    /// Starts following the simulation running at `live.address` (atoms from `top`) on a
+    /// background thread; the current data stays until the first frame arrives.
+    pub fn open_live(&mut self, ctx: &egui::Context, top: PathBuf, live: crate::io::LiveOptions) {
+        let (tx, rx) = channel();
+        let ctx = ctx.clone();
+        self.core.status = format!("connecting to {}…", live.address);
+        let transforms = self.transforms.applied().clone();
+        std::thread::spawn(move || {
+            let result = open_live_with(&top, &live, &transforms);
+            let _ = tx.send((result, RecentEntry { top, traj: None }));
             ctx.request_repaint();
         });
         self.loading = Some(rx);
@@ -460,6 +475,7 @@ impl eframe::App for Viewer {
                 self.fps
             };
         }
+        self.core.follow_live();
         if self.movie.is_none() && !self.scripted() && self.core.timeline.advance(dt) {
             self.core.request_current();
         }
@@ -548,6 +564,9 @@ impl eframe::App for Viewer {
             || self.loading.is_some()
         {
             ctx.request_repaint();
+        } else if self.core.is_live() {
+            // New frames of a running simulation are looked for ten times a second.
+            ctx.request_repaint_after(std::time::Duration::from_millis(100));
         }
     }
 }

@@ -4,13 +4,14 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use mdsurf::app::{self, Script, ViewOptions};
 use mdsurf::render::{RenderSettings, Stereo};
 
 use mdsurf::scene::representation::{RepStyle, Representation};
 
 use super::common::{Backend, ParamArgs, ParticleArgs};
+use super::live_args::LiveArgs;
 use super::render::StereoArgs;
 use super::scene_args::SceneArgs;
 use super::transform_args::TransformArgs;
@@ -24,6 +25,8 @@ pub struct ViewArgs {
     /// Trajectory file.
     #[arg(value_name = "TRAJ")]
     pub traj: Option<PathBuf>,
+    #[command(flatten)]
+    pub live: LiveArgs,
     #[command(flatten)]
     pub params: ParamArgs,
     #[command(flatten)]
@@ -72,6 +75,12 @@ pub fn run(args: ViewArgs) -> Result<()> {
         )),
         None => None,
     };
+    let live = args.live.options(args.traj.as_deref())?;
+    if live.is_some() && args.top.is_none() {
+        bail!(
+            "--imd: give the structure file of the simulation's atoms (mdsurf TOP --imd HOST:PORT)"
+        );
+    }
     let params = args.params.params()?;
     let particles = args.particles.options()?;
     let state = args.scene.load_state()?;
@@ -128,6 +137,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
         reps,
         camera,
         transforms,
+        live,
     };
     mdsurf::app::run(options)?;
     Ok(())

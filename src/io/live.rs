@@ -82,6 +82,22 @@ impl Shared {
     }
 }
 
+/// How many frames a live run has received, readable without waiting on its reader.
+#[derive(Clone)]
+pub(crate) struct LiveCount(Arc<Shared>);
+
+impl LiveCount {
+    /// Frames received so far.
+    pub(crate) fn received(&self) -> usize {
+        self.0.lock().count
+    }
+
+    /// Why the stream ended, once it has (one line), else `None`.
+    pub(crate) fn ended(&self) -> Option<String> {
+        self.0.lock().ended.as_ref().map(|e| e.to_string())
+    }
+}
+
 /// A running simulation as a source of frames.
 pub(crate) struct LiveFrames {
     /// `imd://HOST:PORT`, for messages.
@@ -200,6 +216,13 @@ fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, share
                 return;
             }
         }
+    }
+}
+
+impl LiveFrames {
+    /// A handle on the count of frames received.
+    pub(crate) fn count(&self) -> LiveCount {
+        LiveCount(Arc::clone(&self.shared))
     }
 }
 

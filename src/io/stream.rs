@@ -153,14 +153,15 @@ impl FrameStreamer {
         &self.trajectory
     }
 
-    /// Number of readable frames.
+    /// Number of readable frames (of a running simulation: those received so far, a number
+    /// that grows).
     pub fn len(&self) -> usize {
-        self.trajectory.len()
+        self.trajectory.available()
     }
 
     /// True when there are no readable frames.
     pub fn is_empty(&self) -> bool {
-        self.trajectory.is_empty()
+        self.len() == 0
     }
 
     /// Sets `callback` to run (on the reader thread) whenever a frame lands.
@@ -374,7 +375,7 @@ impl Reader {
 
     /// The prefetch window around the playhead, nearest first, ahead before behind.
     fn window(&self, playhead: usize) -> impl Iterator<Item = usize> + use<> {
-        let len = self.trajectory.len();
+        let len = self.trajectory.available();
         let ahead = (1..=self.ahead)
             .map(move |d| playhead + d)
             .filter(move |&i| i < len);

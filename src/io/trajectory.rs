@@ -11,7 +11,7 @@ use glam::Vec3;
 use super::chem::check_positions;
 use super::contained::ContainedReader;
 use super::format::{FileFormat, detect};
-use super::live::{LiveFrames, LiveOptions};
+use super::live::{LiveCount, LiveFrames, LiveOptions};
 use super::native::{self, NativeFrames};
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
@@ -42,6 +42,8 @@ pub struct Trajectory {
     reader: Mutex<FrameSource>,
     len: usize,
     damage: Option<Damage>,
+    /// Frames received so far, for a running simulation ([`open_live`]).
+    live: Option<LiveCount>,
 }
 
 impl std::fmt::Debug for Trajectory {
@@ -86,12 +88,14 @@ pub fn open_live(top: &Path, options: &LiveOptions) -> Result<Trajectory, IoErro
     let structure = open(top, None)?;
     let start = structure.read_frame(0)?;
     let frames = LiveFrames::connect(options, structure.topology.len(), &start)?;
+    let live = Some(frames.count());
     let source = FrameSource::Native(Box::new(frames));
     let trajectory = Trajectory {
         frames_path: source.path().to_path_buf(),
         len: source.len(),
         reader: Mutex::new(source),
         damage: None,
+        live,
         ..structure
     };
     // Waits for the first frame: a wrong atom count is reported at once.
@@ -253,6 +257,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
         len: reader.len(),
         reader: Mutex::new(reader),
         damage: None,
+        live: None,
     };
     if let Some(w) = walk {
         trajectory.apply_walk(w)?;
@@ -291,7 +296,27 @@ impl Trajectory {
 
     /// True when the frames come from a running simulation ([`open_live`]).
     pub fn is_live(&self) -> bool {
-        self.lock().base() == "IMD"
+        self.live.is_some()
+    }
+
+    /// For a running simulation whose stream has ended (the run finished, the engine was
+    /// killed, the connection dropped): one line saying so, with the frames received.
+    pub fn live_ended(&self) -> Option<String> {
+        let live = self.live.as_ref()?;
+        let reason = live.ended()?;
+        Some(format!(
+            "{}: the simulation stream ended after {} frames ({reason})",
+            self.frames_path.display(),
+            live.received()
+        ))
+    }
+
+    /// Frames readable now without waiting: [`Trajectory::len`], or for a running simulation
+    /// the frames received so far (never blocks on a read in progress).
+    pub fn available(&self) -> usize {
+        self.live
+            .as_ref()
+            .map_or(self.len, |live| live.received().min(self.len))
     }
 
     /// True when there is no readable frame (never the case for an opened trajectory).

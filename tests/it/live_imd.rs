@@ -335,3 +335,83 @@ fn no_engine_is_one_line() {
         run.stderr
     );
 }
+
+#[test]
+fn the_viewer_follows_the_newest_frame_and_keeps_them_when_the_engine_dies() {
+    use mdsurf::app::source::open_live_with;
+    use mdsurf::app::state::AppCore;
+    use mdsurf::app::worker::Worker;
+    use mdsurf::surface::CpuEngine;
+
+    let dir = tempfile::tempdir().unwrap();
+    let top = water_box(dir.path(), 1_000_000);
+    let port = free_port();
+    let mut engine = Mdrun::start(dir.path(), port);
+    let source = open_live_with(&top, &options(port), &Default::default()).unwrap();
+    assert!(source.is_live());
+    let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
+    let mut core = AppCore::new(worker);
+    core.base.spacing = 2.0;
+    core.set_source(source.clone());
+    // The timeline grows as frames arrive and the window shows the newest one.
+    let start = std::time::Instant::now();
+    assert_eq!(
+        core.timeline.current + 1,
+        core.timeline.len,
+        "opens on the newest frame"
+    );
+    let opened_with = core.timeline.len;
+    while core.timeline.len < opened_with + 20 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no frames arrive"
+        );
+        core.follow_live();
+        core.poll();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(core.timeline.current, core.timeline.len - 1);
+    assert!(core.wait_idle(Duration::from_secs(120)));
+    let shown = core
+        .shown
+        .as_ref()
+        .expect("a frame on screen")
+        .computed
+        .frame;
+    assert!(
+        shown + 1 >= opened_with + 20,
+        "showing frame {shown}, not the newest"
+    );
+    // Scrubbing back stops following: new frames extend the timeline, the view stays.
+    core.timeline.current = 5;
+    core.request_current();
+    let len = core.timeline.len;
+    while core.timeline.len < len + 5 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no more frames arrive"
+        );
+        core.follow_live();
+        core.poll();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(core.timeline.current, 5);
+    // A killed engine: the frames received stay, readable, and the window keeps its state.
+    engine.0.kill().unwrap();
+    engine.0.wait().unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    core.follow_live();
+    core.follow_live();
+    let received = core.timeline.len;
+    assert_eq!(
+        core.status,
+        format!(
+            "imd://127.0.0.1:{port}: the simulation stream ended after {received} frames (the simulation closed the connection)"
+        )
+    );
+    assert!(core.wait_idle(Duration::from_secs(120)));
+    assert!(core.error.is_none(), "{:?}", core.error);
+    let last = source.read_frame(received - 1).unwrap();
+    assert_eq!(last.positions.len(), source.topology().len());
+    assert!(core.shown.is_some());
+}
