@@ -19,6 +19,7 @@ use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 use mdsurf::export::video::{Mp4Movie, check_even_size, is_mp4};
 use mdsurf::export::{StatsRow, StatsWriter};
 use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
+use mdsurf::io::IoError;
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::movie::Shot;
 use mdsurf::scene::representation::{RepStyle, Representation};
@@ -40,9 +41,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let state = args.scene.load_state()?;
     let transforms = args.transforms.options(state.as_ref());
     let first = args.frames.map_or(args.frame, |r| r.start);
-    let (system, _) = System::open(&args.input, first)?;
-    let len = system.len();
-    let Images { frames, shots, fps } = images(&args, state.as_ref(), len, &system.frames_path)?;
+    let live = args.live.options(args.input.traj.as_deref())?;
+    if live.is_some() {
+        check_live_output(&args)?;
+    }
+    let (system, _) = System::open_or_follow(&args.input, live.as_ref(), first)?;
+    let Images { frames, shots, fps } = images(&args, state.as_ref(), &system)?;
     let movie_out = is_mp4(&args.output);
     let paths = output_files(&args, &frames, movie_out)?;
     // The images this process writes; the camera is still fitted to the run's first frame.
@@ -168,8 +172,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // On a terminal, a long run shows one progress bar instead of a line per image.
     let bar = (std::io::stderr().is_terminal()
         && block.len() > super::surface::PROGRESS_BAR_FRAMES
-        && !args.quiet)
-        .then(|| super::surface::progress_bar(block.len()));
+        && !args.quiet
+        && live.is_none())
+    .then(|| super::surface::progress_bar(block.len()));
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;
@@ -196,7 +201,19 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let frame = if i == 0 {
             first_frame.clone()
         } else {
-            Arc::new(reader.read_frame(f)?)
+            match reader.read_frame(f) {
+                Ok(frame) => Arc::new(frame),
+                // The end of a running simulation ends the movie; it is not a failure.
+                Err(e) => match e.downcast_ref::<IoError>() {
+                    Some(end @ IoError::LiveEnded { .. }) => {
+                        if !args.quiet {
+                            eprintln!("{end}");
+                        }
+                        break;
+                    }
+                    _ => return Err(e),
+                },
+            }
         };
         let read_ms = ms_since(t0);
         let computed = engine
@@ -304,6 +321,24 @@ pub fn run(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// What `render --imd` can write: a movie of the run (until it ends, or `--frames :N`), or a
+/// numbered image sequence of a stated length; one picture of a stream makes no sense.
+fn check_live_output(args: &RenderArgs) -> Result<()> {
+    if args.chunk.is_some() {
+        bail!(
+            "--chunk splits a trajectory's frames: a running simulation (--imd) has no fixed frames to split"
+        );
+    }
+    let bounded = args.frames.is_some_and(|r| r.stop.is_some());
+    if !is_mp4(&args.output) && !bounded {
+        bail!(
+            "-o {}: with --imd, render a movie (.mp4) or say how many images with --frames :N",
+            args.output.display()
+        );
+    }
+    Ok(())
+}
+
 /// The layers of `layers` as `shot` shows them: a representation the camera script faded
 /// takes the faded opacity, and is not drawn at 0.
 fn faded_layers<'a>(
@@ -381,16 +416,14 @@ struct Images {
 }
 
 /// Which images `args` ask for: `--frames`, one frame, a turntable of it, or the state file's
-/// camera script (unless --frames or --turntable choose the images); `frames_path` names the
-/// trajectory in errors.
-fn images(
-    args: &RenderArgs,
-    state: Option<&StateFile>,
-    len: usize,
-    frames_path: &Path,
-) -> Result<Images> {
+/// camera script (unless --frames or --turntable choose the images); of a running simulation
+/// without --frames, every frame until it ends.
+fn images(args: &RenderArgs, state: Option<&StateFile>, system: &System) -> Result<Images> {
+    let (len, frames_path) = (system.len(), &system.frames_path);
     let mut frames = match args.frames {
         Some(r) => r.indices(len),
+        // A running simulation: every frame from --frame on, until the run ends.
+        None if system.trajectory.is_live() => (args.frame..len).collect(),
         None if args.frame < len => vec![args.frame],
         None => bail!(
             "{}: no frame {} (it has {len})",

@@ -21,6 +21,8 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub input: InputArgs,
     #[command(flatten)]
+    pub live: super::live_args::LiveArgs,
+    #[command(flatten)]
     pub params: ParamArgs,
     #[command(flatten)]
     pub scene: SceneArgs,

@@ -415,3 +415,52 @@ fn the_viewer_follows_the_newest_frame_and_keeps_them_when_the_engine_dies() {
     assert_eq!(last.positions.len(), source.topology().len());
     assert!(core.shown.is_some());
 }
+
+#[test]
+fn render_makes_a_movie_of_a_run_until_it_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let top = water_box(dir.path(), 12);
+    let port = free_port();
+    let engine = Mdrun::start(dir.path(), port);
+    let address = format!("127.0.0.1:{port}");
+    let top = top.to_str().unwrap();
+    let run = mdsurf(
+        dir.path(),
+        &[
+            "render", top, "--imd", &address, "--size", "160x120", "-o", "live.mp4",
+        ],
+    );
+    engine.wait();
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stderr
+            .contains("the simulation stream ended after 13 frames"),
+        "{}",
+        run.stderr
+    );
+    let frames = crate::cli_common::ffmpeg_tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=nb_read_frames",
+            "-of",
+            "csv=p=0",
+        ]
+        .into_iter()
+        .chain([dir.path().join("live.mp4").to_str().unwrap()])
+        .collect::<Vec<_>>(),
+    );
+    assert_eq!(String::from_utf8_lossy(&frames).trim(), "13");
+    // One picture of a stream is refused before connecting.
+    let run = mdsurf(
+        dir.path(),
+        &["render", top, "--imd", &address, "-o", "one.png"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(run.last_line().contains("--frames :N"), "{}", run.stderr);
+}
