@@ -47,7 +47,7 @@ pub(crate) fn read(path: &Path, format: &FileFormat) -> Option<FastRead> {
     if compressed || !matches!(format.base, "PDB" | "XYZ") {
         return None;
     }
-    let bytes = std::fs::read(path).ok()?;
+    let bytes = super::line_ends::lone_cr_to_lf(std::fs::read(path).ok()?);
     match format.base {
         "PDB" => fast_pdb::read(&bytes),
         _ => fast_xyz::read(&bytes),

@@ -6,8 +6,10 @@
 //!   fixed-column formats (PDB, GRO) every non-ASCII byte becomes `?` (so columns stay where they
 //!   are); in the free formats (mmCIF, XYZ, LAMMPS, MOL2) a byte that is not UTF-8 is read as
 //!   Latin-1 and written as UTF-8.
+//! - Lone `\r` line ends (CR-only files) become `\n` in every text format ([`super::line_ends`]).
 //! - `.gz`, `.bz2` and `.xz` files are decompressed here, by memory-safe Rust decoders
-//!   (flate2, bzip2, lzma-rust2), into a
+//!   (flate2, bzip2, lzma-rust2; see [`super::decoders`] for gzip's zero padding and cut `.xz`
+//!   files), into a
 //!   temporary plain file (chemfiles' bzip2 reader spins forever on a truncated stream). A stream
 //!   that ends early keeps what decompressed: the frames before the cut stay readable and the
 //!   last, cut frame is reported as damage.
@@ -24,7 +26,9 @@ use std::fs::File;
 use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
+use super::decoders::decoder;
 use super::format::FileFormat;
+use super::line_ends::{CrToLf, has_lone_cr, lone_cr_to_lf};
 use super::{IoError, cif_residues, tng};
 
 /// Bytes read at a time while scanning or copying.
@@ -64,6 +68,8 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
             if matches!(format.base, "PDB" | "mmCIF") && compression.is_none() {
                 let bytes =
                     std::fs::read(path).map_err(|e| IoError::unreadable(path, e.to_string()))?;
+                let cr_only = has_lone_cr(&bytes);
+                let bytes = lone_cr_to_lf(bytes);
                 let cleaned = match format.base {
                     "PDB" => clean_pdb(&bytes),
                     _ => {
@@ -71,6 +77,7 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
                         cif_residues::renumber(&bytes).map(latin1_as_utf8)
                     }
                 };
+                let cleaned = cleaned.or_else(|| cr_only.then_some(bytes));
                 if let Some(cleaned) = cleaned {
                     let (temp, copy) = temp_file(path, format.base)?;
                     std::fs::write(&copy, cleaned).map_err(|e| write_failed(path, e))?;
@@ -217,6 +224,9 @@ fn scan(path: &Path, kind: TextKind) -> Result<bool, IoError> {
             return Ok(carry == 0);
         }
         let filled = carry + n;
+        if has_lone_cr(&buffer[..filled]) {
+            return Ok(false);
+        }
         match kind {
             TextKind::Columns => {
                 if !buffer[..filled].is_ascii() {
@@ -344,6 +354,9 @@ fn decompress(
     let mut cleaner = text.map(Cleaner::new);
     let mut buffer = vec![0u8; CHUNK];
     let mut cleaned = Vec::with_capacity(CHUNK + 16);
+    // Text only: a binary stream's 0x0d bytes are data.
+    let mut line_ends = CrToLf::default();
+    let mut fixed = Vec::with_capacity(CHUNK + 16);
     let mut total = 0u64;
     let mut truncated = None;
     loop {
@@ -363,7 +376,9 @@ fn decompress(
             Some(c) => {
                 cleaned.clear();
                 c.push(&buffer[..n], false, &mut cleaned);
-                &cleaned[..]
+                fixed.clear();
+                line_ends.push(&cleaned, false, &mut fixed);
+                &fixed[..]
             }
             None => &buffer[..n],
         };
@@ -372,8 +387,10 @@ fn decompress(
     if let Some(c) = cleaner.as_mut() {
         cleaned.clear();
         c.push(&[], true, &mut cleaned);
+        fixed.clear();
+        line_ends.push(&cleaned, true, &mut fixed);
         output
-            .write_all(&cleaned)
+            .write_all(&fixed)
             .map_err(|e| write_failed(path, e))?;
     }
     finish(path, output)?;
@@ -424,18 +441,9 @@ fn decompress(
     })
 }
 
-/// The Rust decoder of `compression` (`GZ`, `XZ`, else bzip2) reading `file`.
-fn decoder(file: File, compression: Option<&str>) -> Box<dyn Read> {
-    let file = std::io::BufReader::new(file);
-    match compression {
-        Some("GZ") => Box::new(flate2::read::MultiGzDecoder::new(file)),
-        Some("XZ") => Box::new(lzma_rust2::XzReader::new(file, true)),
-        _ => Box::new(bzip2::read::MultiBzDecoder::new(file)),
-    }
-}
-
 /// The whole content of `path` in memory, decompressed (in Rust) when `format` is compressed,
-/// and why the compressed stream ends early when it does (what decompressed before is kept).
+/// with lone `\r` line ends made `\n` (`read_all` serves text formats only), and why the
+/// compressed stream ends early when it does (what decompressed before is kept).
 /// For the readers that parse a file themselves ([`super::mmcif`]); no temporary copy.
 pub(crate) fn read_all(
     path: &Path,
@@ -447,7 +455,7 @@ pub(crate) fn read_all(
         let mut bytes = Vec::new();
         file.read_to_end(&mut bytes)
             .map_err(|e| IoError::unreadable(path, e.to_string()))?;
-        return Ok((bytes, None));
+        return Ok((lone_cr_to_lf(bytes), None));
     };
     let mut input = decoder(file, Some(compression));
     let mut bytes = Vec::new();
@@ -464,14 +472,14 @@ pub(crate) fn read_all(
                 if bytes.is_empty() {
                     return Err(IoError::unreadable(path, reason));
                 }
-                return Ok((bytes, Some(reason)));
+                return Ok((lone_cr_to_lf(bytes), Some(reason)));
             }
         }
     }
     if bytes.is_empty() {
         return Err(IoError::unreadable(path, "the compressed data is empty"));
     }
-    Ok((bytes, None))
+    Ok((lone_cr_to_lf(bytes), None))
 }
 
 /// Copies `input` to `output` through `cleaner`.
@@ -483,12 +491,16 @@ fn copy_cleaned(
 ) -> Result<(), IoError> {
     let mut buffer = vec![0u8; CHUNK];
     let mut cleaned = Vec::with_capacity(2 * CHUNK);
+    let mut line_ends = CrToLf::default();
+    let mut fixed = Vec::with_capacity(2 * CHUNK);
     loop {
         let n = read_some(path, input, &mut buffer)?;
         cleaned.clear();
         cleaner.push(&buffer[..n], n == 0, &mut cleaned);
+        fixed.clear();
+        line_ends.push(&cleaned, n == 0, &mut fixed);
         output
-            .write_all(&cleaned)
+            .write_all(&fixed)
             .map_err(|e| write_failed(path, e))?;
         if n == 0 {
             return Ok(());

@@ -76,8 +76,14 @@ impl DataTable {
 
 /// Reads a data file: a multi-model PDB (`.pdb`, `.ent`) for its B-factors, else a CSV.
 pub fn load(path: &Path) -> Result<DataTable, DataError> {
-    let text = std::fs::read_to_string(path)
+    let bytes = std::fs::read(path)
         .map_err(|e| DataError(format!("{}: cannot read: {e}", path.display())))?;
+    // Spreadsheets on Windows write Latin-1 (a `é` in a comment or a label): bytes that are
+    // not UTF-8 are read as Latin-1, as the structure readers do.
+    let text = match String::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(e) => e.into_bytes().iter().map(|&b| char::from(b)).collect(),
+    };
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

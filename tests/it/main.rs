@@ -47,6 +47,7 @@ mod io_model;
 mod io_mutants;
 mod io_roundtrip;
 mod io_stream;
+mod io_valid_files;
 mod io_xdr;
 mod live_imd;
 mod measure_areas;
