@@ -59,9 +59,9 @@ pub struct ViewOptions {
     pub camera: Option<crate::scene::state_file::CameraState>,
     /// Per-frame transformations (whole, centre, fit, smooth) of the frames shown.
     pub transforms: crate::transform::TransformOptions,
-    /// Frames from a running simulation (`--imd`) instead of the trajectory file; the
-    /// structure file of `files` holds its atoms.
-    pub live: Option<crate::io::LiveOptions>,
+    /// Frames from a running simulation (`--imd`) or a file being written (`--follow`); the
+    /// structure file of `files` holds the atoms.
+    pub live: Option<crate::io::LiveSource>,
 }
 
 /// Which surface engine the window uses: [`Backend::Gpu`] uses the GPU engine on the window's

@@ -220,14 +220,14 @@ pub fn open_files_with(
     streamed(opened.map_err(|e| e.to_string())?, top, transforms)
 }
 
-/// Like [`open_files_with`], with the frames coming from the simulation running at
-/// `live.address` as they arrive (see [`crate::io::open_live`]); `top` holds its atoms.
+/// Like [`open_files_with`], with the frames coming as they arrive from a running simulation
+/// or a file being written (see [`crate::io::open_growing`]); `top` holds the atoms.
 pub fn open_live_with(
     top: &std::path::Path,
-    live: &crate::io::LiveOptions,
+    live: &crate::io::LiveSource,
     transforms: &TransformOptions,
 ) -> Result<Arc<dyn FrameSource>, String> {
-    let trajectory = crate::io::open_live(top, live).map_err(|e| e.to_string())?;
+    let trajectory = crate::io::open_growing(top, live).map_err(|e| e.to_string())?;
     streamed(trajectory, top, transforms)
 }
 

@@ -150,12 +150,12 @@ impl Viewer {
         self.loading = Some(rx);
     }
 
-    /// Starts following the simulation running at `live.address` (atoms from `top`) on a
+    /// Starts following a running simulation or a growing file (atoms from `top`) on a
     /// background thread; the current data stays until the first frame arrives.
-    pub fn open_live(&mut self, ctx: &egui::Context, top: PathBuf, live: crate::io::LiveOptions) {
+    pub fn open_live(&mut self, ctx: &egui::Context, top: PathBuf, live: crate::io::LiveSource) {
         let (tx, rx) = channel();
         let ctx = ctx.clone();
-        self.core.status = format!("connecting to {}…", live.address);
+        self.core.status = format!("following {}…", live.describe());
         let transforms = self.transforms.applied().clone();
         std::thread::spawn(move || {
             let result = open_live_with(&top, &live, &transforms);

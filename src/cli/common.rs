@@ -446,15 +446,15 @@ impl System {
         System::open_or_follow(input, None, first_frame)
     }
 
-    /// [`System::open`], with the frames coming from a running simulation when `live` says
-    /// where it is (then `input.traj` is `None`).
+    /// [`System::open`], with the frames coming from a running simulation or a growing file
+    /// when `live` says so.
     pub fn open_or_follow(
         input: &InputArgs,
-        live: Option<&io::LiveOptions>,
+        live: Option<&io::LiveSource>,
         first_frame: usize,
     ) -> Result<(System, Frame)> {
         let trajectory = match live {
-            Some(live) => io::open_live(&input.top, live)?,
+            Some(live) => io::open_growing(&input.top, live)?,
             None => io::open(&input.top, input.traj.as_deref())?,
         };
         let options = input.particles.options_for(&trajectory)?;

@@ -1,10 +1,10 @@
-//! The options that take frames from a running simulation instead of a file (`--imd`), shared
-//! by the commands that read frames as they arrive.
+//! The options that take frames from a running simulation (`--imd`) or from a file an engine
+//! is still writing (`--follow`), shared by the commands that read frames as they arrive.
 
 use std::time::Duration;
 
 use anyhow::{Result, bail};
-use mdsurf::io::LiveOptions;
+use mdsurf::io::{FollowOptions, LiveOptions, LiveSource};
 
 /// Frames from a simulation running now, over IMD (GROMACS `mdrun -imdport`, NAMD, LAMMPS).
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -26,6 +26,15 @@ pub struct LiveArgs {
     #[arg(long, value_name = "S", requires = "imd", default_value_t = 30,
           value_parser = clap::value_parser!(u64).range(1..=86_400))]
     pub imd_wait: u64,
+    /// Keep reading TRAJ while an engine writes it: frames appended later appear as they are
+    /// completed (a frame still being written is waited for); the run ends when the file has
+    /// not grown for --follow-idle seconds.
+    #[arg(long, conflicts_with = "imd")]
+    pub follow: bool,
+    /// With --follow: seconds without growth that end the run.
+    #[arg(long, value_name = "S", requires = "follow", default_value_t = 60,
+          value_parser = clap::value_parser!(u64).range(1..=604_800))]
+    pub follow_idle: u64,
 }
 
 /// A time step in ps: finite, above 0 and at most 1000 (1 ns).
@@ -37,9 +46,20 @@ fn parse_timestep(s: &str) -> Result<f64> {
 }
 
 impl LiveArgs {
-    /// The connection to make, when --imd was given; fails on a time step out of range or a
-    /// trajectory file given as well.
-    pub fn options(&self, traj: Option<&std::path::Path>) -> Result<Option<LiveOptions>> {
+    /// Where growing frames come from: the simulation (--imd), or TRAJ followed as it grows
+    /// (--follow); `None` for an ordinary file. Fails on --imd with a trajectory file, or
+    /// --follow without one.
+    pub fn options(&self, traj: Option<&std::path::Path>) -> Result<Option<LiveSource>> {
+        if self.follow {
+            let Some(traj) = traj else {
+                bail!(
+                    "--follow: give the trajectory file the engine is writing (mdsurf TOP TRAJ --follow)"
+                );
+            };
+            let mut options = FollowOptions::new(traj);
+            options.idle = Duration::from_secs(self.follow_idle);
+            return Ok(Some(LiveSource::Follow(options)));
+        }
         let Some(address) = &self.imd else {
             return Ok(None);
         };
@@ -53,6 +73,6 @@ impl LiveArgs {
         options.rate_steps = self.imd_every;
         options.timestep_ps = self.imd_timestep;
         options.connect_timeout = Duration::from_secs(self.imd_wait);
-        Ok(Some(options))
+        Ok(Some(LiveSource::Imd(options)))
     }
 }

@@ -23,6 +23,25 @@ use crate::model::Frame;
 /// consumers' loops end at [`IoError::LiveEnded`] long before.
 pub const LIVE_FRAMES_UNBOUNDED: usize = 1_000_000;
 
+/// A source of frames that grows while it is read.
+#[derive(Debug, Clone)]
+pub enum LiveSource {
+    /// A running simulation, over IMD.
+    Imd(LiveOptions),
+    /// A trajectory file an engine is writing.
+    Follow(super::follow::FollowOptions),
+}
+
+impl LiveSource {
+    /// Where the frames come from, for messages (`HOST:PORT`, or the file).
+    pub fn describe(&self) -> String {
+        match self {
+            LiveSource::Imd(o) => o.address.clone(),
+            LiveSource::Follow(o) => o.path.display().to_string(),
+        }
+    }
+}
+
 /// How to follow a simulation.
 #[derive(Debug, Clone)]
 pub struct LiveOptions {
@@ -82,19 +101,25 @@ impl Shared {
     }
 }
 
-/// How many frames a live run has received, readable without waiting on its reader.
-#[derive(Clone)]
-pub(crate) struct LiveCount(Arc<Shared>);
+/// How far a growing source has come, readable without waiting on its reader: a running
+/// simulation ([`LiveFrames`]) or a file an engine is writing ([`super::follow`]).
+pub(crate) trait LiveProgress: Send + Sync {
+    /// Frames readable now.
+    fn received(&self) -> usize;
+    /// Why the source stopped growing, once it has (one line), else `None`.
+    fn ended(&self) -> Option<String>;
+}
 
-impl LiveCount {
-    /// Frames received so far.
-    pub(crate) fn received(&self) -> usize {
-        self.0.lock().count
+/// A shared handle on a [`LiveProgress`].
+pub(crate) type LiveCount = Arc<dyn LiveProgress>;
+
+impl LiveProgress for Shared {
+    fn received(&self) -> usize {
+        self.lock().count
     }
 
-    /// Why the stream ended, once it has (one line), else `None`.
-    pub(crate) fn ended(&self) -> Option<String> {
-        self.0.lock().ended.as_ref().map(|e| e.to_string())
+    fn ended(&self) -> Option<String> {
+        self.lock().ended.as_ref().map(|e| e.to_string())
     }
 }
 
@@ -222,7 +247,7 @@ fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, share
 impl LiveFrames {
     /// A handle on the count of frames received.
     pub(crate) fn count(&self) -> LiveCount {
-        LiveCount(Arc::clone(&self.shared))
+        Arc::clone(&self.shared) as LiveCount
     }
 }
 

@@ -33,6 +33,7 @@ pub mod error;
 mod fast;
 mod fast_pdb;
 mod fast_xyz;
+mod follow;
 pub mod format;
 pub mod imd;
 mod line_ends;
@@ -54,10 +55,14 @@ mod xdr_reader;
 
 pub use contained::{READER_ARG, reader_main};
 pub use error::IoError;
+pub use follow::FollowOptions;
 pub use format::{FileFormat, WwFormat, detect};
-pub use live::{LIVE_FRAMES_UNBOUNDED, LiveOptions};
+pub use live::{LIVE_FRAMES_UNBOUNDED, LiveOptions, LiveSource};
 pub use stream::{
     FrameHook, FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions,
 };
-pub use trajectory::{Damage, Trajectory, open, open_live, open_via_chemfiles, reads_fast};
+pub use trajectory::{
+    Damage, Trajectory, open, open_following, open_growing, open_live, open_via_chemfiles,
+    reads_fast,
+};
 pub use warnings::take_warnings;

@@ -10,8 +10,9 @@ use glam::Vec3;
 
 use super::chem::check_positions;
 use super::contained::ContainedReader;
+use super::follow::{FollowOptions, FollowedFrames};
 use super::format::{FileFormat, detect};
-use super::live::{LiveCount, LiveFrames, LiveOptions};
+use super::live::{LiveCount, LiveFrames, LiveOptions, LiveSource};
 use super::native::{self, NativeFrames};
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
@@ -101,6 +102,36 @@ pub fn open_live(top: &Path, options: &LiveOptions) -> Result<Trajectory, IoErro
     // Waits for the first frame: a wrong atom count is reported at once.
     trajectory.check_first_frame()?;
     Ok(trajectory)
+}
+
+/// Opens the structure `top` with the frames of `options.path`, a file an engine is still
+/// writing: frames appended later appear as they are completed (see `follow`), and
+/// [`Trajectory::len`] is [`LIVE_FRAMES_UNBOUNDED`](super::LIVE_FRAMES_UNBOUNDED) (the end
+/// shows as [`IoError::LiveEnded`] once the file stops growing).
+pub fn open_following(top: &Path, options: &FollowOptions) -> Result<Trajectory, IoError> {
+    let opened = open(top, Some(&options.path))?;
+    let topology = opened.topology.clone();
+    let frames = FollowedFrames::start(top, opened, options)?;
+    let live = Some(frames.count());
+    let source = FrameSource::Native(Box::new(frames));
+    Ok(Trajectory {
+        topology,
+        topology_path: top.to_path_buf(),
+        frames_path: options.path.clone(),
+        len: source.len(),
+        reader: Mutex::new(source),
+        damage: None,
+        live,
+    })
+}
+
+/// Opens `top` with frames from a source that grows while it is read: a running simulation
+/// ([`open_live`]) or a file being written ([`open_following`]).
+pub fn open_growing(top: &Path, source: &LiveSource) -> Result<Trajectory, IoError> {
+    match source {
+        LiveSource::Imd(options) => open_live(top, options),
+        LiveSource::Follow(options) => open_following(top, options),
+    }
 }
 
 /// [`open`] with every file read through chemfiles, never a fast reader and never our mmCIF
@@ -294,7 +325,8 @@ impl Trajectory {
         self.len
     }
 
-    /// True when the frames come from a running simulation ([`open_live`]).
+    /// True when the frames come from a running simulation or a growing file
+    /// ([`open_growing`]).
     pub fn is_live(&self) -> bool {
         self.live.is_some()
     }

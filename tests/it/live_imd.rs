@@ -347,7 +347,8 @@ fn the_viewer_follows_the_newest_frame_and_keeps_them_when_the_engine_dies() {
     let top = water_box(dir.path(), 1_000_000);
     let port = free_port();
     let mut engine = Mdrun::start(dir.path(), port);
-    let source = open_live_with(&top, &options(port), &Default::default()).unwrap();
+    let live = io::LiveSource::Imd(options(port));
+    let source = open_live_with(&top, &live, &Default::default()).unwrap();
     assert!(source.is_live());
     let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
     let mut core = AppCore::new(worker);

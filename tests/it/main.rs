@@ -49,6 +49,7 @@ mod io_roundtrip;
 mod io_stream;
 mod io_valid_files;
 mod io_xdr;
+mod live_follow;
 mod live_imd;
 mod measure_areas;
 mod measure_cavities;
