@@ -10,7 +10,7 @@
 
 mod arrays;
 mod engines;
-mod measure;
+mod measurements;
 mod scene;
 mod topology;
 
@@ -270,6 +270,6 @@ fn _mdsurf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_gpu_opened, m)?)?;
     m.add_class::<scene::SceneCore>()?;
     topology::register(m)?;
-    measure::register(m)?;
+    measurements::register(m)?;
     Ok(())
 }

@@ -50,7 +50,10 @@ fn transform_err(err: TransformError) -> PyErr {
 
 /// Runs `f` without the GIL on this process's thread pool (the CPU engine's, see `engines`), so
 /// that a forked worker never waits on threads of its parent; `f` takes the GIL to read frames.
-pub(crate) fn in_pool<R: Send>(py: Python<'_>, f: impl FnOnce() -> PyResult<R> + Send) -> PyResult<R> {
+pub(crate) fn in_pool<R: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> PyResult<R> + Send,
+) -> PyResult<R> {
     py.detach(|| crate::engines::on_pool(f))
         .map_err(PyRuntimeError::new_err)?
 }
@@ -270,7 +273,7 @@ type RepRow = (
 pub struct SceneCore {
     pub(crate) topology: Topology,
     engine: SceneEngine,
-    /// A second engine that keeps meshes, for the measurements of `crate::measure` (the main
+    /// A second engine that keeps meshes, for the measurements of `crate::measurements` (the main
     /// one only measures area and volume, as `mdsurf surface` without mesh outputs).
     pub(crate) meshes: SceneEngine,
     frames: TransformedFrames,

@@ -17,7 +17,7 @@ use mdsurf::measure::{
 use mdsurf::model::{Frame, RadiusOverrides};
 use mdsurf::scene::layer::Layer;
 use mdsurf::scene::representation::{RepStyle, Representation};
-use mdsurf::scene::{LayerResult, RepRequest};
+use mdsurf::scene::{LayerResult, RepRequest, Selection};
 use mdsurf::surface::{AtomSet, CpuEngine};
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
@@ -229,8 +229,8 @@ pub fn scene_residue_areas(
             let m = measured(core, index, &reader, &req)?;
             let err = |e| measure_err(&what, index, e);
             let areas = atom_areas(&m).map_err(err)?;
-            let residues = measure::residue_areas(&core.topology, Some(&m.atoms), &areas)
-                .map_err(err)?;
+            let residues =
+                measure::residue_areas(&core.topology, Some(&m.atoms), &areas).map_err(err)?;
             if table.is_none() {
                 let params = m.layer.rep.vertices.effective(&m.layer.rep.params());
                 let built = ExposureTable::from_isolated_residues(
@@ -245,7 +245,12 @@ pub fn scene_residue_areas(
             }
             let exposure = residues
                 .iter()
-                .map(|r| table.as_ref().and_then(|t| t.exposure(r)).unwrap_or(f64::NAN))
+                .map(|r| {
+                    table
+                        .as_ref()
+                        .and_then(|t| t.exposure(r))
+                        .unwrap_or(f64::NAN)
+                })
                 .collect();
             rows.push((
                 index,
@@ -346,6 +351,8 @@ pub fn scene_interface(
     let core = &mut *core;
     let params = core.params;
     let side = |name: &str, sel: &str| -> PyResult<Layer> {
+        Selection::parse(sel)
+            .map_err(|e| PyValueError::new_err(format!("interface: selection '{sel}': {e}")))?;
         let mut rep = Representation::new(name, sel, RepStyle::Surface);
         rep.set_params(&params);
         rep.validate()
@@ -374,22 +381,24 @@ pub fn scene_interface(
             let err = |e| measure_err("interface", index, e);
             let result = measure::interface(&mut engine, &fa.atom_set(), &fb.atom_set(), &params)
                 .map_err(err)?;
-            let contacts = measure::contact_residues(
-                &core.topology,
-                Some(&ia),
-                Some(&ib),
-                &result,
-                threshold,
-            )
-            .map_err(err)?
-            .into_iter()
-            .map(|c| {
-                let side = u8::from(c.side == Side::B);
-                let alone = c.residue.area;
-                let label = c.residue.label();
-                (side, c.residue.residue, label, alone, c.area_complex, c.buried)
-            })
-            .collect();
+            let contacts =
+                measure::contact_residues(&core.topology, Some(&ia), Some(&ib), &result, threshold)
+                    .map_err(err)?
+                    .into_iter()
+                    .map(|c| {
+                        let side = u8::from(c.side == Side::B);
+                        let alone = c.residue.area;
+                        let label = c.residue.label();
+                        (
+                            side,
+                            c.residue.residue,
+                            label,
+                            alone,
+                            c.area_complex,
+                            c.buried,
+                        )
+                    })
+                    .collect();
             rows.push((
                 index,
                 frame.time_ps,
