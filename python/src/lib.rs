@@ -10,6 +10,7 @@
 
 mod arrays;
 mod engines;
+mod measurements;
 mod scene;
 mod topology;
 
@@ -269,5 +270,6 @@ fn _mdsurf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_gpu_opened, m)?)?;
     m.add_class::<scene::SceneCore>()?;
     topology::register(m)?;
+    measurements::register(m)?;
     Ok(())
 }

@@ -50,7 +50,10 @@ fn transform_err(err: TransformError) -> PyErr {
 
 /// Runs `f` without the GIL on this process's thread pool (the CPU engine's, see `engines`), so
 /// that a forked worker never waits on threads of its parent; `f` takes the GIL to read frames.
-fn in_pool<R: Send>(py: Python<'_>, f: impl FnOnce() -> PyResult<R> + Send) -> PyResult<R> {
+pub(crate) fn in_pool<R: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> PyResult<R> + Send,
+) -> PyResult<R> {
     py.detach(|| crate::engines::on_pool(f))
         .map_err(PyRuntimeError::new_err)?
 }
@@ -268,10 +271,15 @@ type RepRow = (
 /// See the module documentation; `mdsurf.Scene` documents the arguments.
 #[pyclass(unsendable, module = "mdsurf._mdsurf", name = "SceneCore")]
 pub struct SceneCore {
-    topology: Topology,
+    pub(crate) topology: Topology,
     engine: SceneEngine,
+    /// A second engine that keeps meshes, for the measurements of `crate::measurements` (the main
+    /// one only measures area and volume, as `mdsurf surface` without mesh outputs).
+    pub(crate) meshes: SceneEngine,
     frames: TransformedFrames,
-    reps: Vec<RepRequest>,
+    pub(crate) reps: Vec<RepRequest>,
+    /// The scene's surface parameters (those of `select` and `--interface`).
+    pub(crate) params: SurfaceParams,
     /// Selections bound for [`SceneCore::transformed`], by text.
     selections: HashMap<String, BoundSelection>,
     summary: String,
@@ -399,12 +407,17 @@ impl SceneCore {
                 .map(|(id, rep)| RepRequest { id: id as u64, rep })
                 .collect();
 
-            let mut cpu = CpuEngine::new();
-            cpu.set_keep_mesh(false);
-            let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(cpu)));
-            engine.set_periodic(periodic);
-            engine.reset(&topology, &RadiusOverrides::default());
-            engine.bind(&topology, &requests).map_err(scene_err)?;
+            let scene_engine = |keep_mesh: bool| {
+                let mut cpu = CpuEngine::new();
+                cpu.set_keep_mesh(keep_mesh);
+                let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(cpu)));
+                engine.set_periodic(periodic);
+                engine.reset(&topology, &RadiusOverrides::default());
+                engine.bind(&topology, &requests).map_err(scene_err)?;
+                Ok::<_, PyErr>(engine)
+            };
+            let engine = scene_engine(false)?;
+            let meshes = scene_engine(true)?;
             if surfaces && requests.is_empty() {
                 return Err(PyValueError::new_err(
                     "no visible surface representation to compute (the state file hides them all)",
@@ -424,8 +437,10 @@ impl SceneCore {
             Ok(SceneCore {
                 topology,
                 engine,
+                meshes,
                 frames,
                 reps: requests,
+                params,
                 selections: HashMap::new(),
                 summary,
             })
@@ -537,7 +552,8 @@ impl SceneCore {
 }
 
 impl SceneCore {
-    fn read(&mut self, index: usize, reader: &Py<PyAny>) -> PyResult<Frame> {
+    /// Frame `index` through the transformations (`reader` as for [`SceneCore::frame`]).
+    pub(crate) fn read(&mut self, index: usize, reader: &Py<PyAny>) -> PyResult<Frame> {
         let atoms = self.topology.len();
         self.frames
             .read(index, |i| {

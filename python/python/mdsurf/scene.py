@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _f32, _mdsurf
+from . import measurements as _measure
 
 __all__ = ["Scene", "SceneFrame", "RepSurface", "SceneResults", "universe_columns"]
 
@@ -435,6 +436,66 @@ class Scene:
                 volume[s.name][k] = s.volume
                 atoms[s.name][k] = s.atoms
         return SceneResults(np.array(frames, dtype=np.int64), times, area, volume, atoms)
+
+    # Measurements (mdsurf/measurements.py, docs/measure.md): one call per range of frames.
+
+    def _frames(self, frames):
+        """Frame indices of ``frames``: None (all), an int, a slice, a range or indices."""
+        if frames is None:
+            return list(range(self._n_frames))
+        if isinstance(frames, slice):
+            return list(range(self._n_frames)[frames])
+        if np.ndim(frames) == 0:
+            return [self._index(frames)]
+        return [self._index(i) for i in frames]
+
+    def _rep(self, rep):
+        """The representation ``rep`` names, or the only one when None."""
+        if rep is None:
+            names = self.representations
+            if len(names) != 1:
+                raise ValueError(f"name a representation: the scene has {names}")
+            return names[0]
+        return str(rep)
+
+    def _residues(self):
+        if getattr(self, "_residue_table", None) is None:
+            self._residue_table = _measure._Residues(self._core)
+        return self._residue_table
+
+    def per_atom_areas(self, rep=None, frames=None):
+        """Area per atom (Å²) of representation ``rep`` (default: the only one) in ``frames``
+        (None: every frame; an int, a slice, a range or a list of indices): an
+        :class:`mdsurf.measurements.AtomAreas` with an (n_frames, n_atoms) ``area_A2`` array whose
+        rows sum to the surface's area (``--per-atom``). Each vertex's share of the surface goes
+        to the atoms in proportion to their Gaussians there (docs/measure.md)."""
+        return _measure.atom_areas(self, self._rep(rep), self._frames(frames))
+
+    def per_residue_areas(self, rep=None, frames=None):
+        """Area per residue (Å²) and exposure of representation ``rep`` in ``frames``: a
+        :class:`mdsurf.measurements.ResidueAreas` with (n_frames, n_residues) ``area_A2`` and
+        ``exposure`` arrays and the residues' ``resids``, ``resnames``, ``chains``
+        (``--per-residue``). Exposure's reference areas (each residue name alone) come from the
+        first frame of ``frames``, as the command line takes them from its first frame."""
+        return _measure.residue_areas(self, self._rep(rep), self._frames(frames))
+
+    def interface(self, selection_a, selection_b, frames=None, contact_threshold_A2=1.0):
+        """Buried area between two selections (mdsurf's language) in ``frames``, as
+        ``--interface A B``: (area(A) + area(B) - area(A and B)) / 2 in Å², the three surfaces
+        on one grid with the scene's H, R, I and quality (CPU engine), and the residues losing
+        more than ``contact_threshold_A2``: an :class:`mdsurf.measurements.InterfaceAreas`. A
+        selection that does not parse or matches no atom in a frame raises ``ValueError``
+        naming it."""
+        return _measure.interface(self, str(selection_a), str(selection_b),
+                                  self._frames(frames), float(contact_threshold_A2))
+
+    def cavities(self, rep=None, frames=None, min_volume_A3=1.0):
+        """Enclosed cavities of representation ``rep`` in ``frames``, tracked over them (ids
+        from 1, kept while a cavity overlaps its previous self): an
+        :class:`mdsurf.measurements.Cavities` table with ``cavity_id``, ``volume_A3``, ``area_A2``,
+        ``centroid_A`` and ``lining`` residues per cavity and frame (``--cavities``); voids
+        under ``min_volume_A3`` are left out (``--min-cavity-volume``)."""
+        return _measure.cavities(self, self._rep(rep), self._frames(frames), float(min_volume_A3))
 
     def __repr__(self):
         return (
