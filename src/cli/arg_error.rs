@@ -52,9 +52,7 @@ pub enum ArgError {
     #[error("bad turntable step '{0}': expected degrees per image")]
     Turntable(String),
     /// A turntable step out of range.
-    #[error(
-        "bad turntable step '{0}': expected 0.01 to 360 degrees per image (or 0, or negative)"
-    )]
+    #[error("bad turntable step '{0}': expected 0.01 to 360 degrees per image (or 0, or negative)")]
     TurntableRange(String),
     /// A volume (Å³) that is negative or not a number.
     #[error("'{0}': expected a volume in Å³, 0 or more")]

@@ -202,11 +202,11 @@ mod tests {
         assert_eq!(parse_eye_separation("0"), Ok(0.0));
         assert_eq!(parse_focal("80"), Ok(80.0));
         for bad in ["nan", "inf", "-0.1", "x"] {
-            let e = parse_eye_separation(bad).expect_err(bad);
+            let e = parse_eye_separation(bad).expect_err(bad).to_string();
             assert!(!e.contains('\n') && e.contains("eye separation"), "{e}");
         }
         for bad in ["NaN", "-inf", "-5", "0"] {
-            let e = parse_focal(bad).expect_err(bad);
+            let e = parse_focal(bad).expect_err(bad).to_string();
             assert!(!e.contains('\n') && e.contains("focal distance"), "{e}");
         }
     }

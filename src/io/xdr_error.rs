@@ -46,7 +46,11 @@ pub(crate) enum XdrError {
     CompressionIndex { offset: u64 },
     /// An XTC byte count that cannot hold the atoms.
     #[error("the frame header at byte {offset} gives {count} bytes of data for {natoms} atoms")]
-    DataSize { offset: u64, count: i32, natoms: u64 },
+    DataSize {
+        offset: u64,
+        count: i32,
+        natoms: u64,
+    },
     /// A TRR version string of absurd length.
     #[error("invalid version string in the frame header at byte {offset}")]
     VersionString { offset: u64 },

@@ -159,11 +159,14 @@ fn cell_from_rows(rows_nm: [Vec3; 3]) -> Option<[Vec3; 3]> {
 }
 
 /// Reads the TRR frame at `offset`: its positions (`natoms` of them), box and time.
-fn read_trr(file: &mut File, size: u64, natoms: usize, offset: u64) -> Result<FrameParts, XdrError> {
+fn read_trr(
+    file: &mut File,
+    size: u64,
+    natoms: usize,
+    offset: u64,
+) -> Result<FrameParts, XdrError> {
     let blocks = trr_blocks(file, size, offset)?;
-    let x_at = blocks
-        .x_at
-        .ok_or(XdrError::NoPositions)?;
+    let x_at = blocks.x_at.ok_or(XdrError::NoPositions)?;
     let time = reals(file, blocks.time_at, 1, blocks.real)?[0];
     let cell = match blocks.box_at {
         Some(at) => {

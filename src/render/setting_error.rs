@@ -17,9 +17,7 @@ pub enum SettingError {
     #[error("bad shadow strength {0}: expected 0 (off) to 1")]
     Shadows(f32),
     /// A stereo mode name that is not known (the text as given).
-    #[error(
-        "unknown stereo mode '{0}' (expected off, sbs, sbs-cross, anaglyph or anaglyph-grey)"
-    )]
+    #[error("unknown stereo mode '{0}' (expected off, sbs, sbs-cross, anaglyph or anaglyph-grey)")]
     Stereo(String),
     /// An atom style name that is not known (the text as given).
     #[error("unknown atom style '{0}' (expected none, spheres, sticks or ball-and-stick)")]

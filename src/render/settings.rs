@@ -152,7 +152,10 @@ impl FromStr for Stereo {
         Stereo::ALL
             .into_iter()
             .find(|m| m.name().eq_ignore_ascii_case(s))
-            .or_else(|| s.eq_ignore_ascii_case("anaglyph-gray").then_some(Stereo::AnaglyphGrey))
+            .or_else(|| {
+                s.eq_ignore_ascii_case("anaglyph-gray")
+                    .then_some(Stereo::AnaglyphGrey)
+            })
             .ok_or_else(|| SettingError::Stereo(s.to_string()))
     }
 }
