@@ -564,16 +564,26 @@ pub fn complete(line: &str, rep_names: &[String]) -> Option<String> {
     }
 }
 
+pub use super::script_error::ScriptError;
+
 /// Reads a script: one command per line, `#` comments; parse errors name the file and line.
-pub fn read_script(path: &std::path::Path) -> Result<Vec<(usize, String)>, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read script {}: {e}", path.display()))?;
+pub fn read_script(path: &std::path::Path) -> Result<Vec<(usize, String)>, ScriptError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ScriptError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut lines = Vec::new();
     for (i, line) in text.lines().enumerate() {
         match parse(line) {
             Ok(None) => {}
             Ok(Some(_)) => lines.push((i + 1, line.to_string())),
-            Err(e) => return Err(format!("{}:{}: {e}", path.display(), i + 1)),
+            Err(source) => {
+                return Err(ScriptError::Line {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    source,
+                });
+            }
         }
     }
     Ok(lines)

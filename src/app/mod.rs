@@ -14,6 +14,7 @@ pub mod offscreen;
 pub mod panels;
 pub mod plot;
 pub mod recent;
+pub mod script_error;
 pub mod source;
 pub mod state;
 pub mod timeline;

@@ -82,8 +82,11 @@ impl History {
     }
 
     /// Writes [`History::to_csv`] to `path` atomically (temporary file, then rename).
-    pub fn write_csv(&self, path: &Path) -> Result<(), String> {
-        let err = |e: std::io::Error| format!("{}: {e}", path.display());
+    pub fn write_csv(&self, path: &Path) -> Result<(), CsvWriteError> {
+        let err = |source: std::io::Error| CsvWriteError {
+            path: path.to_path_buf(),
+            source,
+        };
         let dir = path
             .parent()
             .filter(|d| !d.as_os_str().is_empty())
@@ -93,6 +96,16 @@ impl History {
         tmp.persist(path).map_err(|e| err(e.error))?;
         Ok(())
     }
+}
+
+/// The history's CSV could not be written; prints as one line naming the file.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct CsvWriteError {
+    /// The CSV file.
+    pub path: std::path::PathBuf,
+    /// What the operating system said.
+    pub source: std::io::Error,
 }
 
 /// Draws area and volume (each scaled to its own range) against frame, with the current frame

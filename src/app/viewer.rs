@@ -205,7 +205,7 @@ impl Viewer {
                 ),
                 Command::ExportCsv(Some(path)) => match self.core.history.write_csv(&path) {
                     Ok(()) => self.core.status = format!("wrote {}", path.display()),
-                    Err(e) => self.core.error = Some(e),
+                    Err(e) => self.core.error = Some(e.to_string()),
                 },
                 Command::SaveView(Some(path)) => match self.state_file().save(&path) {
                     Ok(()) => self.core.status = format!("saved view {}", path.display()),

@@ -17,6 +17,7 @@ use mdsurf::model::Particles;
 use mdsurf::surface::{CpuEngine, RadiusSet, StageTimings, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
 
+use super::arg_error::ArgError;
 use super::bench_table::{Table, peak_rss_bytes};
 use mdsurf::surface::VertexMode;
 
@@ -113,13 +114,13 @@ pub struct BenchArgs {
 }
 
 /// Parses the viewer benchmark's timeline speed (0.5 to 240 frames per second).
-fn parse_play_fps(s: &str) -> Result<f32, String> {
+fn parse_play_fps(s: &str) -> Result<f32, ArgError> {
     let v: f32 = s
         .trim()
         .parse()
-        .map_err(|_| format!("bad frame rate '{s}': expected a number, e.g. 60"))?;
+        .map_err(|_| ArgError::PlayFps(s.to_string()))?;
     if !(0.5..=240.0).contains(&v) {
-        return Err(format!("frame rate '{s}' must be between 0.5 and 240"));
+        return Err(ArgError::PlayFpsRange(s.to_string()));
     }
     Ok(v)
 }
@@ -146,7 +147,7 @@ impl From<GatherArg> for mdsurf::gpu::DensityGather {
 }
 
 /// Parses an atom count: `1000000`, `1e6`, `950k`, `2.37M`.
-pub fn parse_count(s: &str) -> Result<usize, String> {
+pub fn parse_count(s: &str) -> Result<usize, ArgError> {
     let t = s.trim();
     let (num, mult) = match t.chars().last() {
         Some('k' | 'K') => (&t[..t.len() - 1], 1e3),
@@ -156,10 +157,10 @@ pub fn parse_count(s: &str) -> Result<usize, String> {
     let v: f64 = num
         .replace(['_', ','], "")
         .parse()
-        .map_err(|_| format!("bad atom count '{s}' (e.g. 1000000, 1e6, 950k, 2.37M)"))?;
+        .map_err(|_| ArgError::Count(s.to_string()))?;
     let n = (v * mult).round();
     if !(1.0..=1e10).contains(&n) {
-        return Err(format!("atom count '{s}' must be between 1 and 1e10"));
+        return Err(ArgError::CountRange(s.to_string()));
     }
     Ok(n as usize)
 }

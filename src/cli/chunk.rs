@@ -10,6 +10,8 @@ use std::str::FromStr;
 
 use anyhow::{Result, bail};
 
+use super::arg_error::ArgError;
+
 /// The `--chunk` value as given: explicit `I/N`, or `slurm` (read from the environment).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ChunkSpec {
@@ -29,12 +31,12 @@ pub struct Chunk {
 }
 
 impl FromStr for ChunkSpec {
-    type Err = String;
+    type Err = ArgError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         if s.trim().eq_ignore_ascii_case("slurm") {
             return Ok(ChunkSpec::Slurm);
         }
-        let bad = || format!("bad chunk '{s}': expected I/N (0-based I < N, e.g. 0/4) or slurm");
+        let bad = || ArgError::Chunk(s.to_string());
         let (i, n) = s.split_once('/').ok_or_else(bad)?;
         let index: usize = i.trim().parse().map_err(|_| bad())?;
         let count: usize = n.trim().parse().map_err(|_| bad())?;
@@ -44,11 +46,9 @@ impl FromStr for ChunkSpec {
 
 impl Chunk {
     /// Block `index` of `count`; fails unless `index < count`.
-    pub fn new(index: usize, count: usize) -> Result<Chunk, String> {
+    pub fn new(index: usize, count: usize) -> Result<Chunk, ArgError> {
         if count == 0 || index >= count {
-            return Err(format!(
-                "bad chunk {index}/{count}: I must be 0 to N-1 (0-based) and N at least 1"
-            ));
+            return Err(ArgError::ChunkRange { index, count });
         }
         Ok(Chunk { index, count })
     }
@@ -147,7 +147,7 @@ mod tests {
         );
         assert_eq!("SLURM".parse::<ChunkSpec>(), Ok(ChunkSpec::Slurm));
         for bad in ["4/4", "1/0", "x/2", "3", "-1/2"] {
-            let e = bad.parse::<ChunkSpec>().expect_err(bad);
+            let e = bad.parse::<ChunkSpec>().expect_err(bad).to_string();
             assert!(e.contains(bad) || e.contains("bad chunk"), "{e}");
         }
         let env = |vars: &'static [(&'static str, &'static str)]| {

@@ -370,10 +370,10 @@ impl Default for FrameRange {
 }
 
 impl FromStr for FrameRange {
-    type Err = String;
+    type Err = super::arg_error::ArgError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let bad = || format!("bad frame range '{s}': expected START:STOP:STEP, e.g. 0:50:5 or 10");
-        let num = |p: &str| -> Result<Option<usize>, String> {
+        let bad = || super::arg_error::ArgError::FrameRange(s.to_string());
+        let num = |p: &str| -> Result<Option<usize>, super::arg_error::ArgError> {
             let p = p.trim();
             if p.is_empty() {
                 Ok(None)
@@ -404,9 +404,7 @@ impl FromStr for FrameRange {
             _ => return Err(bad()),
         };
         if range.step == 0 {
-            return Err(format!(
-                "bad frame range '{s}': the step must be at least 1"
-            ));
+            return Err(super::arg_error::ArgError::FrameStep(s.to_string()));
         }
         Ok(range)
     }

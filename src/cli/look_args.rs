@@ -4,6 +4,7 @@
 use mdsurf::render::RenderSettings;
 use mdsurf::render::settings::{check_outline_width, check_shadows, parse_linear_rgb};
 
+use super::arg_error::ArgError;
 use super::render_args::parse_f32;
 
 /// A preset look.
@@ -44,12 +45,12 @@ pub struct LookArgs {
     pub transparent: bool,
 }
 
-fn parse_outline(s: &str) -> Result<f32, String> {
-    check_outline_width(parse_f32(s, "outline width")?)
+fn parse_outline(s: &str) -> Result<f32, ArgError> {
+    Ok(check_outline_width(parse_f32(s, "outline width")?)?)
 }
 
-fn parse_shadows(s: &str) -> Result<f32, String> {
-    check_shadows(parse_f32(s, "shadow strength")?)
+fn parse_shadows(s: &str) -> Result<f32, ArgError> {
+    Ok(check_shadows(parse_f32(s, "shadow strength")?)?)
 }
 
 impl LookArgs {

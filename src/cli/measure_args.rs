@@ -67,10 +67,10 @@ impl MeasureArgs {
 }
 
 /// A volume in Å³: finite and not negative.
-fn parse_volume(s: &str) -> Result<f64, String> {
+fn parse_volume(s: &str) -> Result<f64, super::arg_error::ArgError> {
     match s.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("'{s}': expected a volume in Å³, 0 or more")),
+        _ => Err(super::arg_error::ArgError::Volume(s.to_string())),
     }
 }
 

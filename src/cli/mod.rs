@@ -1,6 +1,7 @@
 //! Subcommands of the `mdsurf` binary, one file each, plus what they share ([`common`]) and the
 //! benchmark table ([`bench_table`]).
 
+pub mod arg_error;
 pub mod bench;
 pub mod bench_table;
 pub mod bench_viewer;

@@ -5,6 +5,8 @@ use anyhow::Result;
 use std::path::PathBuf;
 
 use mdsurf::export::video::{VideoQuality, check_fps};
+
+use super::arg_error::ArgError;
 use mdsurf::render::settings::{
     DEFAULT_EYE_SEPARATION, check_eye_separation, check_focal_distance,
 };
@@ -116,73 +118,68 @@ pub struct StereoArgs {
 }
 
 /// A number for flag `what`, or one line naming the value.
-pub(crate) fn parse_f32(s: &str, what: &str) -> Result<f32, String> {
-    s.trim()
-        .parse()
-        .map_err(|_| format!("bad {what} '{s}': expected a number"))
+pub(crate) fn parse_f32(s: &str, what: &'static str) -> Result<f32, ArgError> {
+    s.trim().parse().map_err(|_| ArgError::Number {
+        what,
+        text: s.to_string(),
+    })
 }
 
 /// A strength or opacity from 0 to 1 (NaN and infinities refused, as the state file does).
-fn parse_unit(s: &str) -> Result<f32, String> {
+fn parse_unit(s: &str) -> Result<f32, ArgError> {
     match s.trim().parse::<f32>() {
         Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!("'{s}': expected a number from 0 to 1")),
+        _ => Err(ArgError::Unit(s.to_string())),
     }
 }
 
-fn parse_eye_separation(s: &str) -> Result<f32, String> {
-    check_eye_separation(parse_f32(s, "eye separation")?)
+fn parse_eye_separation(s: &str) -> Result<f32, ArgError> {
+    Ok(check_eye_separation(parse_f32(s, "eye separation")?)?)
 }
 
-fn parse_focal(s: &str) -> Result<f32, String> {
-    check_focal_distance(parse_f32(s, "focal distance")?)
+fn parse_focal(s: &str) -> Result<f32, ArgError> {
+    Ok(check_focal_distance(parse_f32(s, "focal distance")?)?)
 }
 
-pub(crate) fn parse_size(s: &str) -> Result<[u32; 2], String> {
-    let bad = || format!("bad size '{s}': expected WIDTHxHEIGHT, e.g. 1920x1080");
+pub(crate) fn parse_size(s: &str) -> Result<[u32; 2], ArgError> {
+    let bad = || ArgError::Size(s.to_string());
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
     let w: u32 = w.trim().parse().map_err(|_| bad())?;
     let h: u32 = h.trim().parse().map_err(|_| bad())?;
     if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err(format!(
-            "bad size '{s}': each side must be 1 to 16384 pixels"
-        ));
+        return Err(ArgError::SizeRange(s.to_string()));
     }
     Ok([w, h])
 }
 
-fn parse_pair(s: &str) -> Result<[f32; 2], String> {
-    let bad = || format!("bad view '{s}': expected YAW,PITCH in degrees");
+fn parse_pair(s: &str) -> Result<[f32; 2], ArgError> {
+    let bad = || ArgError::View(s.to_string());
     let (a, b) = s.split_once(',').ok_or_else(bad)?;
     let pair: [f32; 2] = [
         a.trim().parse().map_err(|_| bad())?,
         b.trim().parse().map_err(|_| bad())?,
     ];
     if !pair.iter().all(|v| v.is_finite()) {
-        return Err(format!(
-            "bad view '{s}': yaw and pitch must be finite numbers"
-        ));
+        return Err(ArgError::ViewNotFinite(s.to_string()));
     }
     Ok(pair)
 }
 
-fn parse_fps(s: &str) -> Result<f64, String> {
+fn parse_fps(s: &str) -> Result<f64, ArgError> {
     let fps: f64 = s
         .trim()
         .parse()
-        .map_err(|_| format!("bad frame rate '{s}': expected frames per second"))?;
-    check_fps(fps)
+        .map_err(|_| ArgError::FrameRate(s.to_string()))?;
+    Ok(check_fps(fps)?)
 }
 
-fn parse_turntable(s: &str) -> Result<f32, String> {
+fn parse_turntable(s: &str) -> Result<f32, ArgError> {
     let d: f32 = s
         .trim()
         .parse()
-        .map_err(|_| format!("bad turntable step '{s}': expected degrees per image"))?;
+        .map_err(|_| ArgError::Turntable(s.to_string()))?;
     if !d.is_finite() || d.abs() > 360.0 || (d != 0.0 && d.abs() < 0.01) {
-        return Err(format!(
-            "bad turntable step '{s}': expected 0.01 to 360 degrees per image (or 0, or negative)"
-        ));
+        return Err(ArgError::TurntableRange(s.to_string()));
     }
     Ok(d)
 }
@@ -207,11 +204,11 @@ mod tests {
         assert_eq!(parse_eye_separation("0"), Ok(0.0));
         assert_eq!(parse_focal("80"), Ok(80.0));
         for bad in ["nan", "inf", "-0.1", "x"] {
-            let e = parse_eye_separation(bad).expect_err(bad);
+            let e = parse_eye_separation(bad).expect_err(bad).to_string();
             assert!(!e.contains('\n') && e.contains("eye separation"), "{e}");
         }
         for bad in ["NaN", "-inf", "-5", "0"] {
-            let e = parse_focal(bad).expect_err(bad);
+            let e = parse_focal(bad).expect_err(bad).to_string();
             assert!(!e.contains('\n') && e.contains("focal distance"), "{e}");
         }
     }

@@ -85,10 +85,10 @@ pub struct SurfaceArgs {
     pub fps: f64,
 }
 
-fn parse_fps(s: &str) -> Result<f64, String> {
+fn parse_fps(s: &str) -> Result<f64, super::arg_error::ArgError> {
     match s.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 && v <= 1000.0 => Ok(v),
-        _ => Err(format!("bad frame rate '{s}': expected 0 < FPS <= 1000")),
+        _ => Err(super::arg_error::ArgError::SurfaceFps(s.to_string())),
     }
 }
 

@@ -117,26 +117,38 @@ impl fmt::Display for VideoQuality {
     }
 }
 
-impl FromStr for VideoQuality {
-    type Err = String;
+/// A video option that cannot be used; prints as one line naming the value as given.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum VideoOptionError {
+    /// A quality name that is not known.
+    #[error("bad video quality '{0}': expected low, medium or high")]
+    Quality(String),
+    /// A frame rate outside [`FPS_RANGE`] or not finite.
+    #[error(
+        "bad frame rate {0}: expected {lo} to {hi} frames per second",
+        lo = FPS_RANGE.0,
+        hi = FPS_RANGE.1
+    )]
+    Fps(f64),
+}
 
-    fn from_str(s: &str) -> Result<Self, String> {
+impl FromStr for VideoQuality {
+    type Err = VideoOptionError;
+
+    fn from_str(s: &str) -> Result<Self, VideoOptionError> {
         VideoQuality::ALL
             .into_iter()
             .find(|q| q.name().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| format!("bad video quality '{s}': expected low, medium or high"))
+            .ok_or_else(|| VideoOptionError::Quality(s.to_string()))
     }
 }
 
 /// Checks a frame rate: finite and within [`FPS_RANGE`].
-pub fn check_fps(fps: f64) -> Result<f64, String> {
+pub fn check_fps(fps: f64) -> Result<f64, VideoOptionError> {
     if fps.is_finite() && (FPS_RANGE.0..=FPS_RANGE.1).contains(&fps) {
         Ok(fps)
     } else {
-        Err(format!(
-            "bad frame rate {fps}: expected {} to {} frames per second",
-            FPS_RANGE.0, FPS_RANGE.1
-        ))
+        Err(VideoOptionError::Fps(fps))
     }
 }
 
@@ -194,7 +206,7 @@ impl Mp4Movie {
         quality: VideoQuality,
     ) -> Result<Mp4Movie, VideoError> {
         check_even_size(path, size)?;
-        let fps = check_fps(fps).map_err(|message| codec(path, "frame rate", message))?;
+        let fps = check_fps(fps).map_err(|e| codec(path, "frame rate", e.to_string()))?;
         let (qp_min, qp_max, bpp) = quality.tuning();
         let pixels = f64::from(size[0]) * f64::from(size[1]);
         let bps = (bpp * pixels * fps).clamp(64_000.0, 400e6) as u32;

@@ -400,20 +400,97 @@ pub const SHADERS: &[(&str, &[Slot])] = &[
     ("measure.wgsl", measure::ALL),
 ];
 
+/// One disagreement between a binding table and the WGSL; one line naming the shader file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BindingMismatch {
+    /// A shader file with no table in [`SHADERS`].
+    #[error("{file}: no binding table in gpu::layout::SHADERS")]
+    NoTable {
+        /// The shader file.
+        file: &'static str,
+    },
+    /// The assembled WGSL does not parse (naga's report).
+    #[error("{file}: {message}")]
+    Parse {
+        /// The shader file.
+        file: &'static str,
+        /// What naga said.
+        message: String,
+    },
+    /// A WGSL binding the table does not name.
+    #[error("{file}: `{name}` is not named in gpu::layout")]
+    NotNamed {
+        /// The shader file.
+        file: &'static str,
+        /// The WGSL variable.
+        name: String,
+    },
+    /// A binding whose group, number or kind differs between WGSL and table.
+    #[error(
+        "{file}: `{name}` is @group({group}) @binding({binding}) {kind} in WGSL but @group(0) @binding({table_binding}) {want} in gpu::layout"
+    )]
+    Differs {
+        /// The shader file.
+        file: &'static str,
+        /// The WGSL variable.
+        name: String,
+        /// Its group in the WGSL.
+        group: u32,
+        /// Its binding number in the WGSL.
+        binding: u32,
+        /// Its kind in the WGSL (uniform, read, read_write, other).
+        kind: &'static str,
+        /// Its binding number in the table.
+        table_binding: u32,
+        /// Its kind in the table.
+        want: &'static str,
+    },
+    /// A table entry the WGSL does not declare.
+    #[error("{file}: `{name}` is not declared in the WGSL")]
+    NotDeclared {
+        /// The shader file.
+        file: &'static str,
+        /// The table's variable name.
+        name: &'static str,
+    },
+}
+
+/// Every disagreement found by [`check_against_wgsl`], one per line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BindingMismatches(pub Vec<BindingMismatch>);
+
+impl std::fmt::Display for BindingMismatches {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, m) in self.0.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{m}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for BindingMismatches {}
+
 /// Compares every table of [`SHADERS`] with the `@group(0) @binding(n)` declarations of the
 /// assembled WGSL ([`super::shaders::ALL`]): same variables, numbers, address spaces and access.
 /// Returns every disagreement.
-pub fn check_against_wgsl() -> Result<(), String> {
+pub fn check_against_wgsl() -> Result<(), BindingMismatches> {
     let mut errors = Vec::new();
     for (file, source) in super::shaders::ALL {
         let Some((_, slots)) = SHADERS.iter().find(|(f, _)| f == file) else {
-            errors.push(format!("{file}: no binding table in gpu::layout::SHADERS"));
+            errors.push(BindingMismatch::NoTable { file: *file });
             continue;
         };
+        let file: &'static str = *file;
         let module = match naga::front::wgsl::parse_str(source) {
             Ok(m) => m,
             Err(e) => {
-                errors.push(format!("{file}: {}", e.emit_to_string(source)));
+                errors.push(BindingMismatch::Parse {
+                    file,
+                    message: e.emit_to_string(source),
+                });
                 continue;
             }
         };
@@ -433,7 +510,10 @@ pub fn check_against_wgsl() -> Result<(), String> {
                 _ => "other",
             };
             let Some(s) = slots.iter().find(|s| s.name == name) else {
-                errors.push(format!("{file}: `{name}` is not named in gpu::layout"));
+                errors.push(BindingMismatch::NotNamed {
+                    file,
+                    name: name.to_string(),
+                });
                 continue;
             };
             seen.push(s.name);
@@ -443,21 +523,25 @@ pub fn check_against_wgsl() -> Result<(), String> {
                 ReadWrite => "read_write",
             };
             if rb.group != 0 || rb.binding != s.binding || kind != want {
-                errors.push(format!(
-                    "{file}: `{name}` is @group({}) @binding({}) {kind} in WGSL but \
-                     @group(0) @binding({}) {want} in gpu::layout",
-                    rb.group, rb.binding, s.binding
-                ));
+                errors.push(BindingMismatch::Differs {
+                    file,
+                    name: name.to_string(),
+                    group: rb.group,
+                    binding: rb.binding,
+                    kind,
+                    table_binding: s.binding,
+                    want,
+                });
             }
         }
         for s in slots.iter().filter(|s| !seen.contains(&s.name)) {
-            errors.push(format!("{file}: `{}` is not declared in the WGSL", s.name));
+            errors.push(BindingMismatch::NotDeclared { file, name: s.name });
         }
     }
     if errors.is_empty() {
         Ok(())
     } else {
-        Err(errors.join("\n"))
+        Err(BindingMismatches(errors))
     }
 }
 

@@ -76,7 +76,8 @@ impl GpuSurface {
     }
 }
 
-type MapResult = Arc<Mutex<Option<Result<(), String>>>>;
+/// Where a buffer map's callback leaves its outcome (`None` until it has run).
+type MapResult = Arc<Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>;
 
 #[derive(Debug)]
 struct Slot {
@@ -146,7 +147,7 @@ impl Readbacks {
         }
         slot.buffer.map_async(wgpu::MapMode::Read, .., move |r| {
             if let Ok(mut guard) = result.lock() {
-                *guard = Some(r.map_err(|e| e.to_string()));
+                *guard = Some(r);
             }
         });
     }
@@ -158,7 +159,7 @@ impl Readbacks {
             let done = slot.result.lock().ok().and_then(|mut r| r.take());
             let Some(done) = done else { continue };
             slot.busy = false;
-            done.map_err(GpuError::Readback)?;
+            done.map_err(|e| GpuError::Readback(e.to_string()))?;
             let stats = {
                 let view = slot
                     .buffer
@@ -422,7 +423,7 @@ fn map_and_wait(
     let r2 = Arc::clone(&result);
     staging.map_async(wgpu::MapMode::Read, range, move |r| {
         if let Ok(mut g) = r2.lock() {
-            *g = Some(r.map_err(|e| e.to_string()));
+            *g = Some(r);
         }
     });
     device
@@ -431,7 +432,7 @@ fn map_and_wait(
     let done = result.lock().ok().and_then(|mut r| r.take());
     match done {
         Some(Ok(())) => Ok(()),
-        Some(Err(e)) => Err(GpuError::Readback(e)),
+        Some(Err(e)) => Err(GpuError::Readback(e.to_string())),
         None => Err(GpuError::Readback("map did not complete".into())),
     }
 }

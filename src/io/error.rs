@@ -127,10 +127,10 @@ pub enum IoError {
 
 impl IoError {
     /// Builds an [`IoError::Unreadable`], squeezing a multi-line message onto one line.
-    pub(crate) fn unreadable(path: &std::path::Path, message: impl AsRef<str>) -> Self {
+    pub(crate) fn unreadable(path: &std::path::Path, message: impl std::fmt::Display) -> Self {
         IoError::Unreadable {
             path: path.to_path_buf(),
-            message: one_line(message.as_ref()),
+            message: one_line(&message.to_string()),
         }
     }
 
@@ -138,12 +138,12 @@ impl IoError {
     pub(crate) fn bad_frame(
         path: &std::path::Path,
         frame: usize,
-        message: impl AsRef<str>,
+        message: impl std::fmt::Display,
     ) -> Self {
         IoError::BadFrame {
             path: path.to_path_buf(),
             frame,
-            message: one_line(message.as_ref()),
+            message: one_line(&message.to_string()),
         }
     }
 }

@@ -51,6 +51,7 @@ mod trajectory;
 mod warnings;
 mod wwpdb;
 mod xdr;
+mod xdr_error;
 mod xdr_reader;
 
 pub use contained::{READER_ARG, reader_main};

@@ -12,6 +12,30 @@
 use std::fs::File;
 use std::io::Read;
 use std::path::Path;
+use std::sync::Arc;
+
+/// Why a TNG file cannot be read at all (not even one frame set is sound); one line each.
+#[derive(Debug, Clone, thiserror::Error)]
+pub(crate) enum TngDamage {
+    /// The operating system could not read the file.
+    #[error(transparent)]
+    Os(Arc<std::io::Error>),
+    /// The file is shorter than one block header.
+    #[error("the file ends inside its first block (truncated)")]
+    FirstBlockCut,
+    /// Block `block` (from 0) at byte `offset` is damaged; `what` says how.
+    #[error("block {block} at byte {offset} {what} (damaged file)")]
+    Block {
+        block: usize,
+        offset: usize,
+        what: &'static str,
+    },
+    /// The chain ends after `have` frame sets, one short of what the index points to.
+    #[error(
+        "the file ends after frame set {have} of the {promised} its index promises (truncated)"
+    )]
+    IndexCut { have: usize, promised: usize },
+}
 
 /// Header sizes outside this range (bytes) are damage.
 const HEADER_SIZES: std::ops::RangeInclusive<i64> = 40..=4096;
@@ -75,13 +99,13 @@ pub(crate) enum Salvage {
 /// Checks the block chain of the TNG file at `path` (each block's size and, where the writer
 /// recorded one, its MD5). A damaged file keeps the frame sets before the damage (see
 /// [`Salvage::Kept`]); `Err` (one line) when not even one frame set is sound.
-pub(crate) fn salvage(path: &Path) -> Result<Salvage, String> {
+pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
     let mut bytes = Vec::new();
     File::open(path)
         .and_then(|mut f| f.read_to_end(&mut bytes))
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| TngDamage::Os(Arc::new(e)))?;
     if bytes.len() < 8 {
-        return Err("the file ends inside its first block (truncated)".into());
+        return Err(TngDamage::FirstBlockCut);
     }
     // The first block's header size says the byte order (a small number: high bytes zero).
     let ints = Ints {
@@ -117,11 +141,10 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, String> {
             } else {
                 frame_sets.len() - 1
             };
-            let reason = format!(
-                "the file ends after frame set {} of the {} its index promises (truncated)",
-                frame_sets.len(),
-                frame_sets.len() + 1
-            );
+            let reason = TngDamage::IndexCut {
+                have: frame_sets.len(),
+                promised: frame_sets.len() + 1,
+            };
             (Some(keep), reason)
         }
     };
@@ -158,16 +181,20 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, String> {
 
 /// Walks the chain; returns the sound blocks and, when the chain breaks, the offset of the
 /// first damaged block and why.
-fn walk(bytes: &[u8], ints: Ints) -> (Vec<Block>, Option<(usize, String)>) {
+fn walk(bytes: &[u8], ints: Ints) -> (Vec<Block>, Option<(usize, TngDamage)>) {
     let size = bytes.len();
     let mut blocks = Vec::new();
     let mut offset = 0usize;
     while offset < size {
         let n = blocks.len();
-        let damaged = |what: &str| {
+        let damaged = |what: &'static str| {
             Some((
                 offset,
-                format!("block {n} at byte {offset} {what} (damaged file)"),
+                TngDamage::Block {
+                    block: n,
+                    offset,
+                    what,
+                },
             ))
         };
         if size - offset < 40 {

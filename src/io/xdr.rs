@@ -17,6 +17,8 @@ use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
+use super::xdr_error::XdrError;
+
 const XTC_MAGIC: i32 = 1995;
 const TRR_MAGIC: i32 = 1993;
 /// Bounds of the XTC `smallidx` (the xdrfile `FIRSTIDX` and the size of its `MAGICINTS`).
@@ -40,14 +42,14 @@ pub(crate) struct Walk {
 
 /// Walks the frames of the XTC or TRR file `path` (`base` is `"XTC"` or `"TRR"`). `Ok(None)` for
 /// other formats; `Err` (a one-line reason) when not even the first frame is sound.
-pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
-    let step: fn(&mut Reader<File>, u64) -> Result<FrameInfo, String> = match base {
+pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, XdrError> {
+    let step: fn(&mut Reader<File>, u64) -> Result<FrameInfo, XdrError> = match base {
         "XTC" => xtc_frame,
         "TRR" => trr_frame,
         _ => return Ok(None),
     };
-    let file = File::open(path).map_err(|e| e.to_string())?;
-    let size = file.metadata().map_err(|e| e.to_string())?.len();
+    let file = File::open(path).map_err(XdrError::os)?;
+    let size = file.metadata().map_err(XdrError::os)?.len();
     let mut reader = Reader { file, size };
     let mut offset = 0u64;
     let mut offsets = Vec::new();
@@ -59,19 +61,19 @@ pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
             match natoms {
                 None => natoms = Some(info.natoms),
                 Some(n) if n != info.natoms => {
-                    return Err(format!(
-                        "the frame header at byte {offset} says {} atoms, the first frame {n} (damaged file)",
-                        info.natoms
-                    ));
+                    return Err(XdrError::AtomCountChanged {
+                        offset,
+                        natoms: info.natoms,
+                        first: n,
+                    });
                 }
                 Some(_) => {}
             }
             if offset + info.bytes > size {
-                return Err(format!(
-                    "the file ends inside this frame (truncated: {} of {} bytes)",
-                    size - offset,
-                    info.bytes
-                ));
+                return Err(XdrError::Truncated {
+                    have: size - offset,
+                    need: info.bytes,
+                });
             }
             Ok(info)
         });
@@ -88,19 +90,18 @@ pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, String> {
         }
     }
     let Some(natoms) = natoms else {
-        let reason = damage.unwrap_or_else(|| "no frame".into());
-        return Err(reason);
+        return Err(damage.unwrap_or(XdrError::NoFrame));
     };
     let damage = damage.map(|reason| {
-        if reason.starts_with("the file ends") {
-            reason
+        if reason.is_truncation() {
+            reason.to_string()
         } else if frames > 0 {
             // The frame before a damaged header may hold part of the damage (a chunk inserted
             // or deleted inside its data): it is not read either.
             frames -= 1;
-            format!("the data after this frame's header is damaged ({reason})")
+            XdrError::DamagedAfter(Box::new(reason)).to_string()
         } else {
-            reason
+            reason.to_string()
         }
     });
     offsets.truncate(frames);
@@ -132,7 +133,7 @@ pub(crate) struct TrrBlocks {
 }
 
 /// Reads the blocks of the TRR frame at `offset` of `file` (whose size is `size` bytes).
-pub(crate) fn trr_blocks(file: &mut File, size: u64, offset: u64) -> Result<TrrBlocks, String> {
+pub(crate) fn trr_blocks(file: &mut File, size: u64, offset: u64) -> Result<TrrBlocks, XdrError> {
     let mut reader = Reader { file, size };
     Ok(trr_header(&mut reader, offset)?.1)
 }
@@ -144,13 +145,13 @@ struct Reader<F> {
 
 impl<F: Read + Seek> Reader<F> {
     /// Up to `n` bytes at `offset` (fewer at the end of the file).
-    fn bytes(&mut self, offset: u64, n: usize) -> Result<Vec<u8>, String> {
+    fn bytes(&mut self, offset: u64, n: usize) -> Result<Vec<u8>, XdrError> {
         let n = n.min(self.size.saturating_sub(offset) as usize);
         let mut buffer = vec![0u8; n];
         self.file
             .seek(SeekFrom::Start(offset))
             .and_then(|_| self.file.read_exact(&mut buffer))
-            .map_err(|e| e.to_string())?;
+            .map_err(XdrError::os)?;
         Ok(buffer)
     }
 }
@@ -163,26 +164,27 @@ fn float(b: &[u8], at: usize) -> f32 {
     f32::from_be_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
 }
 
-fn truncated_header(offset: u64) -> String {
-    format!("the file ends inside the frame header at byte {offset} (truncated)")
+fn truncated_header(offset: u64) -> XdrError {
+    XdrError::TruncatedHeader { offset }
 }
 
-fn xtc_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<FrameInfo, String> {
+fn xtc_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<FrameInfo, XdrError> {
     let b = reader.bytes(offset, 92)?;
     if b.len() < 56 {
         return Err(truncated_header(offset));
     }
     if int(&b, 0) != XTC_MAGIC {
-        return Err(format!("no XTC frame header at byte {offset}"));
+        return Err(XdrError::NoHeader {
+            format: "XTC",
+            offset,
+        });
     }
     let natoms = int(&b, 4);
     if natoms < 0 || int(&b, 52) != natoms {
-        return Err(format!(
-            "inconsistent atom counts in the frame header at byte {offset}"
-        ));
+        return Err(XdrError::AtomCounts { offset });
     }
     if !(0..9).all(|k| float(&b, 16 + 4 * k).abs() <= MAX_BOX_NM) {
-        return Err(format!("absurd box in the frame header at byte {offset}"));
+        return Err(XdrError::AbsurdBox { offset });
     }
     let natoms = natoms as u64;
     if natoms <= 9 {
@@ -196,27 +198,23 @@ fn xtc_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<Frame
     }
     let precision = float(&b, 56);
     if !(precision.is_finite() && precision > 0.0) {
-        return Err(format!(
-            "invalid precision in the frame header at byte {offset}"
-        ));
+        return Err(XdrError::Precision { offset });
     }
     if !(0..3).all(|k| int(&b, 60 + 4 * k) <= int(&b, 72 + 4 * k)) {
-        return Err(format!(
-            "invalid coordinate range in the frame header at byte {offset}"
-        ));
+        return Err(XdrError::CoordinateRange { offset });
     }
     let small = int(&b, 84) as u32;
     if !(XTC_FIRST_IDX..XTC_LAST_IDX).contains(&small) {
-        return Err(format!(
-            "invalid compression index in the frame header at byte {offset}"
-        ));
+        return Err(XdrError::CompressionIndex { offset });
     }
     let count = int(&b, 88);
     // Each atom takes at least one bit, and at most about 3 × 32 bits plus run flags.
     if count < 0 || (count as u64) * 8 + 8 < natoms || count as u64 > natoms * 24 + 1024 {
-        return Err(format!(
-            "the frame header at byte {offset} gives {count} bytes of data for {natoms} atoms"
-        ));
+        return Err(XdrError::DataSize {
+            offset,
+            count,
+            natoms,
+        });
     }
     let padded = (count as u64 + 3) & !3;
     Ok(FrameInfo {
@@ -225,26 +223,27 @@ fn xtc_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<Frame
     })
 }
 
-fn trr_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<FrameInfo, String> {
+fn trr_frame(reader: &mut Reader<impl Read + Seek>, offset: u64) -> Result<FrameInfo, XdrError> {
     Ok(trr_header(reader, offset)?.0)
 }
 
 fn trr_header(
     reader: &mut Reader<impl Read + Seek>,
     offset: u64,
-) -> Result<(FrameInfo, TrrBlocks), String> {
+) -> Result<(FrameInfo, TrrBlocks), XdrError> {
     let head = reader.bytes(offset, 12)?;
     if head.len() < 12 {
         return Err(truncated_header(offset));
     }
     if int(&head, 0) != TRR_MAGIC {
-        return Err(format!("no TRR frame header at byte {offset}"));
+        return Err(XdrError::NoHeader {
+            format: "TRR",
+            offset,
+        });
     }
     let len = int(&head, 8);
     if !(0..=128).contains(&len) {
-        return Err(format!(
-            "invalid version string in the frame header at byte {offset}"
-        ));
+        return Err(XdrError::VersionString { offset });
     }
     let ints_at = 12 + ((len as usize + 3) & !3);
     let b = reader.bytes(offset, ints_at + 13 * 4)?;
@@ -256,9 +255,7 @@ fn trr_header(
     let sizes: Vec<i32> = (0..10).map(field).collect();
     let natoms = field(10);
     if natoms < 0 || sizes.iter().any(|&s| s < 0) {
-        return Err(format!(
-            "negative size in the frame header at byte {offset}"
-        ));
+        return Err(XdrError::NegativeSize { offset });
     }
     let natoms = natoms as u64;
     let (box_size, x, v, f) = (
@@ -275,9 +272,7 @@ fn trr_header(
         0
     };
     if real != 4 && real != 8 {
-        return Err(format!(
-            "invalid real size in the frame header at byte {offset}"
-        ));
+        return Err(XdrError::RealSize { offset });
     }
     let vector = natoms * 3 * real;
     let matrix = 9 * real;
@@ -286,9 +281,7 @@ fn trr_header(
         .all(|&s| s == 0 || s as u64 == matrix);
     let vectors_ok = [x, v, f].iter().all(|&s| s == 0 || s == vector);
     if !(matrices_ok && vectors_ok) {
-        return Err(format!(
-            "the frame header at byte {offset} gives sizes that do not fit {natoms} atoms"
-        ));
+        return Err(XdrError::SizesDoNotFit { offset, natoms });
     }
     let header = (ints_at + 13 * 4) as u64 + 2 * real;
     let body: u64 = sizes.iter().map(|&s| s as u64).sum();

@@ -15,6 +15,7 @@ use molly::selection::AtomSelection;
 use super::chem::check_positions;
 use super::prepare::Prepared;
 use super::xdr::{Walk, trr_blocks};
+use super::xdr_error::XdrError;
 use super::{IoError, quiet};
 use crate::model::Frame;
 
@@ -119,7 +120,7 @@ impl XdrReader {
         })
     }
 
-    fn read_xtc(&mut self, offset: u64) -> Result<FrameParts, String> {
+    fn read_xtc(&mut self, offset: u64) -> Result<FrameParts, XdrError> {
         let (reader, frame, scratch) = (&mut self.reader, &mut self.xtc_frame, &mut self.scratch);
         // The header walk has checked this frame's header and size; a panic inside the decoder
         // on damaged compressed data is the last line of defence, reported as damage.
@@ -127,14 +128,13 @@ impl XdrReader {
             reader.file.seek(SeekFrom::Start(offset))?;
             reader.read_frame_with_scratch(frame, scratch, &AtomSelection::All)
         })
-        .map_err(|()| "the compressed coordinates are damaged".to_string())?;
-        read.map_err(|e| format!("cannot decode the compressed coordinates ({e})"))?;
+        .map_err(|()| XdrError::CompressedDamaged)?;
+        read.map_err(|e| XdrError::Decode(std::sync::Arc::new(e)))?;
         if frame.positions.len() != 3 * self.natoms {
-            return Err(format!(
-                "decoded {} atoms, the header says {}",
-                frame.positions.len() / 3,
-                self.natoms
-            ));
+            return Err(XdrError::DecodedAtoms {
+                decoded: frame.positions.len() / 3,
+                expected: self.natoms,
+            });
         }
         let positions = frame
             .positions
@@ -159,11 +159,14 @@ fn cell_from_rows(rows_nm: [Vec3; 3]) -> Option<[Vec3; 3]> {
 }
 
 /// Reads the TRR frame at `offset`: its positions (`natoms` of them), box and time.
-fn read_trr(file: &mut File, size: u64, natoms: usize, offset: u64) -> Result<FrameParts, String> {
+fn read_trr(
+    file: &mut File,
+    size: u64,
+    natoms: usize,
+    offset: u64,
+) -> Result<FrameParts, XdrError> {
     let blocks = trr_blocks(file, size, offset)?;
-    let x_at = blocks
-        .x_at
-        .ok_or("this frame has no positions (only velocities or forces)")?;
+    let x_at = blocks.x_at.ok_or(XdrError::NoPositions)?;
     let time = reals(file, blocks.time_at, 1, blocks.real)?[0];
     let cell = match blocks.box_at {
         Some(at) => {
@@ -184,11 +187,11 @@ fn read_trr(file: &mut File, size: u64, natoms: usize, offset: u64) -> Result<Fr
 }
 
 /// Reads `count` big-endian reals of `real` bytes (4 or 8) at `offset`.
-fn reals(file: &mut File, offset: u64, count: usize, real: u64) -> Result<Vec<f64>, String> {
+fn reals(file: &mut File, offset: u64, count: usize, real: u64) -> Result<Vec<f64>, XdrError> {
     let mut bytes = vec![0u8; count * real as usize];
     file.seek(SeekFrom::Start(offset))
         .and_then(|_| file.read_exact(&mut bytes))
-        .map_err(|e| format!("cannot read the frame data ({e})"))?;
+        .map_err(|e| XdrError::FrameData(std::sync::Arc::new(e)))?;
     Ok(if real == 8 {
         bytes
             .chunks_exact(8)

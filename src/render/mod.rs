@@ -12,6 +12,7 @@ pub mod readback;
 pub mod renderer;
 pub mod scene;
 mod scene_layers;
+pub mod setting_error;
 pub mod settings;
 pub mod shapes;
 pub mod targets;

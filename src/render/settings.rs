@@ -5,6 +5,8 @@
 use std::fmt;
 use std::str::FromStr;
 
+pub use super::setting_error::SettingError;
+
 /// Background colour of the image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Background {
@@ -121,24 +123,20 @@ impl Stereo {
 pub const DEFAULT_EYE_SEPARATION: f32 = 1.0 / 30.0;
 
 /// Checks an eye separation (fraction of the focal distance): finite and not negative.
-pub fn check_eye_separation(f: f32) -> Result<f32, String> {
+pub fn check_eye_separation(f: f32) -> Result<f32, SettingError> {
     if f.is_finite() && f >= 0.0 {
         Ok(f)
     } else {
-        Err(format!(
-            "bad eye separation {f}: expected a fraction of the focal distance >= 0, e.g. 0.033"
-        ))
+        Err(SettingError::EyeSeparation(f))
     }
 }
 
 /// Checks a focal distance (Å from the camera): finite and positive.
-pub fn check_focal_distance(d: f32) -> Result<f32, String> {
+pub fn check_focal_distance(d: f32) -> Result<f32, SettingError> {
     if d.is_finite() && d > 0.0 {
         Ok(d)
     } else {
-        Err(format!(
-            "bad focal distance {d}: expected a positive distance in Å from the camera"
-        ))
+        Err(SettingError::FocalDistance(d))
     }
 }
 
@@ -149,17 +147,16 @@ impl fmt::Display for Stereo {
 }
 
 impl FromStr for Stereo {
-    type Err = String;
+    type Err = SettingError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Stereo::ALL
             .into_iter()
             .find(|m| m.name().eq_ignore_ascii_case(s))
-            .or_else(|| s.eq_ignore_ascii_case("anaglyph-gray").then_some(Stereo::AnaglyphGrey))
-            .ok_or_else(|| {
-                format!(
-                    "unknown stereo mode '{s}' (expected off, sbs, sbs-cross, anaglyph or anaglyph-grey)"
-                )
+            .or_else(|| {
+                s.eq_ignore_ascii_case("anaglyph-gray")
+                    .then_some(Stereo::AnaglyphGrey)
             })
+            .ok_or_else(|| SettingError::Stereo(s.to_string()))
     }
 }
 
@@ -236,28 +233,26 @@ pub const FIGURE_SHADOWS: f32 = 0.5;
 pub const MAX_OUTLINE_PX: f32 = 16.0;
 
 /// Checks an outline width in pixels: finite, 0 (off) to [`MAX_OUTLINE_PX`].
-pub fn check_outline_width(px: f32) -> Result<f32, String> {
+pub fn check_outline_width(px: f32) -> Result<f32, SettingError> {
     if px.is_finite() && (0.0..=MAX_OUTLINE_PX).contains(&px) {
         Ok(px)
     } else {
-        Err(format!(
-            "bad outline width {px}: expected pixels from 0 (off) to {MAX_OUTLINE_PX}"
-        ))
+        Err(SettingError::OutlineWidth(px))
     }
 }
 
 /// Checks a shadow strength: finite, 0 (off) to 1.
-pub fn check_shadows(s: f32) -> Result<f32, String> {
+pub fn check_shadows(s: f32) -> Result<f32, SettingError> {
     if s.is_finite() && (0.0..=1.0).contains(&s) {
         Ok(s)
     } else {
-        Err(format!("bad shadow strength {s}: expected 0 (off) to 1"))
+        Err(SettingError::Shadows(s))
     }
 }
 
 /// Parses a linear RGB colour: `black`, `white`, `grey`, `#rrggbb` (sRGB hex, turned linear)
 /// or `r,g,b` (linear, each 0..1).
-pub fn parse_linear_rgb(s: &str) -> Result<[f32; 3], String> {
+pub fn parse_linear_rgb(s: &str) -> Result<[f32; 3], SettingError> {
     let t = s.trim().to_ascii_lowercase();
     let srgb = |v: f32| {
         if v <= 0.04045 {
@@ -266,7 +261,7 @@ pub fn parse_linear_rgb(s: &str) -> Result<[f32; 3], String> {
             ((v + 0.055) / 1.055).powf(2.4)
         }
     };
-    let bad = || format!("bad colour '{s}': expected black, white, grey, #rrggbb or r,g,b (0..1)");
+    let bad = || SettingError::Colour(s.to_string());
     match t.as_str() {
         "black" => return Ok([0.0; 3]),
         "white" => return Ok([1.0; 3]),
@@ -316,26 +311,22 @@ impl RenderSettings {
 }
 
 impl FromStr for AtomStyle {
-    type Err = String;
+    type Err = SettingError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         AtomStyle::ALL
             .into_iter()
             .find(|m| m.name().eq_ignore_ascii_case(s))
-            .ok_or_else(|| {
-                format!(
-                    "unknown atom style '{s}' (expected none, spheres, sticks or ball-and-stick)"
-                )
-            })
+            .ok_or_else(|| SettingError::AtomStyle(s.to_string()))
     }
 }
 
 impl FromStr for Background {
-    type Err = String;
+    type Err = SettingError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.to_ascii_lowercase().as_str() {
             "dark" | "black" => Ok(Background::Dark),
             "light" | "white" => Ok(Background::Light),
-            _ => Err(format!("unknown background '{s}' (expected dark or light)")),
+            _ => Err(SettingError::Background(s.to_string())),
         }
     }
 }

@@ -31,6 +31,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::representation::Representation;
+use crate::render::settings::SettingError;
 use crate::render::{Background, Camera, Projection, RenderSettings};
 
 /// The state-file format version this build writes and reads.
@@ -195,8 +196,14 @@ impl LookState {
 
     /// Applies this look to `settings`; fails naming the first bad value.
     pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), String> {
-        settings.background = self.background.parse()?;
-        settings.stereo = self.stereo.parse()?;
+        settings.background = self
+            .background
+            .parse()
+            .map_err(|e: SettingError| e.to_string())?;
+        settings.stereo = self
+            .stereo
+            .parse()
+            .map_err(|e: SettingError| e.to_string())?;
         for (name, v) in [
             ("ambient_occlusion", self.ambient_occlusion),
             ("depth_cue", self.depth_cue),

@@ -185,7 +185,7 @@ fn scripts_name_the_file_and_line() {
         "# setup\nrep add \"all\" spheres\n\nframe 2\nframe x\n",
     )
     .unwrap();
-    let e = read_script(&path).unwrap_err();
+    let e = read_script(&path).unwrap_err().to_string();
     assert!(e.contains("s.mdsurf:5: column 7"), "{e}");
     std::fs::write(&path, "# setup\nrep add \"all\" spheres\n\nframe 2\n").unwrap();
     let lines = read_script(&path).unwrap();
