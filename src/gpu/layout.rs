@@ -478,12 +478,11 @@ impl std::error::Error for BindingMismatches {}
 /// Returns every disagreement.
 pub fn check_against_wgsl() -> Result<(), BindingMismatches> {
     let mut errors = Vec::new();
-    for (file, source) in super::shaders::ALL {
-        let Some((_, slots)) = SHADERS.iter().find(|(f, _)| f == file) else {
-            errors.push(BindingMismatch::NoTable { file: *file });
+    for &(file, source) in super::shaders::ALL {
+        let Some((_, slots)) = SHADERS.iter().find(|(f, _)| *f == file) else {
+            errors.push(BindingMismatch::NoTable { file });
             continue;
         };
-        let file: &'static str = *file;
         let module = match naga::front::wgsl::parse_str(source) {
             Ok(m) => m,
             Err(e) => {
