@@ -4,6 +4,8 @@
 //! its particles to their nearest neighbour of the same type in the first frame: about the
 //! contact radius of a packed particle (argon 1.9 Å, water oxygen 1.4 Å).
 
+use std::collections::HashMap;
+
 use glam::{IVec3, Vec3};
 
 use super::Topology;
