@@ -8,7 +8,7 @@ use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use mdsurf::io;
-use mdsurf::scene::Selection;
+use mdsurf::selection::Selection;
 
 fn selection(c: &mut Criterion) {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");

@@ -18,6 +18,7 @@ pub mod measure;
 pub mod model;
 pub mod render;
 pub mod scene;
+pub mod selection;
 pub mod surface;
 pub mod synthetic;
 pub mod transform;

@@ -16,7 +16,8 @@ use mdsurf::model::{Frame, RadiusOverrides, Topology, elements};
 use mdsurf::scene::defaults::default_representations;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
-use mdsurf::scene::{BoundSelection, RepRequest, SceneBackend, SceneEngine, SceneError, Selection};
+use mdsurf::scene::{RepRequest, SceneBackend, SceneEngine, SceneError};
+use mdsurf::selection::{BoundSelection, Selection};
 use mdsurf::surface::{CpuEngine, SurfaceEngine, SurfaceParams, VertexMode};
 use mdsurf::transform::{
     FitReference, TransformChain, TransformError, TransformOptions, TransformedFrames,

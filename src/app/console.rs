@@ -13,8 +13,8 @@ use std::path::PathBuf;
 use super::state::{AppCore, Command};
 use super::timeline::TimelineCmd;
 use crate::model::ColorScheme;
-use crate::scene::Selection;
 use crate::scene::representation::{RepStyle, Representation};
+use crate::selection::Selection;
 use crate::surface::{Quality, VertexMode};
 
 /// A one-line console error.

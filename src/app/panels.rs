@@ -6,7 +6,7 @@ use super::state::{AppCore, Command};
 use crate::model::ColorScheme;
 use crate::render::{Background, Projection, Stereo};
 use crate::scene::representation::RepStyle;
-use crate::scene::selection::Selection;
+use crate::selection::Selection;
 use crate::surface::{Preset, Quality, RadiusSet, SurfaceParams, VertexMode};
 
 /// The selected representation's edits in progress: surface parameters become the

@@ -1,5 +1,5 @@
 //! `mdsurf select TOP [TRAJ] [--frame N] [--indices] EXPR`: evaluates a selection (see
-//! [`mdsurf::scene::selection`]) on one frame and prints the number of matching atoms on the
+//! [`mdsurf::selection`]) on one frame and prints the number of matching atoms on the
 //! first line and, with `--indices`, their 0-based indices space-separated on the second.
 //! A bad selection is reported as one line with the column of the first bad token (status 2).
 
@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, anyhow, bail};
-use mdsurf::scene::Selection;
+use mdsurf::selection::Selection;
 
 /// Arguments of `mdsurf select`.
 #[derive(clap::Args, Debug)]

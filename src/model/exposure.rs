@@ -13,6 +13,8 @@
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
+use super::cells::CellList;
+
 /// The smallest factor an [`ExposureModel`] applies to a radius.
 pub const MIN_FACTOR: f32 = 0.2;
 
@@ -69,49 +71,31 @@ pub fn heavy_neighbour_counts(
     radius: f32,
     cap: u32,
 ) -> Vec<u32> {
-    let heavy_positions: Vec<Vec3> = positions
+    let heavy_atoms: Vec<(u32, Vec3)> = positions
         .iter()
         .zip(heavy)
-        .filter_map(|(&p, &h)| h.then_some(p))
+        .enumerate()
+        .filter_map(|(i, (&p, &h))| h.then_some((i as u32, p)))
         .collect();
-    if heavy_positions.is_empty() {
+    if heavy_atoms.is_empty() {
         return vec![0; positions.len()];
     }
-    let lo = heavy_positions
+    let (lo, hi) = heavy_atoms
         .iter()
-        .fold(Vec3::splat(f32::INFINITY), |a, &p| a.min(p));
-    let hi = heavy_positions
-        .iter()
-        .fold(Vec3::splat(f32::NEG_INFINITY), |a, &p| a.max(p));
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &(_, p)| {
+            (lo.min(p), hi.max(p))
+        });
     // Cells of radius / CELLS_PER_RADIUS, larger where atoms are sparse over a large box (no
     // more than four cells per heavy atom; counted in f64, so that a box of any finite size
     // gets cells).
-    let limit = (4 * heavy_positions.len()).max(1 << 12) as f64;
+    let limit = (4 * heavy_atoms.len()).max(1 << 12) as f64;
     let extent = (hi - lo).as_dvec3();
     let mut size = radius / CELLS_PER_RADIUS;
     let dims_for = |size: f32| (extent / size as f64).floor() + 1.0;
     while dims_for(size).element_product() > limit {
         size *= 1.25;
     }
-    let dims = dims_for(size).as_uvec3();
-    let cell_of = |p: Vec3| ((p - lo) / size).floor().as_ivec3();
-    let index = |c: IVec3| (c.x + dims.x as i32 * (c.y + dims.y as i32 * c.z)) as usize;
-    // Heavy atoms sorted by cell (counting sort): cell k holds start[k]..start[k + 1].
-    let cell_count = dims.as_dvec3().element_product() as usize;
-    let mut start = vec![0u32; cell_count + 1];
-    for &p in &heavy_positions {
-        start[index(cell_of(p)) + 1] += 1;
-    }
-    for k in 0..cell_count {
-        start[k + 1] += start[k];
-    }
-    let mut fill = start.clone();
-    let mut sorted = vec![Vec3::ZERO; heavy_positions.len()];
-    for &p in &heavy_positions {
-        let k = index(cell_of(p));
-        sorted[fill[k] as usize] = p;
-        fill[k] += 1;
-    }
+    let cells = CellList::new(&heavy_atoms, lo, size, dims_for(size).as_ivec3());
     // The cells around an atom's own cell that its sphere can reach, nearest first.
     let reach = (radius / size).ceil() as i32;
     let r2 = radius * radius;
@@ -124,24 +108,18 @@ pub fn heavy_neighbour_counts(
         })
         .collect();
     offsets.sort_by_key(|o| o.length_squared());
-    let max = dims.as_ivec3() - 1;
     positions
         .par_iter()
         .map(|&p| {
-            let own = cell_of(p);
+            let own = cells.cell_of(p);
             let mut n = 0u32;
             for &o in &offsets {
                 let cell = own + o;
-                if cell.cmplt(IVec3::ZERO).any() || cell.cmpgt(max).any() {
-                    continue;
-                }
-                let k = index(cell);
-                let atoms = &sorted[start[k] as usize..start[k + 1] as usize];
+                let (atoms, _) = cells.cell(cell);
                 if atoms.is_empty() {
                     continue;
                 }
-                let box_lo = lo + cell.as_vec3() * size;
-                let box_hi = box_lo + size;
+                let (box_lo, box_hi) = cells.cell_box(cell);
                 let nearest = (box_lo - p).max(p - box_hi).max(Vec3::ZERO);
                 if nearest.length_squared() > r2 {
                     continue;

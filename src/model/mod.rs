@@ -8,6 +8,8 @@ use glam::Vec3;
 pub const MIN_BOX_WIDTH: f32 = 4.0;
 
 pub mod beads;
+pub mod bonds;
+pub mod cells;
 pub mod colour;
 pub mod colour_data;
 pub mod colour_map;
@@ -16,6 +18,7 @@ pub mod exposure;
 pub mod labels;
 pub mod lipid_like;
 pub mod particles;
+pub mod pbc;
 pub mod radii;
 pub mod residues;
 pub mod sizing;

@@ -9,6 +9,7 @@ use std::collections::HashMap;
 use glam::{IVec3, Vec3};
 
 use super::Topology;
+use super::cells::CellList;
 
 /// Fitted radii are clamped to this range in Å.
 const RADIUS_RANGE: (f32, f32) = (0.5, 3.0);
@@ -66,26 +67,33 @@ fn median_nearest_distance(points: &[Vec3]) -> Option<f32> {
     // Twice the mean spacing per cell, so most nearest neighbours lie in the 27 cells around.
     let mean_spacing = (extent.x * extent.y * extent.z / points.len() as f32).cbrt();
     let cell = (2.0 * mean_spacing).max(0.1);
-    let key = |p: Vec3| ((p - lo) / cell).floor().as_ivec3();
-    let mut grid: HashMap<IVec3, Vec<u32>> = HashMap::new();
-    for (i, &p) in points.iter().enumerate() {
-        grid.entry(key(p)).or_default().push(i as u32);
+    // Cells at least `cell` wide (wider when a flat or thin cloud would need more than a few
+    // per point): every point within `cell` of another lies in the 27 cells around it.
+    let items: Vec<(u32, Vec3)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| (i as u32, p))
+        .collect();
+    let dims_for = |edge: f32| (extent.as_dvec3() / edge as f64).floor() + 1.0;
+    let limit = (8 * points.len()).max(1 << 12) as f64;
+    let mut edge = cell;
+    while dims_for(edge).element_product() > limit {
+        edge *= 1.25;
     }
+    let grid = CellList::new(&items, lo, edge, dims_for(edge).as_ivec3());
     let step = points.len().div_ceil(SAMPLE).max(1);
     let mut nearest: Vec<f32> = (0..points.len())
         .step_by(step)
         .filter_map(|i| {
             let p = points[i];
-            let c = key(p);
+            let c = grid.cell_of(p);
             let mut best = f32::INFINITY;
             for dz in -1..=1 {
                 for dy in -1..=1 {
                     for dx in -1..=1 {
-                        let Some(bucket) = grid.get(&(c + IVec3::new(dx, dy, dz))) else {
-                            continue;
-                        };
-                        for &j in bucket.iter().filter(|&&j| j as usize != i) {
-                            best = best.min(p.distance(points[j as usize]));
+                        let (near, ids) = grid.cell(c + IVec3::new(dx, dy, dz));
+                        for (q, _) in near.iter().zip(ids).filter(|&(_, &j)| j as usize != i) {
+                            best = best.min(p.distance(*q));
                         }
                     }
                 }

@@ -1,64 +1,10 @@
 //! Atoms and bonds as drawable instances: spheres per atom and two half-cylinders per bond (each
 //! half in its atom's colour), with bonds from the file or guessed from distances.
 
-use std::collections::HashMap;
-
 use glam::Vec3;
 
 use super::scene::{CylinderInstance, SphereInstance};
 use super::settings::{AtomStyle, RenderSettings};
-
-/// Longest bond guessed from distances, in Å.
-pub const MAX_BOND_LENGTH: f32 = 2.0;
-/// Two atoms are bonded when closer than this fraction of the sum of their radii.
-pub const BOND_RADIUS_FRACTION: f32 = 0.6;
-
-/// Guesses bonds from distances: atoms `i`, `j` are bonded when
-/// `|p_i - p_j| < min(BOND_RADIUS_FRACTION * (r_i + r_j), MAX_BOND_LENGTH)` (radii in Å).
-/// Uses a cell grid, so it runs in linear time. Pairs come back with `i < j`.
-pub fn guess_bonds(positions: &[Vec3], radii: &[f32]) -> Vec<[u32; 2]> {
-    let cell = MAX_BOND_LENGTH;
-    let key = |p: Vec3| {
-        let c = (p / cell).floor();
-        (c.x as i32, c.y as i32, c.z as i32)
-    };
-    let mut grid: HashMap<(i32, i32, i32), Vec<u32>> = HashMap::new();
-    for (i, p) in positions.iter().enumerate() {
-        if p.is_finite() {
-            grid.entry(key(*p)).or_default().push(i as u32);
-        }
-    }
-    let mut bonds = Vec::new();
-    for (i, p) in positions.iter().enumerate() {
-        if !p.is_finite() {
-            continue;
-        }
-        let (cx, cy, cz) = key(*p);
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let Some(list) = grid.get(&(cx + dx, cy + dy, cz + dz)) else {
-                        continue;
-                    };
-                    for &j in list {
-                        let j = j as usize;
-                        if j <= i {
-                            continue;
-                        }
-                        let ri = radii.get(i).copied().unwrap_or(1.5);
-                        let rj = radii.get(j).copied().unwrap_or(1.5);
-                        let limit = (BOND_RADIUS_FRACTION * (ri + rj)).min(MAX_BOND_LENGTH);
-                        if p.distance_squared(positions[j]) < limit * limit {
-                            bonds.push([i as u32, j as u32]);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    bonds.sort_unstable();
-    bonds
-}
 
 /// Builds the sphere and cylinder instances for `settings.atom_style`.
 ///
@@ -125,6 +71,7 @@ pub fn atom_instances(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::bonds::guess_bonds;
 
     #[test]
     fn water_has_two_bonds_and_no_h_h_bond() {

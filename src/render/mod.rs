@@ -17,7 +17,7 @@ pub mod settings;
 pub mod shapes;
 pub mod targets;
 
-pub use atoms::{atom_instances, guess_bonds};
+pub use atoms::atom_instances;
 pub use camera::{Camera, Projection, bounding_sphere};
 pub use headless::HeadlessGpu;
 pub use pipelines::{AO_WGSL, LOOK_WGSL, POST_WGSL, SCENE_WGSL};

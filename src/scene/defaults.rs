@@ -6,7 +6,7 @@
 use crate::model::{ColorScheme, Frame, Topology};
 
 use super::representation::{RepStyle, Representation};
-use super::selection::Selection;
+use crate::selection::Selection;
 
 /// Selection of the main representation (proteins and nucleic acids).
 pub const MACROMOLECULE: &str = "protein or nucleic";

@@ -8,12 +8,12 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use crate::model::bonds::guess_bonds;
 use crate::model::{Frame, ModelError, Particles, RadiusOverrides, Topology};
-use crate::render::guess_bonds;
 use crate::surface::AtomSet;
 
 use super::representation::Representation;
-use super::selection::BoundSelection;
+use crate::selection::BoundSelection;
 
 /// Why a layer could not be built or updated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -1,8 +1,8 @@
 //! Scenes: what the viewer, `render`, `surface` and the command line share about *which* atoms
 //! to show and how, below `app` and `cli`. The surface engine stays a function of (atoms,
-//! params) and knows nothing of scenes.
+//! params) and knows nothing of scenes. Which atoms a representation takes is a
+//! [`crate::selection::Selection`], from the top-level selection language.
 //!
-//! - [`selection`]: the atom-selection language, parsed once and evaluated per frame.
 //! - [`engine`]: the [`SceneEngine`], the one frame path from a frame to every
 //!   representation's particles and surface ([`frame`]: what it returns).
 
@@ -12,9 +12,7 @@ pub mod frame;
 pub mod layer;
 pub mod movie;
 pub mod representation;
-pub mod selection;
 pub mod state_file;
 
 pub use engine::{SceneBackend, SceneEngine};
 pub use frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
-pub use selection::{BoundSelection, Selection, SelectionError};

@@ -12,7 +12,7 @@ use crate::model::{ColorScheme, ParticleOptions, RadiusOverrides};
 use crate::render::AtomStyle;
 use crate::surface::{Quality, RadiusSet, SurfaceParams, VertexMode};
 
-use super::selection::{Selection, SelectionError};
+use crate::selection::{Selection, SelectionError};
 
 /// How a representation draws its atoms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

@@ -4,8 +4,8 @@
 
 use glam::{DVec3, Vec3};
 
-use super::pbc::PbcCell;
 use super::whole::Molecules;
+use crate::model::pbc::PbcCell;
 
 /// The weighted centre (Å) of `positions` at `indices`; `masses` (amu, one per atom) weigh it
 /// when every selected atom has a positive mass, otherwise all atoms count the same. `None`

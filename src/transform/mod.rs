@@ -11,7 +11,6 @@
 
 pub mod center;
 pub mod fit;
-pub mod pbc;
 pub mod reader;
 pub mod smooth;
 pub mod whole;
@@ -22,10 +21,11 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::model::pbc;
+pub use crate::model::pbc::PbcCell;
 use crate::model::{Frame, Topology};
-use crate::scene::{BoundSelection, Selection, SelectionError};
+use crate::selection::{BoundSelection, Selection, SelectionError};
 pub use crate::surface::periodic::Replicate;
-pub use pbc::PbcCell;
 pub use reader::TransformedFrames;
 pub use whole::{Connectivity, Molecules};
 

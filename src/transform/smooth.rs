@@ -13,8 +13,8 @@ use std::ops::Range;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::pbc::PbcCell;
 use crate::model::Frame;
+use crate::model::pbc::PbcCell;
 
 /// Atoms per parallel chunk when averaging.
 const CHUNK: usize = 8192;

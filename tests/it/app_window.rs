@@ -81,7 +81,7 @@ fn window_loads_demo_and_draws_the_surface() {
         positions: vec![Default::default(); topology.len()],
         ..Default::default()
     };
-    let protein = mdsurf::scene::Selection::parse("protein or nucleic")
+    let protein = mdsurf::selection::Selection::parse("protein or nucleic")
         .expect("parse")
         .bind(topology)
         .indices(&placeholder)

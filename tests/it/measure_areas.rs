@@ -6,7 +6,7 @@ use mdsurf::measure::{
     residue_areas,
 };
 use mdsurf::model::{ParticleOptions, Particles, Topology};
-use mdsurf::scene::Selection;
+use mdsurf::selection::Selection;
 use mdsurf::surface::{AtomSet, CpuEngine, Preset, SurfaceEngine, SurfaceParams};
 
 use crate::data_support::{DATA, data};

@@ -5,9 +5,9 @@
 
 use mdsurf::io::Trajectory;
 use mdsurf::model::{Frame, Topology};
-use mdsurf::scene::Selection;
 use mdsurf::scene::defaults::default_representations;
 use mdsurf::scene::representation::Representation;
+use mdsurf::selection::Selection;
 
 use crate::data_support::data;
 

@@ -74,7 +74,7 @@ fn adk_in_water_shows_the_protein_not_the_box() {
         .unwrap()
         .apply(&mut frame)
         .unwrap();
-    let protein = mdsurf::scene::Selection::parse("protein")
+    let protein = mdsurf::selection::Selection::parse("protein")
         .unwrap()
         .bind(top)
         .indices(&frame);

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use mdsurf::io::Trajectory;
 use mdsurf::model::{BeadModel, Frame};
-use mdsurf::scene::Selection;
+use mdsurf::selection::Selection;
 
 use crate::cli_common::mdsurf;
 use crate::data_support::data;

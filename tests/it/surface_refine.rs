@@ -283,7 +283,7 @@ fn ses_preset_surface_of_1hpv_holds_at_h_1_with_its_sharp_triangles_measured_on_
     };
     let particles = Particles::new(traj.topology(), &frame, &options).expect("particles");
     let all = particles.positions(&frame).expect("positions");
-    let protein = mdsurf::scene::Selection::parse("protein").expect("selection");
+    let protein = mdsurf::selection::Selection::parse("protein").expect("selection");
     let picked = protein.bind(traj.topology()).indices(&frame);
     let pos: Vec<Vec3> = picked.iter().map(|&i| all[i as usize]).collect();
     let radii: Vec<f32> = picked

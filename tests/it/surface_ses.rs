@@ -16,7 +16,7 @@
 
 use glam::Vec3;
 use mdsurf::model::{ParticleOptions, Particles};
-use mdsurf::scene::Selection;
+use mdsurf::selection::Selection;
 use mdsurf::surface::{AtomSet, CpuEngine, Preset, SurfaceEngine, SurfaceParams};
 
 use crate::data_support::{DATA, data};

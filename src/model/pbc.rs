@@ -1,4 +1,4 @@
-//! Periodic-cell arithmetic shared by the transforms: fractional coordinates, minimum images
+//! Periodic-cell arithmetic shared by the transforms and the bond guesser: fractional coordinates, minimum images
 //! and lattice shifts for orthorhombic and triclinic boxes (rows a, b, c in Å, as
 //! [`crate::model::Frame::cell`] holds them).
 

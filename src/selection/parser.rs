@@ -292,7 +292,7 @@ fn pattern(notes: &Notes, field: StrField, word: &str, v: &Value) -> Option<Patt
     match super::bind::compile(&pattern, field) {
         Ok(_) => Some(pattern),
         Err(e) => {
-            notes.add(v.pos, e);
+            notes.add(v.pos, e.to_string());
             None
         }
     }

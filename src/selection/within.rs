@@ -7,7 +7,8 @@
 //! wrapped atom then finds every partner within D among those copies, so the search itself is a
 //! plain Cartesian one: no minimum-image convention is needed.
 //!
-//! The smaller of the two sets (sources, targets) is binned into Cartesian cells D wide, and
+//! The smaller of the two sets (sources, targets) is binned into Cartesian cells D wide (the
+//! counting sort of [`crate::model::cells`]), and
 //! the cells some part of which lies within D of a binned atom are marked. Each atom of the
 //! larger set (in parallel) is rejected by one look-up when its cell is unmarked, and otherwise
 //! visits the 3 × 3 × 3 cells around its own, row by row, skipping cells whose nearest point
@@ -19,6 +20,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{IVec3, Mat3, Mat3A, Vec3, Vec3A};
 use rayon::prelude::*;
+
+use crate::model::cells::sort_by_cell;
 
 /// Atoms per parallel task.
 const CHUNK: usize = 1024;
@@ -258,21 +261,9 @@ impl Grid {
             .iter()
             .map(|&(_, p)| self.locate(p).map_or(0, |(c, _)| self.flat(c)))
             .collect();
-        let mut start = vec![0u32; cells + 1];
-        for &c in &cell_of {
-            start[c + 1] += 1;
-        }
-        for c in 0..cells {
-            start[c + 1] += start[c];
-        }
-        let mut fill = start.clone();
-        let mut sorted = vec![Vec3A::ZERO; points.len()];
-        let mut ids = vec![0u32; points.len()];
-        for (&c, &(i, p)) in cell_of.iter().zip(points) {
-            sorted[fill[c] as usize] = p;
-            ids[fill[c] as usize] = i;
-            fill[c] += 1;
-        }
+        let (start, order) = sort_by_cell(&cell_of, cells);
+        let sorted: Vec<Vec3A> = order.iter().map(|&o| points[o as usize].1).collect();
+        let ids: Vec<u32> = order.iter().map(|&o| points[o as usize].0).collect();
         // Cells that some part of lies within the cutoff of some point: a target outside them
         // is out of range of every point.
         let mut near = vec![false; cells];

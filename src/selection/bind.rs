@@ -62,9 +62,21 @@ impl Matcher {
     }
 }
 
+/// Why a name pattern does not compile; displays as one line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub(crate) enum PatternError {
+    /// A quoted regex (or a glob turned regex) the regex engine refuses, with its last line of
+    /// explanation.
+    #[error("bad regex \"{regex}\": {detail}")]
+    BadRegex { regex: String, detail: String },
+    /// A glob with `[` and no closing `]`.
+    #[error("unclosed '[' in '{glob}'")]
+    UnclosedClass { glob: String },
+}
+
 /// Compiles `pattern`; the error is one line. Elements are matched upper-cased, so their
 /// regexes are case-insensitive.
-pub(crate) fn compile(pattern: &Pattern, field: StrField) -> Result<Matcher, String> {
+pub(crate) fn compile(pattern: &Pattern, field: StrField) -> Result<Matcher, PatternError> {
     let flags = if field == StrField::Element {
         "(?i)"
     } else {
@@ -81,13 +93,16 @@ pub(crate) fn compile(pattern: &Pattern, field: StrField) -> Result<Matcher, Str
             let detail = e.to_string();
             let last = detail.lines().last().unwrap_or("").trim();
             let last = last.strip_prefix("error: ").unwrap_or(last);
-            format!("bad regex \"{source}\": {last}")
+            PatternError::BadRegex {
+                regex: source,
+                detail: last.to_string(),
+            }
         })
 }
 
 /// A shell glob as a regex body: `*` any run, `?` one character, `[...]` a class (`[!...]`
 /// negated); everything else literal.
-fn glob_to_regex(glob: &str) -> Result<String, String> {
+fn glob_to_regex(glob: &str) -> Result<String, PatternError> {
     let mut out = String::new();
     let mut chars = glob.chars().peekable();
     while let Some(c) = chars.next() {
@@ -112,7 +127,9 @@ fn glob_to_regex(glob: &str) -> Result<String, String> {
                     class.push(c);
                 }
                 if !closed {
-                    return Err(format!("unclosed '[' in '{glob}'"));
+                    return Err(PatternError::UnclosedClass {
+                        glob: glob.to_string(),
+                    });
                 }
                 class.push(']');
                 out.push_str(&class);
