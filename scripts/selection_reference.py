@@ -16,7 +16,7 @@ what mdsurf's expression means:
 
 - Macros. MDAnalysis's `protein`, `backbone`, `nucleic` use its own residue lists, and it has no
   `water`, `ion`, `lipid`, `ligand`, `sidechain` or `hydrogen` keywords. The MDAnalysis side
-  therefore spells out mdsurf's definitions (src/scene/selection/macros.rs and
+  therefore spells out mdsurf's definitions (src/selection/macros.rs and
   src/model/residues.rs) as explicit `resname`/`name` lists, built below from the same lists.
 - `within D of SEL` (SEL included) is `(around D SEL) or (SEL)`; `exwithin D of SEL` is
   `around D SEL`. Both use periodic images when the file has a box, in both programs.
