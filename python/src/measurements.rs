@@ -17,7 +17,8 @@ use mdsurf::measure::{
 use mdsurf::model::{Frame, RadiusOverrides};
 use mdsurf::scene::layer::Layer;
 use mdsurf::scene::representation::{RepStyle, Representation};
-use mdsurf::scene::{LayerResult, RepRequest, Selection};
+use mdsurf::scene::{LayerResult, RepRequest};
+use mdsurf::selection::Selection;
 use mdsurf::surface::{AtomSet, CpuEngine};
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
