@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use anyhow::{Result, bail};
-use mdsurf::io::{FollowOptions, LiveOptions, LiveSource};
+use mdsurf::io::{FollowOptions, IoError, LiveOptions, LiveSource};
 
 /// Frames from a simulation running now, over IMD (GROMACS `mdrun -imdport`, NAMD, LAMMPS).
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -75,4 +75,12 @@ impl LiveArgs {
         options.connect_timeout = Duration::from_secs(self.imd_wait);
         Ok(Some(LiveSource::Imd(options)))
     }
+}
+
+/// The end of a growing source (a simulation that finished, a file that stopped growing) when
+/// `error` is one: the end of the run, not a failure, for the commands' frame loops.
+pub fn end_of_stream(error: &anyhow::Error) -> Option<&IoError> {
+    error
+        .downcast_ref::<IoError>()
+        .filter(|e| matches!(e, IoError::LiveEnded { .. }))
 }

@@ -19,7 +19,6 @@ use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 use mdsurf::export::video::{Mp4Movie, check_even_size, is_mp4};
 use mdsurf::export::{StatsRow, StatsWriter};
 use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
-use mdsurf::io::IoError;
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::movie::Shot;
 use mdsurf::scene::representation::{RepStyle, Representation};
@@ -204,14 +203,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
             match reader.read_frame(f) {
                 Ok(frame) => Arc::new(frame),
                 // The end of a running simulation ends the movie; it is not a failure.
-                Err(e) => match e.downcast_ref::<IoError>() {
-                    Some(end @ IoError::LiveEnded { .. }) => {
+                Err(e) => match super::live_args::end_of_stream(&e) {
+                    Some(end) => {
                         if !args.quiet {
                             eprintln!("{end}");
                         }
                         break;
                     }
-                    _ => return Err(e),
+                    None => return Err(e),
                 },
             }
         };

@@ -15,14 +15,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use mdsurf::export::glb::GlbAnimation;
 use mdsurf::export::stats_merge::{PartHeader, part_path};
 use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
-use mdsurf::io::IoError;
 
 use mdsurf::scene::SceneBackend;
 use mdsurf::surface::SurfaceParams;
 
 use super::chunk::{ChunkSpec, check_chunk_count};
 use super::interrupt::{catch_interrupts, interrupted};
-use super::live_args::LiveArgs;
+use super::live_args::{LiveArgs, end_of_stream};
 use super::measure_args::{MeasureArgs, Measurer};
 
 use super::common::{
@@ -323,13 +322,10 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             }
             Err(err) => {
                 // The end of a running simulation is the end of the run, not a failure.
-                match err.downcast_ref::<IoError>() {
-                    Some(end @ IoError::LiveEnded { .. }) if ok_frames > 0 => {
-                        if !args.quiet {
-                            eprintln!("{end}");
-                        }
-                    }
-                    _ => failure = Some(err),
+                match end_of_stream(&err).filter(|_| ok_frames > 0) {
+                    Some(end) if !args.quiet => eprintln!("{end}"),
+                    Some(_) => {}
+                    None => failure = Some(err),
                 }
                 break;
             }

@@ -13,7 +13,7 @@ use mdsurf::app::export::{MoviePlan, VideoPlan};
 use mdsurf::app::{Command, DEMO_TOP, DEMO_TRAJ, ViewOptions, Viewer, create_viewer};
 use mdsurf::render::RgbaImage;
 
-use crate::cli_common::ffmpeg_tool;
+use crate::cli_common::probe_video;
 
 /// egui_kittest's wgpu set-up on the viewer's backends: its default also opens OpenGL, and on an
 /// H100 dropping that instance deadlocked NVIDIA's driver against the GPU tests compiling on
@@ -149,24 +149,8 @@ fn window_loads_demo_and_draws_the_surface() {
             ..plan
         },
     );
-    let mp4_s = mp4.display().to_string();
-    let probe = ffmpeg_tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=codec_name,width,height,nb_read_frames",
-            "-of",
-            "csv=p=0",
-            &mp4_s,
-        ],
-    );
-    let text = String::from_utf8_lossy(&probe);
-    assert_eq!(text.trim(), "h264,64,48,3", "ffprobe: {text}");
+    let text = probe_video(&mp4, "codec_name,width,height,nb_read_frames");
+    assert_eq!(text, "h264,64,48,3", "ffprobe: {text}");
     // No temporary file is left beside it.
     let leftovers: Vec<_> = std::fs::read_dir(config.path())
         .unwrap()

@@ -223,3 +223,26 @@ pub fn ffmpeg_tool(tool: &str, args: &[&str]) -> Vec<u8> {
     );
     out.stdout
 }
+
+/// The first video stream of `path` as ffprobe counts it: the `entries` of `stream=` (for
+/// example `codec_name,nb_read_frames`), comma-separated, every frame decoded to count them.
+pub fn probe_video(path: &Path, entries: &str) -> String {
+    let path = path.to_str().expect("utf-8 path");
+    let shown = format!("stream={entries}");
+    let out = ffmpeg_tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            &shown,
+            "-of",
+            "csv=p=0",
+            path,
+        ],
+    );
+    String::from_utf8_lossy(&out).trim().to_string()
+}

@@ -439,24 +439,8 @@ fn render_makes_a_movie_of_a_run_until_it_ends() {
         "{}",
         run.stderr
     );
-    let frames = crate::cli_common::ffmpeg_tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=nb_read_frames",
-            "-of",
-            "csv=p=0",
-        ]
-        .into_iter()
-        .chain([dir.path().join("live.mp4").to_str().unwrap()])
-        .collect::<Vec<_>>(),
-    );
-    assert_eq!(String::from_utf8_lossy(&frames).trim(), "13");
+    let frames = crate::cli_common::probe_video(&dir.path().join("live.mp4"), "nb_read_frames");
+    assert_eq!(frames, "13");
     // One picture of a stream is refused before connecting.
     let run = mdsurf(
         dir.path(),
