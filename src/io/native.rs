@@ -12,6 +12,7 @@ use std::path::Path;
 use super::IoError;
 use super::format::FileFormat;
 use super::prepare::Prepared;
+use super::{dcd_frames, netcdf};
 use crate::model::{Frame, Topology};
 
 /// An open trajectory file read by one of our readers: random access to its frames.
@@ -54,6 +55,8 @@ pub(crate) fn opener(format: &FileFormat) -> Option<Opener> {
         return None;
     }
     match format.base {
+        "DCD" => Some(dcd_frames::open),
+        "Amber NetCDF" => Some(netcdf::open),
         _ => None,
     }
 }
