@@ -211,10 +211,10 @@ fn read_header(file: &File, total: u64) -> Result<Layout, String> {
         return Err("the atom-count record's markers are not 4 (damaged header)".into());
     }
     let atoms = layout.int(&natom[4..8]);
-    if atoms <= 0 || (atoms as u64) * 12 > total {
-        return Err(format!(
-            "the header says {atoms} atoms, which a file of {total} bytes cannot hold (damaged header)"
-        ));
+    // Nothing is allocated from the atom count before a whole frame is known to be in the
+    // file (a file cut inside frame 0 is damage at frame 0, an absurd count no frame).
+    if atoms <= 0 {
+        return Err(format!("the header says {atoms} atoms (damaged header)"));
     }
     if fixed < 0 || fixed > atoms {
         return Err(format!(
@@ -307,8 +307,9 @@ impl DcdFrames {
                     layout.frame_bytes
                 };
                 damage = Some(format!(
-                    "the file ends inside this frame (truncated: {} of {expected} bytes)",
-                    total - end
+                    "the file ends inside this frame (truncated: {} of {expected} bytes for {} atoms)",
+                    total - end,
+                    layout.stored(whole)
                 ));
             }
         }

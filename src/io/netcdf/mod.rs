@@ -13,7 +13,6 @@
 mod header;
 
 use std::fs::File;
-use std::io::Read;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
@@ -84,13 +83,10 @@ fn read_header(file: &File, total: u64) -> Result<Header, String> {
     let mut bytes = Vec::new();
     let mut want = HEADER_CHUNK.min(total);
     loop {
-        bytes.clear();
-        (&*file)
-            .take(want)
-            .read_to_end(&mut bytes)
+        // `want` is at most the file size (and `MAX_HEADER`).
+        bytes.resize(want as usize, 0);
+        file.read_exact_at(&mut bytes, 0)
             .map_err(|e| e.to_string())?;
-        // `take` continues from the current position: rewind for the next try.
-        std::io::Seek::rewind(&mut &*file).map_err(|e| e.to_string())?;
         match header::parse(&bytes, total) {
             Ok(header) => return Ok(header),
             Err(HeaderError::Damaged(reason)) => return Err(reason),
