@@ -12,6 +12,7 @@ use std::path::Path;
 use super::IoError;
 use super::format::FileFormat;
 use super::prepare::Prepared;
+use super::{dcd_frames, netcdf};
 use crate::model::{Frame, Topology};
 
 /// An open trajectory file read by one of our readers: random access to its frames.
@@ -53,8 +54,9 @@ pub(crate) fn opener(format: &FileFormat) -> Option<Opener> {
     if std::env::var_os("MDSURF_NO_NATIVE_READ").is_some() {
         return None;
     }
-    #[allow(clippy::match_single_binding)] // until the first reader registers
     match format.base {
+        "DCD" => Some(dcd_frames::open),
+        "Amber NetCDF" => Some(netcdf::open),
         _ => None,
     }
 }

@@ -176,9 +176,12 @@ fn dcd_huge_title_count_is_one_line() {
     dcd[96..100].copy_from_slice(&0x7fff_ffffi32.to_le_bytes());
     let bad = write(dir.path(), "title.dcd", &dcd);
     let pdb = data("adk_open.pdb");
-    let e = io::open(&pdb, Some(&bad)).expect_err("the header is damaged");
-    assert!(e.to_string().contains("title.dcd"), "{e}");
-    let o = surface(dir.path(), &[&pdb, &bad], &[], &[]);
+    // Our DCD reader never reads the title lines: the frames are all there.
+    let ours = io::open(&pdb, Some(&bad)).expect("the frames are sound");
+    assert_eq!(ours.len(), 98);
+    // chemfiles, in the reader process, crashes: one line.
+    let chem = [("MDSURF_NO_NATIVE_READ", "1")];
+    let o = surface(dir.path(), &[&pdb, &bad], &[], &chem);
     assert_one_line(&o, "title.dcd", &["crashed"]);
 }
 
@@ -290,7 +293,10 @@ fn reader_sending_garbage_is_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let pdb = data("adk_open.pdb");
     let dcd = data("adk_dims.dcd");
-    let hook = [("MDSURF_READER_GARBAGE_AT", "4")];
+    let hook = [
+        ("MDSURF_READER_GARBAGE_AT", "4"),
+        ("MDSURF_NO_NATIVE_READ", "1"),
+    ];
     let o = surface(dir.path(), &[&pdb, &dcd], &["--frames", "0:10"], &hook);
     assert_one_line(&o, "adk_dims.dcd", &["frame 4", "invalid reply"]);
     assert_eq!(stats_frames(dir.path()), (0..4).collect::<Vec<_>>());
