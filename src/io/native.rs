@@ -12,6 +12,7 @@ use std::path::Path;
 use super::IoError;
 use super::format::FileFormat;
 use super::prepare::Prepared;
+use super::{gro, lammps};
 use crate::model::{Frame, Topology};
 
 /// An open trajectory file read by one of our readers: random access to its frames.
@@ -54,6 +55,8 @@ pub(crate) fn opener(format: &FileFormat) -> Option<Opener> {
         return None;
     }
     match format.base {
+        "GRO" => Some(gro::open),
+        "LAMMPS" => Some(lammps::open),
         _ => None,
     }
 }

@@ -45,6 +45,7 @@ mod io_hostile;
 mod io_mmcif;
 mod io_model;
 mod io_mutants;
+mod io_native_text;
 mod io_roundtrip;
 mod io_stream;
 mod io_xdr;
