@@ -12,7 +12,7 @@ use std::path::Path;
 use super::IoError;
 use super::format::FileFormat;
 use super::prepare::Prepared;
-use super::{dcd_frames, netcdf};
+use super::{dcd_frames, gro, lammps, netcdf};
 use crate::model::{Frame, Topology};
 
 /// An open trajectory file read by one of our readers: random access to its frames.
@@ -57,6 +57,8 @@ pub(crate) fn opener(format: &FileFormat) -> Option<Opener> {
     match format.base {
         "DCD" => Some(dcd_frames::open),
         "Amber NetCDF" => Some(netcdf::open),
+        "GRO" => Some(gro::open),
+        "LAMMPS" => Some(lammps::open),
         _ => None,
     }
 }

@@ -43,7 +43,11 @@ fn same_both_ways(path: &Path) {
             (Ok(fa), Ok(fb)) => {
                 assert_eq!(fa.positions, fb.positions, "{name}: positions of frame {i}");
                 assert_eq!(fa.cell, fb.cell, "{name}: box of frame {i}");
-                assert_eq!(fa.time_ps, fb.time_ps, "{name}: time of frame {i}");
+                // chemfiles gives no time for GRO files; our reader reads the title's `t=`
+                // (tested in io_native_text.rs).
+                if fb.time_ps.is_some() || !name.to_string().contains(".gro") {
+                    assert_eq!(fa.time_ps, fb.time_ps, "{name}: time of frame {i}");
+                }
             }
             // A frame that does not fit the topology (1lcd's models differ in size) is the
             // same error both ways.

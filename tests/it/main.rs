@@ -46,6 +46,7 @@ mod io_mmcif;
 mod io_model;
 mod io_mutants;
 mod io_native_bin;
+mod io_native_text;
 mod io_roundtrip;
 mod io_stream;
 mod io_valid_files;
