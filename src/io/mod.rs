@@ -71,6 +71,6 @@ pub use stream::{
 };
 pub use trajectory::{
     Damage, Trajectory, open, open_following, open_growing, open_live, open_via_chemfiles,
-    reads_fast,
+    open_via_reader_process, reads_fast,
 };
 pub use warnings::take_warnings;

@@ -76,7 +76,7 @@ impl std::fmt::Debug for Trajectory {
 /// `MDSURF_IN_PROCESS_READ` runs chemfiles in this process (for timing the paths against each
 /// other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
-    open_with(top, traj, true)
+    open_with(top, traj, Readers::Ours)
 }
 
 /// Opens the structure `top` (a file with atom names, as for [`open`]) with its frames coming
@@ -139,7 +139,27 @@ pub fn open_growing(top: &Path, source: &LiveSource) -> Result<Trajectory, IoErr
 /// readers are tested against (tests and benchmarks only; chemfiles' mmCIF reader crashes on
 /// some legal files, and a damaged file can crash this process).
 pub fn open_via_chemfiles(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
-    open_with(top, traj, false)
+    open_with(top, traj, Readers::ChemfilesInProcess)
+}
+
+/// [`open`] with the formats our native readers take (GRO, LAMMPS dump, DCD, Amber NetCDF)
+/// read by chemfiles in its reader process instead, as before those readers existed: how the
+/// tests reach the reader process's crash handling with files that crash chemfiles. The same
+/// as `open` under the environment variable `MDSURF_NO_NATIVE_READ`.
+pub fn open_via_reader_process(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
+    open_with(top, traj, Readers::ChemfilesContained)
+}
+
+/// Which readers [`open_with`] may use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Readers {
+    /// Ours (mmCIF, fast PDB/XYZ, XTC/TRR, the native readers), chemfiles in a reader process
+    /// for the rest.
+    Ours,
+    /// Ours except the native readers; chemfiles in a reader process for the rest.
+    ChemfilesContained,
+    /// Chemfiles in this process for every file but XTC/TRR.
+    ChemfilesInProcess,
 }
 
 /// True when `path` is a file our own readers read: an mmCIF file, or a plain single-frame PDB
@@ -157,9 +177,13 @@ fn read_cif(path: &Path, format: &FileFormat) -> Result<(mmcif::CifRead, Option<
     Ok((mmcif::read(path, &bytes)?, truncated))
 }
 
-/// `allow_fast`: our own readers where they apply, and chemfiles in a reader process; false for
-/// the in-process chemfiles reference ([`open_via_chemfiles`]).
-fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajectory, IoError> {
+/// Opens with the `readers` allowed (see [`Readers`]).
+fn open_with(top: &Path, traj: Option<&Path>, readers: Readers) -> Result<Trajectory, IoError> {
+    let allow_fast = readers != Readers::ChemfilesInProcess;
+    let native_for = |format: &FileFormat| match readers {
+        Readers::Ours => native::opener(format),
+        _ => None,
+    };
     let top_format = detect(top)?;
     if traj.is_none() && !top_format.has_names {
         return Err(IoError::NeedsTopology {
@@ -181,7 +205,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
     } else {
         allow_fast.then(|| fast::read(top, &top_format)).flatten()
     };
-    let native_top = allow_fast.then(|| native::opener(&top_format)).flatten();
+    let native_top = native_for(&top_format);
     let (mut topology, first, top_reader) = match (ours, native_top) {
         (Some(read), _) => (read.topology, FirstFrame::Read(read.frame), None),
         (None, Some(open)) => {
@@ -274,7 +298,7 @@ fn open_with(top: &Path, traj: Option<&Path>, allow_fast: bool) -> Result<Trajec
                     walk = Some(w);
                     FrameSource::Xdr(reader)
                 }
-                None => match allow_fast.then(|| native::opener(&format)).flatten() {
+                None => match native_for(&format) {
                     Some(open) => FrameSource::Native(open(path, prepare(path, &format)?)?.frames),
                     None => FrameSource::Chem(ContainedReader::open(path, &format, allow_fast)?),
                 },

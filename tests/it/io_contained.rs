@@ -104,9 +104,13 @@ fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     path
 }
 
+/// chemfiles for the LAMMPS dump, in its reader process (our reader takes it by default).
+const CHEMFILES: [(&str, &str); 1] = [("MDSURF_NO_NATIVE_READ", "1")];
+
 /// Atom id 0 in frame 3 of 8 makes chemfiles abort (double free) while reading that frame: the
 /// run keeps frames 0-2 and names frame 3; the library reads the frames around it (a new
-/// reader process after the crash) exactly as in the sound file.
+/// reader process after the crash) exactly as in the sound file. Our LAMMPS reader, the
+/// default, reads all 8 frames: an id is a number to sort the atoms by.
 #[test]
 fn lammps_atom_id_zero_keeps_the_frames_before_it() {
     let dir = tempfile::tempdir().unwrap();
@@ -117,12 +121,34 @@ fn lammps_atom_id_zero_keeps_the_frames_before_it() {
         "id0.lammpstrj",
         &with_first_id(&dump, atoms[3], "0"),
     );
-    let o = surface(dir.path(), &[&bad], &[], &[]);
+    let o = surface(dir.path(), &[&bad], &[], &CHEMFILES);
     assert_one_line(&o, "id0.lammpstrj", &["frame 3", "crashed"]);
     assert_eq!(stats_frames(dir.path()), vec![0, 1, 2]);
-    // In this (test) process: the crash is the reader process's, not ours.
-    let t = io::open(&bad, None).expect("frames 0-2 are sound");
+    // Our reader: every frame, frame 3 the same as in the sound file.
+    let o = surface(dir.path(), &[&bad], &[], &[]);
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert_eq!(stats_frames(dir.path()), (0..8).collect::<Vec<_>>());
+    let ours = io::open(&bad, None).expect("our reader reads id 0");
+    assert_eq!(ours.len(), 8);
     let reference = io::open(&good, None).unwrap();
+    for k in [0, 2, 4, 7] {
+        assert_eq!(
+            ours.read_frame(k).unwrap(),
+            reference.read_frame(k).unwrap()
+        );
+    }
+    // Frame 3: the renumbered atom sorts first, the atoms are those of the sound file.
+    let sorted = |mut p: Vec<glam::Vec3>| {
+        p.sort_by(|a, b| a.to_array().partial_cmp(&b.to_array()).unwrap());
+        p
+    };
+    let (a, b) = (
+        ours.read_frame(3).unwrap(),
+        reference.read_frame(3).unwrap(),
+    );
+    assert_eq!(sorted(a.positions), sorted(b.positions));
+    // In this (test) process: the crash is the reader process's, not ours.
+    let t = io::open_via_reader_process(&bad, None).expect("frames 0-2 are sound");
     let e = t.read_frame(3).expect_err("frame 3 crashes the reader");
     assert!(e.to_string().contains("frame 3"), "{e}");
     for k in [2, 4, 0, 7] {
@@ -135,7 +161,8 @@ fn lammps_atom_id_zero_keeps_the_frames_before_it() {
 }
 
 /// An atom id past 2^31 in frame 6 of 8 (SIGSEGV in chemfiles) is found when the file opens
-/// (the last frames are probed): frames 0-5 are the trajectory, frame 6 its damage.
+/// (the last frames are probed): frames 0-5 are the trajectory, frame 6 its damage. Our
+/// reader reads the 64-bit id and every frame.
 #[test]
 fn lammps_huge_atom_id_is_damage_at_its_frame() {
     let dir = tempfile::tempdir().unwrap();
@@ -145,7 +172,8 @@ fn lammps_huge_atom_id_is_damage_at_its_frame() {
         "big.lammpstrj",
         &with_first_id(&dump, atoms[6], "2147483648"),
     );
-    let t = io::open(&bad, None).expect("frames 0-5 are sound");
+    assert_eq!(io::open(&bad, None).expect("our reader").len(), 8);
+    let t = io::open_via_reader_process(&bad, None).expect("frames 0-5 are sound");
     assert_eq!(t.len(), 6);
     let damage = t.damage().expect("frame 6 is the damage");
     assert_eq!(damage.frame, 6);
@@ -154,7 +182,7 @@ fn lammps_huge_atom_id_is_damage_at_its_frame() {
         "{}",
         damage.error
     );
-    let o = surface(dir.path(), &[&bad], &[], &[]);
+    let o = surface(dir.path(), &[&bad], &[], &CHEMFILES);
     assert_one_line(&o, "big.lammpstrj", &["frame 6", "crashed"]);
     assert_eq!(stats_frames(dir.path()), (0..6).collect::<Vec<_>>());
     // Frame 0 broken: nothing to keep, one line, exit 2.
@@ -163,9 +191,10 @@ fn lammps_huge_atom_id_is_damage_at_its_frame() {
         "f0.lammpstrj",
         &with_first_id(&dump, atoms[0], "0"),
     );
-    let o = surface(dir.path(), &[&first], &[], &[]);
+    let o = surface(dir.path(), &[&first], &[], &CHEMFILES);
     assert_one_line(&o, "f0.lammpstrj", &["crashed"]);
-    assert!(io::open(&first, None).is_err());
+    assert!(io::open_via_reader_process(&first, None).is_err());
+    assert_eq!(io::open(&first, None).expect("our reader").len(), 8);
 }
 
 /// A DCD whose title count is 2^31 - 1 made chemfiles read far past its buffer (SIGSEGV).
@@ -201,7 +230,7 @@ fn reader_process_gives_what_chemfiles_gives() {
     for (top, traj) in cases {
         let top = data(top);
         let traj = traj.map(data);
-        let ours = io::open(&top, traj.as_deref()).unwrap();
+        let ours = io::open_via_reader_process(&top, traj.as_deref()).unwrap();
         let theirs = io::open_via_chemfiles(&top, traj.as_deref()).unwrap();
         let name = ours.path().display().to_string();
         assert_eq!(ours.len(), theirs.len(), "{name}");
@@ -235,7 +264,11 @@ fn reader_killed_mid_run_keeps_the_frames_before() {
         dir.path(),
         &[&bz2],
         &[],
-        &[("MDSURF_READER_CRASH_AT", "2"), ("TMPDIR", tmp)],
+        &[
+            ("MDSURF_READER_CRASH_AT", "2"),
+            ("TMPDIR", tmp),
+            CHEMFILES[0],
+        ],
     );
     assert_one_line(&o, "spce_all_coords.lammpstrj.bz2", &["frame 2"]);
     assert_eq!(stats_frames(dir.path()), vec![0, 1]);

@@ -8,8 +8,6 @@ use std::path::Path;
 
 use mdsurf::io;
 
-use crate::data_support::data;
-
 /// True when `a` and `b` agree within 1e-5 relative (1e-5 Å near 0).
 fn close(a: f32, b: f32) -> bool {
     (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0)
@@ -51,7 +49,7 @@ fn same_as_chemfiles(path: &Path) {
 #[test]
 fn every_gro_and_lammps_file_in_tests_data_reads_as_chemfiles_reads_it() {
     let mut seen = Vec::new();
-    for entry in std::fs::read_dir(data("")).unwrap() {
+    for entry in std::fs::read_dir(crate::data_support::DATA).unwrap() {
         let path = entry.unwrap().path();
         let Ok(format) = io::detect(&path) else {
             continue;
