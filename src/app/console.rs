@@ -31,6 +31,9 @@ pub enum ConsoleError {
     /// The line parses but cannot be applied now.
     #[error("{0}")]
     Apply(String),
+    /// The representation the line makes cannot be shown.
+    #[error(transparent)]
+    Representation(#[from] crate::scene::state_file::RepresentationError),
 }
 
 fn perr<T>(column: usize, message: impl Into<String>) -> Result<T, ConsoleError> {
@@ -424,7 +427,7 @@ impl ConsoleCommand {
                 rep.name = name.clone().unwrap_or_else(|| format!("rep {n}"));
                 rep.selection = selection.clone();
                 rep.style = *style;
-                rep.validate().map_err(ConsoleError::Apply)?;
+                rep.validate()?;
                 out.output = Some(format!("added representation {n} '{}'", rep.name));
                 out.commands = vec![Command::AddRep, Command::UpdateRep(n - 1, Box::new(rep))];
             }
@@ -445,7 +448,7 @@ impl ConsoleCommand {
                     RepEdit::Style(s) => rep.style = *s,
                     RepEdit::Select(s) => rep.selection = s.clone(),
                 }
-                rep.validate().map_err(ConsoleError::Apply)?;
+                rep.validate()?;
                 if rep.style.is_surface() {
                     let params = rep.params();
                     let total = core.total_grid_bytes(i, &params);

@@ -185,7 +185,7 @@ impl Viewer {
                     path: Some(path),
                 } => {
                     if let Err(e) = self.screenshot(scale, size, &path) {
-                        self.core.error = Some(e);
+                        self.core.error = Some(e.to_string());
                     }
                 }
                 Command::Screenshot {
@@ -209,7 +209,7 @@ impl Viewer {
                 },
                 Command::SaveView(Some(path)) => match self.state_file().save(&path) {
                     Ok(()) => self.core.status = format!("saved view {}", path.display()),
-                    Err(e) => self.core.error = Some(e),
+                    Err(e) => self.core.error = Some(e.to_string()),
                 },
                 Command::SaveView(None) => self.dialog(
                     ctx,
@@ -222,7 +222,7 @@ impl Viewer {
                         self.core.status = format!("opened view {}", path.display());
                     }
                     // The view on screen stays as it was.
-                    Err(e) => self.core.error = Some(e),
+                    Err(e) => self.core.error = Some(e.to_string()),
                 },
                 Command::OpenView(None) => self.dialog(
                     ctx,
@@ -296,7 +296,7 @@ impl Viewer {
     /// Applies a state file (already checked): representations, camera, look and timeline.
     pub fn apply_state(&mut self, state: StateFile) {
         if let Err(e) = state.look.apply(&mut self.core.render) {
-            self.core.error = Some(e);
+            self.core.error = Some(e.to_string());
             return;
         }
         if let Some(cam) = state.camera {

@@ -12,6 +12,7 @@ pub mod frame;
 pub mod layer;
 pub mod movie;
 pub mod representation;
+mod state_error;
 pub mod state_file;
 
 pub use engine::{SceneBackend, SceneEngine};

@@ -13,6 +13,7 @@ use crate::render::AtomStyle;
 use crate::surface::{Quality, RadiusSet, SurfaceParams, VertexMode};
 
 use crate::selection::{Selection, SelectionError};
+pub use super::state_error::RepresentationError;
 
 /// How a representation draws its atoms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -202,17 +203,27 @@ impl Representation {
 
     /// Checks everything a state file or a panel can get wrong, naming the representation:
     /// the selection parses, the surface parameters are valid, the opacity is within 0..1.
-    pub fn validate(&self) -> Result<(), String> {
-        let who = format!("representation '{}'", self.name);
+    pub fn validate(&self) -> Result<(), RepresentationError> {
+        let name = || self.name.clone();
         self.parse_selection()
-            .map_err(|e| format!("{who}: selection '{}': {e}", self.selection))?;
+            .map_err(|source| RepresentationError::Selection {
+                name: name(),
+                selection: self.selection.clone(),
+                source,
+            })?;
         if self.style.is_surface() {
             self.params()
                 .validate()
-                .map_err(|e| format!("{who}: {e}"))?;
+                .map_err(|source| RepresentationError::Parameters {
+                    name: name(),
+                    source,
+                })?;
         }
         if !(0.0..=1.0).contains(&self.opacity) {
-            return Err(format!("{who}: opacity {} is outside 0..1", self.opacity));
+            return Err(RepresentationError::Opacity {
+                name: name(),
+                opacity: self.opacity,
+            });
         }
         Ok(())
     }
@@ -257,17 +268,17 @@ mod tests {
     #[test]
     fn validation_names_the_problem() {
         let mut r = Representation::new("prot", "protein and", RepStyle::Surface);
-        let e = r.validate().unwrap_err();
+        let e = r.validate().unwrap_err().to_string();
         assert!(
             e.contains("representation 'prot'") && e.contains("column"),
             "{e}"
         );
         r.selection = "protein".into();
-        assert_eq!(r.validate(), Ok(()));
+        assert!(r.validate().is_ok());
         r.spacing = -1.0;
         assert!(r.validate().is_err());
         r.spacing = 1.0;
         r.opacity = 2.0;
-        assert!(r.validate().unwrap_err().contains("opacity"));
+        assert!(r.validate().unwrap_err().to_string().contains("opacity"));
     }
 }

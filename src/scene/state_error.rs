@@ -9,7 +9,7 @@ use crate::surface::SurfaceError;
 use crate::surface::periodic::ReplicateError;
 
 /// A representation that cannot be shown, naming it.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RepresentationError {
     /// Its selection does not parse.
     #[error("representation '{name}': selection '{selection}': {source}")]

@@ -31,6 +31,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::representation::Representation;
+pub use super::state_error::{LookError, RepresentationError, StateFileError};
 use crate::render::settings::SettingError;
 use crate::render::{Background, Camera, Projection, RenderSettings};
 
@@ -195,50 +196,40 @@ impl LookState {
     }
 
     /// Applies this look to `settings`; fails naming the first bad value.
-    pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), String> {
-        settings.background = self
-            .background
-            .parse()
-            .map_err(|e: SettingError| e.to_string())?;
-        settings.stereo = self
-            .stereo
-            .parse()
-            .map_err(|e: SettingError| e.to_string())?;
-        for (name, v) in [
+    pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), LookError> {
+        use crate::render::settings::{
+            check_eye_separation, check_focal_distance, check_outline_width, check_shadows,
+        };
+        let setting = |key: &'static str| move |source: SettingError| LookError::Setting { key, source };
+        settings.background = self.background.parse()?;
+        settings.stereo = self.stereo.parse()?;
+        for (key, value) in [
             ("ambient_occlusion", self.ambient_occlusion),
             ("depth_cue", self.depth_cue),
         ] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(format!("look.{name} = {v} is outside 0..1"));
+            if !(0.0..=1.0).contains(&value) {
+                return Err(LookError::Fraction { key, value });
             }
         }
-        if !(self.eye_separation.is_finite() && self.eye_separation >= 0.0) {
-            return Err(format!(
-                "look.eye_separation = {} must be a finite number >= 0",
-                self.eye_separation
-            ));
-        }
+        check_eye_separation(self.eye_separation).map_err(setting("eye_separation"))?;
         if let Some(f) = self.focal_distance {
-            crate::render::settings::check_focal_distance(f)
-                .map_err(|e| format!("look.focal_distance: {e}"))?;
+            check_focal_distance(f).map_err(setting("focal_distance"))?;
         }
         settings.focal_distance = self.focal_distance;
         settings.ambient_occlusion = self.ambient_occlusion;
         settings.depth_cue = self.depth_cue;
         settings.eye_separation = self.eye_separation;
         if let Some(px) = self.outline_width {
-            settings.outline_width = crate::render::settings::check_outline_width(px)
-                .map_err(|e| format!("look.outline_width: {e}"))?;
+            settings.outline_width = check_outline_width(px).map_err(setting("outline_width"))?;
         }
         if let Some(c) = self.outline_colour {
             if !c.iter().all(|v| (0.0..=1.0).contains(v)) {
-                return Err(format!("look.outline_colour = {c:?} is outside 0..1"));
+                return Err(LookError::OutlineColour(c));
             }
             settings.outline_colour = c;
         }
         if let Some(v) = self.shadows {
-            settings.shadows = crate::render::settings::check_shadows(v)
-                .map_err(|e| format!("look.shadows: {e}"))?;
+            settings.shadows = check_shadows(v).map_err(setting("shadows"))?;
         }
         if let Some(t) = self.transparent_background {
             settings.transparent_background = t;
@@ -338,40 +329,61 @@ impl StateFile {
 
     /// Parses state-file text; `origin` names the file in errors. Every representation is
     /// validated (selection, parameters), and the error is one line.
-    pub fn parse(text: &str, origin: &str) -> Result<Self, String> {
+    pub fn parse(text: &str, origin: &str) -> Result<Self, StateFileError> {
+        let origin = || origin.to_string();
         let state: StateFile = toml::from_str(text).map_err(|e| {
-            let msg = e.message().replace('\n', " ");
+            let message = e.message().replace('\n', " ").trim().to_string();
             match e.span().map(|s| line_col(text, s.start)) {
-                Some((line, col)) => format!("{origin}:{line}:{col}: {}", msg.trim()),
-                None => format!("{origin}: {}", msg.trim()),
+                Some((line, column)) => StateFileError::SyntaxAt {
+                    origin: origin(),
+                    line,
+                    column,
+                    message,
+                },
+                None => StateFileError::Syntax {
+                    origin: origin(),
+                    message,
+                },
             }
         })?;
         if state.version != STATE_VERSION {
-            return Err(format!(
-                "{origin}: state file version {} is not supported (this mdsurf reads version {STATE_VERSION})",
-                state.version
-            ));
+            return Err(StateFileError::Version {
+                origin: origin(),
+                found: state.version,
+            });
         }
         for r in &state.representations {
-            r.validate().map_err(|e| format!("{origin}: {e}"))?;
+            r.validate()
+                .map_err(|source| StateFileError::Representation {
+                    origin: origin(),
+                    source,
+                })?;
         }
         let mut probe = RenderSettings::default();
         state
             .look
             .apply(&mut probe)
-            .map_err(|e| format!("{origin}: {e}"))?;
+            .map_err(|source| StateFileError::Look {
+                origin: origin(),
+                source,
+            })?;
         state
             .trajectory
             .replicate
             .validate()
-            .map_err(|e| format!("{origin}: [trajectory] {e}"))?;
+            .map_err(|source| StateFileError::Replicate {
+                origin: origin(),
+                source,
+            })?;
         Ok(state)
     }
 
     /// Reads and checks the state file at `path` (one-line errors naming the file).
-    pub fn load(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("cannot read state file {}: {e}", path.display()))?;
+    pub fn load(path: &Path) -> Result<Self, StateFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| StateFileError::Read {
+            path: path.display().to_string(),
+            source,
+        })?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -381,10 +393,10 @@ impl StateFile {
     }
 
     /// Writes the state to `path` atomically (a failed write leaves any old file as it was).
-    pub fn save(&self, path: &Path) -> Result<(), String> {
+    pub fn save(&self, path: &Path) -> Result<(), StateFileError> {
         let text = self.to_toml();
-        crate::export::write_atomic(path, |w| w.write_all(text.as_bytes()))
-            .map_err(|e| e.to_string())
+        crate::export::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+        Ok(())
     }
 }
 
@@ -421,18 +433,22 @@ mod tests {
 
     #[test]
     fn errors_name_file_line_and_representation() {
-        let e = StateFile::parse("version = 1\nbogus = 3\n", "s.toml").unwrap_err();
+        let e = StateFile::parse("version = 1\nbogus = 3\n", "s.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("s.toml:2:"), "{e}");
-        let e = StateFile::parse("version = 7\n", "s.toml").unwrap_err();
+        let e = StateFile::parse("version = 7\n", "s.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("version 7"), "{e}");
         let text = "version = 1\n[[representation]]\nname = \"p\"\nselection = \"resname (\"\n";
-        let e = StateFile::parse(text, "s.toml").unwrap_err();
+        let e = StateFile::parse(text, "s.toml").unwrap_err().to_string();
         assert!(
             e.contains("representation 'p'") && e.contains("column"),
             "{e}"
         );
         let text = "version = 1\n[[representation]]\nstyle = \"ribbon\"\n";
-        let e = StateFile::parse(text, "s.toml").unwrap_err();
+        let e = StateFile::parse(text, "s.toml").unwrap_err().to_string();
         assert!(e.contains("ribbon"), "{e}");
         assert!(!e.contains('\n'), "{e}");
     }

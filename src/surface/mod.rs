@@ -33,7 +33,7 @@ pub use preset::{Preset, RadiusSet};
 pub use tables::McTables;
 
 /// Why a surface could not be computed.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SurfaceError {
     /// H, R or I was not a positive finite number.
     #[error("{name} must be a positive number, got {value}")]

@@ -174,8 +174,8 @@ pub enum TransformError {
         reason: String,
     },
     /// A `--replicate` value out of range.
-    #[error("{0}")]
-    BadReplicate(String),
+    #[error(transparent)]
+    BadReplicate(#[from] crate::surface::periodic::ReplicateError),
     /// `--periodic` with `--fit`, which rotates the box.
     #[error("{file}: --periodic cannot be combined with --fit (fitting rotates the periodic box)")]
     PeriodicWithFit {

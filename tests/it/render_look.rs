@@ -217,7 +217,7 @@ fn render_transparent_writes_alpha() {
 
 #[test]
 fn render_look_state_file_keeps_old_files_and_round_trips() {
-    use mdsurf::scene::state_file::{LookState, StateFile};
+    use mdsurf::scene::state_file::{LookError, LookState, StateFile, StateFileError};
     // A look section without the new fields loads and leaves the flags' values alone.
     let old = StateFile::parse(
         "version = 1\n[look]\nbackground = \"light\"\nambient_occlusion = 0.5\n",
@@ -244,5 +244,16 @@ fn render_look_state_file_keeps_old_files_and_round_trips() {
     assert_eq!(s, look);
     // Out-of-range values are refused.
     let bad = StateFile::parse("version = 1\n[look]\nshadows = 2.0\n", "bad.toml");
-    assert!(bad.is_err_and(|e| e.contains("look.shadows")));
+    let e = bad.unwrap_err();
+    assert!(
+        matches!(
+            &e,
+            StateFileError::Look {
+                source: LookError::Setting { key: "shadows", .. },
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("look.shadows"), "{e}");
 }

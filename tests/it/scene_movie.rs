@@ -154,7 +154,9 @@ fn bad_scripts_fail_in_one_line_naming_the_segment() {
     assert!(e.contains("'ghost'") && !e.contains('\n'), "{e}");
     // Unknown keys are refused when the file is read.
     let typo = SCRIPT.replace("degrees = 90.0", "degree = 90.0");
-    let e = StateFile::parse(&typo, "movie.toml").unwrap_err();
+    let e = StateFile::parse(&typo, "movie.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("movie.toml") && !e.contains('\n'), "{e}");
 }
 

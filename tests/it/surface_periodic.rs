@@ -11,7 +11,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use mdsurf::model::Frame;
-use mdsurf::scene::state_file::StateFile;
+use mdsurf::scene::state_file::{StateFile, StateFileError};
 use mdsurf::surface::periodic::density::PeriodicGrid;
 use mdsurf::surface::periodic::measure::box_volume;
 use mdsurf::surface::periodic::{PeriodicBox, PeriodicCell, PeriodicEngine, Replicate};
@@ -412,6 +412,11 @@ fn state_files_record_periodic_and_old_ones_still_load() {
     assert_eq!(back.trajectory.transforms(), options);
     let bad = "version = 1\n\n[trajectory]\nperiodic = true\nreplicate = [0, 1, 1]\n";
     let err = StateFile::parse(bad, "bad.toml").unwrap_err();
+    assert!(
+        matches!(&err, StateFileError::Replicate { source, .. } if source.0 == Replicate([0, 1, 1])),
+        "{err:?}"
+    );
+    let err = err.to_string();
     assert!(err.contains("bad.toml") && err.contains("replicate") && !err.contains('\n'));
 }
 

@@ -151,16 +151,19 @@ impl Replicate {
     }
 
     /// Checks every count is in `1..=MAX_REPLICATE`; the error is one line.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ReplicateError> {
         if self.0.iter().all(|&n| (1..=MAX_REPLICATE).contains(&n)) {
             Ok(())
         } else {
-            Err(format!(
-                "--replicate {self}: expected three whole numbers from 1 to {MAX_REPLICATE}, e.g. 2,2,1"
-            ))
+            Err(ReplicateError(*self))
         }
     }
 }
+
+/// Replication counts outside `1..=MAX_REPLICATE`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("--replicate {0}: expected three whole numbers from 1 to {MAX_REPLICATE}, e.g. 2,2,1")]
+pub struct ReplicateError(pub Replicate);
 
 impl fmt::Display for Replicate {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
