@@ -31,6 +31,9 @@ pub enum ConsoleError {
     /// The line parses but cannot be applied now.
     #[error("{0}")]
     Apply(String),
+    /// The frame the line needs cannot be read.
+    #[error(transparent)]
+    Frame(#[from] super::source::SourceError),
     /// The representation the line makes cannot be shown.
     #[error(transparent)]
     Representation(#[from] crate::scene::state_file::RepresentationError),
@@ -398,7 +401,7 @@ fn select_now(core: &AppCore, expr: &str) -> Result<(Vec<u32>, Vec<glam::Vec3>),
         .as_ref()
         .ok_or_else(|| apply("no trajectory loaded".into()))?;
     let sel = Selection::parse(expr).map_err(|e| apply(e.to_string()))?;
-    let frame = source.read_frame(core.timeline.current).map_err(apply)?;
+    let frame = source.read_frame(core.timeline.current)?;
     let indices = sel.bind(source.topology()).indices(&frame);
     let points = indices
         .iter()

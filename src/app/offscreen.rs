@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::source::FrameSource;
+use super::source::{FrameSource, SourceError};
 use super::state::AppCore;
 use super::timeline::{EndMode, TimelineCmd};
 use super::view_renderer::ViewRenderer;
@@ -20,6 +20,20 @@ use crate::gpu::{DensityGather, EngineOptions, GpuContext, GpuEngine};
 use crate::model::{Frame, Topology};
 use crate::render::RenderSettings;
 use crate::scene::representation::Representation;
+
+/// Why the offscreen viewer could not play (one line).
+#[derive(Debug, thiserror::Error)]
+pub enum PlayError {
+    /// The GPU engine or device failed.
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
+    /// The viewer reported an error (the source, or a frame's computation).
+    #[error("{0}")]
+    Viewer(String),
+    /// The source has one frame and nothing to play.
+    #[error("a single frame cannot play: give a trajectory or --jitter-frames")]
+    SingleFrame,
+}
 
 /// How to play.
 #[derive(Debug, Clone)]
@@ -88,8 +102,8 @@ pub fn play(
     ctx: &GpuContext,
     source: Arc<dyn FrameSource>,
     opts: &PlayOptions,
-) -> Result<PlayReport, String> {
-    let mut engine = GpuEngine::with_context(ctx.clone()).map_err(|e| e.to_string())?;
+) -> Result<PlayReport, PlayError> {
+    let mut engine = GpuEngine::with_context(ctx.clone())?;
     engine.set_options(EngineOptions {
         density_gather: opts.density_gather,
         ..engine.options()
@@ -102,7 +116,7 @@ pub fn play(
     let mut view = ViewRenderer::new(ctx.device.clone(), ctx.queue.clone());
     core.wait_idle(Duration::from_secs(3600));
     if let Some(e) = core.error.take() {
-        return Err(e);
+        return Err(PlayError::Viewer(e));
     }
     let mut report = PlayReport {
         reps: core
@@ -115,13 +129,13 @@ pub fn play(
     };
     view.sync(&mut core);
     view.draw(&core.camera, &core.render, opts.size);
-    ctx.wait().map_err(|e| e.to_string())?;
+    ctx.wait()?;
 
     core.timeline.apply(TimelineCmd::SetFps(opts.play_fps));
     core.timeline.apply(TimelineCmd::SetEndMode(EndMode::Loop));
     core.timeline.apply(TimelineCmd::SetPlaying(true));
     if !core.timeline.playing {
-        return Err("a single frame cannot play: give a trajectory or --jitter-frames".into());
+        return Err(PlayError::SingleFrame);
     }
     let fps = core.timeline.fps as f64;
     let length = Duration::from_secs_f64(opts.frames as f64 / fps);
@@ -144,7 +158,7 @@ pub fn play(
         let wait = core.timeline.until_next_s().min(0.05);
         if !core.poll_wait(Duration::from_secs_f64(wait)) {
             if let Some(e) = core.error.take() {
-                return Err(e);
+                return Err(PlayError::Viewer(e));
             }
             continue;
         }
@@ -164,7 +178,7 @@ pub fn play(
         let t = Instant::now();
         view.draw(&core.camera, &core.render, opts.size);
         report.draw_host_ms.push(ms(t.elapsed()));
-        ctx.wait().map_err(|e| e.to_string())?;
+        ctx.wait()?;
         report.draw_ms.push(ms(t.elapsed()));
     }
     report.wall_s = start.elapsed().as_secs_f64();
@@ -175,7 +189,7 @@ pub fn play(
     for _ in 0..DRAWS_ALONE {
         let t = Instant::now();
         view.draw(&core.camera, &core.render, opts.size);
-        ctx.wait().map_err(|e| e.to_string())?;
+        ctx.wait()?;
         report.draw_alone_ms.push(ms(t.elapsed()));
     }
     Ok(report)
@@ -205,7 +219,7 @@ impl JitteredSource {
         inner: Arc<dyn FrameSource>,
         frames: usize,
         jitter: f32,
-    ) -> Result<JitteredSource, String> {
+    ) -> Result<JitteredSource, SourceError> {
         let first = inner.read_frame(0)?;
         Ok(JitteredSource {
             inner,
@@ -235,13 +249,13 @@ impl FrameSource for JitteredSource {
     fn len(&self) -> usize {
         self.frames
     }
-    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, SourceError> {
         if index >= self.frames {
-            return Err(format!(
-                "{}: no frame {index} (it has {})",
-                self.name(),
-                self.frames
-            ));
+            return Err(SourceError::NoFrame {
+                name: self.name(),
+                index,
+                len: self.frames,
+            });
         }
         let mut frame = Frame::clone(&self.first);
         frame.index = index;

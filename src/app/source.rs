@@ -7,12 +7,54 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::io::{FrameHook, FrameStreamer, StreamerOptions, Trajectory};
+use crate::io::{FrameHook, FrameStreamer, IoError, StreamerOptions, Trajectory};
 use crate::model::{Frame, Topology};
-use crate::transform::{TransformChain, TransformOptions};
+use crate::transform::{TransformChain, TransformError, TransformOptions};
 
 /// How long the worker waits for the reader thread to deliver one frame.
 const READ_TIMEOUT: Duration = Duration::from_secs(120);
+
+/// Why a source cannot be opened or a frame of it read; one line naming the file and frame.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SourceError {
+    /// Opening the files or reading a frame failed.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// A frame past the end of a source held in memory.
+    #[error("{name}: no frame {index} (it has {len})")]
+    NoFrame {
+        /// The source's name.
+        name: String,
+        /// The frame asked for (from 0).
+        index: usize,
+        /// How many frames it holds.
+        len: usize,
+    },
+    /// A streamed frame that failed to read (or to transform): playback skips it.
+    #[error("{source} (frame {index} skipped)")]
+    Skipped {
+        /// The frame (from 0).
+        index: usize,
+        /// Why it failed, naming the file.
+        source: IoError,
+    },
+    /// The reader thread did not deliver a frame in time.
+    #[error("{name}: frame {index} not read within {seconds} s")]
+    Timeout {
+        /// The source's name.
+        name: String,
+        /// The frame (from 0).
+        index: usize,
+        /// How long the worker waited (s).
+        seconds: u64,
+    },
+    /// The topology file asked for as the `--fit` reference cannot be read.
+    #[error("fit reference: {0}")]
+    FitReference(IoError),
+    /// The frame transformations (whole, centre, fit, periodic) cannot be set up.
+    #[error(transparent)]
+    Transform(#[from] TransformError),
+}
 
 /// A trajectory the viewer can play.
 pub trait FrameSource: Send + Sync {
@@ -26,7 +68,7 @@ pub trait FrameSource: Send + Sync {
     }
     /// Reads frame `index` (from 0); the error is one line naming the file and frame. The
     /// frame is shared, not copied: a streamed file hands out the frame its cache holds.
-    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String>;
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, SourceError>;
     /// Short name for the window title and messages (file name).
     fn name(&self) -> String;
     /// The images shown when surfaces are periodic (`--periodic`), else `None`.
@@ -62,17 +104,15 @@ impl FrameSource for MemorySource {
     fn len(&self) -> usize {
         self.frames.len()
     }
-    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, SourceError> {
         self.frames
             .get(index)
             .cloned()
             .map(Arc::new)
-            .ok_or_else(|| {
-                format!(
-                    "{}: no frame {index} (it has {})",
-                    self.name,
-                    self.frames.len()
-                )
+            .ok_or_else(|| SourceError::NoFrame {
+                name: self.name.clone(),
+                index,
+                len: self.frames.len(),
             })
     }
     fn name(&self) -> String {
@@ -87,10 +127,8 @@ impl FrameSource for crate::io::Trajectory {
     fn len(&self) -> usize {
         crate::io::Trajectory::len(self)
     }
-    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
-        crate::io::Trajectory::read_frame(self, index)
-            .map(Arc::new)
-            .map_err(|e| e.to_string())
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, SourceError> {
+        Ok(Arc::new(crate::io::Trajectory::read_frame(self, index)?))
     }
     fn name(&self) -> String {
         let p = self.path();
@@ -137,8 +175,11 @@ impl StreamedSource {
         options.ahead = options.ahead.max(smooth + 1);
         options.capacity = options.capacity.max(options.behind + options.ahead + 2);
         let hook: Option<FrameHook> = (!chain.is_identity()).then(|| {
-            Arc::new(move |frame: &mut Frame| chain.apply(frame).map_err(|e| e.reason()))
-                as FrameHook
+            Arc::new(move |frame: &mut Frame| {
+                chain
+                    .apply(frame)
+                    .map_err(|e| Box::new(e.at_frame()) as crate::io::FrameHookError)
+            }) as FrameHook
         });
         StreamedSource {
             streamer: FrameStreamer::with_hook(trajectory, options, hook),
@@ -147,15 +188,15 @@ impl StreamedSource {
         }
     }
 
-    fn read_one(&self, index: usize) -> Result<Arc<Frame>, String> {
+    fn read_one(&self, index: usize) -> Result<Arc<Frame>, SourceError> {
         match self.streamer.wait(index, READ_TIMEOUT) {
             Some(Ok(frame)) => Ok(frame),
-            Some(Err(e)) => Err(format!("{e} (frame {index} skipped)")),
-            None => Err(format!(
-                "{}: frame {index} not read within {} s",
-                self.name(),
-                READ_TIMEOUT.as_secs()
-            )),
+            Some(Err(source)) => Err(SourceError::Skipped { index, source }),
+            None => Err(SourceError::Timeout {
+                name: self.name(),
+                index,
+                seconds: READ_TIMEOUT.as_secs(),
+            }),
         }
     }
 
@@ -172,7 +213,7 @@ impl FrameSource for StreamedSource {
     fn len(&self) -> usize {
         self.streamer.len()
     }
-    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, String> {
+    fn read_frame(&self, index: usize) -> Result<Arc<Frame>, SourceError> {
         self.streamer.set_playhead(index);
         if self.smooth == 0 {
             return self.read_one(index);
@@ -198,7 +239,7 @@ impl FrameSource for StreamedSource {
 pub fn open_files(
     top: &std::path::Path,
     traj: Option<&std::path::Path>,
-) -> Result<Arc<dyn FrameSource>, String> {
+) -> Result<Arc<dyn FrameSource>, SourceError> {
     open_files_with(top, traj, &TransformOptions::default())
 }
 
@@ -208,7 +249,7 @@ pub fn open_files_with(
     top: &std::path::Path,
     traj: Option<&std::path::Path>,
     transforms: &TransformOptions,
-) -> Result<Arc<dyn FrameSource>, String> {
+) -> Result<Arc<dyn FrameSource>, SourceError> {
     // A reader that panics (it should not: see `io`) must give an error, not a dead thread
     // the window waits on forever.
     let opened = std::panic::catch_unwind(|| crate::io::open(top, traj)).unwrap_or_else(|_| {
@@ -217,7 +258,7 @@ pub fn open_files_with(
             message: "the reader crashed on this file".into(),
         })
     });
-    streamed(opened.map_err(|e| e.to_string())?, top, transforms)
+    streamed(opened?, top, transforms)
 }
 
 /// Like [`open_files_with`], with the frames coming as they arrive from a running simulation
@@ -226,8 +267,8 @@ pub fn open_live_with(
     top: &std::path::Path,
     live: &crate::io::LiveSource,
     transforms: &TransformOptions,
-) -> Result<Arc<dyn FrameSource>, String> {
-    let trajectory = crate::io::open_growing(top, live).map_err(|e| e.to_string())?;
+) -> Result<Arc<dyn FrameSource>, SourceError> {
+    let trajectory = crate::io::open_growing(top, live)?;
     streamed(trajectory, top, transforms)
 }
 
@@ -237,7 +278,7 @@ fn streamed(
     trajectory: Trajectory,
     top: &std::path::Path,
     transforms: &TransformOptions,
-) -> Result<Arc<dyn FrameSource>, String> {
+) -> Result<Arc<dyn FrameSource>, SourceError> {
     let chain = transform_chain(&trajectory, top, transforms)?;
     Ok(Arc::new(StreamedSource::transformed(
         trajectory,
@@ -252,17 +293,13 @@ fn transform_chain(
     trajectory: &Trajectory,
     top: &std::path::Path,
     transforms: &TransformOptions,
-) -> Result<TransformChain, String> {
+) -> Result<TransformChain, SourceError> {
     use crate::transform::FitReference;
-    let first = trajectory.read_frame(0).map_err(|e| e.to_string())?;
+    let first = trajectory.read_frame(0)?;
     let reference =
         if transforms.fit.is_some() && transforms.fit_reference == FitReference::Topology {
-            let opened = crate::io::open(top, None).map_err(|e| format!("fit reference: {e}"))?;
-            Some(
-                opened
-                    .read_frame(0)
-                    .map_err(|e| format!("fit reference: {e}"))?,
-            )
+            let frame = crate::io::open(top, None).and_then(|opened| opened.read_frame(0));
+            Some(frame.map_err(SourceError::FitReference)?)
         } else {
             None
         };
@@ -274,7 +311,7 @@ fn transform_chain(
         reference.as_ref(),
         &file,
     )
-    .map_err(|e| e.to_string())
+    .map_err(SourceError::from)
 }
 
 /// A small test system: `residues` residues of three atoms each along a helix, moving a little

@@ -13,7 +13,7 @@ use super::export::{MovieJob, MoviePlan, export_ui};
 use super::panels::{SurfaceDraft, look_ui, readouts_ui, surface_ui};
 use super::plot::plot_ui;
 use super::recent::{Recent, RecentEntry};
-use super::source::{FrameSource, open_files_with, open_live_with};
+use super::source::{FrameSource, SourceError, open_files_with, open_live_with};
 use super::state::{AppCore, Command};
 use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
@@ -28,7 +28,7 @@ pub use scripted::Script;
 /// Where a scripted run reports failure (read after the window closes).
 pub type ScriptResult = Arc<Mutex<Option<String>>>;
 
-type Loaded = (Result<Arc<dyn FrameSource>, String>, RecentEntry);
+type Loaded = (Result<Arc<dyn FrameSource>, SourceError>, RecentEntry);
 
 /// The viewer window.
 pub struct Viewer {
@@ -349,18 +349,19 @@ impl Viewer {
         scale: u32,
         size: Option<[u32; 2]>,
         path: &std::path::Path,
-    ) -> Result<(), String> {
-        let gpu = self.gpu.as_mut().ok_or("no GPU device for screenshots")?;
+    ) -> Result<(), crate::render::RenderError> {
+        let gpu = self
+            .gpu
+            .as_mut()
+            .ok_or(crate::render::RenderError::NoDevice)?;
         let base = gpu.size().unwrap_or([1280, 720]);
         let size = size.unwrap_or([base[0] * scale.clamp(1, 4), base[1] * scale.clamp(1, 4)]);
         gpu.sync(&mut self.core);
-        let mut image = gpu
-            .snapshot(&self.core.camera, &self.core.render, size)
-            .map_err(|e| e.to_string())?;
+        let mut image = gpu.snapshot(&self.core.camera, &self.core.render, size)?;
         if let Some((map, range)) = self.core.colour_bar() {
             draw_colour_bar(&mut image, map, range);
         }
-        write_png(path, &image).map_err(|e| e.to_string())?;
+        write_png(path, &image)?;
         self.core.status = format!("wrote {} ({}×{})", path.display(), size[0], size[1]);
         Ok(())
     }

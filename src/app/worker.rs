@@ -118,6 +118,25 @@ pub enum Reply {
     },
 }
 
+/// Why the worker could not compute a frame (one line).
+#[derive(Debug, thiserror::Error)]
+pub enum ComputeError {
+    /// The frame could not be read.
+    #[error(transparent)]
+    Source(#[from] super::source::SourceError),
+    /// A representation could not be computed.
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    /// The computation panicked (a bug, never a user's file).
+    #[error("frame {frame}: internal error: {message}")]
+    Panic {
+        /// The frame asked for.
+        frame: usize,
+        /// The panic's message.
+        message: String,
+    },
+}
+
 /// The engine the worker runs (the scene engine's backend).
 pub use crate::scene::SceneBackend as Engine;
 
@@ -301,20 +320,20 @@ fn run(
             cache.source = None;
             cache.frames.clear();
             cache.order.clear();
-            Err(format!(
-                "frame {frame}: internal error: {}",
-                panic_text(&*panic)
-            ))
+            Err(ComputeError::Panic {
+                frame,
+                message: panic_text(&*panic),
+            })
         });
         let reply = match computed {
             Ok(c) => {
                 scene.hold_shown(&c.scene);
                 Reply::Done(Box::new(c))
             }
-            Err(message) => Reply::Failed {
+            Err(e) => Reply::Failed {
                 generation,
                 frame,
-                message,
+                message: e.to_string(),
             },
         };
         if let Ok(pending) = slot.0.lock() {
@@ -344,7 +363,7 @@ fn frame_of(
     scene: &mut SceneEngine,
     cache: &mut Cache,
     req: &Request,
-) -> Result<(Arc<crate::model::Frame>, f64), String> {
+) -> Result<(Arc<crate::model::Frame>, f64), super::source::SourceError> {
     let same = cache
         .source
         .as_ref()
@@ -374,12 +393,14 @@ fn frame_of(
     Ok((frame, ms))
 }
 
-fn compute(scene: &mut SceneEngine, cache: &mut Cache, req: &Request) -> Result<Computed, String> {
+fn compute(
+    scene: &mut SceneEngine,
+    cache: &mut Cache,
+    req: &Request,
+) -> Result<Computed, ComputeError> {
     let started = Instant::now();
     let (frame, read_ms) = frame_of(scene, cache, req)?;
-    let computed = scene
-        .frame(req.source.topology(), req.frame, &frame, &req.reps)
-        .map_err(|e| e.to_string())?;
+    let computed = scene.frame(req.source.topology(), req.frame, &frame, &req.reps)?;
     Ok(Computed {
         generation: req.generation,
         read_ms,

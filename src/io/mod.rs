@@ -67,7 +67,8 @@ pub use follow::FollowOptions;
 pub use format::{FileFormat, WwFormat, detect};
 pub use live::{LIVE_FRAMES_UNBOUNDED, LiveOptions, LiveSource};
 pub use stream::{
-    FrameHook, FrameResult, FrameStatus, FrameStreamer, ReadyCallback, StreamerOptions,
+    FrameHook, FrameHookError, FrameResult, FrameStatus, FrameStreamer, ReadyCallback,
+    StreamerOptions,
 };
 pub use trajectory::{
     Damage, Trajectory, open, open_following, open_growing, open_live, open_via_chemfiles,

@@ -23,7 +23,11 @@ pub type ReadyCallback = Box<dyn Fn(usize) + Send + 'static>;
 /// Runs on the reader thread on each frame right after it is read, before it is cached (the
 /// viewer's per-frame transformations, see [`crate::transform`]); an error (one line, without
 /// the file and frame) makes the frame fail.
-pub type FrameHook = Arc<dyn Fn(&mut Frame) -> Result<(), String> + Send + Sync>;
+pub type FrameHook = Arc<dyn Fn(&mut Frame) -> Result<(), FrameHookError> + Send + Sync>;
+
+/// Why a [`FrameHook`] refused a frame: any error, displayed as one line without the file and
+/// frame (the streamer adds them).
+pub type FrameHookError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Cache and prefetch sizes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -240,7 +240,9 @@ fn parse_data(s: &str) -> Result<ColorScheme, ModelError> {
     for part in parts {
         match part.split_once('=') {
             Some(("map", v)) => map = v.parse().map_err(ModelError::Parse)?,
-            Some(("range", v)) => range = Some(parse_range(v).map_err(ModelError::Parse)?),
+            Some(("range", v)) => {
+                range = Some(parse_range(v).map_err(|e| ModelError::Parse(e.to_string()))?)
+            }
             _ => {
                 return Err(ModelError::Parse(format!(
                     "bad colour scheme '{s}': after the file name, expected ;map=viridis|bwr or ;range=LOW:HIGH"

@@ -99,16 +99,25 @@ impl FromStr for ColourMap {
     }
 }
 
+/// A colour range that cannot be used (the text as given).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RangeError {
+    /// Not two numbers separated by a colon.
+    #[error("bad colour range '{0}': expected LOW:HIGH, e.g. -1:1 or 0:80")]
+    Syntax(String),
+    /// Two numbers, but not finite or not increasing.
+    #[error("bad colour range '{0}': LOW and HIGH must be finite with LOW < HIGH")]
+    Order(String),
+}
+
 /// Parses a range `LOW:HIGH` (numbers, LOW < HIGH).
-pub fn parse_range(s: &str) -> Result<[f32; 2], String> {
-    let bad = || format!("bad colour range '{s}': expected LOW:HIGH, e.g. -1:1 or 0:80");
+pub fn parse_range(s: &str) -> Result<[f32; 2], RangeError> {
+    let bad = || RangeError::Syntax(s.to_string());
     let (a, b) = s.split_once(':').ok_or_else(bad)?;
     let lo: f32 = a.trim().parse().map_err(|_| bad())?;
     let hi: f32 = b.trim().parse().map_err(|_| bad())?;
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(format!(
-            "bad colour range '{s}': LOW and HIGH must be finite with LOW < HIGH"
-        ));
+        return Err(RangeError::Order(s.to_string()));
     }
     Ok([lo, hi])
 }

@@ -45,4 +45,7 @@ pub enum RenderError {
     /// A PNG could not be written or read.
     #[error("PNG {0}: {1}")]
     Png(String, String),
+    /// The window has no GPU device to draw a screenshot with.
+    #[error("no GPU device for screenshots")]
+    NoDevice,
 }

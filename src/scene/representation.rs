@@ -12,8 +12,8 @@ use crate::model::{ColorScheme, ParticleOptions, RadiusOverrides};
 use crate::render::AtomStyle;
 use crate::surface::{Quality, RadiusSet, SurfaceParams, VertexMode};
 
-use crate::selection::{Selection, SelectionError};
 pub use super::state_error::RepresentationError;
+use crate::selection::{Selection, SelectionError};
 
 /// How a representation draws its atoms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

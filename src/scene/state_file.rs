@@ -200,7 +200,8 @@ impl LookState {
         use crate::render::settings::{
             check_eye_separation, check_focal_distance, check_outline_width, check_shadows,
         };
-        let setting = |key: &'static str| move |source: SettingError| LookError::Setting { key, source };
+        let setting =
+            |key: &'static str| move |source: SettingError| LookError::Setting { key, source };
         settings.background = self.background.parse()?;
         settings.stereo = self.stereo.parse()?;
         for (key, value) in [

@@ -202,7 +202,19 @@ impl TransformError {
             other => other.to_string(),
         }
     }
+
+    /// This error as one frame's failure, displayed without the file and frame (for the
+    /// frame streamer, which adds them).
+    pub fn at_frame(self) -> FrameFailure {
+        FrameFailure(self)
+    }
 }
+
+/// A [`TransformError`] displayed as [`TransformError::reason`]: what went wrong with one
+/// frame, for a caller that names the file and frame itself.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}", .0.reason())]
+pub struct FrameFailure(pub TransformError);
 
 /// The centring step.
 #[derive(Debug, Clone)]

@@ -9,7 +9,7 @@ use crate::data_support::{data, nan_trajectory};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use mdsurf::app::source::{FrameSource, StreamedSource};
+use mdsurf::app::source::{FrameSource, SourceError, StreamedSource};
 use mdsurf::app::worker::{Reply, Request, Worker};
 use mdsurf::io::{self, StreamerOptions, Trajectory};
 use mdsurf::model::ParticleOptions;
@@ -55,7 +55,11 @@ fn streamed_source_prefetches_after_each_read() {
         "prefetched frames were read from the file again"
     );
     let e = source.read_frame(direct.len()).expect_err("past the end");
-    assert!(!e.contains('\n'), "{e}");
+    assert!(
+        matches!(e, SourceError::Skipped { index, .. } if index == direct.len()),
+        "{e:?}"
+    );
+    assert!(!e.to_string().contains('\n'), "{e}");
 }
 
 /// Waits (up to 30 s) until the reader has prefetched `frames` without being asked.
@@ -125,7 +129,7 @@ impl FrameSource for PanicsAt {
     fn len(&self) -> usize {
         self.inner.len()
     }
-    fn read_frame(&self, index: usize) -> Result<Arc<mdsurf::model::Frame>, String> {
+    fn read_frame(&self, index: usize) -> Result<Arc<mdsurf::model::Frame>, SourceError> {
         assert_ne!(index, self.at, "injected bug at frame {index}");
         FrameSource::read_frame(&self.inner, index)
     }

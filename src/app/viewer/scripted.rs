@@ -139,7 +139,7 @@ impl Viewer {
             return;
         }
         let result = match self.script.screenshot.clone() {
-            Some(path) => self.screenshot(1, None, &path).err(),
+            Some(path) => self.screenshot(1, None, &path).err().map(|e| e.to_string()),
             None => None,
         };
         self.finish_script(ctx, result);
