@@ -332,7 +332,10 @@ impl SceneCore {
             .map(|v| v.parse().map_err(PyValueError::new_err))
             .transpose()?;
         let state = state
-            .map(|p| StateFile::load(std::path::Path::new(&p)).map_err(PyValueError::new_err))
+            .map(|p| {
+                StateFile::load(std::path::Path::new(&p))
+                    .map_err(|e| PyValueError::new_err(e.to_string()))
+            })
             .transpose()?;
         let first_positions = arrays::positions(&first)?;
         let raw_first = Frame {
@@ -391,7 +394,8 @@ impl SceneCore {
                     selection: expr,
                     ..base
                 };
-                rep.validate().map_err(PyValueError::new_err)?;
+                rep.validate()
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
                 vec![rep]
             } else {
                 default_representations(&topology, &first, &base)
