@@ -30,12 +30,18 @@ pub(crate) enum NetcdfError {
     #[error(
         "the header needs {bytes} bytes at byte {at} of a {file_len}-byte file (damaged or truncated header)"
     )]
-    Truncated { bytes: u64, at: usize, file_len: u64 },
+    Truncated {
+        bytes: u64,
+        at: usize,
+        file_len: u64,
+    },
     /// A count of `what` (e.g. "attributes") above `i32::MAX`.
     #[error("negative {what} count in the header (damaged header)")]
     NegativeCount { what: &'static str },
     /// `count` elements of `what` that the rest of a `file_len`-byte file cannot hold.
-    #[error("the header says {count} {what}, which a {file_len}-byte file cannot hold (damaged header)")]
+    #[error(
+        "the header says {count} {what}, which a {file_len}-byte file cannot hold (damaged header)"
+    )]
     CountTooLarge {
         what: &'static str,
         count: u32,

@@ -265,9 +265,7 @@ pub(crate) fn parse(bytes: &[u8], file_len: u64) -> Result<Header, HeaderError> 
     let records = match cursor.u32()? {
         u32::MAX => None,
         n if n > i32::MAX as u32 => {
-            return Err(HeaderError::Damaged(NetcdfError::NegativeRecords(
-                n as i32,
-            )));
+            return Err(HeaderError::Damaged(NetcdfError::NegativeRecords(n as i32)));
         }
         n => Some(u64::from(n)),
     };

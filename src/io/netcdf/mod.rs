@@ -188,7 +188,9 @@ impl Layout {
         let per_record = |v: &Variable| -> Result<u64, NetcdfError> {
             v.dimensions[1..]
                 .iter()
-                .try_fold(v.kind.size(), |acc, &d| acc.checked_mul(header.dimensions[d].len))
+                .try_fold(v.kind.size(), |acc, &d| {
+                    acc.checked_mul(header.dimensions[d].len)
+                })
                 .filter(|&b| b <= total)
                 .ok_or_else(|| NetcdfError::RecordTooLarge {
                     variable: v.name.clone(),
@@ -310,8 +312,7 @@ impl Layout {
                 let next = self
                     .records_begin
                     .saturating_add(whole.saturating_mul(self.record_bytes));
-                let cut = (total > next && self.record_bytes > 0)
-                    .then_some(NetcdfError::CutFrame);
+                let cut = (total > next && self.record_bytes > 0).then_some(NetcdfError::CutFrame);
                 (whole as usize, cut)
             }
         }
