@@ -6,9 +6,12 @@
 //! header record (84 bytes: `CORD` + 20 control integers), title record, atom-count record, a
 //! free-atom index record when atoms are fixed; then per frame an optional unit-cell record
 //! (6 doubles), x, y and z records (one f32 per atom), and an optional fourth-dimension record.
+//! Sizes that cannot fit the file are a [`DcdError`].
 
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
+
+use super::reader_errors::DcdError;
 
 /// What the file size says about the frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -98,7 +101,7 @@ pub(crate) fn measure(path: &Path) -> Option<DcdTail> {
 /// Checks that the sizes in the header of the DCD file at `path` fit the file, before chemfiles
 /// allocates for them (a 4-byte edit of the atom count made it grow to 8 GB). Headers this check
 /// does not understand pass (chemfiles then decides); sizes that cannot fit give the reason.
-pub(crate) fn check_header(path: &Path) -> Result<(), String> {
+pub(crate) fn check_header(path: &Path) -> Result<(), DcdError> {
     let Ok(mut file) = std::fs::File::open(path) else {
         return Ok(());
     };
@@ -123,20 +126,18 @@ pub(crate) fn check_header(path: &Path) -> Result<(), String> {
     let fixed = int(&head[8 + 4 * 8..]);
     let mut marker = [0u8; 4];
     if file.read_exact(&mut marker).is_err() {
-        return Err("the file ends inside its header (truncated)".into());
+        return Err(DcdError::HeaderTruncated);
     }
     let title = int(&marker);
     if title < 0 || title as u64 > total {
-        return Err(format!(
-            "the header's title record says {title} bytes, in a file of {total} bytes (damaged header)"
-        ));
+        return Err(DcdError::HeaderTitleSize { title, total });
     }
     if file.seek(SeekFrom::Current(title + 4)).is_err() {
-        return Err("the file ends inside its header (truncated)".into());
+        return Err(DcdError::HeaderTruncated);
     }
     let mut natom_record = [0u8; 12];
     if file.read_exact(&mut natom_record).is_err() {
-        return Err("the file ends inside its header (truncated)".into());
+        return Err(DcdError::HeaderTruncated);
     }
     if int(&natom_record[0..4]) != 4 {
         return Ok(());
@@ -144,26 +145,22 @@ pub(crate) fn check_header(path: &Path) -> Result<(), String> {
     let atoms = int(&natom_record[4..8]);
     // One frame needs at least 3 × 4 bytes per free atom; the first frame holds all atoms.
     if atoms <= 0 || (atoms as u64) * 12 > total {
-        return Err(format!(
-            "the header says {atoms} atoms, which a file of {total} bytes cannot hold (damaged header)"
-        ));
+        return Err(DcdError::AtomsDontFit { atoms, total });
     }
     if fixed < 0 || fixed > atoms {
-        return Err(format!(
-            "the header says {fixed} fixed atoms out of {atoms} (damaged header)"
-        ));
+        return Err(DcdError::BadFixed { fixed, atoms });
     }
     if fixed > 0 {
         let free = (atoms - fixed) as usize;
         let mut record = vec![0u8; 4 * free + 4];
         if file.read_exact(&mut record).is_err() {
-            return Err("the file ends inside its header (truncated)".into());
+            return Err(DcdError::HeaderTruncated);
         }
         let bad = (0..free)
             .map(|k| int(&record[4 + 4 * k..]))
             .any(|index| index < 1 || index > atoms);
         if int(&record[0..4]) != 4 * free as i64 || bad {
-            return Err("the free-atom list in the header is damaged".into());
+            return Err(DcdError::FreeAtomList);
         }
     }
     Ok(())
@@ -234,5 +231,25 @@ mod tests {
         )
         .expect("write");
         assert_eq!(measure(&path), None);
+    }
+
+    #[test]
+    fn the_header_check_names_sizes_that_cannot_fit() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("t.dcd");
+        write_dcd(&path, 10, 3, 0);
+        assert_eq!(check_header(&path), Ok(()));
+        write_dcd(&path, 1_000_000, 0, 0);
+        let total = std::fs::metadata(&path).expect("size").len();
+        assert_eq!(
+            check_header(&path),
+            Err(DcdError::AtomsDontFit {
+                atoms: 1_000_000,
+                total
+            })
+        );
+        let bytes = std::fs::read(&path).expect("read");
+        std::fs::write(&path, &bytes[..94]).expect("write");
+        assert_eq!(check_header(&path), Err(DcdError::HeaderTruncated));
     }
 }

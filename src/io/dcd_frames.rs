@@ -10,6 +10,8 @@
 //! units, converted to ps; the cell record is `A, gamma, B, beta, alpha, C` (angles in degrees,
 //! or their cosines when all three are within ±1), or, for CHARMM versions above 25, the
 //! symmetric box matrix `[A, B, C; B, D, E; C, E, F]` packed as `A, B, D, C, E, F`.
+//!
+//! Errors are [`DcdError`]s, wrapped in an [`IoError`] naming the file (and frame).
 
 use std::fs::File;
 use std::os::unix::fs::FileExt;
@@ -20,6 +22,7 @@ use glam::{DMat3, DVec3, Vec3};
 use super::IoError;
 use super::native::{NativeFrames, NativeOpen};
 use super::prepare::Prepared;
+use super::reader_errors::DcdError;
 use super::unit_cell;
 use crate::model::Frame;
 
@@ -119,9 +122,9 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
     })?;
     let total = file
         .metadata()
-        .map_err(|e| IoError::unreadable(path, e.to_string()))?
+        .map_err(|e| IoError::unreadable(path, e))?
         .len();
-    let layout = read_header(&file, total).map_err(|reason| IoError::unreadable(path, reason))?;
+    let layout = read_header(&file, total).map_err(|e| IoError::unreadable(path, e))?;
     let mut reader = DcdFrames {
         path: path.to_path_buf(),
         file,
@@ -140,30 +143,27 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
 }
 
 /// Reads `len` bytes at `offset`, or says the file ends first.
-fn read_at(file: &File, offset: u64, len: u64, total: u64) -> Result<Vec<u8>, String> {
+fn read_at(file: &File, offset: u64, len: u64, total: u64) -> Result<Vec<u8>, DcdError> {
     if offset.checked_add(len).is_none_or(|end| end > total) {
-        return Err(format!(
-            "the file ends inside its header ({len} bytes at byte {offset} of {total}; truncated or damaged header)"
-        ));
+        return Err(DcdError::HeaderCut { len, offset, total });
     }
     let mut bytes = vec![0u8; len as usize];
-    file.read_exact_at(&mut bytes, offset)
-        .map_err(|e| e.to_string())?;
+    file.read_exact_at(&mut bytes, offset)?;
     Ok(bytes)
 }
 
 /// Parses the header records; see the module documentation.
-fn read_header(file: &File, total: u64) -> Result<Layout, String> {
-    let head = read_at(file, 0, 92, total).map_err(|_| "too short for a DCD header".to_string())?;
+fn read_header(file: &File, total: u64) -> Result<Layout, DcdError> {
+    let head = read_at(file, 0, 92, total).map_err(|_| DcdError::TooShort)?;
     let little = match (&head[0..4], &head[4..8]) {
         ([84, 0, 0, 0], b"CORD") => true,
         ([0, 0, 0, 84], b"CORD") => false,
         ([84, 0, 0, 0], [0, 0, 0, 0]) | ([0, 0, 0, 0], [0, 0, 0, 84])
             if &head[8..12] == b"CORD" =>
         {
-            return Err("DCD files with 64-bit record markers are not supported".into());
+            return Err(DcdError::Markers64);
         }
-        _ => return Err("not a DCD file (no 'CORD' header record)".into()),
+        _ => return Err(DcdError::NotDcd),
     };
     let mut layout = Layout {
         little,
@@ -193,33 +193,29 @@ fn read_header(file: &File, total: u64) -> Result<Layout, String> {
         (layout.f64(&head[8 + 36..]), false, false)
     };
     if layout.int(&head[88..92]) != 84 {
-        return Err("the header record's closing marker is not 84 (damaged header)".into());
+        return Err(DcdError::HeaderMarker);
     }
     // Title record: skipped (its line count is never trusted).
     let title = layout.int(&read_at(file, 92, 4, total)?);
     if title < 0 || title as u64 > total {
-        return Err(format!(
-            "the title record says {title} bytes, in a file of {total} bytes (damaged header)"
-        ));
+        return Err(DcdError::TitleSize { title, total });
     }
     let after_title = 96 + title as u64;
     if layout.int(&read_at(file, after_title, 4, total)?) != title {
-        return Err("the title record's closing marker does not match (damaged header)".into());
+        return Err(DcdError::TitleMarker);
     }
     let natom = read_at(file, after_title + 4, 12, total)?;
     if layout.int(&natom[0..4]) != 4 || layout.int(&natom[8..12]) != 4 {
-        return Err("the atom-count record's markers are not 4 (damaged header)".into());
+        return Err(DcdError::AtomCountMarkers);
     }
     let atoms = layout.int(&natom[4..8]);
     // Nothing is allocated from the atom count before a whole frame is known to be in the
     // file (a file cut inside frame 0 is damage at frame 0, an absurd count no frame).
     if atoms <= 0 {
-        return Err(format!("the header says {atoms} atoms (damaged header)"));
+        return Err(DcdError::BadAtomCount(atoms));
     }
     if fixed < 0 || fixed > atoms {
-        return Err(format!(
-            "the header says {fixed} fixed atoms out of {atoms} (damaged header)"
-        ));
+        return Err(DcdError::BadFixed { fixed, atoms });
     }
     let mut header_bytes = after_title + 16;
     let free = if fixed > 0 {
@@ -228,15 +224,13 @@ fn read_header(file: &File, total: u64) -> Result<Layout, String> {
         let bytes = record.len();
         let marker = (4 * count) as i64;
         if layout.int(&record[0..4]) != marker || layout.int(&record[bytes - 4..]) != marker {
-            return Err("the free-atom record's markers do not match (damaged header)".into());
+            return Err(DcdError::FreeAtomMarkers);
         }
         let mut free = Vec::with_capacity(count as usize);
         for k in 0..count as usize {
             let index = layout.int(&record[4 + 4 * k..]);
             if index < 1 || index > atoms {
-                return Err(format!(
-                    "free atom {k} is atom {index}, outside 1..={atoms} (damaged header)"
-                ));
+                return Err(DcdError::FreeAtomIndex { k, index, atoms });
             }
             free.push(index as usize - 1);
         }
@@ -306,11 +300,11 @@ impl DcdFrames {
                 } else {
                     layout.frame_bytes
                 };
-                damage = Some(format!(
-                    "the file ends inside this frame (truncated: {} of {expected} bytes for {} atoms)",
-                    total - end,
-                    layout.stored(whole)
-                ));
+                damage = Some(DcdError::FrameCut {
+                    have: total - end,
+                    expected,
+                    atoms: layout.stored(whole),
+                });
             }
         }
         self.len = len;
@@ -319,7 +313,7 @@ impl DcdFrames {
             return Err(self
                 .damage
                 .clone()
-                .unwrap_or_else(|| IoError::unreadable(&self.path, "the file holds no frames")));
+                .unwrap_or_else(|| IoError::unreadable(&self.path, DcdError::NoFrames)));
         }
         if self.layout.free.is_some() {
             self.fixed = self.read_frame(0)?.positions;
@@ -328,19 +322,19 @@ impl DcdFrames {
     }
 
     /// Checks the Fortran record markers of frame `index` (which the file holds whole).
-    fn check_markers(&self, index: usize) -> Result<(), String> {
+    fn check_markers(&self, index: usize) -> Result<(), DcdError> {
         let mut offset = self.layout.offset(index);
         let mut marker = [0u8; 4];
         for (bytes, what) in self.layout.records(index) {
             for at in [offset, offset + 4 + bytes] {
-                self.file
-                    .read_exact_at(&mut marker, at)
-                    .map_err(|e| e.to_string())?;
+                self.file.read_exact_at(&mut marker, at)?;
                 let found = self.layout.int(&marker);
                 if found != bytes as i64 {
-                    return Err(format!(
-                        "the {what} record's marker says {found} bytes where {bytes} belong (damaged frame)"
-                    ));
+                    return Err(DcdError::RecordMarker {
+                        record: what,
+                        found,
+                        expected: bytes,
+                    });
                 }
             }
             offset += 8 + bytes;
@@ -349,7 +343,7 @@ impl DcdFrames {
     }
 
     /// The box of a frame from its cell record's six doubles.
-    fn cell(&self, values: [f64; 6]) -> Result<Option<[Vec3; 3]>, String> {
+    fn cell(&self, values: [f64; 6]) -> Result<Option<[Vec3; 3]>, DcdError> {
         if self.layout.charmm_version > 25 {
             let [a, b, d, c, e, f] = values;
             let matrix = DMat3::from_cols(
@@ -357,7 +351,7 @@ impl DcdFrames {
                 DVec3::new(b, d, e),
                 DVec3::new(c, e, f),
             );
-            return unit_cell::from_columns(matrix);
+            return unit_cell::from_columns(matrix).map_err(DcdError::Cell);
         }
         let [a, gamma, b, beta, alpha, c] = values;
         let mut angles = [alpha, beta, gamma];
@@ -365,7 +359,7 @@ impl DcdFrames {
             // Cosines: 90° − asin(cos) keeps a cosine of 0 at exactly 90°.
             angles = angles.map(|cos| 90.0 - cos.asin() * 90.0 / (std::f64::consts::PI / 2.0));
         }
-        unit_cell::from_lengths_angles([a, b, c], angles)
+        unit_cell::from_lengths_angles([a, b, c], angles).map_err(DcdError::Cell)
     }
 }
 
@@ -394,7 +388,7 @@ impl NativeFrames for DcdFrames {
                 len: self.len,
             });
         }
-        let bad = |reason: String| IoError::bad_frame(&self.path, index, reason);
+        let bad = |reason: DcdError| IoError::bad_frame(&self.path, index, reason);
         let size = if index == 0 {
             self.layout.first_bytes
         } else {
@@ -403,7 +397,7 @@ impl NativeFrames for DcdFrames {
         self.buffer.resize(size, 0);
         self.file
             .read_exact_at(&mut self.buffer, self.layout.offset(index))
-            .map_err(|e| bad(e.to_string()))?;
+            .map_err(|e| bad(e.into()))?;
         let layout = &self.layout;
         let mut at = 0usize;
         let cell = if layout.has_cell {

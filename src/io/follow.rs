@@ -124,11 +124,19 @@ impl FollowedFrames {
     }
 }
 
+/// Why the followed file cannot be looked at.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum FollowError {
+    /// Its size cannot be had (the operating system's message): it was removed or moved.
+    #[error("the file is gone ({0})")]
+    Gone(String),
+}
+
 /// The size of `path` in bytes, or why it cannot be had.
-fn file_size(path: &Path) -> Result<u64, String> {
+fn file_size(path: &Path) -> Result<u64, FollowError> {
     std::fs::metadata(path)
         .map(|m| m.len())
-        .map_err(|e| format!("the file is gone ({e})"))
+        .map_err(|e| FollowError::Gone(e.to_string()))
 }
 
 /// The watching thread: reopens the file when it grows, until it stops growing or the reader
@@ -168,7 +176,7 @@ fn watch(top: &Path, options: &FollowOptions, shared: &Shared) {
             }
             Ok(_) => {}
             Err(reason) => {
-                watched.ended = Some(reason);
+                watched.ended = Some(reason.to_string());
                 shared.grew.notify_all();
                 return;
             }
@@ -225,5 +233,22 @@ impl Drop for FollowedFrames {
         if let Some(thread) = self.thread.take() {
             let _ = thread.join();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_removed_file_is_gone() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("t.xtc");
+        std::fs::write(&path, b"1234").expect("write");
+        assert_eq!(file_size(&path), Ok(4));
+        std::fs::remove_file(&path).expect("remove");
+        let error = file_size(&path).unwrap_err();
+        assert!(matches!(error, FollowError::Gone(_)));
+        assert!(error.to_string().starts_with("the file is gone ("));
     }
 }

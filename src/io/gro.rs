@@ -12,6 +12,9 @@
 //! The topology is what the chemfiles path gives (see `super::chem`): names that are also the
 //! types, no element, mass 0, residue numbers and names from columns 1-10 with residues as runs
 //! of atoms sharing both. `tests/it/io_native_text.rs` compares both on every GRO test file.
+//!
+//! A damaged or cut frame is a [`GroError`] naming the line, wrapped in an [`IoError`] naming
+//! the file and frame.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -20,6 +23,7 @@ use super::fast::{QuickMap, parse_u64, trim};
 use super::fast::{TypeTable, cols, columns_text, empty_topology, parse_f64, parse_i64, to_vec3};
 use super::native::{NativeFrames, NativeOpen};
 use super::prepare::Prepared;
+use super::reader_errors::GroError;
 use super::text_scan::{FrameSpan, LineScanner, cell_rows, lines, mark_cut_stream, read_span};
 use super::{IoError, chem};
 use crate::model::{Frame, Labels, Topology};
@@ -136,7 +140,7 @@ fn index(path: &Path, file: &Path) -> Result<(Vec<FrameSpan>, Option<IoError>), 
 
 /// Walks over the next frame: its span, `None` at the end of the file, or why the frame is cut
 /// or damaged.
-fn index_frame(scan: &mut LineScanner) -> std::io::Result<Result<Option<FrameSpan>, String>> {
+fn index_frame(scan: &mut LineScanner) -> std::io::Result<Result<Option<FrameSpan>, GroError>> {
     let Some((start, line, title)) = scan.next_line()? else {
         return Ok(Ok(None));
     };
@@ -153,42 +157,34 @@ fn index_frame(scan: &mut LineScanner) -> std::io::Result<Result<Option<FrameSpa
     let atoms = match count {
         // Blank lines after the last frame.
         None if blank_title => return Ok(Ok(None)),
-        None => {
-            let at = line + 1;
-            return Ok(Err(format!(
-                "line {at}: the file ends before the atom count"
-            )));
-        }
-        Some(Err((at, shown))) => {
-            return Ok(Err(format!(
-                "line {at}: the atom count '{shown}' is not a number"
-            )));
-        }
+        None => return Ok(Err(GroError::EndsBeforeCount { line: line + 1 })),
+        Some(Err((at, shown))) => return Ok(Err(GroError::BadCount { line: at, shown })),
         Some(Ok(atoms)) => atoms,
     };
     let mut needed = FIRST_FIELD + 3 * DEFAULT_FIELD;
     for atom in 0..atoms {
         let Some((_, at, text)) = scan.next_line()? else {
-            let missing = atom + 1;
-            return Ok(Err(format!(
-                "the file ends inside this frame (atom {missing} of {atoms} is missing)"
-            )));
+            return Ok(Err(GroError::AtomMissing {
+                missing: atom + 1,
+                atoms,
+            }));
         };
         if atom == 0 {
             needed = FIRST_FIELD + 3 * field_width(text);
         }
         if text.len() < needed {
-            let length = text.len();
-            return Ok(Err(format!(
-                "line {at}: an atom line of {length} characters (at least {needed} expected)"
-            )));
+            return Ok(Err(GroError::ShortAtomLine {
+                line: at,
+                length: text.len(),
+                needed,
+            }));
         }
     }
     let Some((_, at, text)) = scan.next_line()? else {
-        return Ok(Err("the file ends before this frame's box line".to_string()));
+        return Ok(Err(GroError::EndsBeforeBox));
     };
-    if let Err(message) = parse_box(text) {
-        return Ok(Err(format!("line {at}: {message}")));
+    if let Err(error) = parse_box(text, at) {
+        return Ok(Err(error));
     }
     Ok(Ok(Some(FrameSpan {
         start,
@@ -228,13 +224,13 @@ fn parse_frame(
     bytes: &[u8],
     first_line: u64,
     with_atoms: bool,
-) -> Result<(Frame, Vec<AtomText>), String> {
+) -> Result<(Frame, Vec<AtomText>), GroError> {
     let mut it = lines(bytes);
     let title = it.next().unwrap_or_default();
     let mut number = first_line + 1;
     // The index skipped blank lines between a blank title and the count.
     let count = loop {
-        let text = it.next().ok_or("the frame ends before the atom count")?;
+        let text = it.next().ok_or(GroError::FrameEndsBeforeCount)?;
         if !trim(text).is_empty() || !trim(title).is_empty() {
             break text;
         }
@@ -242,15 +238,16 @@ fn parse_frame(
     };
     let n = parse_u64(count)
         .and_then(|n| usize::try_from(n).ok())
-        .ok_or_else(|| format!("line {number}: the atom count is not a number"))?;
+        .ok_or(GroError::CountNotNumber { line: number })?;
     let mut positions = Vec::with_capacity(n);
     let mut atoms = Vec::with_capacity(if with_atoms { n } else { 0 });
     let mut width = DEFAULT_FIELD;
     for atom in 0..n {
         number += 1;
-        let line = it
-            .next()
-            .ok_or_else(|| format!("line {number}: the frame ends before atom {}", atom + 1))?;
+        let line = it.next().ok_or(GroError::FrameEndsBeforeAtom {
+            line: number,
+            atom: atom + 1,
+        })?;
         if atom == 0 {
             width = field_width(line);
         }
@@ -258,13 +255,11 @@ fn parse_frame(
         for (k, value) in xyz.iter_mut().enumerate() {
             let from = FIRST_FIELD + k * width;
             let field = cols(line, from, from + width);
-            *value = parse_f64(field).ok_or_else(|| {
-                let axis = ["x", "y", "z"][k];
-                let shown = columns_text(trim(field));
-                format!(
-                    "line {number}: atom {}: {axis} '{shown}' is not a number",
-                    atom + 1
-                )
+            *value = parse_f64(field).ok_or_else(|| GroError::BadCoordinate {
+                line: number,
+                atom: atom + 1,
+                axis: ["x", "y", "z"][k],
+                shown: columns_text(trim(field)),
             })? * 10.0;
         }
         positions.push(to_vec3(xyz));
@@ -283,8 +278,8 @@ fn parse_frame(
     number += 1;
     let box_line = it
         .next()
-        .ok_or_else(|| format!("line {number}: the frame ends before its box line"))?;
-    let cell = parse_box(box_line).map_err(|m| format!("line {number}: {m}"))?;
+        .ok_or(GroError::FrameEndsBeforeBox { line: number })?;
+    let cell = parse_box(box_line, number)?;
     let frame = Frame {
         index: 0,
         time_ps: title_time(title),
@@ -294,11 +289,12 @@ fn parse_frame(
     Ok((frame, atoms))
 }
 
-/// The box line: 3 or 9 numbers in nm, as rows a, b, c in Å (`None` for a zero box).
-fn parse_box(line: &[u8]) -> Result<Option<[glam::Vec3; 3]>, String> {
+/// The box line (`text`, line `line` of the file): 3 or 9 numbers in nm, as rows a, b, c in Å
+/// (`None` for a zero box).
+fn parse_box(text: &[u8], line: u64) -> Result<Option<[glam::Vec3; 3]>, GroError> {
     let mut values = [0.0f64; 9];
     let mut count = 0usize;
-    for token in line
+    for token in text
         .split(|&b| matches!(b, b' ' | b'\t'))
         .filter(|t| !t.is_empty())
     {
@@ -306,9 +302,10 @@ fn parse_box(line: &[u8]) -> Result<Option<[glam::Vec3; 3]>, String> {
             count += 1;
             break;
         }
-        values[count] = parse_f64(token)
-            .ok_or_else(|| format!("the box value '{}' is not a number", columns_text(token)))?
-            * 10.0;
+        values[count] = parse_f64(token).ok_or_else(|| GroError::BadBoxValue {
+            line,
+            shown: columns_text(token),
+        })? * 10.0;
         count += 1;
     }
     let v = values;
@@ -316,18 +313,9 @@ fn parse_box(line: &[u8]) -> Result<Option<[glam::Vec3; 3]>, String> {
         3 => right_angled(v[0], v[1], v[2]),
         // v1(x) v2(y) v3(z) v1(y) v1(z) v2(x) v2(z) v3(x) v3(y)
         9 => [[v[0], v[3], v[4]], [v[5], v[1], v[6]], [v[7], v[8], v[2]]],
-        _ => {
-            return Err(format!(
-                "the box line holds {} numbers (3 or 9 expected)",
-                if count > 9 {
-                    "more than 9".to_string()
-                } else {
-                    count.to_string()
-                }
-            ));
-        }
+        _ => return Err(GroError::BoxCount { line, count }),
     };
-    cell_rows(rows)
+    cell_rows(rows).map_err(|error| GroError::Cell { line, error })
 }
 
 /// A rectangular box of lengths `a`, `b`, `c` (Å) with the rounding of chemfiles, which builds
@@ -406,6 +394,7 @@ fn topology(atoms: &[AtomText]) -> Topology {
 
 #[cfg(test)]
 mod tests {
+    use super::super::text_scan::BoxError;
     use super::*;
 
     #[test]
@@ -428,16 +417,38 @@ mod tests {
 
     #[test]
     fn boxes_of_three_and_nine_numbers() {
-        let cube = parse_box(b"   1.00000   2.00000   3.00000")
+        let cube = parse_box(b"   1.00000   2.00000   3.00000", 1)
             .unwrap()
             .unwrap();
         assert_eq!(cube[2].z, 30.0);
         assert!(cube[2].x.abs() < 1e-9 && cube[1].x.abs() < 1e-9);
-        let tri = parse_box(b" 1 2 3 0 0 0.5 0 0.25 0.75").unwrap().unwrap();
+        let tri = parse_box(b" 1 2 3 0 0 0.5 0 0.25 0.75", 1)
+            .unwrap()
+            .unwrap();
         assert_eq!(tri[1], glam::Vec3::new(5.0, 20.0, 0.0));
         assert_eq!(tri[2], glam::Vec3::new(2.5, 7.5, 30.0));
-        assert_eq!(parse_box(b"0 0 0"), Ok(None));
-        assert!(parse_box(b"1 2").is_err());
-        assert!(parse_box(b"1 2 x").is_err());
+        assert_eq!(parse_box(b"0 0 0", 1), Ok(None));
+        assert_eq!(
+            parse_box(b"1 2", 4),
+            Err(GroError::BoxCount { line: 4, count: 2 })
+        );
+        assert_eq!(
+            parse_box(b"1 2 3 4 5 6 7 8 9 10 11", 4),
+            Err(GroError::BoxCount { line: 4, count: 10 })
+        );
+        assert_eq!(
+            parse_box(b"1 2 x", 4),
+            Err(GroError::BadBoxValue {
+                line: 4,
+                shown: "x".into()
+            })
+        );
+        assert!(matches!(
+            parse_box(b"-1 2 3", 4),
+            Err(GroError::Cell {
+                line: 4,
+                error: BoxError::NegativeLength(_)
+            })
+        ));
     }
 }

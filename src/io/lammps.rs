@@ -16,6 +16,9 @@
 //! The topology is what the chemfiles path gives (see `super::chem`): the `element` column is
 //! the name, else the `type`; `mass` and `q` columns give masses and charges; no residues.
 //! `tests/it/io_native_text.rs` compares both on every LAMMPS test file.
+//!
+//! A damaged or cut frame is a [`LammpsError`] naming the line, wrapped in an [`IoError`]
+//! naming the file and frame.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -25,6 +28,7 @@ use super::fast::{to_vec3, trim};
 use super::lammps_header::{self, Header, item, words};
 use super::native::{NativeFrames, NativeOpen};
 use super::prepare::Prepared;
+use super::reader_errors::LammpsError;
 use super::text_scan::{FrameSpan, LineScanner, lines, mark_cut_stream, read_span};
 use super::{IoError, chem};
 use crate::model::elements::canonical_symbol;
@@ -139,7 +143,7 @@ fn index(path: &Path, file: &Path) -> Result<(Vec<FrameSpan>, Option<IoError>), 
 
 /// Walks over the next frame (blank lines before it are skipped): its span, `None` at the end
 /// of the file, or why the frame is cut or damaged.
-fn index_frame(scan: &mut LineScanner) -> std::io::Result<Result<Option<FrameSpan>, String>> {
+fn index_frame(scan: &mut LineScanner) -> std::io::Result<Result<Option<FrameSpan>, LammpsError>> {
     let mut header: Vec<Vec<u8>> = Vec::new();
     let (mut start, mut first) = (0, 0);
     loop {
@@ -168,10 +172,10 @@ fn index_frame(scan: &mut LineScanner) -> std::io::Result<Result<Option<FrameSpa
     };
     for atom in 0..header.atoms {
         if scan.next_line()?.is_none() {
-            let (missing, atoms) = (atom + 1, header.atoms);
-            return Ok(Err(format!(
-                "the file ends inside this frame (atom {missing} of {atoms} is missing)"
-            )));
+            return Ok(Err(LammpsError::AtomMissing {
+                missing: atom + 1,
+                atoms: header.atoms,
+            }));
         }
     }
     Ok(Ok(Some(FrameSpan {
@@ -187,7 +191,7 @@ fn parse_frame(
     bytes: &[u8],
     first_line: u64,
     with_topology: bool,
-) -> Result<(Frame, Option<Topology>), String> {
+) -> Result<(Frame, Option<Topology>), LammpsError> {
     let mut it = lines(bytes);
     let header = lammps_header::parse(&mut it, first_line)?;
     let columns = &header.columns;
@@ -199,23 +203,25 @@ fn parse_frame(
     let first_atom_line = first_line + header.lines;
     for atom in 0..n {
         let number = first_atom_line + atom as u64;
-        let line = it
-            .next()
-            .ok_or_else(|| format!("line {number}: the frame ends before atom {}", atom + 1))?;
+        let line = it.next().ok_or(LammpsError::FrameEndsBeforeAtom {
+            line: number,
+            atom: atom + 1,
+        })?;
         words_of_line.clear();
         words_of_line.extend(words(line));
         if words_of_line.len() != columns.count {
-            return Err(format!(
-                "line {number}: {} values for the {} columns of ITEM: ATOMS",
-                words_of_line.len(),
-                columns.count
-            ));
+            return Err(LammpsError::ValueCount {
+                line: number,
+                found: words_of_line.len(),
+                columns: columns.count,
+            });
         }
-        let number_at = |column: Option<usize>, what: &str| -> Result<f64, String> {
+        let number_at = |column: Option<usize>, what: &'static str| -> Result<f64, LammpsError> {
             match column {
-                Some(k) => parse_f64(words_of_line[k]).ok_or_else(|| {
-                    let shown = free_text(words_of_line[k]);
-                    format!("line {number}: the {what} '{shown}' is not a number")
+                Some(k) => parse_f64(words_of_line[k]).ok_or_else(|| LammpsError::NotANumber {
+                    line: number,
+                    what,
+                    shown: free_text(words_of_line[k]),
                 }),
                 None => Ok(0.0),
             }
@@ -227,9 +233,9 @@ fn parse_frame(
         p = place(&header, p, image_of(&words_of_line, &header, number)?);
         positions.push(to_vec3(p));
         if let Some(k) = columns.id {
-            let id = parse_u64(words_of_line[k]).ok_or_else(|| {
-                let shown = free_text(words_of_line[k]);
-                format!("line {number}: the atom id '{shown}' is not a whole number")
+            let id = parse_u64(words_of_line[k]).ok_or_else(|| LammpsError::BadId {
+                line: number,
+                shown: free_text(words_of_line[k]),
             })?;
             ids.push(id);
         }
@@ -267,16 +273,20 @@ fn parse_frame(
 }
 
 /// The image flags of an atom line (0 where absent), when they are to be applied.
-fn image_of(words: &[&[u8]], header: &Header, number: u64) -> Result<Option<[f64; 3]>, String> {
+fn image_of(
+    words: &[&[u8]],
+    header: &Header,
+    number: u64,
+) -> Result<Option<[f64; 3]>, LammpsError> {
     let Some(images) = header.columns.images else {
         return Ok(None);
     };
     let mut out = [0.0f64; 3];
     for (value, column) in out.iter_mut().zip(images) {
         if let Some(k) = column {
-            let image = parse_i64(words[k]).ok_or_else(|| {
-                let shown = free_text(words[k]);
-                format!("line {number}: the image flag '{shown}' is not a whole number")
+            let image = parse_i64(words[k]).ok_or_else(|| LammpsError::BadImage {
+                line: number,
+                shown: free_text(words[k]),
             })?;
             *value = image as f64;
         }
@@ -306,8 +316,11 @@ fn place(header: &Header, mut p: [f64; 3], images: Option<[f64; 3]>) -> [f64; 3]
 
 /// The order that sorts the atoms by `ids` (`None` when they are in order already, or there
 /// are none); an error naming the id when two atoms share one.
-fn id_order(ids: &[u64], first_atom_line: u64) -> Result<Option<Vec<usize>>, String> {
-    let twice = |id: u64| format!("atom id {id} appears twice (lines from {first_atom_line})");
+fn id_order(ids: &[u64], first_atom_line: u64) -> Result<Option<Vec<usize>>, LammpsError> {
+    let twice = |id: u64| LammpsError::DuplicateId {
+        id,
+        first_line: first_atom_line,
+    };
     if ids.windows(2).all(|w| w[0] < w[1]) {
         return Ok(None);
     }
@@ -384,11 +397,15 @@ mod tests {
         assert_eq!(top.names, vec!["1", "1", "2"]);
         assert_eq!(top.charges, [0.25, 0.25, -0.5]);
         let twice = text.replace("\n7 1", "\n0 1");
-        assert!(
-            parse_frame(twice.as_bytes(), 1, false)
-                .unwrap_err()
-                .contains("id 0")
+        let error = parse_frame(twice.as_bytes(), 1, false).unwrap_err();
+        assert_eq!(
+            error,
+            LammpsError::DuplicateId {
+                id: 0,
+                first_line: 10
+            }
         );
+        assert_eq!(error.to_string(), "atom id 0 appears twice (lines from 10)");
     }
 
     #[test]
@@ -402,10 +419,13 @@ mod tests {
         let got = frame.positions[0];
         assert_eq!([got.x, got.y, got.z], want.map(|v| v as f32));
         let short = text.replace("1 0.5 0.5 0.5 1 0 -1", "1 0.5 0.5");
-        assert!(
-            parse_frame(short.as_bytes(), 1, false)
-                .unwrap_err()
-                .contains("line 10")
+        assert_eq!(
+            parse_frame(short.as_bytes(), 1, false).unwrap_err(),
+            LammpsError::ValueCount {
+                line: 10,
+                found: 3,
+                columns: 7
+            }
         );
     }
 }

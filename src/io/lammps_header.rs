@@ -1,8 +1,10 @@
 //! The header of one LAMMPS dump frame (see [`super::lammps`]): the `ITEM:` lines before the
 //! atoms (`UNITS` and `TIME` optional, `TIMESTEP`, `NUMBER OF ATOMS`, `BOX BOUNDS` with its three
-//! lines, `ATOMS` with the column names), and which columns hold what.
+//! lines, `ATOMS` with the column names), and which columns hold what. A damaged header is a
+//! [`LammpsError`] naming the line.
 
 use super::fast::{parse_f64, parse_i64, parse_u64, trim};
+use super::reader_errors::LammpsError;
 use super::text_scan::cell_rows;
 use glam::Vec3;
 
@@ -58,8 +60,8 @@ const STYLES: [[&str; 3]; 4] = [
 impl Columns {
     /// The columns named after `ITEM: ATOMS`. Positions as chemfiles picks them: the style with
     /// the most of its three columns present, unwrapped before scaled unwrapped before wrapped
-    /// before scaled on ties. Fails when there is none.
-    pub(crate) fn choose(names: &[&[u8]]) -> Result<Columns, String> {
+    /// before scaled on ties. `None` when there is none.
+    pub(crate) fn choose(names: &[&[u8]]) -> Option<Columns> {
         let mut columns = Columns {
             count: names.len(),
             ..Columns::default()
@@ -91,10 +93,7 @@ impl Columns {
         let (wrapped, scaled, unwrapped, scaled_unwrapped) =
             (count(0), count(1), count(2), count(3));
         let style = if wrapped + scaled + unwrapped + scaled_unwrapped == 0 {
-            return Err(
-                "the ATOMS columns hold no positions (x y z, xs ys zs, xu yu zu or xsu ysu zsu)"
-                    .to_string(),
-            );
+            return None;
         } else if unwrapped >= scaled_unwrapped && unwrapped >= wrapped && unwrapped >= scaled {
             2
         } else if scaled_unwrapped >= wrapped && scaled_unwrapped >= scaled {
@@ -110,7 +109,7 @@ impl Columns {
         if images.iter().any(Option::is_some) && !unwrapped_already {
             columns.images = Some(images);
         }
-        Ok(columns)
+        Some(columns)
     }
 }
 
@@ -131,14 +130,14 @@ pub(crate) fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
 pub(crate) fn parse<'a>(
     lines: &mut impl Iterator<Item = &'a [u8]>,
     first_line: u64,
-) -> Result<Header, String> {
+) -> Result<Header, LammpsError> {
     let mut number = first_line - 1;
-    let mut next = |what: &str| {
+    let mut next = |what: &'static str| {
         number += 1;
         lines
             .next()
             .map(|line| (number, line))
-            .ok_or_else(|| format!("the file ends inside this frame (before {what})"))
+            .ok_or(LammpsError::EndsBefore { what })
     };
     let mut atoms = None;
     let mut bounds = None;
@@ -146,10 +145,10 @@ pub(crate) fn parse<'a>(
     loop {
         let (at, line) = next("ITEM: ATOMS")?;
         let Some(name) = item(line) else {
-            let shown = String::from_utf8_lossy(trim(line));
-            return Err(format!(
-                "line {at}: '{shown}' where an ITEM: line should be"
-            ));
+            return Err(LammpsError::NotAnItem {
+                line: at,
+                shown: String::from_utf8_lossy(trim(line)).into_owned(),
+            });
         };
         match name {
             b"UNITS" | b"TIME" => {
@@ -157,23 +156,18 @@ pub(crate) fn parse<'a>(
             }
             b"TIMESTEP" => {
                 let (at, value) = next("the time step")?;
-                parse_i64(value)
-                    .ok_or_else(|| format!("line {at}: the time step is not a number"))?;
+                parse_i64(value).ok_or(LammpsError::BadTimestep { line: at })?;
                 timestep = true;
             }
             b"NUMBER OF ATOMS" => {
                 let (at, value) = next("the atom count")?;
                 let count = parse_u64(value).and_then(|n| usize::try_from(n).ok());
-                atoms = Some(
-                    count.ok_or_else(|| format!("line {at}: the atom count is not a number"))?,
-                );
+                atoms = Some(count.ok_or(LammpsError::BadAtomCount { line: at })?);
             }
             _ if name.starts_with(b"BOX BOUNDS") => {
                 let flags: Vec<&[u8]> = words(&name[10..]).collect();
                 if flags.first() == Some(&&b"abc"[..]) {
-                    return Err(format!(
-                        "line {at}: general triclinic boxes (BOX BOUNDS abc origin) are not read"
-                    ));
+                    return Err(LammpsError::GeneralTriclinic { line: at });
                 }
                 let tilted = flags
                     .windows(3)
@@ -184,33 +178,36 @@ pub(crate) fn parse<'a>(
                     let found: Vec<&[u8]> = words(line).collect();
                     let wanted = if tilted { 3 } else { 2 };
                     if found.len() != wanted {
-                        return Err(format!(
-                            "line {at}: {} box values ({wanted} expected)",
-                            found.len()
-                        ));
+                        return Err(LammpsError::BoxValueCount {
+                            line: at,
+                            found: found.len(),
+                            wanted,
+                        });
                     }
                     for (value, word) in row.iter_mut().zip(&found) {
-                        *value = parse_f64(word).ok_or_else(|| {
-                            let shown = String::from_utf8_lossy(word);
-                            format!("line {at}: the box value '{shown}' is not a number")
+                        *value = parse_f64(word).ok_or_else(|| LammpsError::BadBoxValue {
+                            line: at,
+                            shown: String::from_utf8_lossy(word).into_owned(),
                         })?;
                     }
                 }
                 bounds = Some((at, values, tilted));
             }
             _ if name.starts_with(b"ATOMS") => {
+                let before = |missing| LammpsError::AtomsBefore { line: at, missing };
                 if !timestep {
-                    return Err(format!("line {at}: ITEM: ATOMS before ITEM: TIMESTEP"));
+                    return Err(before("TIMESTEP"));
                 }
-                let atoms = atoms.ok_or_else(|| {
-                    format!("line {at}: ITEM: ATOMS before ITEM: NUMBER OF ATOMS")
-                })?;
-                let (box_line, values, tilted) = bounds
-                    .ok_or_else(|| format!("line {at}: ITEM: ATOMS before ITEM: BOX BOUNDS"))?;
+                let atoms = atoms.ok_or_else(|| before("NUMBER OF ATOMS"))?;
+                let (box_line, values, tilted) = bounds.ok_or_else(|| before("BOX BOUNDS"))?;
                 let names: Vec<&[u8]> = words(&name[5..]).collect();
-                let columns = Columns::choose(&names).map_err(|m| format!("line {at}: {m}"))?;
+                let columns =
+                    Columns::choose(&names).ok_or(LammpsError::NoPositions { line: at })?;
                 let (origin, rows) = box_rows(values, tilted);
-                let cell = cell_rows(rows).map_err(|m| format!("line {box_line}: {m}"))?;
+                let cell = cell_rows(rows).map_err(|error| LammpsError::Cell {
+                    line: box_line,
+                    error,
+                })?;
                 return Ok(Header {
                     atoms,
                     origin,
@@ -221,8 +218,10 @@ pub(crate) fn parse<'a>(
                 });
             }
             other => {
-                let shown = String::from_utf8_lossy(other);
-                return Err(format!("line {at}: unknown item 'ITEM: {shown}'"));
+                return Err(LammpsError::UnknownItem {
+                    line: at,
+                    shown: String::from_utf8_lossy(other).into_owned(),
+                });
             }
         }
     }
@@ -255,9 +254,10 @@ fn box_rows(values: [[f64; 3]; 3], tilted: bool) -> ([f64; 3], [[f64; 3]; 3]) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::text_scan::BoxError;
     use super::*;
 
-    fn header(text: &str) -> Result<Header, String> {
+    fn header(text: &str) -> Result<Header, LammpsError> {
         let mut lines = super::super::text_scan::lines(text.as_bytes());
         parse(&mut lines, 1)
     }
@@ -278,7 +278,7 @@ mod tests {
         assert_eq!(c.images, Some([Some(4), Some(5), Some(6)]));
         let c = pick("id xu yu zu ix iy iz").unwrap();
         assert_eq!(c.images, None);
-        assert!(pick("id type vx vy vz").is_err());
+        assert!(pick("id type vx vy vz").is_none());
     }
 
     #[test]
@@ -298,11 +298,33 @@ mod tests {
             [[11.0, 0.0, 0.0], [-2.0, 17.0, 0.0], [1.0, 3.0, 30.0]]
         );
         assert_eq!(h.origin, [0.0, 0.0, 0.0]);
-        assert!(
-            header("ITEM: TIMESTEP\n0\n")
-                .unwrap_err()
-                .contains("ends inside")
+        assert_eq!(
+            header("ITEM: TIMESTEP\n0\n"),
+            Err(LammpsError::EndsBefore {
+                what: "ITEM: ATOMS"
+            })
         );
-        assert!(header("hello\n").unwrap_err().contains("line 1"));
+        assert_eq!(
+            header("hello\n"),
+            Err(LammpsError::NotAnItem {
+                line: 1,
+                shown: "hello".into()
+            })
+        );
+        let no_box = "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\nITEM: ATOMS x y z\n";
+        let error = header(no_box).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "line 5: ITEM: ATOMS before ITEM: BOX BOUNDS"
+        );
+        let upside_down = "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n1\n\
+                           ITEM: BOX BOUNDS pp pp pp\n10 0\n0 10\n0 10\nITEM: ATOMS x y z\n";
+        assert!(matches!(
+            header(upside_down),
+            Err(LammpsError::Cell {
+                line: 5,
+                error: BoxError::NegativeLength(_)
+            })
+        ));
     }
 }

@@ -50,6 +50,7 @@ mod pdb_models;
 mod pdb_templates;
 mod prepare;
 mod quiet;
+mod reader_errors;
 pub mod stream;
 mod text_scan;
 mod tng;

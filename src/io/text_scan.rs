@@ -2,7 +2,7 @@
 //! `\n`, `\r\n` or a lone `\r` (old Mac files), a UTF-8 byte-order mark skipped at the start of
 //! a file, a scanner that walks a file line by line in 1 MiB chunks to index its frames (a
 //! multi-GB trajectory is never held in memory whole), the bytes of one frame read back on
-//! request, and chemfiles' rules for a periodic box.
+//! request, and chemfiles' rules for a periodic box (a box they refuse is a [`BoxError`]).
 
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
@@ -202,23 +202,32 @@ pub(crate) fn mark_cut_stream(
     *damage = Some(IoError::bad_frame(path, frame, reason));
 }
 
+/// Why [`cell_rows`] refuses a box.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub(crate) enum BoxError {
+    /// A right-angled box with a negative length among these (a, b, c in Å, or the file's
+    /// length unit).
+    #[error("the box has a negative length ({} {} {})", .0[0], .0[1], .0[2])]
+    NegativeLength([f64; 3]),
+    /// Box vectors of negative determinant.
+    #[error("the box vectors are left-handed (negative volume)")]
+    LeftHanded,
+}
+
 /// A periodic box by chemfiles' rules, from its rows a, b, c (Å): `None` for an absent box
 /// (every diagonal element within 1e-5 of 0 and no tilt), an error for a negative length or a
 /// left-handed (negative determinant) box.
-pub(crate) fn cell_rows(rows: [[f64; 3]; 3]) -> Result<Option<[Vec3; 3]>, String> {
+pub(crate) fn cell_rows(rows: [[f64; 3]; 3]) -> Result<Option<[Vec3; 3]>, BoxError> {
     let [a, b, c] = rows;
     let tiny = |v: f64| v.abs() < 1e-5;
     let diagonal = [a[1], a[2], b[0], b[2], c[0], c[1]].into_iter().all(tiny);
     if diagonal && [a[0], b[1], c[2]].into_iter().any(|v| v < 0.0) {
-        return Err(format!(
-            "the box has a negative length ({} {} {})",
-            a[0], b[1], c[2]
-        ));
+        return Err(BoxError::NegativeLength([a[0], b[1], c[2]]));
     }
     let determinant = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
         + a[2] * (b[0] * c[1] - b[1] * c[0]);
     if determinant < 0.0 {
-        return Err("the box vectors are left-handed (negative volume)".to_string());
+        return Err(BoxError::LeftHanded);
     }
     if diagonal && [a[0], b[1], c[2]].into_iter().all(tiny) {
         return Ok(None);
@@ -281,6 +290,13 @@ mod tests {
             Vec3::new(1.0, 3.0, 30.0)
         );
         let negative = [[-10.0, 0.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 30.0]];
-        assert!(cell_rows(negative).is_err());
+        let error = cell_rows(negative).unwrap_err();
+        assert_eq!(error, BoxError::NegativeLength([-10.0, 20.0, 30.0]));
+        assert_eq!(
+            error.to_string(),
+            "the box has a negative length (-10 20 30)"
+        );
+        let left = [[10.0, 0.0, 0.0], [0.0, 20.0, 0.0], [0.0, 5.0, -30.0]];
+        assert_eq!(cell_rows(left), Err(BoxError::LeftHanded));
     }
 }

@@ -2,7 +2,10 @@
 //! global attributes and variables with their attributes, type and where their data begins.
 //! Every count in the header is checked against the bytes left before anything is allocated
 //! for it, so a damaged header is a one-line error, never a huge allocation or a panic. CDF-5
-//! (64-bit data, NetCDF-4 is HDF5) is refused with a message that says so.
+//! (64-bit data, NetCDF-4 is HDF5) is refused with a message that says so. Errors are
+//! [`NetcdfError`]s.
+
+use super::error::NetcdfError;
 
 /// A NetCDF external type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -16,7 +19,7 @@ pub(crate) enum NcType {
 }
 
 impl NcType {
-    fn from_code(code: u32) -> Result<NcType, String> {
+    fn from_code(code: u32) -> Result<NcType, NetcdfError> {
         Ok(match code {
             1 => NcType::Byte,
             2 => NcType::Char,
@@ -24,7 +27,7 @@ impl NcType {
             4 => NcType::Int,
             5 => NcType::Float,
             6 => NcType::Double,
-            _ => return Err(format!("unknown NetCDF type {code} (damaged header)")),
+            _ => return Err(NetcdfError::UnknownType(code)),
         })
     }
 
@@ -115,11 +118,11 @@ fn find<'a>(attributes: &'a [Attribute], name: &str) -> Option<&'a Value> {
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum HeaderError {
     NeedMore,
-    Damaged(String),
+    Damaged(NetcdfError),
 }
 
-impl From<String> for HeaderError {
-    fn from(reason: String) -> Self {
+impl From<NetcdfError> for HeaderError {
+    fn from(reason: NetcdfError) -> Self {
         HeaderError::Damaged(reason)
     }
 }
@@ -135,10 +138,11 @@ impl Cursor<'_> {
     fn take(&mut self, n: u64) -> Result<&[u8], HeaderError> {
         let left = self.file_len.saturating_sub(self.at as u64);
         if n > left {
-            return Err(HeaderError::Damaged(format!(
-                "the header needs {n} bytes at byte {} of a {}-byte file (damaged or truncated header)",
-                self.at, self.file_len
-            )));
+            return Err(HeaderError::Damaged(NetcdfError::Truncated {
+                bytes: n,
+                at: self.at,
+                file_len: self.file_len,
+            }));
         }
         let end = self.at + n as usize;
         if end > self.bytes.len() {
@@ -154,20 +158,20 @@ impl Cursor<'_> {
         Ok(u32::from_be_bytes([b[0], b[1], b[2], b[3]]))
     }
 
-    /// A count: a non-negative 32-bit integer, at most `most` (what the bytes left can hold).
-    fn count(&mut self, what: &str, each: u64) -> Result<u64, HeaderError> {
+    /// A count of `what`: a non-negative 32-bit integer, at most what the bytes left can hold
+    /// at `each` bytes per element.
+    fn count(&mut self, what: &'static str, each: u64) -> Result<u64, HeaderError> {
         let n = self.u32()?;
         if n > i32::MAX as u32 {
-            return Err(HeaderError::Damaged(format!(
-                "negative {what} count in the header (damaged header)"
-            )));
+            return Err(HeaderError::Damaged(NetcdfError::NegativeCount { what }));
         }
         let left = self.file_len.saturating_sub(self.at as u64);
         if u64::from(n).saturating_mul(each) > left {
-            return Err(HeaderError::Damaged(format!(
-                "the header says {n} {what}, which a {}-byte file cannot hold (damaged header)",
-                self.file_len
-            )));
+            return Err(HeaderError::Damaged(NetcdfError::CountTooLarge {
+                what,
+                count: n,
+                file_len: self.file_len,
+            }));
         }
         Ok(u64::from(n))
     }
@@ -184,15 +188,17 @@ impl Cursor<'_> {
     }
 
     /// A list header: its tag (or ABSENT: two zeros) and element count.
-    fn list(&mut self, tag: u32, what: &str, each: u64) -> Result<u64, HeaderError> {
+    fn list(&mut self, tag: u32, what: &'static str, each: u64) -> Result<u64, HeaderError> {
         let found = self.u32()?;
         let n = self.count(what, each)?;
         match found {
             0 if n == 0 => Ok(0),
             t if t == tag => Ok(n),
-            t => Err(HeaderError::Damaged(format!(
-                "expected the {what} list (tag {tag}), found tag {t} (damaged header)"
-            ))),
+            found => Err(HeaderError::Damaged(NetcdfError::WrongTag {
+                what,
+                expected: tag,
+                found,
+            })),
         }
     }
 
@@ -241,34 +247,25 @@ pub(crate) fn parse(bytes: &[u8], file_len: u64) -> Result<Header, HeaderError> 
     };
     let magic = cursor.take(4).map_err(|e| match e {
         HeaderError::NeedMore => e,
-        HeaderError::Damaged(_) => HeaderError::Damaged("too short for a NetCDF file".into()),
+        HeaderError::Damaged(_) => HeaderError::Damaged(NetcdfError::TooShort),
     })?;
     let offset_bytes = match magic {
         [b'C', b'D', b'F', 1] => 4,
         [b'C', b'D', b'F', 2] => 8,
         [b'C', b'D', b'F', 5] => {
-            return Err(HeaderError::Damaged(
-                "a CDF-5 (64-bit data) NetCDF file: only CDF-1 and CDF-2 are read".into(),
-            ));
+            return Err(HeaderError::Damaged(NetcdfError::Cdf5));
         }
         [0x89, b'H', b'D', b'F'] => {
-            return Err(HeaderError::Damaged(
-                "a NetCDF-4 (HDF5) file: only classic NetCDF (CDF-1, CDF-2) is read".into(),
-            ));
+            return Err(HeaderError::Damaged(NetcdfError::Netcdf4));
         }
         _ => {
-            return Err(HeaderError::Damaged(
-                "not a NetCDF file (no 'CDF' signature)".into(),
-            ));
+            return Err(HeaderError::Damaged(NetcdfError::NotNetcdf));
         }
     };
     let records = match cursor.u32()? {
         u32::MAX => None,
         n if n > i32::MAX as u32 => {
-            return Err(HeaderError::Damaged(format!(
-                "the header says {} records (damaged header)",
-                n as i32
-            )));
+            return Err(HeaderError::Damaged(NetcdfError::NegativeRecords(n as i32)));
         }
         n => Some(u64::from(n)),
     };
@@ -278,9 +275,7 @@ pub(crate) fn parse(bytes: &[u8], file_len: u64) -> Result<Header, HeaderError> 
         let name = cursor.name()?;
         let len = cursor.u32()?;
         if len > i32::MAX as u32 {
-            return Err(HeaderError::Damaged(format!(
-                "dimension '{name}' has a negative length (damaged header)"
-            )));
+            return Err(HeaderError::Damaged(NetcdfError::NegativeDimension(name)));
         }
         dimensions.push(Dimension {
             name,
@@ -297,10 +292,11 @@ pub(crate) fn parse(bytes: &[u8], file_len: u64) -> Result<Header, HeaderError> 
         for _ in 0..rank {
             let id = cursor.u32()? as usize;
             if id >= dimensions.len() {
-                return Err(HeaderError::Damaged(format!(
-                    "variable '{name}' uses dimension {id}, of {} (damaged header)",
-                    dimensions.len()
-                )));
+                return Err(HeaderError::Damaged(NetcdfError::UnknownDimension {
+                    variable: name,
+                    id,
+                    count: dimensions.len(),
+                }));
             }
             ids.push(id);
         }

@@ -9,7 +9,10 @@
 //! Differences from chemfiles (on purpose): the `time` variable is read (chemfiles gives no
 //! time), nanometre coordinates are scaled by 10 (chemfiles uses 10⁴), and `Conventions` may
 //! list AMBER among others.
+//!
+//! Errors are [`NetcdfError`]s, wrapped in an [`IoError`] naming the file (and frame).
 
+mod error;
 mod header;
 
 use std::fs::File;
@@ -18,6 +21,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use self::error::NetcdfError;
 use self::header::{Header, HeaderError, NcType, Value, Variable};
 use super::IoError;
 use super::native::{NativeFrames, NativeOpen};
@@ -55,14 +59,14 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
     })?;
     let total = file
         .metadata()
-        .map_err(|e| IoError::unreadable(path, e.to_string()))?
+        .map_err(|e| IoError::unreadable(path, e))?
         .len();
-    let header = read_header(&file, total).map_err(|reason| IoError::unreadable(path, reason))?;
-    let layout = Layout::new(&header, total).map_err(|reason| IoError::unreadable(path, reason))?;
+    let header = read_header(&file, total).map_err(|e| IoError::unreadable(path, e))?;
+    let layout = Layout::new(&header, total).map_err(|e| IoError::unreadable(path, e))?;
     let (len, damage) = layout.count_frames(header.records, total);
     let damage = damage.map(|reason| IoError::bad_frame(path, len, reason));
     if len == 0 {
-        return Err(damage.unwrap_or_else(|| IoError::unreadable(path, "the file holds no frames")));
+        return Err(damage.unwrap_or_else(|| IoError::unreadable(path, NetcdfError::NoFrames)));
     }
     Ok(NativeOpen {
         topology: None,
@@ -79,14 +83,13 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
 }
 
 /// Reads and parses the header, reading more of the file while it needs more.
-fn read_header(file: &File, total: u64) -> Result<Header, String> {
+fn read_header(file: &File, total: u64) -> Result<Header, NetcdfError> {
     let mut bytes = Vec::new();
     let mut want = HEADER_CHUNK.min(total);
     loop {
         // `want` is at most the file size (and `MAX_HEADER`).
         bytes.resize(want as usize, 0);
-        file.read_exact_at(&mut bytes, 0)
-            .map_err(|e| e.to_string())?;
+        file.read_exact_at(&mut bytes, 0)?;
         match header::parse(&bytes, total) {
             Ok(header) => return Ok(header),
             Err(HeaderError::Damaged(reason)) => return Err(reason),
@@ -94,9 +97,7 @@ fn read_header(file: &File, total: u64) -> Result<Header, String> {
                 want = (want * 4).min(total).min(MAX_HEADER);
             }
             Err(HeaderError::NeedMore) => {
-                return Err(format!(
-                    "the header is larger than {MAX_HEADER} bytes (damaged header)"
-                ));
+                return Err(NetcdfError::HeaderTooLarge { limit: MAX_HEADER });
             }
         }
     }
@@ -124,44 +125,43 @@ fn text(value: Option<&Value>) -> Option<&str> {
 }
 
 /// Å per unit of a distance unit named `units`.
-fn distance_scale(units: &str) -> Result<f64, String> {
+fn distance_scale(units: &str) -> Result<f64, NetcdfError> {
     Ok(match units.trim().to_ascii_lowercase().as_str() {
         "" | "angstrom" | "angstroms" | "a" => 1.0,
         "nanometer" | "nanometers" | "nm" => 10.0,
         "bohr" | "bohrs" => 0.529_177_210_9,
         "meter" | "meters" | "m" => 1e10,
-        other => return Err(format!("unknown distance unit '{other}'")),
+        other => return Err(NetcdfError::UnknownUnit(other.to_string())),
     })
 }
 
 impl Layout {
-    fn new(header: &Header, total: u64) -> Result<Layout, String> {
+    fn new(header: &Header, total: u64) -> Result<Layout, NetcdfError> {
         let conventions = text(header.attribute("Conventions")).unwrap_or("");
         let names: Vec<&str> = conventions
             .split(|c: char| c == ',' || c.is_whitespace())
             .filter(|s| !s.is_empty())
             .collect();
         if names.contains(&"AMBERRESTART") {
-            return Err("an Amber NetCDF restart file, not a trajectory".into());
+            return Err(NetcdfError::Restart);
         }
         if !names.contains(&"AMBER") {
-            return Err(format!(
-                "not an Amber NetCDF trajectory (Conventions attribute '{conventions}', AMBER expected)"
-            ));
+            return Err(NetcdfError::NotAmber(conventions.to_string()));
         }
         let record_dim = header
             .dimension("frame")
             .filter(|&d| header.dimensions[d].len == 0)
-            .ok_or("no 'frame' record dimension")?;
-        let atom_dim = header.dimension("atom").ok_or("no 'atom' dimension")?;
+            .ok_or(NetcdfError::NoRecordDimension)?;
+        let atom_dim = header
+            .dimension("atom")
+            .ok_or(NetcdfError::MissingDimension("atom"))?;
         let atoms = header.dimensions[atom_dim].len;
         let Some(coordinates) = header.variable("coordinates") else {
-            let what = if header.variable("velocities").is_some() {
-                "velocities only"
+            return Err(if header.variable("velocities").is_some() {
+                NetcdfError::VelocitiesOnly
             } else {
-                "no 'coordinates' variable"
-            };
-            return Err(format!("no coordinates in this file ({what})"));
+                NetcdfError::MissingVariable("coordinates")
+            });
         };
         let dims = |v: &Variable| -> Vec<&str> {
             v.dimensions
@@ -171,28 +171,30 @@ impl Layout {
         };
         let is_real = |v: &Variable| matches!(v.kind, NcType::Float | NcType::Double);
         if dims(coordinates) != ["frame", "atom", "spatial"] || !is_real(coordinates) {
-            return Err(format!(
-                "'coordinates' must be floating point over (frame, atom, spatial), found {:?} over {:?}",
-                coordinates.kind,
-                dims(coordinates)
-            ));
+            return Err(NetcdfError::BadCoordinates {
+                kind: coordinates.kind,
+                dimensions: dims(coordinates).into_iter().map(String::from).collect(),
+            });
         }
         let spatial = header.dimensions[coordinates.dimensions[2]].len;
         if spatial != 3 {
-            return Err(format!("the 'spatial' dimension is {spatial}, not 3"));
+            return Err(NetcdfError::BadDimension {
+                name: "spatial",
+                value: spatial,
+            });
         }
         // Bytes of one record of every record variable (each padded to 4 bytes unless it is
         // the only one).
-        let per_record = |v: &Variable| -> Result<u64, String> {
+        let per_record = |v: &Variable| -> Result<u64, NetcdfError> {
             v.dimensions[1..]
                 .iter()
-                .try_fold(v.kind.size(), |acc, &d| acc.checked_mul(header.dimensions[d].len))
+                .try_fold(v.kind.size(), |acc, &d| {
+                    acc.checked_mul(header.dimensions[d].len)
+                })
                 .filter(|&b| b <= total)
-                .ok_or_else(|| {
-                    format!(
-                        "variable '{}' needs more bytes per frame than the {total}-byte file has (damaged header)",
-                        v.name
-                    )
+                .ok_or_else(|| NetcdfError::RecordTooLarge {
+                    variable: v.name.clone(),
+                    file_len: total,
                 })
         };
         let record_vars: Vec<&Variable> = header
@@ -211,17 +213,12 @@ impl Layout {
             record_bytes = record_bytes.saturating_add(padded);
         }
         let records_begin = record_vars.iter().map(|v| v.begin).min().unwrap_or(0);
-        let slice = |v: &Variable, scale: f64| -> Result<Slice, String> {
+        let slice = |v: &Variable, scale: f64| -> Result<Slice, NetcdfError> {
             let values = per_record(v)? / v.kind.size();
             let factor = match v.attribute("scale_factor") {
                 None => 1.0,
                 Some(Value::Numbers(NcType::Float | NcType::Double, n)) if n.len() == 1 => n[0],
-                Some(_) => {
-                    return Err(format!(
-                        "'{}' has a scale_factor that is not one number",
-                        v.name
-                    ));
-                }
+                Some(_) => return Err(NetcdfError::BadScaleFactor(v.name.clone())),
             };
             Ok(Slice {
                 begin: v.begin,
@@ -240,13 +237,13 @@ impl Layout {
                 for (v, dim) in [(lengths, "cell_spatial"), (angles, "cell_angular")] {
                     let d = dims(v);
                     if d.len() != 2 || d[0] != "frame" || d[1] != dim || !is_real(v) {
-                        return Err(format!(
-                            "'{}' must be floating point over (frame, {dim})",
-                            v.name
-                        ));
+                        return Err(NetcdfError::BadCellVariable {
+                            variable: v.name.clone(),
+                            dimension: dim,
+                        });
                     }
                     if header.dimensions[v.dimensions[1]].len != 3 {
-                        return Err(format!("the '{dim}' dimension is not 3"));
+                        return Err(NetcdfError::BadCellDimension(dim));
                     }
                 }
                 let angle_scale = match units(angles).trim().to_ascii_lowercase().as_str() {
@@ -259,7 +256,7 @@ impl Layout {
                 ))
             }
             (None, None) => None,
-            _ => return Err("one of 'cell_lengths' and 'cell_angles' without the other".into()),
+            _ => return Err(NetcdfError::HalfCell),
         };
         let time = match header.variable("time") {
             Some(v) if dims(v) == ["frame"] && is_real(v) => {
@@ -292,7 +289,7 @@ impl Layout {
 
     /// Frames the file holds whole (at most `announced`, when the header says), and why the
     /// next one is unreadable when it is.
-    fn count_frames(&self, announced: Option<u64>, total: u64) -> (usize, Option<String>) {
+    fn count_frames(&self, announced: Option<u64>, total: u64) -> (usize, Option<NetcdfError>) {
         // Frame k is whole when every slice we read of it ends inside the file.
         let whole = self
             .slices()
@@ -309,16 +306,13 @@ impl Layout {
             Some(n) if n <= whole => (n as usize, None),
             Some(n) => (
                 whole as usize,
-                Some(format!(
-                    "the file ends inside this frame (truncated: the header says {n} frames)"
-                )),
+                Some(NetcdfError::FewerFrames { announced: n }),
             ),
             None => {
                 let next = self
                     .records_begin
                     .saturating_add(whole.saturating_mul(self.record_bytes));
-                let cut = (total > next && self.record_bytes > 0)
-                    .then(|| "the file ends inside this frame (truncated)".to_string());
+                let cut = (total > next && self.record_bytes > 0).then_some(NetcdfError::CutFrame);
                 (whole as usize, cut)
             }
         }
@@ -339,12 +333,10 @@ struct NetcdfFrames {
 
 impl NetcdfFrames {
     /// The values of `slice` in frame `index`, as f64 times its scale.
-    fn read_slice(&mut self, slice: Slice, index: usize) -> Result<Vec<f64>, String> {
+    fn read_slice(&mut self, slice: Slice, index: usize) -> Result<Vec<f64>, NetcdfError> {
         let offset = slice.begin + index as u64 * self.layout.record_bytes;
         self.buffer.resize(slice.bytes() as usize, 0);
-        self.file
-            .read_exact_at(&mut self.buffer, offset)
-            .map_err(|e| e.to_string())?;
+        self.file.read_exact_at(&mut self.buffer, offset)?;
         let scale = slice.scale;
         Ok(match slice.kind {
             NcType::Float => self
@@ -389,7 +381,7 @@ impl NativeFrames for NetcdfFrames {
             });
         }
         let path = self.path.clone();
-        let bad = |reason: String| IoError::bad_frame(&path, index, reason);
+        let bad = |reason: NetcdfError| IoError::bad_frame(&path, index, reason);
         let layout = self.layout.clone();
         let values = self.read_slice(layout.coordinates, index).map_err(bad)?;
         let positions: Vec<Vec3> = values
@@ -402,7 +394,7 @@ impl NativeFrames for NetcdfFrames {
                 let l = self.read_slice(lengths, index).map_err(bad)?;
                 let a = self.read_slice(angles, index).map_err(bad)?;
                 unit_cell::from_lengths_angles([l[0], l[1], l[2]], [a[0], a[1], a[2]])
-                    .map_err(bad)?
+                    .map_err(|reason| bad(NetcdfError::Cell(reason)))?
             }
             None => None,
         };
