@@ -91,8 +91,8 @@ pub(crate) enum DcdError {
     #[error("the file holds no frames")]
     NoFrames,
     /// A frame's cell record makes no box (`unit_cell`'s reason).
-    #[error("{0}")]
-    Cell(String),
+    #[error(transparent)]
+    Cell(#[from] crate::io::unit_cell::CellError),
 }
 
 impl From<std::io::Error> for DcdError {

@@ -12,6 +12,23 @@ const ROUGHLY_ZERO: f64 = 1e-5;
 /// Within this of 90° an angle counts as right (degrees; chemfiles' tolerance).
 const ROUGHLY_RIGHT: f64 = 1e-3;
 
+/// Lengths, angles or vectors no periodic box can have.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CellError {
+    /// A negative (or NaN) edge length (Å).
+    #[error("the box has a negative length {0:?}")]
+    NegativeLength([f64; 3]),
+    /// An angle of 0°, 180° or more, negative or NaN (degrees).
+    #[error("the box has an angle no box can have {0:?} (degrees)")]
+    BadAngle([f64; 3]),
+    /// Box vectors with a negative determinant.
+    #[error("the box vectors are left-handed (negative determinant)")]
+    LeftHanded,
+    /// A box row that is not finite.
+    #[error("the box has a non-finite length or angle")]
+    NonFinite,
+}
+
 /// The box with edge lengths `lengths` (Å) and angles `angles` (degrees: alpha between b and
 /// c, beta between a and c, gamma between a and b) as rows a, b, c in Å; `None` when every
 /// length is (roughly) zero, the files' way of saying "no box". Fails with the reason for
@@ -19,17 +36,15 @@ const ROUGHLY_RIGHT: f64 = 1e-3;
 pub(crate) fn from_lengths_angles(
     lengths: [f64; 3],
     angles: [f64; 3],
-) -> Result<Option<[Vec3; 3]>, String> {
+) -> Result<Option<[Vec3; 3]>, CellError> {
     if lengths.iter().any(|l| l.is_nan() || *l < 0.0) {
-        return Err(format!("the box has a negative length {lengths:?}"));
+        return Err(CellError::NegativeLength(lengths));
     }
     if angles
         .iter()
         .any(|a| a.is_nan() || *a < 0.0 || a.abs() < ROUGHLY_ZERO || *a >= 180.0)
     {
-        return Err(format!(
-            "the box has an angle no box can have {angles:?} (degrees)"
-        ));
+        return Err(CellError::BadAngle(angles));
     }
     let angles = if angles.iter().all(|a| (a - 90.0).abs() < ROUGHLY_RIGHT) {
         [90.0; 3]
@@ -56,10 +71,10 @@ pub(crate) fn from_lengths_angles(
 
 /// The box whose vectors are the columns of `matrix` (Å) as rows a, b, c, with chemfiles'
 /// checks: a negative determinant is refused, a diagonal matrix with a zero diagonal is no box.
-pub(crate) fn from_columns(matrix: DMat3) -> Result<Option<[Vec3; 3]>, String> {
+pub(crate) fn from_columns(matrix: DMat3) -> Result<Option<[Vec3; 3]>, CellError> {
     let determinant = matrix.determinant();
     if determinant.is_nan() || determinant < 0.0 {
-        return Err("the box vectors are left-handed (negative determinant)".into());
+        return Err(CellError::LeftHanded);
     }
     let zero = |v: f64| v.abs() < ROUGHLY_ZERO;
     let [x, y, z] = [matrix.x_axis, matrix.y_axis, matrix.z_axis];
@@ -69,7 +84,7 @@ pub(crate) fn from_columns(matrix: DMat3) -> Result<Option<[Vec3; 3]>, String> {
     }
     let rows = [x, y, z].map(|v| v.as_vec3());
     if rows.iter().any(|r| !r.is_finite()) {
-        return Err("the box has a non-finite length or angle".into());
+        return Err(CellError::NonFinite);
     }
     Ok(Some(rows))
 }
@@ -87,8 +102,14 @@ mod tests {
         assert!(rows[1].x.abs() < 1e-5 && (rows[1].y - 20.0).abs() < 1e-5);
         assert!((rows[2].z - 30.0).abs() < 1e-5);
         assert_eq!(from_lengths_angles([0.0; 3], [90.0; 3]), Ok(None));
-        assert!(from_lengths_angles([1.0; 3], [0.0, 90.0, 90.0]).is_err());
-        assert!(from_lengths_angles([-1.0, 1.0, 1.0], [90.0; 3]).is_err());
+        assert_eq!(
+            from_lengths_angles([1.0; 3], [0.0, 90.0, 90.0]),
+            Err(CellError::BadAngle([0.0, 90.0, 90.0]))
+        );
+        assert_eq!(
+            from_lengths_angles([-1.0, 1.0, 1.0], [90.0; 3]),
+            Err(CellError::NegativeLength([-1.0, 1.0, 1.0]))
+        );
     }
 
     #[test]

@@ -132,8 +132,8 @@ pub(crate) enum NetcdfError {
     #[error("the file ends inside this frame (truncated)")]
     CutFrame,
     /// A frame's cell lengths and angles make no box (`unit_cell`'s reason).
-    #[error("{0}")]
-    Cell(String),
+    #[error(transparent)]
+    Cell(#[from] crate::io::unit_cell::CellError),
 }
 
 impl From<std::io::Error> for NetcdfError {
