@@ -15,8 +15,8 @@ use crate::gpu::frame::{Recorder, Stages, Work};
 pub use crate::gpu::options::{Changes, EngineOptions, FrameInfo};
 use crate::gpu::output::{FrameStats, GpuSurface, Readbacks, Staging};
 use crate::gpu::plan::{
-    BufferPlan, FramePlan, MeshCapacity, first_mesh_want, grown_brick_want, grown_mesh_want,
-    plan_frame, settled_brick_slots,
+    BufferPlan, FramePlan, MeshCapacity, SlotTable, first_mesh_want, grown_brick_want,
+    grown_mesh_want, plan_frame, settled_brick_slots,
 };
 use crate::gpu::resources::Buffers;
 use crate::gpu::timing::Timer;

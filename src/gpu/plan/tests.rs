@@ -174,8 +174,7 @@ fn buffer_plan_adds_up_per_atom_and_per_mesh_element() {
         vertices: 1000,
         triangles: 2000,
     };
-    let m =
-        |atoms, mesh| BufferPlan::new(&plan, atoms, true, mesh, None, &limits).fresh_memory();
+    let m = |atoms, mesh| BufferPlan::new(&plan, atoms, true, mesh, None, &limits).fresh_memory();
     let (a, b) = (m(10_000, mesh), m(11_000, mesh));
     assert_eq!(b.atoms - a.atoms, 1000 * BYTES_PER_ATOM);
     assert_eq!(b.total() - a.total(), 1000 * BYTES_PER_ATOM);

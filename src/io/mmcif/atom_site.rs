@@ -200,7 +200,11 @@ impl<'a> AtomSite<'a> {
 
     /// A value of column `column` (`name`) as a number; `None` for `?` and `.`, an error for
     /// anything else that is not a number.
-    pub(super) fn optional_number(&self, column: Option<usize>, name: &str) -> Result<Option<f64>, IoError> {
+    pub(super) fn optional_number(
+        &self,
+        column: Option<usize>,
+        name: &str,
+    ) -> Result<Option<f64>, IoError> {
         let Some(t) = column.map(|k| &self.row[k]) else {
             return Ok(None);
         };

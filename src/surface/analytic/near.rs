@@ -15,7 +15,7 @@ pub(super) struct FieldAtom {
 
 thread_local! {
     /// Per-thread scratch for the atoms near one edge ([`AnalyticField::refine_edge`]).
-    static NEAR: std::cell::RefCell<NearAtoms> = std::cell::RefCell::new(NearAtoms::default());
+    pub(super) static NEAR: std::cell::RefCell<NearAtoms> = std::cell::RefCell::new(NearAtoms::default());
 }
 
 /// Lanes of the branch-free sum in [`NearAtoms::eval`] (a multiple of the SIMD width).
