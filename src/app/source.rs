@@ -316,6 +316,7 @@ fn transform_chain(
 
 /// A small test system: `residues` residues of three atoms each along a helix, moving a little
 /// from frame to frame (`frames` frames, 1 ps apart). Element colours and radii are filled in.
+#[cfg(any(test, feature = "test-hooks"))]
 pub fn helix_source(residues: usize, frames: usize) -> MemorySource {
     use glam::Vec3;
     let mut top = Topology::default();

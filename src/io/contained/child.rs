@@ -5,7 +5,8 @@
 //! descriptor 1 is pointed at stderr (which the parent captures) before chemfiles is touched, so
 //! a C library printing to stdout cannot corrupt the replies.
 //!
-//! Test hooks: with `MDSURF_READER_CRASH_AT=K` in its environment the process aborts (SIGABRT)
+//! Test hooks (only with the `test-hooks` feature, never in the shipped binary): with
+//! `MDSURF_READER_CRASH_AT=K` in its environment the process aborts (SIGABRT)
 //! when asked for frame `K`, as chemfiles does on some damaged files; with
 //! `MDSURF_READER_GARBAGE_AT=K` it answers that request with bytes that are no reply.
 
@@ -46,11 +47,8 @@ pub(super) fn serve(args: &[OsString]) -> i32 {
     let Some(mut out) = protocol_output() else {
         return 2;
     };
-    let hook = |name: &str| -> Option<u64> { std::env::var(name).ok()?.trim().parse().ok() };
-    let (crash_at, garbage_at) = (
-        hook("MDSURF_READER_CRASH_AT"),
-        hook("MDSURF_READER_GARBAGE_AT"),
-    );
+    #[cfg(feature = "test-hooks")]
+    let faults = Faults::from_env();
     let reader = ChemReader::open_prepared(&path, base, copy, chemfiles, None);
     let mut reader = match reader {
         Ok(reader) => reader,
@@ -70,11 +68,8 @@ pub(super) fn serve(args: &[OsString]) -> i32 {
         let (Ok(op), Ok(index)) = (r.u8(), r.u64()) else {
             return 2;
         };
-        if crash_at == Some(index) {
-            std::process::abort();
-        }
-        if garbage_at == Some(index) {
-            let _ = protocol::send(&mut out, b"?garbage");
+        #[cfg(feature = "test-hooks")]
+        if faults.inject(index, &mut out) {
             continue;
         }
         let body = match usize::try_from(index) {
@@ -94,6 +89,39 @@ pub(super) fn serve(args: &[OsString]) -> i32 {
         }
     }
     0
+}
+
+/// Faults the tests inject (feature `test-hooks`): the frame index whose request aborts the
+/// process (`MDSURF_READER_CRASH_AT`) and the one answered with bytes that are no reply
+/// (`MDSURF_READER_GARBAGE_AT`).
+#[cfg(feature = "test-hooks")]
+struct Faults {
+    crash_at: Option<u64>,
+    garbage_at: Option<u64>,
+}
+
+#[cfg(feature = "test-hooks")]
+impl Faults {
+    fn from_env() -> Faults {
+        let hook = |name: &str| -> Option<u64> { std::env::var(name).ok()?.trim().parse().ok() };
+        Faults {
+            crash_at: hook("MDSURF_READER_CRASH_AT"),
+            garbage_at: hook("MDSURF_READER_GARBAGE_AT"),
+        }
+    }
+
+    /// Acts on a request for frame `index`: aborts at `crash_at`; at `garbage_at` sends garbage
+    /// and returns true (the request is answered).
+    fn inject(&self, index: u64, out: &mut impl Write) -> bool {
+        if self.crash_at == Some(index) {
+            std::process::abort();
+        }
+        if self.garbage_at == Some(index) {
+            let _ = protocol::send(out, b"?garbage");
+            return true;
+        }
+        false
+    }
 }
 
 /// Sends the warnings chemfiles gave since the last reply, then `body`.
