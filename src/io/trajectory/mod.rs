@@ -2,23 +2,31 @@
 //! thread-safe source of frames with random access. Frames are read on demand (one at a time,
 //! under an interior mutex), checked against the topology's atom count and for finite
 //! coordinates.
+//!
+//! - `frame_source`: the reader behind a trajectory (chemfiles, ours, XTC/TRR, memory).
+//! - `checks`: what `open` checks once the files are open (damage, cut streams, models).
+//! - `growing`: trajectories whose frames keep coming (IMD, a file being written).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
-use glam::Vec3;
-
 use super::chem::check_positions;
 use super::contained::ContainedReader;
-use super::follow::{FollowOptions, FollowedFrames};
 use super::format::{FileFormat, detect};
-use super::live::{LiveCount, LiveFrames, LiveOptions, LiveSource};
-use super::native::{self, NativeFrames};
+use super::live::LiveCount;
+use super::native;
 use super::prepare::{prepare, read_all};
 use super::xdr_reader::{XdrKind, XdrReader};
-use super::{IoError, dcd, fast, mmcif, pdb_models, wwpdb, xdr};
+use super::{IoError, fast, mmcif, wwpdb, xdr};
 
 use crate::model::{Frame, Topology, sizing};
+
+mod checks;
+mod frame_source;
+mod growing;
+
+use frame_source::{FirstFrame, FrameSource};
+pub use growing::{open_following, open_growing, open_live};
 
 /// How many frames at the end of a file are probed for damage when it opens (a truncated
 /// file loses its last frame or two; probing every frame of a long trajectory would be slow).
@@ -77,61 +85,6 @@ impl std::fmt::Debug for Trajectory {
 /// other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, Readers::Ours)
-}
-
-/// Opens the structure `top` (a file with atom names, as for [`open`]) with its frames coming
-/// from the simulation running at `options.address` over IMD (see `live`): frame `i` is the
-/// `i`-th step the engine sent, read waits for it, and [`Trajectory::len`] is
-/// [`LIVE_FRAMES_UNBOUNDED`](super::LIVE_FRAMES_UNBOUNDED) (the run's end shows as [`IoError::LiveEnded`]). The engine must
-/// send the coordinates of every atom of `top` (GROMACS: `IMD-group = System`). IMD version 2
-/// sends no box or time: frames carry the box of `top`, and times counted from its time.
-pub fn open_live(top: &Path, options: &LiveOptions) -> Result<Trajectory, IoError> {
-    let structure = open(top, None)?;
-    let start = structure.read_frame(0)?;
-    let frames = LiveFrames::connect(options, structure.topology.len(), &start)?;
-    let live = Some(frames.count());
-    let source = FrameSource::Native(Box::new(frames));
-    let trajectory = Trajectory {
-        frames_path: source.path().to_path_buf(),
-        len: source.len(),
-        reader: Mutex::new(source),
-        damage: None,
-        live,
-        ..structure
-    };
-    // Waits for the first frame: a wrong atom count is reported at once.
-    trajectory.check_first_frame()?;
-    Ok(trajectory)
-}
-
-/// Opens the structure `top` with the frames of `options.path`, a file an engine is still
-/// writing: frames appended later appear as they are completed (see `follow`), and
-/// [`Trajectory::len`] is [`LIVE_FRAMES_UNBOUNDED`](super::LIVE_FRAMES_UNBOUNDED) (the end
-/// shows as [`IoError::LiveEnded`] once the file stops growing).
-pub fn open_following(top: &Path, options: &FollowOptions) -> Result<Trajectory, IoError> {
-    let opened = open(top, Some(&options.path))?;
-    let topology = opened.topology.clone();
-    let frames = FollowedFrames::start(top, opened, options)?;
-    let live = Some(frames.count());
-    let source = FrameSource::Native(Box::new(frames));
-    Ok(Trajectory {
-        topology,
-        topology_path: top.to_path_buf(),
-        frames_path: options.path.clone(),
-        len: source.len(),
-        reader: Mutex::new(source),
-        damage: None,
-        live,
-    })
-}
-
-/// Opens `top` with frames from a source that grows while it is read: a running simulation
-/// ([`open_live`]) or a file being written ([`open_following`]).
-pub fn open_growing(top: &Path, source: &LiveSource) -> Result<Trajectory, IoError> {
-    match source {
-        LiveSource::Imd(options) => open_live(top, options),
-        LiveSource::Follow(options) => open_following(top, options),
-    }
 }
 
 /// [`open`] with every file read through chemfiles, never a fast reader and never our mmCIF
@@ -349,32 +302,6 @@ impl Trajectory {
         self.len
     }
 
-    /// True when the frames come from a running simulation or a growing file
-    /// ([`open_growing`]).
-    pub fn is_live(&self) -> bool {
-        self.live.is_some()
-    }
-
-    /// For a running simulation whose stream has ended (the run finished, the engine was
-    /// killed, the connection dropped): one line saying so, with the frames received.
-    pub fn live_ended(&self) -> Option<String> {
-        let live = self.live.as_ref()?;
-        let reason = live.ended()?;
-        Some(format!(
-            "{}: the simulation stream ended after {} frames ({reason})",
-            self.frames_path.display(),
-            live.received()
-        ))
-    }
-
-    /// Frames readable now without waiting: [`Trajectory::len`], or for a running simulation
-    /// the frames received so far (never blocks on a read in progress).
-    pub fn available(&self) -> usize {
-        self.live
-            .as_ref()
-            .map_or(self.len, |live| live.received().min(self.len))
-    }
-
     /// True when there is no readable frame (never the case for an opened trajectory).
     pub fn is_empty(&self) -> bool {
         self.len == 0
@@ -456,238 +383,5 @@ impl Trajectory {
         self.reader
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    /// Limits the readable frames to those the XTC/TRR header walk found sound.
-    fn apply_walk(&mut self, walk: xdr::Walk) -> Result<(), IoError> {
-        if walk.frames < self.len || walk.damage.is_some() {
-            let frame = walk.frames.min(self.len);
-            let message = walk
-                .damage
-                .unwrap_or_else(|| "the frame headers end here".to_string());
-            let error = IoError::bad_frame(&self.frames_path, frame, message);
-            if frame == 0 {
-                return Err(error);
-            }
-            self.len = frame;
-            self.damage = Some(Damage { frame, error });
-        }
-        Ok(())
-    }
-
-    /// Limits the readable frames to those our reader found sound when it indexed the file.
-    fn apply_native_damage(&mut self) -> Result<(), IoError> {
-        let found = match &*self.lock() {
-            FrameSource::Native(reader) => reader.damage().map(|e| (reader.len(), e.clone())),
-            _ => None,
-        };
-        let Some((frame, error)) = found else {
-            return Ok(());
-        };
-        if frame == 0 {
-            return Err(error);
-        }
-        self.len = self.len.min(frame);
-        self.damage = Some(Damage { frame, error });
-        Ok(())
-    }
-
-    /// A compressed file whose stream is cut: its last decompressed frame is incomplete, so it
-    /// is the damage (even when its text happens to parse).
-    fn mark_truncated_stream(&mut self) -> Result<(), IoError> {
-        let Some((reason, removed)) = self.lock().truncated().map(|(t, r)| (t.to_string(), r))
-        else {
-            return Ok(());
-        };
-        let frame = if removed {
-            self.len
-        } else {
-            self.len.saturating_sub(1)
-        };
-        let error = IoError::bad_frame(&self.frames_path, frame, reason);
-        if frame == 0 {
-            return Err(error);
-        }
-        self.len = frame;
-        self.damage = Some(Damage { frame, error });
-        Ok(())
-    }
-
-    /// A PDB file that ends inside a model: the whole models before it are the trajectory and
-    /// the cut one is the damage (chemfiles dropped it, or read it with fewer atoms, silently);
-    /// an error when no model is whole.
-    fn check_pdb_models(&mut self) -> Result<(), IoError> {
-        let Ok(format) = detect(&self.frames_path) else {
-            return Ok(());
-        };
-        if format.base != "PDB" {
-            return Ok(());
-        }
-        let Ok((bytes, _)) = read_all(&self.frames_path, &format) else {
-            return Ok(());
-        };
-        let Some((whole, message)) = pdb_models::cut_model(&bytes) else {
-            return Ok(());
-        };
-        let error = IoError::bad_frame(&self.frames_path, whole, message);
-        if whole == 0 {
-            return Err(error);
-        }
-        if whole < self.len || (whole == self.len && self.damage.is_none()) {
-            self.len = whole;
-            self.damage = Some(Damage {
-                frame: whole,
-                error,
-            });
-        }
-        Ok(())
-    }
-
-    /// A DCD file whose size leaves a partial frame after the last complete one was truncated:
-    /// chemfiles drops that frame silently, this records it as [`Damage`].
-    fn check_dcd_size(&mut self) {
-        if self.damage.is_some() || self.lock().base() != "DCD" {
-            return;
-        }
-        let Some(tail) = dcd::measure(&self.frames_path) else {
-            return;
-        };
-        if tail.trailing > 0 && tail.complete == self.len {
-            let message = format!(
-                "the file ends inside this frame (truncated: {} of {} bytes)",
-                tail.trailing, tail.frame_bytes
-            );
-            let error = IoError::bad_frame(&self.frames_path, self.len, message);
-            self.damage = Some(Damage {
-                frame: self.len,
-                error,
-            });
-        }
-    }
-
-    /// Checks the last few frames; if some fail to read, the readable length ends at the first
-    /// failing one (a truncated file) and the failure is kept as [`Damage`].
-    fn probe_tail(&mut self) {
-        let start = self.len.saturating_sub(TAIL_PROBE).max(1);
-        let mut first_bad = None;
-        for index in start..self.len {
-            let result = self.lock().read_frame(index);
-            if let Err(error) = result
-                && !matches!(
-                    error,
-                    IoError::NonFiniteCoordinate { .. } | IoError::AbsurdCoordinate { .. }
-                )
-            {
-                first_bad = Some((index, error));
-                break;
-            }
-        }
-        if let Some((frame, error)) = first_bad {
-            self.len = frame;
-            self.damage = Some(Damage { frame, error });
-        }
-    }
-}
-
-/// Frame 0 of the topology file as the reader gave it: a whole frame (fast path) or positions.
-enum FirstFrame {
-    Read(Frame),
-    Positions(Vec<Vec3>),
-}
-
-impl FirstFrame {
-    /// Positions in Å.
-    fn positions(&self) -> &[Vec3] {
-        match self {
-            FirstFrame::Read(frame) => &frame.positions,
-            FirstFrame::Positions(p) => p,
-        }
-    }
-
-    /// The frame (the fast path always gives one; positions alone become a frame without box).
-    fn into_frame(self) -> Frame {
-        match self {
-            FirstFrame::Read(frame) => frame,
-            FirstFrame::Positions(positions) => Frame {
-                positions,
-                ..Frame::default()
-            },
-        }
-    }
-}
-
-/// Where frames come from: chemfiles, our own readers for XTC and TRR, or the frames a reader
-/// of our own read with the topology (kept in memory: the one frame of a fast-read file, the
-/// models of an mmCIF file).
-enum FrameSource {
-    Chem(ContainedReader),
-    Native(Box<dyn NativeFrames>),
-    Xdr(XdrReader),
-    Memory {
-        path: PathBuf,
-        base: &'static str,
-        frames: Vec<Frame>,
-        /// Why the compressed file ends early, when it does (its last frame is then cut).
-        truncated: Option<String>,
-    },
-}
-
-impl FrameSource {
-    fn path(&self) -> &Path {
-        match self {
-            FrameSource::Chem(r) => r.path(),
-            FrameSource::Native(r) => r.path(),
-            FrameSource::Xdr(r) => r.path(),
-            FrameSource::Memory { path, .. } => path,
-        }
-    }
-
-    fn base(&self) -> &'static str {
-        match self {
-            FrameSource::Chem(r) => r.base(),
-            FrameSource::Native(r) => r.base(),
-            FrameSource::Xdr(r) => r.base(),
-            FrameSource::Memory { base, .. } => base,
-        }
-    }
-
-    fn len(&self) -> usize {
-        match self {
-            FrameSource::Chem(r) => r.len(),
-            FrameSource::Native(r) => r.len(),
-            FrameSource::Xdr(r) => r.len(),
-            FrameSource::Memory { frames, .. } => frames.len(),
-        }
-    }
-
-    fn truncated(&self) -> Option<(&str, bool)> {
-        match self {
-            FrameSource::Chem(r) => r.truncated(),
-            FrameSource::Memory { truncated, .. } => truncated.as_deref().map(|t| (t, false)),
-            FrameSource::Xdr(_) | FrameSource::Native(_) => None,
-        }
-    }
-
-    fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
-        match self {
-            FrameSource::Chem(r) => r.read_frame(index),
-            FrameSource::Native(r) => {
-                let frame = r.read_frame(index)?;
-                check_positions(r.path(), index, &frame.positions)?;
-                Ok(frame)
-            }
-            FrameSource::Xdr(r) => r.read_frame(index),
-            FrameSource::Memory { path, frames, .. } => {
-                let Some(frame) = frames.get(index) else {
-                    return Err(IoError::FrameOutOfRange {
-                        path: path.clone(),
-                        frame: index,
-                        len: frames.len(),
-                    });
-                };
-                check_positions(path, index, &frame.positions)?;
-                Ok(frame.clone())
-            }
-        }
     }
 }
