@@ -22,6 +22,7 @@ use crate::render::colour_bar::draw_colour_bar;
 use crate::render::write_png;
 use crate::scene::state_file::{CameraState, LookState, StateFile, TrajectoryState};
 
+mod menu;
 mod scripted;
 pub use scripted::Script;
 
@@ -395,67 +396,6 @@ impl Viewer {
         if let Some(top) = dropped.first().cloned() {
             self.apply(ctx, Command::Open(top, dropped.get(1).cloned()));
         }
-    }
-
-    fn menu_ui(&mut self, ui: &mut egui::Ui) -> Vec<Command> {
-        let mut out = Vec::new();
-        let is_mac = ui.ctx().os() == egui::os::OperatingSystem::Mac;
-        // A menu entry showing the keys of `action` from the shortcut table.
-        let entry = |text: &str, action| {
-            egui::Button::new(text).shortcut_text(super::keys::keys_for(action, is_mac))
-        };
-        use super::keys::Action;
-        egui::MenuBar::new().ui(ui, |ui| {
-            ui.menu_button("File", |ui| {
-                if ui.add(entry("Open…", Action::Open)).clicked() {
-                    out.push(Command::OpenDialog);
-                }
-                ui.menu_button("Recent", |ui| {
-                    for e in &self.recent.entries {
-                        let label = match &e.traj {
-                            Some(t) => format!("{} + {}", e.top.display(), t.display()),
-                            None => e.top.display().to_string(),
-                        };
-                        if ui.button(label).clicked() {
-                            out.push(Command::Open(e.top.clone(), e.traj.clone()));
-                        }
-                    }
-                });
-                ui.separator();
-                if ui.button("Open view…").clicked() {
-                    out.push(Command::OpenView(None));
-                }
-                if ui.add(entry("Save view…", Action::SaveView)).clicked() {
-                    out.push(Command::SaveView(None));
-                }
-                ui.separator();
-                if ui.add(entry("Screenshot…", Action::Screenshot)).clicked() {
-                    out.push(Command::Screenshot {
-                        scale: 1,
-                        size: None,
-                        path: None,
-                    });
-                }
-                if ui.button("Quit").clicked() {
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
-                }
-            });
-            ui.menu_button("View", |ui| {
-                if ui.add(entry("Console", Action::ToggleConsole)).clicked() {
-                    out.push(Command::ToggleConsole);
-                }
-            });
-            ui.menu_button("Help", |ui| {
-                if ui
-                    .add(entry(super::keys::OVERLAY_TITLE, Action::ToggleHelp))
-                    .clicked()
-                {
-                    out.push(Command::ShowShortcuts(true));
-                }
-            });
-            ui.label(&self.core.status);
-        });
-        out
     }
 }
 
