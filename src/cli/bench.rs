@@ -29,6 +29,9 @@ use super::common::{
 /// Arguments of `mdsurf bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
+    /// Print only the results and errors (no "timing ..." progress lines on stderr).
+    #[arg(short, long)]
+    pub quiet: bool,
     /// Structure or topology file to benchmark (default: the bundled demo).
     #[arg(value_name = "TOP")]
     pub top: Option<PathBuf>,
@@ -253,7 +256,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
         } = case;
         for engine in engines.iter_mut() {
             let name = engine.name().to_string();
-            eprintln!("timing {label} on {name} ...");
+            if !args.quiet {
+                eprintln!("timing {label} on {name} ...");
+            }
             let mode = args.params.vertex_mode();
             engine.engine().set_vertices(mode);
             let mut r = time_case(&mut source, engine, &params, &args)
@@ -283,7 +288,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
             results.push(r);
             if let (Some(sparse_ms), BenchEngine::Gpu(gpu)) = (sparse_ms, &mut *engine) {
                 // The same GPU engine on the dense path (every voxel sampled and classified).
-                eprintln!("timing {label} on the dense gpu path ...");
+                if !args.quiet {
+                    eprintln!("timing {label} on the dense gpu path ...");
+                }
                 let sparse_opts = gpu.options();
                 gpu.set_options(mdsurf::gpu::EngineOptions {
                     sparse_bricks: false,
@@ -303,7 +310,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 ));
                 results.push(d);
             } else if let Some(sparse_ms) = sparse_ms {
-                eprintln!("timing {label} on the dense cpu engine ...");
+                if !args.quiet {
+                    eprintln!("timing {label} on the dense cpu engine ...");
+                }
                 let mut dense = BenchEngine::Cpu(CpuEngine::dense());
                 dense.engine().set_vertices(mode);
                 let mut d = time_case(&mut source, &mut dense, &params, &args)

@@ -12,6 +12,7 @@ pub mod live_args;
 pub mod look_args;
 pub mod measure_args;
 pub mod merge;
+pub mod progress;
 pub mod render;
 pub mod render_args;
 pub mod render_output;

@@ -3,7 +3,6 @@
 //! `render_to_rgba` (optionally turning the camera per image, or in stereo) and writes PNGs, or
 //! one H.264 MP4 movie (`-o movie.mp4`), atomically.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -168,12 +167,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut stats = args.stats.as_deref().map(StatsWriter::create).transpose()?;
     let mut stats_frame = None;
     catch_interrupts();
-    // On a terminal, a long run shows one progress bar instead of a line per image.
-    let bar = (std::io::stderr().is_terminal()
-        && block.len() > super::surface::PROGRESS_BAR_FRAMES
-        && !args.quiet
-        && live.is_none())
-    .then(|| super::surface::progress_bar(block.len()));
+    // A line per image with -v; a bar on a terminal; a running simulation has no length.
+    let length = live.is_none().then_some(block.len());
+    let progress = super::progress::Progress::new(length, args.quiet, args.verbose);
+    let started = Instant::now();
+    let mut images = 0usize;
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;
@@ -282,9 +280,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
             Some(m) => m.push(&image)?,
             None => write_png(path, &image)?,
         }
-        match &bar {
-            Some(bar) => bar.inc(1),
-            None if !args.quiet => eprintln!(
+        images += 1;
+        progress.advance();
+        progress.line(|| {
+            format!(
                 "frame {f}: {}; read {read_ms:.1} ms, total {:.1} ms -> {}",
                 if summary.is_empty() {
                     "atoms only".to_string()
@@ -293,13 +292,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 },
                 ms_since(t0),
                 path.display()
-            ),
-            None => {}
-        }
+            )
+        });
     }
-    if let Some(bar) = &bar {
-        bar.finish_and_clear();
-    }
+    progress.finish();
     if let Some(stats) = stats {
         stats.finish()?;
     }
@@ -314,6 +310,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             s.seconds,
             fps,
             s.bytes as f64 / 1000.0,
+            args.output.display()
+        );
+    } else if progress.shows_summary() {
+        let secs = started.elapsed().as_secs_f64();
+        eprintln!(
+            "{images} image(s) in {secs:.2} s ({:.1} images/s) -> {}",
+            images as f64 / secs.max(1e-9),
             args.output.display()
         );
     }

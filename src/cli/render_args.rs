@@ -44,6 +44,10 @@ pub struct RenderArgs {
     /// Print only errors (no per-image lines, progress bar or summaries).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Print one line per image (surfaces, timings, file) instead of the progress bar on a
+    /// terminal, or of nothing per image when stderr is a file or a pipe.
+    #[arg(short, long, conflicts_with = "quiet")]
+    pub verbose: bool,
     /// Also write each rendered frame's area and volume per surface representation, as
     /// `mdsurf surface --stats` does (same columns).
     #[arg(long, value_name = "FILE.csv")]

@@ -22,6 +22,10 @@ pub struct SelectArgs {
     /// Also print the selected atoms' 0-based indices on a second line.
     #[arg(long)]
     pub indices: bool,
+    /// Print only errors besides the result (taken by every command; `select` prints its
+    /// count on stdout and nothing else on stderr).
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// Runs `mdsurf select`.

@@ -5,13 +5,12 @@
 //! A failure in the middle (a truncated file, a bad frame) keeps the outputs of the frames
 //! before it, is reported as one line naming the file and frame, and exits with status 2.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::progress::Progress;
 use anyhow::{Context, Result, anyhow, bail};
-use indicatif::{ProgressBar, ProgressStyle};
 use mdsurf::export::glb::GlbAnimation;
 use mdsurf::export::stats_merge::{PartHeader, part_path};
 use mdsurf::export::{self, MeshFormat, StatsRow, StatsWriter};
@@ -30,9 +29,6 @@ use super::common::{
 };
 use super::scene_args::{SceneArgs, bind_scene};
 use super::transform_args::{FrameReader, TransformArgs, host_scene};
-
-/// Above this many frames on a terminal, a progress bar replaces the per-frame lines.
-pub(crate) const PROGRESS_BAR_FRAMES: usize = 20;
 
 /// Arguments of `mdsurf surface`.
 #[derive(clap::Args, Debug)]
@@ -67,6 +63,10 @@ pub struct SurfaceArgs {
     /// Print only errors (no per-frame lines, progress bar or final summary).
     #[arg(short, long)]
     pub quiet: bool,
+    /// Print one line per frame (area, volume, counts, time) instead of the progress bar on a
+    /// terminal, or of nothing per frame when stderr is a file or a pipe.
+    #[arg(short, long, conflicts_with = "quiet")]
+    pub verbose: bool,
     /// Do one block of the selected frames: I/N (0-based I of N contiguous blocks) or `slurm`
     /// (I = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, N = SLURM_ARRAY_TASK_COUNT). Meshes keep
     /// the global frame index; --stats goes to STATS.part-IIII-of-NNNN.csv (join them with
@@ -261,11 +261,8 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     }
 
     // A running simulation has no known length: one line per frame, no bar.
-    let bar = (std::io::stderr().is_terminal()
-        && frames.len() > PROGRESS_BAR_FRAMES
-        && !args.quiet
-        && live.is_none())
-    .then(|| progress_bar(frames.len()));
+    let length = live.is_none().then_some(frames.len());
+    let progress = Progress::new(length, args.quiet, args.verbose);
     // The loop's first frame is usually the one read above: it is taken, not read again (a
     // million atoms: a copy and a check of every position).
     let mut first = Some(Arc::new(first));
@@ -312,13 +309,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                     if let Some(stats) = stats.as_mut() {
                         stats.write_row(row)?;
                     }
-                    if bar.is_none() && !args.quiet {
-                        eprintln!("{}", summary_line(row, layers.len() > 1));
-                    }
+                    progress.line(|| summary_line(row, layers.len() > 1));
                 }
-                if let Some(bar) = &bar {
-                    bar.inc(1);
-                }
+                progress.advance();
             }
             Err(err) => {
                 // The end of a running simulation is the end of the run, not a failure.
@@ -331,9 +324,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
             }
         }
     }
-    if let Some(bar) = &bar {
-        bar.finish_and_clear();
-    }
+    progress.finish();
 
     // Keep what the good frames produced; a run where no frame succeeded changes no file (a
     // chunk with an empty block writes its empty part, so the merge knows it ran).
@@ -360,7 +351,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         };
         bail!("{err:#} (the {ok_frames} frame(s) before it were processed{kept})");
     }
-    if !args.quiet || bar.is_some() {
+    if progress.shows_summary() {
         let secs = t_all.elapsed().as_secs_f64();
         eprintln!(
             "{} frame(s) in {:.2} s ({:.1} frames/s) on {}",
@@ -419,16 +410,6 @@ fn summary_line(r: &StatsRow, with_rep: bool) -> String {
         r.volume,
         r.total_ms
     )
-}
-
-pub(crate) fn progress_bar(len: usize) -> ProgressBar {
-    let bar = ProgressBar::new(len as u64);
-    if let Ok(style) =
-        ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  eta {eta}")
-    {
-        bar.set_style(style);
-    }
-    bar
 }
 
 /// Fails with one line when two outputs, or an output and an input, are one file (the second

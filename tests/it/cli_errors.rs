@@ -224,11 +224,11 @@ fn nan_and_infinite_coordinates_name_the_frame_after_the_good_ones() {
         write_bad_coordinate_trajectory(d, top, bad);
         let run = fails(
             d,
-            &[top, "traj.dcd"],
+            &[top, "traj.dcd", "-v"],
             "o_{frame}.ply",
             &["traj.dcd", "frame 1"],
         );
-        // Frame 0 was computed, written and reported before the error.
+        // Frame 0 was computed, written and reported (-v) before the error.
         assert!(
             run.stderr.lines().any(|l| l.starts_with("frame     0")),
             "{}",
@@ -334,7 +334,7 @@ fn ctrl_c_keeps_the_frames_done_and_leaves_no_temporary_file() {
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_mdsurf"))
         .args(["surface", &data("adk_oplsaa.gro"), &data("adk_oplsaa.xtc")])
         .args(["--select", "all", "--spacing", "0.3", "--backend", "cpu"])
-        .args(["--stats", "stats.csv", "-o", "mesh_{frame}.ply"])
+        .args(["--stats", "stats.csv", "-o", "mesh_{frame}.ply", "-v"])
         .current_dir(dir.path())
         .stderr(Stdio::piped())
         .spawn()

@@ -77,14 +77,31 @@ fn demo_frames_give_ply_files_and_stats_rows() {
         assert!((t as f64 / v as f64 - 2.0).abs() < 0.05, "V {v}, T {t}");
     }
     assert!(!dir.path().join("surf_3.ply").exists());
-    // One summary line per frame and a final line on stderr.
-    let lines: Vec<&str> = run
-        .stderr
-        .lines()
-        .filter(|l| l.starts_with("frame"))
-        .collect();
-    assert_eq!(lines.len(), 3, "{}", run.stderr);
+    // stderr is a pipe here: no line per frame, the final summary line only.
+    let frame_lines = |stderr: &str| stderr.lines().filter(|l| l.starts_with("frame")).count();
+    assert_eq!(frame_lines(&run.stderr), 0, "{}", run.stderr);
     assert!(run.last_line().contains("3 frame(s)"), "{}", run.stderr);
+    // With -v: one summary line per frame, then the final line.
+    let verbose = mdsurf(
+        dir.path(),
+        &[
+            "surface",
+            &gro,
+            &xtc,
+            "--frames",
+            "0:3",
+            "--backend",
+            "cpu",
+            "-v",
+        ],
+    );
+    assert_eq!(verbose.code, 0, "{}", verbose.stderr);
+    assert_eq!(frame_lines(&verbose.stderr), 3, "{}", verbose.stderr);
+    assert!(
+        verbose.last_line().contains("3 frame(s)"),
+        "{}",
+        verbose.stderr
+    );
 }
 
 #[test]

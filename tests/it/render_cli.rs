@@ -223,9 +223,20 @@ fn quiet_render_prints_nothing_and_still_writes() {
         "--backend",
         "cpu",
     ];
-    let loud = mdsurf(&args);
+    let loud = mdsurf(&[&args[..], &["-v"]].concat());
     assert!(loud.status.success());
     assert!(String::from_utf8_lossy(&loud.stderr).contains("frame 1"));
+    // stderr is a pipe: no line per image, one summary line at the end.
+    let plain = mdsurf(&args);
+    assert!(plain.status.success());
+    let text = String::from_utf8_lossy(&plain.stderr);
+    assert!(!text.lines().any(|l| l.starts_with("frame ")), "{text}");
+    assert!(
+        text.lines()
+            .last()
+            .is_some_and(|l| l.starts_with("2 image(s) in ")),
+        "{text}"
+    );
     let quiet = mdsurf(&[&args[..], &["-q"]].concat());
     assert!(quiet.status.success());
     assert_eq!(String::from_utf8_lossy(&quiet.stderr), "");

@@ -237,6 +237,7 @@ fn interrupted_movie_leaves_no_file() {
             "1",
             "--size",
             "64x48",
+            "-v",
             "-o",
             "movie.mp4",
         ])

@@ -193,6 +193,7 @@ fn render_plays_the_script_one_image_per_shot() {
             "64x48",
             "-o",
             "shot_{image}.png",
+            "-v",
         ],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
