@@ -20,7 +20,7 @@ use super::viewport::{GpuView, viewport_ui};
 use crate::export::video::Mp4Movie;
 use crate::render::colour_bar::draw_colour_bar;
 use crate::render::write_png;
-use crate::scene::state_file::{CameraState, LookState, StateFile, TrajectoryState};
+use crate::scene::state_file::StateFile;
 
 mod menu;
 mod scripted;
@@ -279,44 +279,26 @@ impl Viewer {
         }
     }
 
-    /// The view as a state file: representations, camera, look and timeline.
+    /// The view as a state file: representations, camera, look, timeline and the frame
+    /// transformations.
     pub fn state_file(&self) -> StateFile {
-        let mut state = StateFile::new(self.core.reps.clone());
-        state.camera = Some(CameraState::from_camera(&self.core.camera, false));
-        state.look = LookState::from_settings(&self.core.render);
-        state.trajectory = TrajectoryState {
-            frame: self.core.timeline.current,
-            stride: self.core.timeline.stride,
-            fps: self.core.timeline.fps,
-            ..TrajectoryState::default()
-        };
+        let mut state = self.core.view_state();
         state.trajectory.set_transforms(self.transforms.applied());
         state
     }
 
-    /// Applies a state file (already checked): representations, camera, look and timeline.
+    /// Applies a state file (already checked): representations, camera, look, timeline and
+    /// the frame transformations.
     pub fn apply_state(&mut self, state: StateFile) {
-        if let Err(e) = state.look.apply(&mut self.core.render) {
+        let transforms = state.trajectory.transforms();
+        if let Err(e) = self.core.apply_view_state(state) {
             self.core.error = Some(e.to_string());
             return;
         }
-        if let Some(cam) = state.camera {
-            cam.apply(&mut self.core.camera);
-            self.core.fit_pending = cam.fit;
-            self.core.orient_pending = false;
-        }
-        self.core.timeline.stride = state.trajectory.stride.max(1);
-        self.core.timeline.fps = state.trajectory.fps;
-        let transforms = state.trajectory.transforms();
         if &transforms != self.transforms.applied() {
             self.set_transforms(transforms);
             self.transforms.request_reload();
         }
-        self.core.apply(Command::SetReps(state.representations));
-        self.core
-            .apply(Command::Timeline(super::timeline::TimelineCmd::Seek(
-                state.trajectory.frame,
-            )));
     }
 
     /// Runs a file dialog on a background thread (open: several files; else save) and turns the

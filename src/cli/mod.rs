@@ -16,6 +16,7 @@ pub mod progress;
 pub mod render;
 pub mod render_args;
 pub mod render_output;
+pub mod render_script;
 pub mod scene_args;
 pub mod select;
 pub mod surface;

@@ -37,6 +37,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let params = args.params.params()?;
     let chunk = args.chunk.map(ChunkSpec::resolve).transpose()?;
     let state = args.scene.load_state()?;
+    // A script sets the scene up first; what it leaves stands in for --state.
+    let state = match &args.script {
+        Some(script) => Some(super::render_script::run(
+            &args,
+            script,
+            state,
+            look_flags(&args),
+        )?),
+        None => state,
+    };
     let transforms = args.transforms.options(state.as_ref());
     let first = args.frames.map_or(args.frame, |r| r.start);
     let live = args.live.options(args.input.traj.as_deref())?;
@@ -60,18 +70,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         );
         return Ok(());
     }
-    let mut settings = RenderSettings {
-        background: args.background,
-        surface_opacity: args.opacity,
-        atom_style: args.atoms,
-        stereo: args.stereo,
-        eye_separation: args.eyes.eye_separation,
-        focal_distance: args.eyes.focal,
-        ambient_occlusion: args.ao,
-        depth_cue: args.depth_cue,
-        ..RenderSettings::default()
-    };
-    args.look.apply(&mut settings);
+    let mut settings = look_flags(&args);
     let options = args.input.particles.options_for(&system.trajectory)?;
     check_colour_frames(&options, &frames)?;
     let topology = system.trajectory.topology().clone();
@@ -321,6 +320,23 @@ pub fn run(args: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The look the command-line flags ask for (a state file's look replaces it).
+fn look_flags(args: &RenderArgs) -> RenderSettings {
+    let mut settings = RenderSettings {
+        background: args.background,
+        surface_opacity: args.opacity,
+        atom_style: args.atoms,
+        stereo: args.stereo,
+        eye_separation: args.eyes.eye_separation,
+        focal_distance: args.eyes.focal,
+        ambient_occlusion: args.ao,
+        depth_cue: args.depth_cue,
+        ..RenderSettings::default()
+    };
+    args.look.apply(&mut settings);
+    settings
 }
 
 /// What `render --imd` can write: a movie of the run (until it ends, or `--frames :N`), or a

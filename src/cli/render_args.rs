@@ -41,6 +41,11 @@ pub struct RenderArgs {
     /// A `.mp4` name writes all images as one H.264 movie instead (even --size needed).
     #[arg(short = 'o', long = "output", value_name = "PNG|MP4")]
     pub output: PathBuf,
+    /// Run the console commands of this file first, headless (one per line, `#` comments; the
+    /// window's console language: `rep`, `frame`, `fit`, `view`, `screenshot FILE [WxH]`,
+    /// `select`), stopping at the first error; `-o` then shows the scene the script left.
+    #[arg(long, value_name = "FILE")]
+    pub script: Option<PathBuf>,
     /// Print only errors (no per-image lines, progress bar or summaries).
     #[arg(short, long)]
     pub quiet: bool,

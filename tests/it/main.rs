@@ -61,6 +61,7 @@ mod render_images;
 mod render_look;
 mod render_movie;
 mod render_refined;
+mod render_script;
 mod render_stereo;
 mod scene_lipids;
 mod scene_movie;
