@@ -86,4 +86,7 @@ pub enum Command {
     ShowShortcuts(bool),
     /// Show or hide the console under the viewport (window layer; see `app::console_ui`).
     ToggleConsole,
+    /// Forget the kept panel layout and look, and give the window its first size (window
+    /// layer; see `app::settings_store`).
+    ResetLayout,
 }

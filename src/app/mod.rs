@@ -17,6 +17,7 @@ pub mod panels;
 pub mod plot;
 pub mod recent;
 pub mod script_error;
+pub mod settings_store;
 pub mod source;
 pub mod state;
 pub mod timeline;
@@ -284,28 +285,30 @@ fn run_window(
         .files
         .clone()
         .unwrap_or_else(|| (PathBuf::from(DEMO_TOP), Some(PathBuf::from(DEMO_TRAJ))));
-    let native = eframe::NativeOptions {
+    let mut native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
-            .with_inner_size([1400.0, 900.0])
+            .with_inner_size(settings_store::DEFAULT_SIZE)
             .with_drag_and_drop(true),
         renderer: eframe::Renderer::Wgpu,
         wgpu_options: wgpu_options(),
         ..Default::default()
     };
+    let keep = settings_store::Keep::for_run(options.script.quit);
+    keep.configure(&mut native);
+    let keeps = keep.keeps();
     let options = options.clone();
-    eframe::run_native(
+    let result = eframe::run_native(
         "mdsurf",
         native,
         Box::new(move |cc| {
-            Ok(Box::new(create_viewer(
-                cc,
-                &options,
-                script_result,
-                top,
-                traj,
-                device,
-            )))
+            let mut viewer = create_viewer(cc, &options, script_result, top, traj, device);
+            if keeps {
+                viewer.keep_settings(cc.storage, options.reps.is_none());
+            }
+            Ok(Box::new(viewer))
         }),
     )
-    .map_err(|e| ViewError::NoDisplay(e.to_string()))
+    .map_err(|e| ViewError::NoDisplay(e.to_string()));
+    keep.clean_up();
+    result
 }

@@ -19,7 +19,7 @@ use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
 use crate::export::video::Mp4Movie;
 use crate::render::colour_bar::draw_colour_bar;
-use crate::render::write_png;
+use crate::render::{RenderSettings, write_png};
 use crate::scene::state_file::StateFile;
 
 mod menu;
@@ -60,6 +60,8 @@ pub struct Viewer {
     shortcuts_shown: bool,
     /// The console under the viewport.
     console: super::console_ui::ConsoleState,
+    /// True when the window keeps its layout and look for the next session.
+    keeps_settings: bool,
 }
 
 impl Viewer {
@@ -92,6 +94,25 @@ impl Viewer {
             transforms: Default::default(),
             shortcuts_shown: false,
             console: Default::default(),
+            keeps_settings: false,
+        }
+    }
+
+    /// Keeps the panel layout and the look for the next session (see `settings_store`), and
+    /// starts from the look the last one kept when `use_kept_look` (no state file was given).
+    pub fn keep_settings(&mut self, storage: Option<&dyn eframe::Storage>, use_kept_look: bool) {
+        self.keeps_settings = true;
+        if let Some(look) = super::settings_store::kept_look(storage).filter(|_| use_kept_look) {
+            let stereo = self.core.render.stereo;
+            self.core.render = RenderSettings {
+                // A stereo mode asked for on the command line wins.
+                stereo: if stereo == RenderSettings::default().stereo {
+                    look.stereo
+                } else {
+                    stereo
+                },
+                ..look
+            };
         }
     }
 
@@ -274,6 +295,13 @@ impl Viewer {
                 }
                 Command::ShowShortcuts(shown) => self.shortcuts_shown = shown,
                 Command::ToggleConsole => self.console.toggle(),
+                Command::ResetLayout => {
+                    ctx.memory_mut(|m| *m = egui::Memory::default());
+                    self.core.render = RenderSettings::default();
+                    let [w, h] = super::settings_store::DEFAULT_SIZE;
+                    ctx.send_viewport_cmd(egui::ViewportCommand::InnerSize(egui::vec2(w, h)));
+                    self.core.status = "layout and look reset".into();
+                }
                 _ => {}
             }
         }
@@ -382,6 +410,16 @@ impl Viewer {
 }
 
 impl eframe::App for Viewer {
+    fn save(&mut self, storage: &mut dyn eframe::Storage) {
+        if self.keeps_settings {
+            super::settings_store::keep_look(storage, &self.core.render);
+        }
+    }
+
+    fn persist_egui_memory(&self) -> bool {
+        self.keeps_settings
+    }
+
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         if self.leave_if_device_lost(&ctx) {

@@ -12,6 +12,7 @@ mod app_gpu_worker;
 mod app_keys;
 mod app_membrane_view;
 mod app_panels;
+mod app_persist;
 mod app_smoke;
 mod app_soak;
 mod app_stream_source;

@@ -53,6 +53,9 @@ impl Viewer {
                 if ui.add(entry("Console", Action::ToggleConsole)).clicked() {
                     out.push(Command::ToggleConsole);
                 }
+                if ui.button("Reset layout").clicked() {
+                    out.push(Command::ResetLayout);
+                }
             });
             ui.menu_button("Help", |ui| {
                 if ui
