@@ -3,6 +3,7 @@
 
 pub mod arg_error;
 pub mod bench;
+pub mod bench_args;
 pub mod bench_table;
 pub mod bench_viewer;
 pub mod chunk;
