@@ -86,6 +86,8 @@ pub enum Command {
     ShowShortcuts(bool),
     /// Show or hide the console under the viewport (window layer; see `app::console_ui`).
     ToggleConsole,
+    /// Pause, resume or detach from the running simulation (`--imd`).
+    Live(crate::io::LiveAction),
     /// Forget the kept panel layout and look, and give the window its first size (window
     /// layer; see `app::settings_store`).
     ResetLayout,

@@ -114,12 +114,25 @@ pub enum ConsoleCommand {
     Screenshot(PathBuf, Option<[u32; 2]>),
     /// `select "SEL"`: prints the number of atoms in the current frame.
     Select(String),
+    /// `imd pause|resume|detach`: the running simulation (`--imd`).
+    Imd(ImdVerb),
     /// `help [TOPIC]`.
     Help(Option<String>),
 }
 
+/// What `imd` asks of the running simulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImdVerb {
+    /// `imd pause`.
+    Pause,
+    /// `imd resume`.
+    Resume,
+    /// `imd detach`: the simulation goes on, no more frames come.
+    Detach,
+}
+
 /// The first words of commands (Tab completion, `help`).
-pub const COMMAND_WORDS: [&str; 10] = [
+pub const COMMAND_WORDS: [&str; 11] = [
     "rep",
     "frame",
     "play",
@@ -128,6 +141,7 @@ pub const COMMAND_WORDS: [&str; 10] = [
     "view",
     "screenshot",
     "select",
+    "imd",
     "help",
     "clear",
 ];
@@ -149,7 +163,7 @@ pub const REP_WORDS: [&str; 13] = [
     "add",
 ];
 
-const HELP: &str = "commands: rep add \"SEL\" STYLE [as NAME] | rep N|NAME color|spacing|radius-scale|isovalue|quality|opacity|vertices|style|select VALUE | rep N hide|show|delete | frame N | play | pause | fit [\"SEL\"] | view save|open FILE | screenshot FILE [WxH] | select \"SEL\" | clear | help [rep]";
+const HELP: &str = "commands: rep add \"SEL\" STYLE [as NAME] | rep N|NAME color|spacing|radius-scale|isovalue|quality|opacity|vertices|style|select VALUE | rep N hide|show|delete | frame N | play | pause | fit [\"SEL\"] | view save|open FILE | screenshot FILE [WxH] | select \"SEL\" | imd pause|resume|detach | clear | help [rep]";
 const HELP_REP: &str = "rep add \"SEL\" surface|beads|spheres|sticks|ball-and-stick [as NAME]; rep N (1-based) or rep NAME, then: color SCHEME (element, chain, residue-type, residue-index, b-factor, single:#rrggbb), spacing Å, radius-scale R, isovalue I, quality low|medium|high|max, opacity 0..1, vertices interpolated|refined, style STYLE, select \"SEL\", hide, show, delete";
 
 /// A word of the line and its 1-based column.
@@ -357,6 +371,21 @@ pub fn parse(line: &str) -> Result<Option<ConsoleCommand>, ConsoleError> {
             max(2)?;
             ConsoleCommand::Select(selection(need(1, "a selection")?)?)
         }
+        "imd" => {
+            max(2)?;
+            let verb = need(1, "'pause', 'resume' or 'detach'")?;
+            ConsoleCommand::Imd(match verb.text.as_str() {
+                "pause" => ImdVerb::Pause,
+                "resume" => ImdVerb::Resume,
+                "detach" => ImdVerb::Detach,
+                other => {
+                    return perr(
+                        verb.column,
+                        format!("expected 'pause', 'resume' or 'detach', got '{other}'"),
+                    );
+                }
+            })
+        }
         "help" => {
             max(2)?;
             ConsoleCommand::Help(words.get(1).map(|w| w.text.clone()))
@@ -505,6 +534,22 @@ impl ConsoleCommand {
                     core.timeline.current
                 ));
             }
+            ConsoleCommand::Imd(verb) => {
+                use crate::io::LiveAction::{Detach, TogglePause};
+                let action = match (verb, core.live_paused) {
+                    (ImdVerb::Pause, true) | (ImdVerb::Resume, false) => {
+                        let state = if core.live_paused {
+                            "paused"
+                        } else {
+                            "running"
+                        };
+                        return Err(ConsoleError::Apply(format!("the simulation is {state}")));
+                    }
+                    (ImdVerb::Detach, _) => Detach,
+                    _ => TogglePause,
+                };
+                return Ok(one(Command::Live(action)));
+            }
             ConsoleCommand::Help(topic) => {
                 out.output = Some(match topic.as_deref() {
                     Some("rep") => HELP_REP.to_string(),
@@ -516,60 +561,7 @@ impl ConsoleCommand {
     }
 }
 
-/// Completes the last word of `line` (command words, rep settings, styles, representation
-/// names); the completed line, or `None` when nothing (or more than one thing) fits.
-pub fn complete(line: &str, rep_names: &[String]) -> Option<String> {
-    let start = line.rfind(' ').map_or(0, |i| i + 1);
-    let (head, last) = line.split_at(start);
-    let words: Vec<&str> = head.split_whitespace().collect();
-    let styles: Vec<String> = RepStyle::ALL.iter().map(|s| s.name().to_string()).collect();
-    let candidates: Vec<String> = match words.as_slice() {
-        [] => COMMAND_WORDS.iter().map(|s| s.to_string()).collect(),
-        ["rep"] => std::iter::once("add".to_string())
-            .chain(rep_names.iter().filter(|n| !n.contains(' ')).cloned())
-            .collect(),
-        ["rep", "add", ..] if head.matches('"').count() % 2 == 0 && words.len() >= 3 => styles,
-        ["rep", _, "style"] => styles,
-        ["rep", _] => REP_WORDS[..12].iter().map(|s| s.to_string()).collect(),
-        ["rep", _, "color" | "colour"] => [
-            "element",
-            "chain",
-            "residue-type",
-            "residue-index",
-            "b-factor",
-            "single:",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect(),
-        ["rep", _, "quality"] => ["low", "medium", "high", "max"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
-        ["view"] => vec!["save".into(), "open".into()],
-        ["help"] => vec!["rep".into()],
-        _ => Vec::new(),
-    };
-    let fits: Vec<&String> = candidates.iter().filter(|c| c.starts_with(last)).collect();
-    match fits.as_slice() {
-        [one] => {
-            let space = if one.ends_with(':') { "" } else { " " };
-            Some(format!("{head}{one}{space}"))
-        }
-        [] => None,
-        many => {
-            // The longest common prefix, when it adds something.
-            let mut prefix = many[0].clone();
-            for c in &many[1..] {
-                while !c.starts_with(prefix.as_str()) {
-                    prefix.pop();
-                }
-            }
-            (prefix.len() > last.len()).then(|| format!("{head}{prefix}"))
-        }
-    }
-}
-
+pub use super::console_complete::complete;
 pub use super::script_error::ScriptError;
 
 /// Reads a script: one command per line, `#` comments; parse errors name the file and line.

@@ -6,6 +6,7 @@
 
 pub mod command;
 pub mod console;
+pub mod console_complete;
 pub mod console_ui;
 pub mod device_loss;
 pub mod export;

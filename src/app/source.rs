@@ -7,7 +7,9 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::io::{FrameHook, FrameStreamer, IoError, StreamerOptions, Trajectory};
+use crate::io::{
+    FrameHook, FrameStreamer, IoError, LiveAction, LiveControlError, StreamerOptions, Trajectory,
+};
 use crate::model::{Frame, Topology};
 use crate::transform::{TransformChain, TransformError, TransformOptions};
 
@@ -83,6 +85,10 @@ pub trait FrameSource: Send + Sync {
     /// For a running simulation whose stream has ended: why, in one line.
     fn live_ended(&self) -> Option<String> {
         None
+    }
+    /// Pauses, resumes or detaches from the running simulation the frames come from.
+    fn live_control(&self, _action: LiveAction) -> Result<(), LiveControlError> {
+        Err(LiveControlError::NotImd)
     }
 }
 
@@ -232,6 +238,9 @@ impl FrameSource for StreamedSource {
     }
     fn live_ended(&self) -> Option<String> {
         self.streamer.trajectory().live_ended()
+    }
+    fn live_control(&self, action: LiveAction) -> Result<(), LiveControlError> {
+        self.streamer.trajectory().live_control(action)
     }
 }
 

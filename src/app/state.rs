@@ -65,6 +65,8 @@ pub struct AppCore {
     pub error: Option<String>,
     /// Latest informational message.
     pub status: String,
+    /// True while the running simulation (`--imd`) is paused from here.
+    pub live_paused: bool,
     /// Largest grid accepted, in bytes.
     pub grid_limit_bytes: u64,
     /// Commands for the window layer (dialogs, screenshots, movies).
@@ -98,6 +100,7 @@ impl AppCore {
             history: History::default(),
             error: None,
             status: String::new(),
+            live_paused: false,
             grid_limit_bytes: default_grid_limit(),
             outbox: Vec::new(),
             worker,
@@ -286,6 +289,7 @@ impl AppCore {
                 self.fit_camera();
             }
             Command::FitCamera => self.fit_camera(),
+            Command::Live(action) => self.control_live(action),
             Command::FitSphere(centre, radius) => {
                 self.camera.fit_sphere(centre, radius);
                 self.fit_pending = false;
@@ -297,6 +301,29 @@ impl AppCore {
             Command::SetTurntable(t) => self.turntable = t,
             Command::DismissError => self.error = None,
             other => self.outbox.push(other),
+        }
+    }
+
+    /// Pauses, resumes or detaches from the running simulation; says so on the status line.
+    fn control_live(&mut self, action: crate::io::LiveAction) {
+        use crate::io::LiveAction;
+        let Some(source) = self.source.clone() else {
+            self.error = Some("no trajectory loaded".into());
+            return;
+        };
+        match source.live_control(action) {
+            Ok(()) => {
+                self.status = match action {
+                    LiveAction::TogglePause if self.live_paused => "simulation resumed",
+                    LiveAction::TogglePause => "simulation paused",
+                    LiveAction::Detach => "detached: the simulation goes on without us",
+                }
+                .into();
+                if action == LiveAction::TogglePause {
+                    self.live_paused = !self.live_paused;
+                }
+            }
+            Err(e) => self.error = Some(e.to_string()),
         }
     }
 

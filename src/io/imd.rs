@@ -91,6 +91,9 @@ pub enum ImdError {
     /// The socket failed.
     #[error("network error: {0}")]
     Network(String),
+    /// We left the simulation running and stopped receiving it.
+    #[error("detached from the simulation (it goes on)")]
+    Detached,
 }
 
 /// One step's energy record, as the engine sends it (GROMACS: kJ/mol and K).
@@ -331,6 +334,12 @@ fn send_header(mut stream: &TcpStream, kind: MessageType, length: i32) -> Result
     header[..4].copy_from_slice(&(kind as i32).to_be_bytes());
     header[4..].copy_from_slice(&length.to_be_bytes());
     stream.write_all(&header).map_err(network)
+}
+
+/// Pauses a running simulation, or resumes a paused one, through `socket` (a handle from
+/// [`ImdClient::socket`]), while the client receives on another thread.
+pub(crate) fn toggle_pause_on(socket: &TcpStream) -> Result<(), ImdError> {
+    send_header(socket, MessageType::Pause, 0)
 }
 
 /// Detaches from the engine through `socket` (a handle from [`ImdClient::socket`]; the

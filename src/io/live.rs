@@ -91,6 +91,8 @@ struct Received {
 struct Shared {
     received: Mutex<Received>,
     arrived: Condvar,
+    /// A handle on the socket for pause and detach ([`LiveProgress::control`]).
+    control: Mutex<Option<std::net::TcpStream>>,
 }
 
 impl Shared {
@@ -108,6 +110,33 @@ pub(crate) trait LiveProgress: Send + Sync {
     fn received(&self) -> usize;
     /// Why the source stopped growing, once it has (one line), else `None`.
     fn ended(&self) -> Option<String>;
+    /// Pauses, resumes or detaches from a running simulation; only IMD sources can.
+    fn control(&self, _action: LiveAction) -> Result<(), LiveControlError> {
+        Err(LiveControlError::NotImd)
+    }
+}
+
+/// What the viewer can ask of a running simulation (IMD version 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LiveAction {
+    /// Pause the simulation, or resume it when paused (IMD version 2 has one message for both).
+    TogglePause,
+    /// Leave the simulation running and stop receiving its frames (those received stay).
+    Detach,
+}
+
+/// Why a [`LiveAction`] could not be sent.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LiveControlError {
+    /// The frames do not come from a simulation over IMD.
+    #[error("not a running simulation: only --imd sources can be paused or detached")]
+    NotImd,
+    /// The stream has ended (the run finished, was killed, or we detached).
+    #[error("the simulation stream has ended")]
+    Ended,
+    /// The message could not be sent.
+    #[error(transparent)]
+    Imd(#[from] ImdError),
 }
 
 /// A shared handle on a [`LiveProgress`].
@@ -120,6 +149,27 @@ impl LiveProgress for Shared {
 
     fn ended(&self) -> Option<String> {
         self.lock().ended.as_ref().map(|e| e.to_string())
+    }
+
+    fn control(&self, action: LiveAction) -> Result<(), LiveControlError> {
+        let control = self
+            .control
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let socket = match (&*control, &self.lock().ended) {
+            (Some(socket), None) => socket,
+            _ => return Err(LiveControlError::Ended),
+        };
+        match action {
+            LiveAction::TogglePause => super::imd::toggle_pause_on(socket)?,
+            LiveAction::Detach => {
+                // Marked first, so the receiver's end of stream reads as the detach it is.
+                self.lock().ended = Some(ImdError::Detached);
+                super::imd::leave(socket);
+                self.arrived.notify_all();
+            }
+        }
+        Ok(())
     }
 }
 
@@ -164,6 +214,7 @@ impl LiveFrames {
         let shared = Arc::new(Shared {
             received: Mutex::new(Received::default()),
             arrived: Condvar::new(),
+            control: Mutex::new(client.socket().ok()),
         });
         let ring_frames = options.ring_frames.max(1);
         let expected = Expected {
@@ -236,7 +287,8 @@ fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, share
                 shared.arrived.notify_all();
             }
             Err(error) => {
-                received.ended = Some(error);
+                // A detach already said why the stream ends.
+                received.ended.get_or_insert(error);
                 shared.arrived.notify_all();
                 return;
             }

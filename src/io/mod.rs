@@ -66,7 +66,7 @@ pub use contained::{READER_ARG, reader_main};
 pub use error::IoError;
 pub use follow::FollowOptions;
 pub use format::{FileFormat, WwFormat, detect};
-pub use live::{LIVE_FRAMES_UNBOUNDED, LiveOptions, LiveSource};
+pub use live::{LIVE_FRAMES_UNBOUNDED, LiveAction, LiveControlError, LiveOptions, LiveSource};
 pub use stream::{
     FrameHook, FrameHookError, FrameResult, FrameStatus, FrameStreamer, ReadyCallback,
     StreamerOptions,

@@ -449,3 +449,85 @@ fn render_makes_a_movie_of_a_run_until_it_ends() {
     assert_eq!(run.code, 2, "{}", run.stderr);
     assert!(run.last_line().contains("--frames :N"), "{}", run.stderr);
 }
+
+/// The console's `imd pause`, `imd resume` and `imd detach` (issue 35): a paused GROMACS run
+/// sends no more frames until it is resumed; after a detach the frames received stay, the status
+/// says so, and the simulation goes on without us.
+#[test]
+fn the_console_pauses_resumes_and_detaches_from_a_running_simulation() {
+    use mdsurf::app::console;
+    use mdsurf::app::source::open_live_with;
+    use mdsurf::app::state::AppCore;
+    use mdsurf::app::worker::Worker;
+    use mdsurf::surface::CpuEngine;
+
+    let dir = tempfile::tempdir().unwrap();
+    let top = water_box(dir.path(), 1_000_000);
+    let port = free_port();
+    let mut engine = Mdrun::start(dir.path(), port);
+    let live = io::LiveSource::Imd(options(port));
+    let source = open_live_with(&top, &live, &Default::default()).unwrap();
+    let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
+    let mut core = AppCore::new(worker);
+    core.base.spacing = 2.0;
+    core.set_source(source.clone());
+    let start = std::time::Instant::now();
+    // Runs a console line against the core, as the window's console does.
+    let run = |core: &mut AppCore, line: &str| {
+        let cmd = console::parse(line).unwrap().expect("a command");
+        let outcome = cmd.resolve(core).map_err(|e| e.to_string())?;
+        for c in outcome.commands {
+            core.apply(c);
+        }
+        match core.error.take() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    };
+    // Waits until `more` frames beyond `from` have arrived.
+    let grow = |core: &mut AppCore, more: usize| {
+        let from = core.timeline.len;
+        while core.timeline.len < from + more {
+            assert!(start.elapsed() < Duration::from_secs(120), "no frames arrive");
+            core.follow_live();
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    };
+    grow(&mut core, 5);
+    assert!(run(&mut core, "imd resume").is_err(), "resumed a running simulation");
+    run(&mut core, "imd pause").unwrap();
+    assert_eq!(core.status, "simulation paused");
+    // The frames already on their way land; then nothing comes while paused.
+    std::thread::sleep(Duration::from_millis(500));
+    core.follow_live();
+    let paused_at = core.timeline.len;
+    std::thread::sleep(Duration::from_millis(1500));
+    core.follow_live();
+    assert!(
+        core.timeline.len <= paused_at + 1,
+        "frames kept coming while paused: {paused_at} -> {}",
+        core.timeline.len
+    );
+    run(&mut core, "imd resume").unwrap();
+    assert_eq!(core.status, "simulation resumed");
+    grow(&mut core, 5);
+    // Detach: the frames stay, the status says why the stream ended, the engine goes on.
+    run(&mut core, "imd detach").unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    core.follow_live();
+    core.follow_live();
+    let received = core.timeline.len;
+    assert!(
+        core.status.contains(&format!("ended after {received} frames"))
+            && core.status.contains("detached from the simulation (it goes on)"),
+        "{}",
+        core.status
+    );
+    assert!(run(&mut core, "imd pause").is_err(), "paused after a detach");
+    let last = source.read_frame(received - 1).unwrap();
+    assert_eq!(last.positions.len(), source.topology().len());
+    assert!(
+        engine.0.try_wait().unwrap().is_none(),
+        "the simulation stopped when we detached"
+    );
+}

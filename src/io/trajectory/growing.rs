@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use super::{FrameSource, Trajectory, open};
 use crate::io::IoError;
 use crate::io::follow::{FollowOptions, FollowedFrames};
-use crate::io::live::{LiveFrames, LiveOptions, LiveSource};
+use crate::io::live::{LiveAction, LiveControlError, LiveFrames, LiveOptions, LiveSource};
 
 /// Opens the structure `top` (a file with atom names, as for [`open`]) with its frames coming
 /// from the simulation running at `options.address` over IMD (see `live`): frame `i` is the
@@ -82,6 +82,15 @@ impl Trajectory {
             self.frames_path.display(),
             live.received()
         ))
+    }
+
+    /// Pauses, resumes or detaches from the running simulation the frames come from (`--imd`);
+    /// an error for any other source.
+    pub fn live_control(&self, action: LiveAction) -> Result<(), LiveControlError> {
+        match &self.live {
+            Some(live) => live.control(action),
+            None => Err(LiveControlError::NotImd),
+        }
     }
 
     /// Frames readable now without waiting: [`Trajectory::len`], or for a running simulation
