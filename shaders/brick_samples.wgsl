@@ -1,7 +1,8 @@
-// Reading density samples, shared by classify.wgsl, emit.wgsl and refine.wgsl (each is built
-// after slab_uniform.wgsl and this file, see src/gpu/shaders.rs). It uses two names the stage
-// declares: the slab uniform `u` and its density buffer `density` (array<u32>: density words
-// and, on sparse bricks, the brick slot table).
+// Reading density samples, shared by classify.wgsl, compact.wgsl, emit.wgsl and refine.wgsl
+// (each is built after the preludes, slab_uniform.wgsl and this file, see src/gpu/shaders.rs).
+// It uses two names the stage declares: the slab uniform `u` and its density buffer `density`
+// (array<u32>: density words and, on sparse bricks, the brick slot table); BRICK,
+// SLOT_UNREACHED and NO_SAMPLE come from brick_const.wgsl.
 
 // The density word of grid point (i, j, k) (global k, within the slab's density layers). Dense:
 // the slab volume. Sparse bricks (u.sparse != 0): the first brick_count words are the brick slot
@@ -19,21 +20,16 @@ fn dens_at(i: u32, j: u32, k: u32) -> f32 {
     return bitcast<f32>(density[u.brick_dims.x * u.brick_dims.y * u.brick_dims.z + s]);
 }
 
-const NO_SAMPLE: u32 = 0xffffffffu;
-
 // On sparse bricks: the brick-local sample index of grid point (i, j, k) (counted from the
 // slab's first slot; density word brick_count + index, colour sample index), or NO_SAMPLE
 // when no atom reaches its brick.
 fn sample_slot(i: u32, j: u32, k: u32) -> u32 {
     let bd = u.brick_dims;
-    let t = density[i / BRICK_EDGE + bd.x * (j / BRICK_EDGE + bd.y * (k / BRICK_EDGE))];
-    if ((t >> 31u) != 0u) {
+    let t = density[i / BRICK + bd.x * (j / BRICK + bd.y * (k / BRICK))];
+    if ((t & SLOT_UNREACHED) != 0u) {
         return NO_SAMPLE;
     }
-    let first = density[(u.dens_z0 / BRICK_EDGE) * bd.x * bd.y] & 0x7fffffffu;
-    let local = i % BRICK_EDGE + BRICK_EDGE * (j % BRICK_EDGE + BRICK_EDGE * (k % BRICK_EDGE));
-    return (t - first) * (BRICK_EDGE * BRICK_EDGE * BRICK_EDGE) + local;
+    let first = density[(u.dens_z0 / BRICK) * bd.x * bd.y] & ~SLOT_UNREACHED;
+    let local = i % BRICK + BRICK * (j % BRICK + BRICK * (k % BRICK));
+    return (t - first) * (BRICK * BRICK * BRICK) + local;
 }
-
-// Samples per sparse-brick edge (crate::gpu::plan::BRICK).
-const BRICK_EDGE: u32 = 8u;

@@ -5,6 +5,7 @@
 // count, and the brick slot table in the density buffer) and args (the indirect dispatch
 // arguments). Rust side: src/gpu/bricks.rs. A brick that
 // no atom reaches holds density 0 at every sample, exactly as the dense pass computes it there.
+// BRICK and SLOT_UNREACHED come from brick_const.wgsl, prepended by src/gpu/shaders.rs.
 
 // Twin of crate::gpu::types::BrickUniform (96 bytes).
 struct BrickUniform {
@@ -23,9 +24,6 @@ struct BrickUniform {
     _pad1: u32,
     _pad2: u32,
 }
-
-// Samples per brick edge (crate::gpu::plan::BRICK).
-const BRICK: u32 = 8u;
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::bricks`): the Rust side
 // builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
@@ -116,7 +114,7 @@ fn compact(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     // a slab finds the first slot of its first brick layer even when that brick is unreached).
     let slot = brick_scan[b];
     if (brick_flags[b] == 0u) {
-        density[b] = slot | 0x80000000u;
+        density[b] = slot | SLOT_UNREACHED;
         return;
     }
     density[b] = slot;

@@ -1,6 +1,7 @@
 // Where a grid point's class word and vertex base live, shared by classify.wgsl, compact.wgsl,
 // emit.wgsl and refine.wgsl (each is built after slab_uniform.wgsl and brick_samples.wgsl, see
-// src/gpu/shaders.rs). Uses the slab uniform `u` and the density buffer's brick slot table.
+// src/gpu/shaders.rs). Uses the slab uniform `u` and the density buffer's brick slot table;
+// BRICK, CLASS_APRON, SLOT_UNREACHED and NO_ENTRY come from brick_const.wgsl.
 //
 // Dense classes (bit 1 of u.sparse clear): one entry per point of the slab's class layers,
 // x fastest from layer own_z0. Sparse classes (bit 1 set, with sparse bricks): CLASS_APRON^3
@@ -10,10 +11,6 @@
 // an unreached brick whose cell can touch a reached one (crate::gpu::plan::CLASS_ENTRIES_PER_SLOT
 // counts the entries; the host twin is crate::gpu::engine's test hook `read_classes`). Every
 // point that classify.wgsl does not skip (near_reached_brick) has an entry; the others none.
-
-const NO_ENTRY: u32 = 0xffffffffu;
-// Entries per brick slot edge (BRICK_EDGE + 1).
-const CLASS_APRON: u32 = 9u;
 
 fn sparse_classes() -> bool {
     return (u.sparse & 2u) != 0u;
@@ -25,7 +22,7 @@ fn class_first_slot() -> u32 {
     if (!sparse_classes()) {
         return 0u;
     }
-    return density[(u.dens_z0 / BRICK_EDGE) * u.brick_dims.x * u.brick_dims.y] & 0x7fffffffu;
+    return density[(u.dens_z0 / BRICK) * u.brick_dims.x * u.brick_dims.y] & ~SLOT_UNREACHED;
 }
 
 // The entry of grid point p (global coordinates, in the slab's class layers), or NO_ENTRY.
@@ -39,14 +36,14 @@ fn class_entry_from(p: vec3<u32>, first: u32) -> u32 {
         return p.x + u.dims.x * (p.y + u.dims.y * (p.z - u.own_z0));
     }
     let bd = u.brick_dims;
-    let b0 = p / BRICK_EDGE;
-    let l = p % BRICK_EDGE;
+    let b0 = p / BRICK;
+    let l = p % BRICK;
     // Along an axis where p is the last sample of its brick, the cell based at p reaches the
     // next brick: that brick may hold p in its apron.
     let up = vec3<u32>(
-        select(0u, 1u, l.x == BRICK_EDGE - 1u && p.x + 1u < u.dims.x),
-        select(0u, 1u, l.y == BRICK_EDGE - 1u && p.y + 1u < u.dims.y),
-        select(0u, 1u, l.z == BRICK_EDGE - 1u && p.z + 1u < u.dims.z),
+        select(0u, 1u, l.x == BRICK - 1u && p.x + 1u < u.dims.x),
+        select(0u, 1u, l.y == BRICK - 1u && p.y + 1u < u.dims.y),
+        select(0u, 1u, l.z == BRICK - 1u && p.z + 1u < u.dims.z),
     );
     for (var dz = 0u; dz <= up.z; dz++) {
         for (var dy = 0u; dy <= up.y; dy++) {
@@ -54,9 +51,9 @@ fn class_entry_from(p: vec3<u32>, first: u32) -> u32 {
                 let d = vec3<u32>(dx, dy, dz);
                 let r = b0 + d;
                 let t = density[r.x + bd.x * (r.y + bd.y * r.z)];
-                if ((t >> 31u) == 0u) {
+                if ((t & SLOT_UNREACHED) == 0u) {
                     // Local 1..=BRICK in its own brick, 0 in the apron of the brick above.
-                    let a = l + vec3<u32>(1u) - BRICK_EDGE * d;
+                    let a = l + vec3<u32>(1u) - BRICK * d;
                     return (t - first) * (CLASS_APRON * CLASS_APRON * CLASS_APRON)
                         + a.x + CLASS_APRON * (a.y + CLASS_APRON * a.z);
                 }

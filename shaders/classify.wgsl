@@ -7,6 +7,9 @@
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
+// So are the counter words and overflow bits (C_*, OVERFLOW_*: counters.wgsl), the brick
+// constants (BRICK, CLASS_APRON, ...: brick_const.wgsl) and the Marching Cubes tables' layout
+// (McTablesUniform, MC_TRI_BASE: mc_tables.wgsl).
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::classify`): the Rust side
 // builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these
@@ -14,15 +17,6 @@
 @group(0) @binding(0) var<uniform> u: SlabUniform;
 // Density words (f32 bits): see dens_at.
 @group(0) @binding(1) var<storage, read> density: array<u32>;
-// Marching Cubes tables as a uniform (uniforms do not count against the device's 8 storage
-// buffers per stage). Twin of crate::gpu::types::McTablesUniform: case starts in words 0..257
-// (crate::surface::McTables::case_start), triangle edges, three per triangle, from word
-// MC_TRI_BASE (crate::surface::McTables::triangles_flat_u32).
-const MC_TRI_BASE: u32 = 260u;
-struct McTablesUniform {
-    words: array<vec4<u32>, 1025>,
-}
-
 fn table_word(i: u32) -> u32 {
     return mc.words[i / 4u][i % 4u];
 }
@@ -39,9 +33,6 @@ fn table_word(i: u32) -> u32 {
 // buffers sets OVERFLOW_BRICKS and raises brick_slots, so the engine grows them (with the brick
 // slots) and runs the frame again.
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
-const C_OVERFLOW: u32 = 2u;
-const OVERFLOW_BRICKS: u32 = 4u;
-const C_BRICK_SLOTS: u32 = 15u;
 
 // Stores the class word of point p (entry e); false when its brick slot lies past the class
 // buffers (flagged for the engine).
@@ -59,9 +50,6 @@ fn store_class(e: u32, word: u32) -> bool {
     classes[e] = word;
     return true;
 }
-
-// Samples per brick edge (crate::gpu::plan::BRICK).
-const BRICK: u32 = 8u;
 
 // True when a brick holding one of the points (i..=i+1, j..=j+1, k..=k+1) (clamped to the grid)
 // is reached by some atom. Otherwise every density this point's classification reads is 0 (the

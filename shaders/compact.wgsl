@@ -5,13 +5,8 @@
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
-
-// Twin of crate::gpu::types::GpuCounters (64 bytes), viewed as u32 words; indices below.
-const C_SLAB_VERTEX_BASE: u32 = 3u;
-const C_SLAB_TRIANGLE_BASE: u32 = 4u;
-const C_SLAB_OWNED_VERTICES: u32 = 5u;
-const C_SCAN_ACTIVE: u32 = 6u;
-const C_SCAN_VERTICES: u32 = 7u;
+// So are the counter words (C_*: counters.wgsl) and the brick constants (NO_ENTRY, ...:
+// brick_const.wgsl).
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::compact`): the Rust side
 // builds explicit bind-group layouts from that table, and tests/it/gpu_steady.rs checks these

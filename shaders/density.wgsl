@@ -16,6 +16,8 @@
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
+// So are the counter words and overflow bits (C_*, OVERFLOW_*: counters.wgsl) and the brick
+// constants (BRICK, SLOT_UNREACHED: brick_const.wgsl).
 
 // True when the colour volume is computed too.
 override WITH_COLOUR: bool = true;
@@ -38,15 +40,6 @@ const RUN: u32 = 8u;
 @group(0) @binding(7) var<storage, read> active_bricks: array<u32>;
 // Frame counters (twin of crate::gpu::types::GpuCounters), as words.
 @group(0) @binding(8) var<storage, read_write> counters: array<atomic<u32>>;
-
-// Word of the overflow bits in the counters, and the bit of crate::gpu::types::OVERFLOW_BRICKS.
-const C_OVERFLOW: u32 = 2u;
-const OVERFLOW_BRICKS: u32 = 4u;
-// Word of crate::gpu::types::GpuCounters::brick_slots: the most slots one slab used.
-const C_BRICK_SLOTS: u32 = 15u;
-
-// Samples per brick edge (crate::gpu::plan::BRICK; one run of RUN voxels spans a brick row).
-const BRICK: u32 = 8u;
 
 fn cell_coord(x: f32, o: f32, n: u32) -> u32 {
     return u32(clamp(i32(floor((x - o) / u.cell_size)), 0, i32(n) - 1));
@@ -215,7 +208,7 @@ fn in_slab(bz: u32) -> bool {
 
 // The slot of the slab's first brick layer (from the slot table at the start of density).
 fn first_slot() -> u32 {
-    return density[(u.dens_z0 / BRICK) * u.brick_dims.x * u.brick_dims.y] & 0x7fffffffu;
+    return density[(u.dens_z0 / BRICK) * u.brick_dims.x * u.brick_dims.y] & ~SLOT_UNREACHED;
 }
 
 // Records that `slot` is used (thread 0) and whether the buffers hold it; when they do not,

@@ -7,14 +7,9 @@
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl,
 // prepended by src/gpu/shaders.rs.
-
-// Word indices into the counters (twin of crate::gpu::types::GpuCounters).
-const C_OVERFLOW: u32 = 2u;
-const C_SCAN_ACTIVE: u32 = 6u;
-const C_VERTEX_CAPACITY: u32 = 11u;
-const C_TRIANGLE_CAPACITY: u32 = 12u;
-const OVERFLOW_VERTICES: u32 = 1u;
-const OVERFLOW_TRIANGLES: u32 = 2u;
+// So are the counter words and overflow bits (C_*, OVERFLOW_*: counters.wgsl), the brick
+// constants (brick_const.wgsl) and the Marching Cubes tables' layout (McTablesUniform,
+// MC_TRI_BASE: mc_tables.wgsl).
 
 // First corner of each cell edge (crate::surface::tables::EDGE_CORNERS[e][0]); edge e runs
 // along axis e / 4.
@@ -32,15 +27,6 @@ override WITH_COLOUR: bool = true;
 @group(0) @binding(3) var<storage, read> classes: array<u32>;
 @group(0) @binding(4) var<storage, read> vertex_base: array<u32>;
 @group(0) @binding(5) var<storage, read> active_cells: array<vec2<u32>>;
-// Marching Cubes tables as a uniform (uniforms do not count against the device's 8 storage
-// buffers per stage). Twin of crate::gpu::types::McTablesUniform: case starts in words 0..257
-// (crate::surface::McTables::case_start), triangle edges, three per triangle, from word
-// MC_TRI_BASE (crate::surface::McTables::triangles_flat_u32).
-const MC_TRI_BASE: u32 = 260u;
-struct McTablesUniform {
-    words: array<vec4<u32>, 1025>,
-}
-
 fn table_word(i: u32) -> u32 {
     return mc.words[i / 4u][i % 4u];
 }

@@ -3,22 +3,7 @@
 // src/gpu/shaders.rs), plus the bookkeeping kernels that run between slabs and at the end of
 // a frame: emit dispatch arguments, slab bases, counts, overflow bits and the indirect draw
 // arguments for the renderer. Rust side: src/gpu/measure.rs.
-
-// Twin of crate::gpu::types::GpuCounters (64 bytes), viewed as u32 words.
-const C_VERTEX_COUNT: u32 = 0u;
-const C_TRIANGLE_COUNT: u32 = 1u;
-const C_OVERFLOW: u32 = 2u;
-const C_SLAB_VERTEX_BASE: u32 = 3u;
-const C_SLAB_TRIANGLE_BASE: u32 = 4u;
-const C_SLAB_OWNED_VERTICES: u32 = 5u;
-const C_SCAN_ACTIVE: u32 = 6u;
-const C_SCAN_VERTICES: u32 = 7u;
-const C_SCAN_TRIANGLES: u32 = 8u;
-const C_AREA: u32 = 9u;
-const C_VOLUME: u32 = 10u;
-const C_VERTEX_CAPACITY: u32 = 11u;
-const C_TRIANGLE_CAPACITY: u32 = 12u;
-const C_ACTIVE_TOTAL: u32 = 13u;
+// The counter words and overflow bits (C_*, OVERFLOW_*) come from counters.wgsl, prepended too.
 
 // Twin of crate::gpu::types::MeasureUniform (64 bytes).
 struct MeasureUniform {
@@ -269,10 +254,10 @@ fn frame_end() {
     counters[C_TRIANGLE_COUNT] = nt;
     var overflow = counters[C_OVERFLOW];
     if (nv > counters[C_VERTEX_CAPACITY]) {
-        overflow |= 1u;
+        overflow |= OVERFLOW_VERTICES;
     }
     if (nt > counters[C_TRIANGLE_CAPACITY]) {
-        overflow |= 2u;
+        overflow |= OVERFLOW_TRIANGLES;
     }
     counters[C_OVERFLOW] = overflow;
     var draw = nt;

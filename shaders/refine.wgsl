@@ -10,10 +10,7 @@
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl, and
 // field_eval and field_project from field.wgsl, both prepended by src/gpu/shaders.rs.
-
-// Word indices into the counters (twin of crate::gpu::types::GpuCounters).
-const C_SCAN_ACTIVE: u32 = 6u;
-const C_VERTEX_CAPACITY: u32 = 11u;
+// So are the counter words (C_*: counters.wgsl) and the brick constants (brick_const.wgsl).
 
 // Twins of crate::surface::analytic::{REFINE_ITERATIONS, PROJECT_ITERATIONS} (REFINE_REACH and
 // REFINE_STEP are in field.wgsl).

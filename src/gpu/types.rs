@@ -142,7 +142,8 @@ pub struct MeasureUniform {
 const _: () = assert!(std::mem::size_of::<MeasureUniform>() == 64);
 
 /// Frame counters on the GPU, read back asynchronously. Twin: the `C_*` word indices in
-/// `shaders/compact.wgsl`, `shaders/emit.wgsl` and `shaders/measure.wgsl`.
+/// `shaders/counters.wgsl` (one per field, checked against the field offsets by the tests of
+/// [`super::shaders`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, Pod, Zeroable, PartialEq)]
 pub struct GpuCounters {
@@ -150,8 +151,9 @@ pub struct GpuCounters {
     pub vertex_count: u32,
     /// Triangles of the surface (may exceed `triangle_capacity`).
     pub triangle_count: u32,
-    /// Bit 0: vertex buffer too small; bit 1: index buffer too small; bit 2
-    /// ([`OVERFLOW_BRICKS`]): the reached bricks did not fit the brick slots.
+    /// Bit 0 ([`OVERFLOW_VERTICES`]): vertex buffer too small; bit 1 ([`OVERFLOW_TRIANGLES`]):
+    /// index buffer too small; bit 2 ([`OVERFLOW_BRICKS`]): the reached bricks did not fit the
+    /// brick slots.
     pub overflow: u32,
     /// Internal: first vertex id of the current slab.
     pub slab_vertex_base: u32,
@@ -184,15 +186,28 @@ pub struct GpuCounters {
 }
 const _: () = assert!(std::mem::size_of::<GpuCounters>() == 64);
 
-/// Word index of the scan totals in [`GpuCounters`] (where the scans write their grand totals).
-pub(crate) const C_SCAN_ACTIVE: u32 = 6;
-pub(crate) const C_SCAN_VERTICES: u32 = 7;
-pub(crate) const C_SCAN_TRIANGLES: u32 = 8;
+/// Word index of a field of [`GpuCounters`].
+macro_rules! counter_word {
+    ($field:ident) => {
+        (std::mem::offset_of!(GpuCounters, $field) / 4) as u32
+    };
+}
+/// Word index of the scan totals in [`GpuCounters`] (where the scans write their grand totals;
+/// `C_SCAN_*` in `shaders/counters.wgsl`).
+pub(crate) const C_SCAN_ACTIVE: u32 = counter_word!(scan_active);
+pub(crate) const C_SCAN_VERTICES: u32 = counter_word!(scan_vertices);
+pub(crate) const C_SCAN_TRIANGLES: u32 = counter_word!(scan_triangles);
+/// Word index of [`GpuCounters::reached_bricks`] (`C_REACHED_BRICKS` in `shaders/counters.wgsl`).
+pub(crate) const C_REACHED_BRICKS: u32 = counter_word!(reached_bricks);
+/// Bit of [`GpuCounters::overflow`]: the vertex buffer was too small (`OVERFLOW_VERTICES` in
+/// `shaders/counters.wgsl`).
+pub const OVERFLOW_VERTICES: u32 = 1;
+/// Bit of [`GpuCounters::overflow`]: the index buffer was too small (`OVERFLOW_TRIANGLES` in
+/// `shaders/counters.wgsl`).
+pub const OVERFLOW_TRIANGLES: u32 = 2;
 /// Bit of [`GpuCounters::overflow`]: the reached bricks of a slab did not fit the brick slots
-/// (`OVERFLOW_BRICKS` in `shaders/density.wgsl`).
+/// (`OVERFLOW_BRICKS` in `shaders/counters.wgsl`).
 pub const OVERFLOW_BRICKS: u32 = 4;
-/// Word index of [`GpuCounters::reached_bricks`].
-pub(crate) const C_REACHED_BRICKS: u32 = 14;
 
 /// One output vertex. Twin: the 9-float records written by `write_vertex` in `shaders/emit.wgsl`.
 /// Vertex buffer layout for the renderer: stride 36 bytes; position `Float32x3` at offset 0 (Å),
@@ -235,14 +250,15 @@ pub fn pack_colour(c: [f32; 3]) -> [u32; 2] {
     [q(c[0]) | (q(c[1]) << 16), q(c[2])]
 }
 
-/// Word where the triangle edges start in [`McTablesUniform`] (`MC_TRI_BASE` in the WGSL).
+/// Word where the triangle edges start in [`McTablesUniform`] (`MC_TRI_BASE` in
+/// `shaders/mc_tables.wgsl`).
 pub const MC_TRI_BASE: usize = 260;
-/// 16-byte rows of [`McTablesUniform`].
+/// 16-byte rows of [`McTablesUniform`] (`MC_TABLE_ROWS` in `shaders/mc_tables.wgsl`).
 pub const MC_TABLE_ROWS: usize = 1025;
 
 /// The Marching Cubes tables as one uniform buffer. Twin: `McTablesUniform` in
-/// `shaders/classify.wgsl` and `shaders/emit.wgsl`. Words `0..257`: case starts; from word
-/// [`MC_TRI_BASE`]: triangle edges, three per triangle.
+/// `shaders/mc_tables.wgsl` (prepended to `shaders/classify.wgsl` and `shaders/emit.wgsl`).
+/// Words `0..257`: case starts; from word [`MC_TRI_BASE`]: triangle edges, three per triangle.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct McTablesUniform {

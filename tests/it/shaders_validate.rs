@@ -1,5 +1,6 @@
 //! Validates every WGSL file under `shaders/` with naga (parse + full validation), no GPU needed,
-//! and checks that the constants the compute shaders hard-code agree with the Rust side.
+//! and checks that the edge table `emit.wgsl` hard-codes agrees with the Rust side (the shared
+//! constants of the preludes are checked by the unit tests of `mdsurf::gpu::shaders`).
 
 use std::path::{Path, PathBuf};
 
@@ -32,9 +33,10 @@ fn validate(name: &str, source: &str) -> Result<(), String> {
 
 /// Every file under `shaders/` is validated: each stage as the engine or the renderer
 /// assembles it (`mdsurf::gpu::shaders::ALL`, `mdsurf::render::SHADERS`, with their shared
-/// uniform files prepended), the shared files alone, and the shared function files
-/// (`brick_samples.wgsl`, `class_entries.wgsl`, `field.wgsl`) inside the stages that include them. A new shader that neither lists
-/// fails here.
+/// uniform and constant files prepended), the shared files alone (the uniforms and the preludes
+/// of `mdsurf::gpu::shaders::PRELUDES`), and the shared function files (`brick_samples.wgsl`,
+/// `class_entries.wgsl`, `field.wgsl`) inside the stages that include them. A new shader that
+/// neither lists fails here.
 #[test]
 fn every_shader_parses_and_validates() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
@@ -46,7 +48,8 @@ fn every_shader_parses_and_validates() {
         .chain(mdsurf::render::SHADERS)
         .copied()
         .collect();
-    let shared = ["slab_uniform.wgsl", "render_view.wgsl"];
+    let mut shared = vec!["slab_uniform.wgsl", "render_view.wgsl"];
+    shared.extend(mdsurf::gpu::shaders::PRELUDES.iter().map(|(n, _)| *n));
     // Shared functions that use names each stage declares: checked inside the stages.
     let included = ["brick_samples.wgsl", "class_entries.wgsl", "field.wgsl"];
     let mut failures = Vec::new();
@@ -122,20 +125,5 @@ fn edge_corner_table_in_emit_matches_the_rust_tables() {
             "edge {e} must run along axis {}",
             e / 4
         );
-    }
-}
-
-#[test]
-fn mc_table_layout_in_the_shaders_matches_the_rust_side() {
-    for name in ["classify.wgsl", "emit.wgsl"] {
-        let path = format!("{}/shaders/{name}", env!("CARGO_MANIFEST_DIR"));
-        let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-        let base = format!(
-            "const MC_TRI_BASE: u32 = {}u;",
-            mdsurf::gpu::types::MC_TRI_BASE
-        );
-        assert!(source.contains(&base), "{name}: expected `{base}`");
-        let rows = format!("array<vec4<u32>, {}>", mdsurf::gpu::types::MC_TABLE_ROWS);
-        assert!(source.contains(&rows), "{name}: expected `{rows}`");
     }
 }

@@ -7,7 +7,8 @@ use super::*;
 /// Samples per sparse brick ([`BRICK`]^3).
 pub const BRICK_SAMPLES: u64 = (BRICK * BRICK * BRICK) as u64;
 
-/// Class entries per brick slot on sparse classes, (`BRICK` + 1)^3 (`shaders/class_entries.wgsl`):
+/// Class entries per brick slot on sparse classes, (`BRICK` + 1)^3 (`CLASS_APRON`^3 in
+/// `shaders/brick_const.wgsl`, used by `shaders/class_entries.wgsl`):
 /// a reached brick holds its own points' class words and vertex bases, and the points just below
 /// it in unreached bricks, whose cells reach into it.
 pub const CLASS_ENTRIES_PER_SLOT: u64 = ((BRICK + 1) * (BRICK + 1) * (BRICK + 1)) as u64;
@@ -91,7 +92,7 @@ pub struct SlotTable<'a> {
 }
 
 impl<'a> SlotTable<'a> {
-    /// The bit set on an unreached brick's word.
+    /// The bit set on an unreached brick's word (`SLOT_UNREACHED` in `shaders/brick_const.wgsl`).
     pub const UNREACHED: u32 = 1 << 31;
 
     /// The table of `plan` in `words` (its first [`FramePlan::brick_count`] words are read).

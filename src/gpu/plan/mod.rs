@@ -26,8 +26,7 @@ pub use buffers::*;
 /// Bytes per voxel of a slab: density 4, colour 12, class word 4, vertex base 4, active cell 8
 /// (on sparse bricks density and colour are held per reached brick instead).
 pub const BYTES_PER_VOXEL: u64 = 32;
-/// Samples per sparse-brick edge (`BRICK` in `shaders/bricks.wgsl`, `density.wgsl` and
-/// `classify.wgsl`); one density thread's run of [`super::density::RUN`] voxels spans a brick row.
+/// Samples per sparse-brick edge (`BRICK` in `shaders/brick_const.wgsl`); one density thread's run of [`super::density::RUN`] voxels spans a brick row.
 pub const BRICK: u32 = 8;
 const _: () = assert!(BRICK == super::density::RUN);
 
