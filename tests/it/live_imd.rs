@@ -488,13 +488,19 @@ fn the_console_pauses_resumes_and_detaches_from_a_running_simulation() {
     let grow = |core: &mut AppCore, more: usize| {
         let from = core.timeline.len;
         while core.timeline.len < from + more {
-            assert!(start.elapsed() < Duration::from_secs(120), "no frames arrive");
+            assert!(
+                start.elapsed() < Duration::from_secs(120),
+                "no frames arrive"
+            );
             core.follow_live();
             std::thread::sleep(Duration::from_millis(20));
         }
     };
     grow(&mut core, 5);
-    assert!(run(&mut core, "imd resume").is_err(), "resumed a running simulation");
+    assert!(
+        run(&mut core, "imd resume").is_err(),
+        "resumed a running simulation"
+    );
     run(&mut core, "imd pause").unwrap();
     assert_eq!(core.status, "simulation paused");
     // The frames already on their way land; then nothing comes while paused.
@@ -518,12 +524,18 @@ fn the_console_pauses_resumes_and_detaches_from_a_running_simulation() {
     core.follow_live();
     let received = core.timeline.len;
     assert!(
-        core.status.contains(&format!("ended after {received} frames"))
-            && core.status.contains("detached from the simulation (it goes on)"),
+        core.status
+            .contains(&format!("ended after {received} frames"))
+            && core
+                .status
+                .contains("detached from the simulation (it goes on)"),
         "{}",
         core.status
     );
-    assert!(run(&mut core, "imd pause").is_err(), "paused after a detach");
+    assert!(
+        run(&mut core, "imd pause").is_err(),
+        "paused after a detach"
+    );
     let last = source.read_frame(received - 1).unwrap();
     assert_eq!(last.positions.len(), source.topology().len());
     assert!(
