@@ -21,15 +21,17 @@
 //! naming the file and frame.
 
 use std::fs::File;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::fast::{TypeTable, empty_topology, free_text, parse_f64, parse_i64, parse_u64};
 use super::fast::{to_vec3, trim};
 use super::lammps_header::{self, Header, item, words};
-use super::native::{NativeFrames, NativeOpen};
+use super::native::NativeOpen;
 use super::prepare::Prepared;
 use super::reader_errors::LammpsError;
-use super::text_scan::{FrameSpan, LineScanner, lines, mark_cut_stream, read_span};
+use super::text_scan::{
+    FrameSpan, LineScanner, SpanFrames, index_spans, lines, mark_cut_stream, read_span,
+};
 use super::{IoError, chem};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
@@ -63,82 +65,32 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
     }
     Ok(NativeOpen {
         topology,
-        frames: Box::new(LammpsFrames {
+        frames: Box::new(SpanFrames {
+            base: "LAMMPS",
             path: path.to_path_buf(),
             file,
             spans,
             damage,
             cached,
+            parse: parse_span,
             _prepared: prepared,
         }),
     })
 }
 
-/// An open LAMMPS dump.
-struct LammpsFrames {
-    path: PathBuf,
-    file: File,
-    spans: Vec<FrameSpan>,
-    damage: Option<IoError>,
-    /// The frame read last (frame 0 at first: the opening reads it twice).
-    cached: Option<Frame>,
-    /// Keeps the decompressed or cleaned copy alive.
-    _prepared: Prepared,
-}
-
-impl NativeFrames for LammpsFrames {
-    fn path(&self) -> &Path {
-        &self.path
-    }
-
-    fn base(&self) -> &'static str {
-        "LAMMPS"
-    }
-
-    fn len(&self) -> usize {
-        self.spans.len()
-    }
-
-    fn damage(&self) -> Option<&IoError> {
-        self.damage.as_ref()
-    }
-
-    fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
-        if let Some(frame) = self.cached.as_ref().filter(|f| f.index == index) {
-            return Ok(frame.clone());
-        }
-        let Some(&span) = self.spans.get(index) else {
-            return Err(IoError::FrameOutOfRange {
-                path: self.path.clone(),
-                frame: index,
-                len: self.spans.len(),
-            });
-        };
-        let bytes = read_span(&mut self.file, &self.path, index, span)?;
-        let (frame, _) = parse_frame(&bytes, span.line, false)
-            .map_err(|m| IoError::bad_frame(&self.path, index, m))?;
-        let frame = Frame { index, ..frame };
-        self.cached = Some(frame.clone());
-        Ok(frame)
-    }
+/// One frame's positions, box and time for [`SpanFrames`] (no topology).
+fn parse_span(
+    bytes: &[u8],
+    first_line: u64,
+) -> Result<Frame, Box<dyn std::error::Error + Send + Sync>> {
+    Ok(parse_frame(bytes, first_line, false)?.0)
 }
 
 /// Finds every frame of `file` (`path` in messages): their spans, and the error of the first
 /// frame that is cut or damaged (the frames before it are whole). Headers are read whole here;
 /// atom lines are only counted (their numbers are parsed on reading).
 fn index(path: &Path, file: &Path) -> Result<(Vec<FrameSpan>, Option<IoError>), IoError> {
-    let mut scan = LineScanner::open(file, path)?;
-    let mut spans = Vec::new();
-    loop {
-        match index_frame(&mut scan).map_err(|e| IoError::unreadable(path, e.to_string()))? {
-            Ok(Some(span)) => spans.push(span),
-            Ok(None) => return Ok((spans, None)),
-            Err(message) => {
-                let damage = IoError::bad_frame(path, spans.len(), message);
-                return Ok((spans, Some(damage)));
-            }
-        }
-    }
+    index_spans(path, file, index_frame)
 }
 
 /// Walks over the next frame (blank lines before it are skipped): its span, `None` at the end

@@ -2,16 +2,19 @@
 //! `\n`, `\r\n` or a lone `\r` (old Mac files), a UTF-8 byte-order mark skipped at the start of
 //! a file, a scanner that walks a file line by line in 1 MiB chunks to index its frames (a
 //! multi-GB trajectory is never held in memory whole), the bytes of one frame read back on
-//! request, and chemfiles' rules for a periodic box (a box they refuse is a [`BoxError`]).
+//! request ([`SpanFrames`], the open file both readers hand out), and chemfiles' rules for a
+//! periodic box (a box they refuse is a [`BoxError`]).
 
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
 use super::IoError;
+use super::native::NativeFrames;
 use super::prepare::Prepared;
+use crate::model::Frame;
 
 /// The UTF-8 byte-order mark some editors put at the start of a text file.
 const BOM: &[u8] = b"\xEF\xBB\xBF";
@@ -160,6 +163,91 @@ impl LineScanner {
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
                 Err(e) => return Err(e),
+            }
+        }
+    }
+}
+
+/// Parses the bytes of one frame whose first line is line `first_line` (from 1), for
+/// [`SpanFrames`]; the error is one line without the file and frame.
+pub(crate) type ParseSpan =
+    fn(&[u8], u64) -> Result<Frame, Box<dyn std::error::Error + Send + Sync>>;
+
+/// An open text trajectory whose frames were indexed into spans: each read parses one span,
+/// and the frame read last is kept (frame 0 at first: the opening reads it for the topology).
+pub(crate) struct SpanFrames {
+    /// The format's name (`GRO`, `LAMMPS`).
+    pub base: &'static str,
+    /// The file as the user named it.
+    pub path: PathBuf,
+    /// The file read (the decompressed or cleaned copy, when there is one).
+    pub file: File,
+    /// The whole frames.
+    pub spans: Vec<FrameSpan>,
+    /// Why the file stops being readable after the spans, when it does.
+    pub damage: Option<IoError>,
+    /// The frame read last.
+    pub cached: Option<Frame>,
+    /// The format's parser.
+    pub parse: ParseSpan,
+    /// Keeps the decompressed or cleaned copy alive.
+    pub _prepared: Prepared,
+}
+
+impl NativeFrames for SpanFrames {
+    fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn base(&self) -> &'static str {
+        self.base
+    }
+
+    fn len(&self) -> usize {
+        self.spans.len()
+    }
+
+    fn damage(&self) -> Option<&IoError> {
+        self.damage.as_ref()
+    }
+
+    fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
+        if let Some(frame) = self.cached.as_ref().filter(|f| f.index == index) {
+            return Ok(frame.clone());
+        }
+        let Some(&span) = self.spans.get(index) else {
+            return Err(IoError::FrameOutOfRange {
+                path: self.path.clone(),
+                frame: index,
+                len: self.spans.len(),
+            });
+        };
+        let bytes = read_span(&mut self.file, &self.path, index, span)?;
+        let frame = (self.parse)(&bytes, span.line)
+            .map_err(|m| IoError::bad_frame(&self.path, index, m))?;
+        let frame = Frame { index, ..frame };
+        self.cached = Some(frame.clone());
+        Ok(frame)
+    }
+}
+
+/// Finds every frame of `file` (`path` in messages) with `next_frame`, which walks over one
+/// frame: its span, `None` at the end of the file, or why the frame is cut or damaged. Returns
+/// the spans and the error of the first bad frame (the frames before it are whole).
+pub(crate) fn index_spans<E: std::fmt::Display>(
+    path: &Path,
+    file: &Path,
+    mut next_frame: impl FnMut(&mut LineScanner) -> std::io::Result<Result<Option<FrameSpan>, E>>,
+) -> Result<(Vec<FrameSpan>, Option<IoError>), IoError> {
+    let mut scan = LineScanner::open(file, path)?;
+    let mut spans = Vec::new();
+    loop {
+        match next_frame(&mut scan).map_err(|e| IoError::unreadable(path, e.to_string()))? {
+            Ok(Some(span)) => spans.push(span),
+            Ok(None) => return Ok((spans, None)),
+            Err(message) => {
+                let damage = IoError::bad_frame(path, spans.len(), message);
+                return Ok((spans, Some(damage)));
             }
         }
     }
