@@ -65,8 +65,7 @@ fn main() -> ExitCode {
     let code = match result {
         Ok(()) => 0,
         Err(err) => {
-            // One line: the error and its causes, outermost first.
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", error_line(&err));
             2
         }
     };
@@ -103,11 +102,47 @@ fn one_line_usage_error(text: &str) -> String {
 /// and, with no session (`XDG_RUNTIME_DIR` unset: SSH, CI, Xvfb), prints a two-line complaint on
 /// stderr that would break our one-line errors. Without a session it has nothing to choose by,
 /// so it is switched off there (`NODEVICE_SELECT`, Mesa's own switch).
+/// One line: the error and its causes, outermost first, leaving out a cause whose text the
+/// line already holds (our typed errors name their cause in their own message).
+fn error_line(err: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
+}
+
 fn quiet_vulkan_device_select() {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none()
         && std::env::var_os("NODEVICE_SELECT").is_none()
     {
         // SAFETY: called first thing in `main`, before any other thread exists.
         unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_line;
+
+    #[test]
+    fn causes_already_in_the_message_are_not_repeated() {
+        let typed = mdsurf::scene::state_file::StateFileError::Read {
+            path: "s.toml".into(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "gone"),
+        };
+        assert_eq!(
+            error_line(&anyhow::Error::new(typed)),
+            "cannot read state file s.toml: gone"
+        );
+        let with_context = anyhow::anyhow!("inner").context("outer");
+        assert_eq!(error_line(&with_context), "outer: inner");
     }
 }
