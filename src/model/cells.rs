@@ -1,11 +1,13 @@
 //! One cell list for every neighbour search in the crate: points binned by a counting sort into
 //! cubic cells of a given edge (Å) over a box, so that the points near a place are read from the
 //! few cells around it. Bond guessing ([`super::bonds`]), exposure counts
-//! ([`super::exposure`]), radius fitting ([`super::sizing`]) and `within` selections build on
-//! it; periodic callers bin wrapped points (and their images) or their own cell keys with
+//! ([`super::exposure`]) and radius fitting ([`super::sizing`]) read [`CellList`] cell by cell;
+//! `within D of SEL` selections (`crate::selection::within`) ask a [`CutoffCells`] (a cell list
+//! with one cutoff and the cells it reaches marked) for the points within D of each atom.
+//! Periodic callers bin wrapped points (and their images) or their own cell keys with
 //! [`sort_by_cell`].
 
-use glam::{IVec3, Vec3};
+use glam::{IVec3, Vec3, Vec3A};
 
 /// Sorts items into cells by counting: `keys[i]` is item `i`'s cell (below `cells`), or
 /// `usize::MAX` to leave it out. Returns `(start, order)`: the items of cell `k` are
@@ -155,6 +157,93 @@ impl CellList {
         (lo, lo + self.edge)
     }
 
+    /// Where `p` (Å) lies on the list, or `None` when it is off the cells (or not finite).
+    #[inline]
+    pub fn locate(&self, p: Vec3) -> Option<Spot> {
+        // The arithmetic of `cell_of` (lane by lane), so that a point is found in the cell it
+        // was put in.
+        let g = (Vec3A::from(p) - Vec3A::from(self.origin)) / self.edge;
+        let inside = g.cmpge(Vec3A::ZERO).all() && g.cmplt(self.dims.as_vec3a()).all();
+        inside.then(|| {
+            let floor = g.floor();
+            let cell = floor.as_ivec3();
+            Spot {
+                cell,
+                flat: self.flat(cell),
+                inside: (g - floor).into(),
+            }
+        })
+    }
+
+    /// Calls `f(first, last)` for each row (along x) of cells around `at` whose nearest point
+    /// lies within √`d2` Å of the position at `at`: flat cells `first..=last`, consecutive
+    /// around the position's column. Stops when `f` returns true and returns whether it did.
+    #[inline]
+    pub fn runs_within(&self, at: &Spot, d2: f32, f: impl FnMut(usize, usize) -> bool) -> bool {
+        let (u, edge) = (at.inside, self.edge);
+        // Squared gap in Å² from the position to the cells at offset `o` along axis `k`.
+        let gap = move |k: usize, o: i32| {
+            let g = match o {
+                0 => 0.0,
+                o if o > 0 => (o as f32 - u[k]) * edge,
+                o => (-o as f32 - 1.0 + u[k]) * edge,
+            };
+            g * g
+        };
+        if d2 <= edge * edge {
+            // The cells next to the position's own are as far as it reaches: gaps tabulated.
+            let mut gaps = [[0.0f32; 3]; 3];
+            for (k, row) in gaps.iter_mut().enumerate() {
+                *row = [gap(k, -1), 0.0, gap(k, 1)];
+            }
+            self.runs(at.cell, 1, d2, |k, o| gaps[k][(o + 1) as usize], f)
+        } else {
+            let reach = (d2.sqrt() / edge).ceil() as i32;
+            self.runs(at.cell, reach, d2, gap, f)
+        }
+    }
+
+    /// [`CellList::runs_within`] for the cells up to `r` from cell `c`, with `gap(k, o)` the
+    /// squared gap to the cells at offset `o` along axis `k`.
+    #[inline(always)]
+    fn runs(
+        &self,
+        c: IVec3,
+        r: i32,
+        d2: f32,
+        gap: impl Fn(usize, i32) -> f32,
+        mut f: impl FnMut(usize, usize) -> bool,
+    ) -> bool {
+        let (x0, x1) = ((c.x - r).max(0), (c.x + r).min(self.dims.x - 1));
+        for z in (c.z - r).max(0)..=(c.z + r).min(self.dims.z - 1) {
+            let gz = gap(2, z - c.z);
+            if gz > d2 {
+                continue;
+            }
+            for y in (c.y - r).max(0)..=(c.y + r).min(self.dims.y - 1) {
+                let gy = gz + gap(1, y - c.y);
+                if gy > d2 {
+                    continue;
+                }
+                // Gaps grow away from the position's own column (gap 0), so the cells in
+                // range are consecutive.
+                let fits = |x: i32| gy + gap(0, x - c.x) <= d2;
+                let (mut first, mut last) = (c.x, c.x);
+                while first > x0 && fits(first - 1) {
+                    first -= 1;
+                }
+                while last < x1 && fits(last + 1) {
+                    last += 1;
+                }
+                let row = ((z * self.dims.y + y) * self.dims.x) as usize;
+                if f(row + first as usize, row + last as usize) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// Calls `f(i, p_i, j, p_j)` once for every pair of points in the same or in touching cells
     /// (ids and positions in Å): every pair closer than [`CellList::edge`] among them. The
     /// caller applies its exact distance test.
@@ -195,6 +284,107 @@ impl CellList {
                 }
             }
         }
+    }
+}
+
+/// Where a position lies on a [`CellList`] ([`CellList::locate`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Spot {
+    /// The cell holding the position.
+    pub cell: IVec3,
+    /// Its flat index.
+    pub flat: usize,
+    /// The position's place inside the cell, 0 to 1 per axis.
+    pub inside: Vec3,
+}
+
+/// A [`CellList`] for one cutoff distance: which binned points lie within it of a position.
+/// The cells some part of which lies within the cutoff of a point are marked, so that a
+/// position far from every point is rejected by one look-up; otherwise the rows of cells
+/// around it are read, skipping cells whose nearest point is beyond the cutoff.
+#[derive(Debug, Clone)]
+pub struct CutoffCells {
+    cells: CellList,
+    /// The cutoff squared, Å².
+    d2: f32,
+    /// True for the cells that some part of lies within the cutoff of a point.
+    reached: Vec<bool>,
+}
+
+impl CutoffCells {
+    /// Bins `items` (id, position in Å; those not finite left out) in cells `cutoff` Å wide
+    /// over their bounding box, padded by two cells, and marks the cells within `cutoff` of a
+    /// point. The cells are made wider (all alike) where the box would need more than eight
+    /// cells per item and 4096 in all, so that a few far apart points need no huge list.
+    pub fn new(items: &[(u32, Vec3)], cutoff: f32) -> CutoffCells {
+        let (lo, hi) = bounds(items.iter().map(|&(_, p)| p));
+        let extent = (hi - lo).max(Vec3::splat(1e-3));
+        let max_cells = (8 * items.len()).max(1 << 12) as f64;
+        let mut edge = cutoff.max(1e-3);
+        let dims_for = |edge: f32| (extent / edge).floor() + 1.0;
+        let total = dims_for(edge).as_dvec3().element_product();
+        if total > max_cells {
+            edge *= (total / max_cells).cbrt() as f32 * 1.01;
+        }
+        // One cell of reach plus one spare (absorbing rounding) on every side.
+        let pad = 2;
+        let dims = dims_for(edge).as_ivec3() + 2 * pad;
+        let cells = CellList::new(items, lo - pad as f32 * edge, edge, dims);
+        let d2 = cutoff * cutoff;
+        let mut reached = vec![false; cells.start.len() - 1];
+        for &p in &cells.points {
+            if let Some(at) = cells.locate(p) {
+                cells.runs_within(&at, d2, |first, last| {
+                    reached[first..=last].fill(true);
+                    false
+                });
+            }
+        }
+        CutoffCells { cells, d2, reached }
+    }
+
+    /// The cell list.
+    pub fn cells(&self) -> &CellList {
+        &self.cells
+    }
+
+    /// Where `p` lies, when in a cell that some point reaches.
+    #[inline]
+    fn reached(&self, p: Vec3) -> Option<Spot> {
+        self.cells.locate(p).filter(|at| self.reached[at.flat])
+    }
+
+    /// True when some binned point lies within the cutoff (inclusive) of `p` (Å).
+    #[inline]
+    pub fn any_within(&self, p: Vec3) -> bool {
+        let Some(at) = self.reached(p) else {
+            return false;
+        };
+        let d2 = self.d2;
+        let close = |points: &[Vec3]| points.iter().any(|q| q.distance_squared(p) <= d2);
+        // The position's own cell first: inside a dense set that settles it.
+        close(self.cells.span(at.flat, at.flat).0)
+            || self
+                .cells
+                .runs_within(&at, d2, |first, last| close(self.cells.span(first, last).0))
+    }
+
+    /// Calls `f(id)` for every binned point within the cutoff (inclusive) of `p` (Å).
+    #[inline]
+    pub fn for_each_within(&self, p: Vec3, mut f: impl FnMut(u32)) {
+        let Some(at) = self.reached(p) else {
+            return;
+        };
+        let d2 = self.d2;
+        self.cells.runs_within(&at, d2, |first, last| {
+            let (points, ids) = self.cells.span(first, last);
+            for (q, &i) in points.iter().zip(ids) {
+                if q.distance_squared(p) <= d2 {
+                    f(i);
+                }
+            }
+            false
+        });
     }
 }
 
