@@ -305,6 +305,9 @@ pub struct Spot {
 #[derive(Debug, Clone)]
 pub struct CutoffCells {
     cells: CellList,
+    /// The list's positions (Å) in its order, 16-byte aligned: the distance tests of the
+    /// queries run on these (SIMD lanes), not on the list's packed copies.
+    aligned: Vec<Vec3A>,
     /// The cutoff squared, Å².
     d2: f32,
     /// True for the cells that some part of lies within the cutoff of a point.
@@ -340,7 +343,21 @@ impl CutoffCells {
                 });
             }
         }
-        CutoffCells { cells, d2, reached }
+        let aligned = cells.points.iter().map(|&p| Vec3A::from(p)).collect();
+        CutoffCells {
+            cells,
+            aligned,
+            d2,
+            reached,
+        }
+    }
+
+    /// The aligned positions (Å) of the points in flat cells `first..=last`, with their ids.
+    #[inline]
+    fn span(&self, first: usize, last: usize) -> (&[Vec3A], &[u32]) {
+        let start = &self.cells.start;
+        let (a, b) = (start[first] as usize, start[last + 1] as usize);
+        (&self.aligned[a..b], &self.cells.ids[a..b])
     }
 
     /// The cell list.
@@ -350,34 +367,36 @@ impl CutoffCells {
 
     /// Where `p` lies, when in a cell that some point reaches.
     #[inline]
-    fn reached(&self, p: Vec3) -> Option<Spot> {
-        self.cells.locate(p).filter(|at| self.reached[at.flat])
+    fn reached(&self, p: Vec3A) -> Option<Spot> {
+        self.cells
+            .locate(p.into())
+            .filter(|at| self.reached[at.flat])
     }
 
     /// True when some binned point lies within the cutoff (inclusive) of `p` (Å).
     #[inline]
-    pub fn any_within(&self, p: Vec3) -> bool {
+    pub fn any_within(&self, p: Vec3A) -> bool {
         let Some(at) = self.reached(p) else {
             return false;
         };
         let d2 = self.d2;
-        let close = |points: &[Vec3]| points.iter().any(|q| q.distance_squared(p) <= d2);
+        let close = |points: &[Vec3A]| points.iter().any(|q| q.distance_squared(p) <= d2);
         // The position's own cell first: inside a dense set that settles it.
-        close(self.cells.span(at.flat, at.flat).0)
+        close(self.span(at.flat, at.flat).0)
             || self
                 .cells
-                .runs_within(&at, d2, |first, last| close(self.cells.span(first, last).0))
+                .runs_within(&at, d2, |first, last| close(self.span(first, last).0))
     }
 
     /// Calls `f(id)` for every binned point within the cutoff (inclusive) of `p` (Å).
     #[inline]
-    pub fn for_each_within(&self, p: Vec3, mut f: impl FnMut(u32)) {
+    pub fn for_each_within(&self, p: Vec3A, mut f: impl FnMut(u32)) {
         let Some(at) = self.reached(p) else {
             return;
         };
         let d2 = self.d2;
         self.cells.runs_within(&at, d2, |first, last| {
-            let (points, ids) = self.cells.span(first, last);
+            let (points, ids) = self.span(first, last);
             for (q, &i) in points.iter().zip(ids) {
                 if q.distance_squared(p) <= d2 {
                     f(i);

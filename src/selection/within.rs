@@ -75,9 +75,7 @@ pub(crate) fn within(
         let marks: Vec<AtomicBool> = (0..targets.len()).map(|_| AtomicBool::new(false)).collect();
         sources.par_chunks(CHUNK).for_each(|chunk| {
             for p in chunk.iter().filter_map(|&s| place(s as usize)) {
-                near.for_each_within(p.into(), |i| {
-                    marks[i as usize].store(true, Ordering::Relaxed)
-                });
+                near.for_each_within(p, |i| marks[i as usize].store(true, Ordering::Relaxed));
             }
         });
         out.iter_mut()
@@ -98,7 +96,7 @@ pub(crate) fn within(
                 for (j, o) in chunk.iter_mut().enumerate() {
                     let i = k * CHUNK + j;
                     *o = targets[i]
-                        && (is_source[i] || place(i).is_some_and(|p| near.any_within(p.into())));
+                        && (is_source[i] || place(i).is_some_and(|p| near.any_within(p)));
                 }
             });
     }
