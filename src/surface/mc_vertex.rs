@@ -22,9 +22,9 @@ pub struct EdgeVertex {
 /// 2 = z), which the isovalue `iso` must cross (`rho(a) >= iso` differs from `rho(b) >= iso`).
 ///
 /// - `t = (iso - rho(a)) / (rho(b) - rho(a))`, position `p_a + t (p_b - p_a)` (Å);
-/// - normal: `-(g_a + t (g_b - g_a))` normalised, where `g` is the central-difference gradient
-///   (one-sided on the grid boundary) in Å⁻¹; if that vanishes, the edge direction pointing from
-///   the inside sample to the outside one;
+/// - normal: `n_a + t (n_b - n_a)` normalised, where `n = -g / |g|` and `g` is the
+///   central-difference gradient (one-sided on the grid boundary) in Å⁻¹; if that vanishes, the
+///   edge direction pointing from the inside sample to the outside one;
 /// - colour: `c_a + t (c_b - c_a)` from the colour volume, else white.
 pub fn edge_vertex(
     grid: &GridSpec,
@@ -98,9 +98,11 @@ pub fn edge_geometry(
     b[axis] += 1;
     let (va, vb) = (value(a), value(b));
     let (position, t) = edge_position(grid, va, vb, iso, a, axis);
-    let ga = gradient_with(grid, &value, a);
-    let gb = gradient_with(grid, &value, b);
-    let g = -(ga + t * (gb - ga));
+    // Each end's normal first (normalised -grad rho), then interpolated and normalised again
+    // (DESIGN section 2; the GPU's emit.wgsl does the same).
+    let na = (-gradient_with(grid, &value, a)).normalize_or_zero();
+    let nb = (-gradient_with(grid, &value, b)).normalize_or_zero();
+    let g = na + t * (nb - na);
     let normal = if g.length_squared() > 0.0 && g.is_finite() {
         g.normalize()
     } else {
