@@ -32,7 +32,7 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use super::bin::{AtomBins, sample_range};
-use super::density::fill_planes;
+use super::density::{SampleLattice, fill_planes};
 use super::mc_vertex::{edge_t, lerp_colour};
 use super::{GridSpec, SurfaceParams};
 
@@ -392,7 +392,7 @@ impl LayerCtx<'_> {
         fill_planes(
             &self.bins.atoms,
             self.bins.slab(slab),
-            self.grid,
+            &SampleLattice::of_grid(self.grid),
             z0 as u32,
             z1,
             vals,

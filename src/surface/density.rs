@@ -75,7 +75,45 @@ pub fn compute_binned_into(
     with_colour: bool,
     out: &mut DensityVolume,
 ) {
-    let [nx, ny, nz] = grid.dims.map(|d| d as usize);
+    let lattice = SampleLattice::of_grid(grid);
+    fill_binned_into(bins, &lattice, params.isovalue, with_colour, out);
+}
+
+/// The samples a density kernel adds to: sample `(i, j, k)` (each from 0 to `dims - 1`) at
+/// `origin + (i h_x, j h_y, k h_z)`. The dense engine's grid has one spacing; the periodic
+/// engine's box has one per axis and local coordinates (origin 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SampleLattice {
+    /// Position of sample (0, 0, 0) in Å, in the atoms' coordinates.
+    pub origin: [f32; 3],
+    /// Spacing per axis in Å.
+    pub spacing: [f32; 3],
+    /// Samples per axis.
+    pub dims: [u32; 3],
+}
+
+impl SampleLattice {
+    /// The samples of a dense grid.
+    pub fn of_grid(grid: &GridSpec) -> SampleLattice {
+        SampleLattice {
+            origin: grid.origin.to_array(),
+            spacing: [grid.spacing; 3],
+            dims: grid.dims,
+        }
+    }
+}
+
+/// Density (and colour volume, `sum w colour / iso`, when `with_colour`) of the binned atoms
+/// on `lattice` into `out`, slab by slab in parallel, reusing `out`'s buffers when they
+/// already have the lattice's size. The dense and the periodic engine both fill through it.
+pub(crate) fn fill_binned_into(
+    bins: &AtomBins,
+    lattice: &SampleLattice,
+    iso: f32,
+    with_colour: bool,
+    out: &mut DensityVolume,
+) {
+    let [nx, ny, nz] = lattice.dims.map(|d| d as usize);
     let plane = nx * ny;
     let slab_len = (plane * bins.slab_planes as usize).max(1);
     let total = plane * nz;
@@ -89,7 +127,7 @@ pub fn compute_binned_into(
         out.colours = None;
         out.colours = Some(vec![[0.0f32; 3]; total]);
     }
-    let inv_iso = 1.0 / params.isovalue;
+    let inv_iso = 1.0 / iso;
     let values = &mut out.values;
     match out.colours.as_mut() {
         None => values
@@ -97,7 +135,7 @@ pub fn compute_binned_into(
             .enumerate()
             .for_each(|(s, vals)| {
                 vals.fill(0.0);
-                fill_slab(bins, grid, s, vals, None);
+                fill_slab(bins, lattice, s, vals, None);
             }),
         Some(cols) => values
             .par_chunks_mut(slab_len)
@@ -114,7 +152,7 @@ pub fn compute_binned_into(
                         plane.resize(vals.len(), 0.0);
                     }
                     let [r, g, b] = planes;
-                    fill_slab(bins, grid, s, vals, Some([&mut *r, &mut *g, &mut *b]));
+                    fill_slab(bins, lattice, s, vals, Some([&mut *r, &mut *g, &mut *b]));
                     // Zipped, so the interleaving runs without bounds checks.
                     for (c, ((r, g), b)) in
                         cols.iter_mut().zip(r.iter().zip(g.iter()).zip(b.iter()))
@@ -192,14 +230,14 @@ impl Lanes {
 /// Adds every atom of slab `s` to that slab's samples (`vals`, and `cols` when colouring).
 fn fill_slab(
     bins: &AtomBins,
-    grid: &GridSpec,
+    lattice: &SampleLattice,
     s: usize,
     vals: &mut [f32],
     cols: Option<ColourPlanes<'_>>,
 ) {
     let z0 = s as u32 * bins.slab_planes;
-    let z1 = (z0 + bins.slab_planes).min(grid.dims[2]) - 1;
-    fill_planes(&bins.atoms, bins.slab(s), grid, z0, z1, vals, cols);
+    let z1 = (z0 + bins.slab_planes).min(lattice.dims[2]) - 1;
+    fill_planes(&bins.atoms, bins.slab(s), lattice, z0, z1, vals, cols);
 }
 
 /// Colour sums of a run of samples, one plane per channel (red, green, blue; laid out as the
@@ -215,7 +253,7 @@ pub(crate) type ColourPlanes<'a> = [&'a mut [f32]; 3];
 pub(crate) fn fill_planes(
     atoms: &[super::bin::PreparedAtom],
     list: &[u32],
-    grid: &GridSpec,
+    lattice: &SampleLattice,
     z0: u32,
     z1: u32,
     vals: &mut [f32],
@@ -224,10 +262,10 @@ pub(crate) fn fill_planes(
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        unsafe { fill_planes_avx2(atoms, list, grid, z0, z1, vals, cols) };
+        unsafe { fill_planes_avx2(atoms, list, lattice, z0, z1, vals, cols) };
         return;
     }
-    fill_planes_body(atoms, list, grid, z0, z1, vals, cols);
+    fill_planes_body(atoms, list, lattice, z0, z1, vals, cols);
 }
 
 /// [`fill_planes`] compiled for AVX2, whose 8-wide registers halve the instructions of the
@@ -238,13 +276,13 @@ pub(crate) fn fill_planes(
 fn fill_planes_avx2(
     atoms: &[super::bin::PreparedAtom],
     list: &[u32],
-    grid: &GridSpec,
+    lattice: &SampleLattice,
     z0: u32,
     z1: u32,
     vals: &mut [f32],
     cols: Option<ColourPlanes<'_>>,
 ) {
-    fill_planes_body(atoms, list, grid, z0, z1, vals, cols);
+    fill_planes_body(atoms, list, lattice, z0, z1, vals, cols);
 }
 
 /// The body of [`fill_planes`], inlined into each instruction-set variant.
@@ -252,14 +290,14 @@ fn fill_planes_avx2(
 fn fill_planes_body(
     atoms: &[super::bin::PreparedAtom],
     list: &[u32],
-    grid: &GridSpec,
+    lattice: &SampleLattice,
     z0: u32,
     z1: u32,
     vals: &mut [f32],
     mut cols: Option<ColourPlanes<'_>>,
 ) {
-    let [nx, ny, nz] = grid.dims;
-    let (o, h) = (grid.origin, grid.spacing);
+    let [nx, ny, nz] = lattice.dims;
+    let (o, h) = (lattice.origin, lattice.spacing);
     let plane = nx as usize * ny as usize;
     let (mut tx, mut ty, mut tz) = (
         AxisTerms::default(),
@@ -270,9 +308,9 @@ fn fill_planes_body(
         let atom = &atoms[a as usize];
         let [px, py, pz] = atom.pos;
         let (Some(rx), Some(ry), Some(rz)) = (
-            sample_range(px, atom.cut, o.x, h, nx),
-            sample_range(py, atom.cut, o.y, h, ny),
-            sample_range(pz, atom.cut, o.z, h, nz),
+            sample_range(px, atom.cut, o[0], h[0], nx),
+            sample_range(py, atom.cut, o[1], h[1], ny),
+            sample_range(pz, atom.cut, o[2], h[2], nz),
         ) else {
             continue;
         };
@@ -281,9 +319,9 @@ fn fill_planes_body(
             continue;
         }
         let cut2 = atom.cut2;
-        if !(tx.fill(rx.0, rx.1, o.x, h, px, atom.k, cut2)
-            && ty.fill(ry.0, ry.1, o.y, h, py, atom.k, cut2)
-            && tz.fill(k0, k1, o.z, h, pz, atom.k, cut2))
+        if !(tx.fill(rx.0, rx.1, o[0], h[0], px, atom.k, cut2)
+            && ty.fill(ry.0, ry.1, o[1], h[1], py, atom.k, cut2)
+            && tz.fill(k0, k1, o[2], h[2], pz, atom.k, cut2))
         {
             continue;
         }
@@ -389,13 +427,14 @@ mod tests {
             let n = grid.voxel_count() as usize;
             let list: Vec<u32> = (0..bins.atoms.len() as u32).collect();
             let z1 = grid.dims[2] - 1;
+            let lattice = SampleLattice::of_grid(&grid);
             let (mut v1, mut c1) = (vec![0.0f32; n], [(); 3].map(|_| vec![0.0f32; n]));
             let (mut v2, mut c2) = (vec![0.0f32; n], [(); 3].map(|_| vec![0.0f32; n]));
             let [r1, g1, b1] = &mut c1;
             fill_planes(
                 &bins.atoms,
                 &list,
-                &grid,
+                &lattice,
                 0,
                 z1,
                 &mut v1,
@@ -405,7 +444,7 @@ mod tests {
             fill_planes_body(
                 &bins.atoms,
                 &list,
-                &grid,
+                &lattice,
                 0,
                 z1,
                 &mut v2,

@@ -1,7 +1,7 @@
 //! Stage 3 of the periodic engine: Marching Cubes over every cell of the periodic grid, with
 //! wrap-around (cell `N - 1`'s upper corners are samples 0), giving the mesh inside one box.
 //!
-//! Data flow: [`PeriodicVolume`] + [`PeriodicGrid`] + I -> [`Mesh`] (local coordinates, Å from
+//! Data flow: [`DensityVolume`] + [`PeriodicGrid`] + I -> [`Mesh`] (local coordinates, Å from
 //! the box origin) -> area and volume ([`super::measure`]).
 //!
 //! The walk is that of [`crate::surface::marching_cubes`] on the `(N_x + 1) x (N_y + 1) x
@@ -17,7 +17,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::density::{PeriodicGrid, PeriodicVolume};
+use super::density::PeriodicGrid;
+use crate::surface::DensityVolume;
 use crate::surface::Mesh;
 use crate::surface::marching_cubes::{PlaneSource, SlabMesh, march_slab, merge, word};
 use crate::surface::mc_vertex::{edge_t, lerp_colour};
@@ -25,7 +26,7 @@ use crate::surface::tables::McTables;
 
 /// The isosurface `rho = iso` of `vol` inside one box of `grid`, positions local (Å from the
 /// box origin), outward unit normals, colours (white without a colour volume).
-pub fn extract(grid: &PeriodicGrid, vol: &PeriodicVolume, iso: f32) -> Mesh {
+pub fn extract(grid: &PeriodicGrid, vol: &DensityVolume, iso: f32) -> Mesh {
     if vol.values.len() != grid.len()
         || vol.colours.as_ref().is_some_and(|c| c.len() != grid.len())
         || grid.is_empty()
@@ -54,7 +55,7 @@ pub fn extract(grid: &PeriodicGrid, vol: &PeriodicVolume, iso: f32) -> Mesh {
 /// What every slab reads.
 struct Ctx<'a> {
     grid: &'a PeriodicGrid,
-    vol: &'a PeriodicVolume,
+    vol: &'a DensityVolume,
     iso: f32,
     tables: &'static McTables,
     /// Points per axis, `N + 1`.
@@ -77,7 +78,7 @@ pub struct Vertex {
 /// must be crossed (`rho(a) >= iso` differs from `rho(b) >= iso`).
 pub fn periodic_edge_vertex(
     grid: &PeriodicGrid,
-    vol: &PeriodicVolume,
+    vol: &DensityVolume,
     iso: f32,
     a: [usize; 3],
     axis: usize,

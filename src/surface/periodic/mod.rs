@@ -34,8 +34,8 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::{
-    AtomSet, GridSpec, Mesh, StageTimings, SurfaceError, SurfaceOutput, SurfaceParams,
-    available_memory_bytes,
+    AtomSet, DensityVolume, GridSpec, Mesh, StageTimings, SurfaceError, SurfaceOutput,
+    SurfaceParams, available_memory_bytes,
 };
 
 /// The largest image count along one axis for `--replicate`.
@@ -211,7 +211,7 @@ pub enum PeriodicError {
 #[derive(Debug, Default)]
 pub struct PeriodicEngine {
     memory_limit: Option<u64>,
-    volume: density::PeriodicVolume,
+    volume: DensityVolume,
 }
 
 impl PeriodicEngine {
@@ -250,8 +250,13 @@ impl PeriodicEngine {
         let images = density::bin_images(atoms, params, &grid);
         let bin_ms = ms(t);
         let t = Instant::now();
-        self.volume
-            .compute(&images, &grid, params.isovalue, with_colour);
+        density::compute_volume(
+            &images,
+            &grid,
+            params.isovalue,
+            with_colour,
+            &mut self.volume,
+        );
         drop(images);
         let density_ms = ms(t);
         let t = Instant::now();
@@ -326,7 +331,7 @@ impl PeriodicEngine {
     }
 
     /// The density volume of the last computation (for tests).
-    pub fn last_volume(&self) -> &density::PeriodicVolume {
+    pub fn last_volume(&self) -> &DensityVolume {
         &self.volume
     }
 }

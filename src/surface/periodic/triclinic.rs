@@ -25,8 +25,9 @@ use glam::{DMat3, Vec3};
 use rayon::prelude::*;
 
 use super::cell::TriclinicCell;
-use super::density::{PeriodicGrid, PeriodicVolume};
+use super::density::PeriodicGrid;
 use super::{Replicate, mc, measure, replicate_mesh};
+use crate::surface::DensityVolume;
 use crate::surface::{
     AtomSet, GridSpec, Mesh, StageTimings, SurfaceError, SurfaceOutput, SurfaceParams,
 };
@@ -163,7 +164,7 @@ fn span(g: f32, half: f64, n: u32) -> Option<(u32, u32)> {
 /// Fills `vol` with the density (and colour divided by `iso` when `with_colour`) of `images`
 /// at the samples of `geo`, reusing the buffers when the grid keeps its size.
 pub fn fill(
-    vol: &mut PeriodicVolume,
+    vol: &mut DensityVolume,
     images: &[Image],
     geo: &Geometry,
     iso: f32,
@@ -317,7 +318,7 @@ pub fn to_cartesian(mesh: Mesh, geo: &Geometry, replicate: Replicate) -> Mesh {
 /// and volume (Å³) per cell times the number of images. `memory` is the byte limit for the
 /// grid; `vol` keeps the density between calls.
 pub fn compute(
-    vol: &mut PeriodicVolume,
+    vol: &mut DensityVolume,
     memory: u64,
     atoms: &AtomSet<'_>,
     params: &SurfaceParams,
