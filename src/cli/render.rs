@@ -47,8 +47,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
         )?),
         None => state,
     };
+    // Without --frame, a script's pictures go on from the frame its last `frame` line chose.
+    let mut args = args;
+    if args.script.is_some() && args.frame.is_none() {
+        args.frame = state.as_ref().map(|s| s.trajectory.frame);
+    }
     let transforms = args.transforms.options(state.as_ref());
-    let first = args.frames.map_or(args.frame, |r| r.start);
+    let first = args.frames.map_or(args.frame.unwrap_or(0), |r| r.start);
     let live = args.live.options(args.input.traj.as_deref())?;
     if live.is_some() {
         check_live_output(&args)?;
@@ -438,16 +443,13 @@ struct Images {
 /// without --frames, every frame until it ends.
 fn images(args: &RenderArgs, state: Option<&StateFile>, system: &System) -> Result<Images> {
     let (len, frames_path) = (system.len(), &system.frames_path);
+    let frame = args.frame.unwrap_or(0);
     let mut frames = match args.frames {
         Some(r) => r.indices(len),
         // A running simulation: every frame from --frame on, until the run ends.
-        None if system.trajectory.is_live() => (args.frame..len).collect(),
-        None if args.frame < len => vec![args.frame],
-        None => bail!(
-            "{}: no frame {} (it has {len})",
-            frames_path.display(),
-            args.frame
-        ),
+        None if system.trajectory.is_live() => (frame..len).collect(),
+        None if frame < len => vec![frame],
+        None => bail!("{}: no frame {frame} (it has {len})", frames_path.display()),
     };
     if frames.is_empty() {
         bail!(
@@ -473,7 +475,7 @@ fn images(args: &RenderArgs, state: Option<&StateFile>, system: &System) -> Resu
                     .find(|r| r.name == name)
                     .map(|r| r.opacity)
             };
-            let shots = script.shots(args.frame, len, opacity).map_err(|e| {
+            let shots = script.shots(frame, len, opacity).map_err(|e| {
                 let file = args.scene.state.as_deref().unwrap_or(Path::new("state"));
                 anyhow!("{}: {e}", file.display())
             })?;

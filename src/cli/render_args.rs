@@ -30,9 +30,10 @@ pub struct RenderArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub transforms: TransformArgs,
-    /// Frame to render (from 0) when --frames is not given.
-    #[arg(long, default_value_t = 0)]
-    pub frame: usize,
+    /// Frame to render (from 0) when --frames is not given [default: 0; with --script, the
+    /// frame the script leaves].
+    #[arg(long)]
+    pub frame: Option<usize>,
     /// Frames to render, START:STOP:STEP (STOP exclusive); needs `{frame}` in the output name.
     #[arg(long, value_name = "A:B[:S]")]
     pub frames: Option<FrameRange>,

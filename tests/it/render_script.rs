@@ -1,7 +1,8 @@
 //! `mdsurf render --script FILE` (issue 30): a console session replayed headless. The script's
 //! `screenshot` lines write their pictures, `view save` writes the state it built (the
 //! representations added and edited, the frame, the look), and `-o` then draws the scene the
-//! script left: the same picture as `render --state` of the saved view. A bad line stops the
+//! script left, at the frame it left: the same picture as `render --state` of the saved view at
+//! that frame. A bad line stops the
 //! run with one line naming the script and the line, and no `-o` file is written.
 
 use mdsurf::render::RgbaImage;
@@ -33,7 +34,8 @@ fn a_script_builds_the_scene_its_pictures_and_the_output_show() {
     std::fs::write(dir.path().join("s.txt"), SCRIPT).unwrap();
     let (top, traj) = (data("adk_open.pdb"), data("adk_dims.dcd"));
     let files = [top.as_str(), traj.as_str()];
-    let common = ["--backend", "cpu", "--size", "160x120", "--frame", "3"];
+    let common = ["--backend", "cpu", "--size", "160x120"];
+    // No --frame: -o shows the frame the script left (its `frame 3`).
     let run = mdsurf(
         dir.path(),
         &[
@@ -78,7 +80,7 @@ fn a_script_builds_the_scene_its_pictures_and_the_output_show() {
         &[
             &["render"],
             &files[..],
-            &["--state", "view.toml", "-o", "again.png"],
+            &["--state", "view.toml", "-o", "again.png", "--frame", "3"],
             &common[..],
         ]
         .concat(),
@@ -87,6 +89,22 @@ fn a_script_builds_the_scene_its_pictures_and_the_output_show() {
     assert!(
         output.close_to(&read("again.png")),
         "--script and --state differ"
+    );
+    // ... and not frame 0, which --state alone starts from.
+    let start = mdsurf(
+        dir.path(),
+        &[
+            &["render"],
+            &files[..],
+            &["--state", "view.toml", "-o", "start.png"],
+            &common[..],
+        ]
+        .concat(),
+    );
+    assert_eq!(start.code, 0, "{}", start.stderr);
+    assert!(
+        !output.close_to(&read("start.png")),
+        "-o after a script drew frame 0, not the script's frame 3"
     );
     assert!(
         output.close_to(&last),
