@@ -90,6 +90,10 @@ pub trait FrameSource: Send + Sync {
     fn live_control(&self, _action: LiveAction) -> Result<(), LiveControlError> {
         Err(LiveControlError::NotImd)
     }
+    /// True while [`FrameSource::live_control`] can reach a running simulation (`--imd`).
+    fn live_controllable(&self) -> bool {
+        false
+    }
 }
 
 /// Frames held in memory.
@@ -241,6 +245,9 @@ impl FrameSource for StreamedSource {
     }
     fn live_control(&self, action: LiveAction) -> Result<(), LiveControlError> {
         self.streamer.trajectory().live_control(action)
+    }
+    fn live_controllable(&self) -> bool {
+        self.streamer.trajectory().live_controllable()
     }
 }
 

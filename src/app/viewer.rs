@@ -473,6 +473,7 @@ impl eframe::App for Viewer {
                         self.reload_transformed(ui.ctx());
                     }
                     ui.separator();
+                    cmds.extend(super::simulation_panel::simulation_ui(ui, &self.core));
                     let frames = self.core.timeline.len;
                     cmds.extend(export_ui(
                         ui,

@@ -114,6 +114,11 @@ pub(crate) trait LiveProgress: Send + Sync {
     fn control(&self, _action: LiveAction) -> Result<(), LiveControlError> {
         Err(LiveControlError::NotImd)
     }
+    /// True while [`LiveProgress::control`] can reach the simulation (an IMD stream that has
+    /// not ended).
+    fn controllable(&self) -> bool {
+        false
+    }
 }
 
 /// What the viewer can ask of a running simulation (IMD version 2).
@@ -149,6 +154,14 @@ impl LiveProgress for Shared {
 
     fn ended(&self) -> Option<String> {
         self.lock().ended.as_ref().map(|e| e.to_string())
+    }
+
+    fn controllable(&self) -> bool {
+        let control = self
+            .control
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        control.is_some() && self.lock().ended.is_none()
     }
 
     fn control(&self, action: LiveAction) -> Result<(), LiveControlError> {

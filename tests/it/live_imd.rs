@@ -36,7 +36,7 @@ fn gmx(dir: &Path, args: &[&str]) {
 
 /// A box of 176 SPC/E waters (1.8 nm) and a run input of `steps` MD steps writing positions to
 /// `md.trr` every 5 steps; returns the structure file.
-fn water_box(dir: &Path, steps: i64) -> PathBuf {
+pub(crate) fn water_box(dir: &Path, steps: i64) -> PathBuf {
     gmx(
         dir,
         &[
@@ -96,7 +96,7 @@ fn water_box(dir: &Path, steps: i64) -> PathBuf {
 }
 
 /// A port nothing listens on (free a moment ago).
-fn free_port() -> u16 {
+pub(crate) fn free_port() -> u16 {
     TcpListener::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
@@ -105,10 +105,10 @@ fn free_port() -> u16 {
 }
 
 /// `gmx mdrun` on `md.tpr` in `dir`, waiting for an IMD client on `port`; killed when dropped.
-struct Mdrun(Child);
+pub(crate) struct Mdrun(pub(crate) Child);
 
 impl Mdrun {
-    fn start(dir: &Path, port: u16) -> Mdrun {
+    pub(crate) fn start(dir: &Path, port: u16) -> Mdrun {
         let child = Command::new("gmx")
             .args([
                 "mdrun", "-s", "md.tpr", "-deffnm", "md", "-nt", "1", "-imdwait",
@@ -136,7 +136,7 @@ impl Drop for Mdrun {
     }
 }
 
-fn options(port: u16) -> LiveOptions {
+pub(crate) fn options(port: u16) -> LiveOptions {
     let mut options = LiveOptions::new(&format!("127.0.0.1:{port}"));
     options.connect_timeout = Duration::from_secs(60);
     options.frame_timeout = Duration::from_secs(60);
@@ -338,22 +338,14 @@ fn no_engine_is_one_line() {
 
 #[test]
 fn the_viewer_follows_the_newest_frame_and_keeps_them_when_the_engine_dies() {
-    use mdsurf::app::source::open_live_with;
-    use mdsurf::app::state::AppCore;
-    use mdsurf::app::worker::Worker;
-    use mdsurf::surface::CpuEngine;
-
-    let dir = tempfile::tempdir().unwrap();
-    let top = water_box(dir.path(), 1_000_000);
-    let port = free_port();
-    let mut engine = Mdrun::start(dir.path(), port);
-    let live = io::LiveSource::Imd(options(port));
-    let source = open_live_with(&top, &live, &Default::default()).unwrap();
+    let LiveViewer {
+        dir: _dir,
+        mut engine,
+        port,
+        source,
+        mut core,
+    } = LiveViewer::start();
     assert!(source.is_live());
-    let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
-    let mut core = AppCore::new(worker);
-    core.base.spacing = 2.0;
-    core.set_source(source.clone());
     // The timeline grows as frames arrive and the window shows the newest one.
     let start = std::time::Instant::now();
     assert_eq!(
@@ -450,96 +442,43 @@ fn render_makes_a_movie_of_a_run_until_it_ends() {
     assert!(run.last_line().contains("--frames :N"), "{}", run.stderr);
 }
 
-/// The console's `imd pause`, `imd resume` and `imd detach` (issue 35): a paused GROMACS run
-/// sends no more frames until it is resumed; after a detach the frames received stay, the status
-/// says so, and the simulation goes on without us.
-#[test]
-fn the_console_pauses_resumes_and_detaches_from_a_running_simulation() {
-    use mdsurf::app::console;
-    use mdsurf::app::source::open_live_with;
-    use mdsurf::app::state::AppCore;
-    use mdsurf::app::worker::Worker;
-    use mdsurf::surface::CpuEngine;
+/// The viewer's core on a running GROMACS simulation (a water box of a million steps, a 2 Å
+/// grid), as the window opens it with `--imd`.
+pub(crate) struct LiveViewer {
+    /// The run's files; removed when dropped.
+    pub(crate) dir: tempfile::TempDir,
+    /// The engine; killed when dropped.
+    pub(crate) engine: Mdrun,
+    /// The IMD port the engine listens on.
+    pub(crate) port: u16,
+    /// The frames received.
+    pub(crate) source: std::sync::Arc<dyn mdsurf::app::source::FrameSource>,
+    /// The app core showing them.
+    pub(crate) core: mdsurf::app::AppCore,
+}
 
-    let dir = tempfile::tempdir().unwrap();
-    let top = water_box(dir.path(), 1_000_000);
-    let port = free_port();
-    let mut engine = Mdrun::start(dir.path(), port);
-    let live = io::LiveSource::Imd(options(port));
-    let source = open_live_with(&top, &live, &Default::default()).unwrap();
-    let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
-    let mut core = AppCore::new(worker);
-    core.base.spacing = 2.0;
-    core.set_source(source.clone());
-    let start = std::time::Instant::now();
-    // Runs a console line against the core, as the window's console does.
-    let run = |core: &mut AppCore, line: &str| {
-        let cmd = console::parse(line).unwrap().expect("a command");
-        let outcome = cmd.resolve(core).map_err(|e| e.to_string())?;
-        for c in outcome.commands {
-            core.apply(c);
+impl LiveViewer {
+    pub(crate) fn start() -> LiveViewer {
+        use mdsurf::app::source::open_live_with;
+        use mdsurf::app::worker::Worker;
+        use mdsurf::surface::CpuEngine;
+
+        let dir = tempfile::tempdir().unwrap();
+        let top = water_box(dir.path(), 1_000_000);
+        let port = free_port();
+        let engine = Mdrun::start(dir.path(), port);
+        let live = io::LiveSource::Imd(options(port));
+        let source = open_live_with(&top, &live, &Default::default()).unwrap();
+        let worker = Worker::spawn(Box::new(CpuEngine::new()), Box::new(|| {}));
+        let mut core = mdsurf::app::AppCore::new(worker);
+        core.base.spacing = 2.0;
+        core.set_source(source.clone());
+        LiveViewer {
+            dir,
+            engine,
+            port,
+            source,
+            core,
         }
-        match core.error.take() {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
-    };
-    // Waits until `more` frames beyond `from` have arrived.
-    let grow = |core: &mut AppCore, more: usize| {
-        let from = core.timeline.len;
-        while core.timeline.len < from + more {
-            assert!(
-                start.elapsed() < Duration::from_secs(120),
-                "no frames arrive"
-            );
-            core.follow_live();
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    };
-    grow(&mut core, 5);
-    assert!(
-        run(&mut core, "imd resume").is_err(),
-        "resumed a running simulation"
-    );
-    run(&mut core, "imd pause").unwrap();
-    assert_eq!(core.status, "simulation paused");
-    // The frames already on their way land; then nothing comes while paused.
-    std::thread::sleep(Duration::from_millis(500));
-    core.follow_live();
-    let paused_at = core.timeline.len;
-    std::thread::sleep(Duration::from_millis(1500));
-    core.follow_live();
-    assert!(
-        core.timeline.len <= paused_at + 1,
-        "frames kept coming while paused: {paused_at} -> {}",
-        core.timeline.len
-    );
-    run(&mut core, "imd resume").unwrap();
-    assert_eq!(core.status, "simulation resumed");
-    grow(&mut core, 5);
-    // Detach: the frames stay, the status says why the stream ended, the engine goes on.
-    run(&mut core, "imd detach").unwrap();
-    std::thread::sleep(Duration::from_millis(300));
-    core.follow_live();
-    core.follow_live();
-    let received = core.timeline.len;
-    assert!(
-        core.status
-            .contains(&format!("ended after {received} frames"))
-            && core
-                .status
-                .contains("detached from the simulation (it goes on)"),
-        "{}",
-        core.status
-    );
-    assert!(
-        run(&mut core, "imd pause").is_err(),
-        "paused after a detach"
-    );
-    let last = source.read_frame(received - 1).unwrap();
-    assert_eq!(last.positions.len(), source.topology().len());
-    assert!(
-        engine.0.try_wait().unwrap().is_none(),
-        "the simulation stopped when we detached"
-    );
+    }
 }

@@ -93,6 +93,12 @@ impl Trajectory {
         }
     }
 
+    /// True while the frames come from a running simulation over IMD that can still be
+    /// paused or detached ([`Trajectory::live_control`]).
+    pub fn live_controllable(&self) -> bool {
+        self.live.as_ref().is_some_and(|live| live.controllable())
+    }
+
     /// Frames readable now without waiting: [`Trajectory::len`], or for a running simulation
     /// the frames received so far (never blocks on a read in progress).
     pub fn available(&self) -> usize {
