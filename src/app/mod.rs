@@ -4,10 +4,10 @@
 //! [`state::Command`]s, applied in one place ([`state::AppCore::apply`] and the window layer in
 //! [`viewer::Viewer`]). Nothing below this module imports it.
 
-pub mod command;
+pub(crate) mod command;
 pub mod console;
-pub mod console_complete;
-pub mod console_ui;
+pub(crate) mod console_complete;
+pub(crate) mod console_ui;
 pub mod device_loss;
 pub mod export;
 pub mod headless_script;
@@ -15,17 +15,18 @@ pub mod keys;
 pub mod membrane_view;
 pub mod offscreen;
 pub mod panels;
-pub mod plot;
-pub mod recent;
-pub mod script_error;
+pub(crate) mod plot;
+pub(crate) mod recent;
+pub(crate) mod script_error;
 pub mod settings_store;
+pub mod simulation_panel;
 pub mod source;
 pub mod state;
 pub mod timeline;
 pub mod trajectory_panel;
-pub mod view_renderer;
-pub mod view_state;
-pub mod viewer;
+pub(crate) mod view_renderer;
+pub(crate) mod view_state;
+pub(crate) mod viewer;
 pub mod viewport;
 pub mod worker;
 

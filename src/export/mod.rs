@@ -4,13 +4,13 @@
 //! Positions are written in Å as they are; colours go to PLY/OBJ as sRGB (what viewers expect)
 //! and to glTF as linear RGB (what its spec requires).
 
-pub mod atomic;
+pub(crate) mod atomic;
 pub mod glb;
-pub mod obj;
-pub mod ply;
-pub mod stats;
+pub(crate) mod obj;
+pub(crate) mod ply;
+pub(crate) mod stats;
 pub mod stats_merge;
-pub mod stl;
+pub(crate) mod stl;
 #[cfg(feature = "app")]
 pub mod video;
 

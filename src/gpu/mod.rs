@@ -16,27 +16,27 @@
 //! `shaders/`, one file per stage.
 
 pub mod bin;
-pub mod bricks;
-pub mod context;
-pub mod density;
+pub(crate) mod bricks;
+pub(crate) mod context;
+pub(crate) mod density;
 pub mod engine;
-pub mod factory;
+pub(crate) mod factory;
 pub mod frame;
 pub mod inputs;
-pub mod kernel;
+pub(crate) mod kernel;
 pub mod layout;
-pub mod mc;
-pub mod measure;
-pub mod options;
+pub(crate) mod mc;
+pub(crate) mod measure;
+pub(crate) mod options;
 pub mod output;
 pub mod plan;
-pub mod resources;
-pub mod scan;
+pub(crate) mod resources;
+pub(crate) mod scan;
 pub mod shaders;
 pub mod table1;
-pub mod timing;
+pub(crate) mod timing;
 pub mod tolerance;
-pub mod types;
+pub(crate) mod types;
 
 pub use context::{GpuContext, GpuObjects, gpu_required};
 pub use density::DensityGather;

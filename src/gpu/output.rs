@@ -175,7 +175,11 @@ impl Readbacks {
                     frame: slot.frame,
                     vertex_count: c.vertex_count,
                     triangle_count: c.triangle_count,
-                    overflow: c.overflow != 0,
+                    overflow: c.overflow
+                        & (super::types::OVERFLOW_VERTICES
+                            | super::types::OVERFLOW_TRIANGLES
+                            | super::types::OVERFLOW_BRICKS)
+                        != 0,
                     area: c.area as f64,
                     volume: c.volume as f64,
                     timings: timer.stage_ms(&slot.passes, &ticks),

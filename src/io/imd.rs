@@ -226,25 +226,10 @@ impl ImdClient {
         }
     }
 
-    /// Toggles the simulation's pause (IMD version 2 has one message for pause and resume).
-    pub fn toggle_pause(&mut self) -> Result<(), ImdError> {
-        self.send(MessageType::Pause, 0)
-    }
-
     /// Asks the engine to send one frame every `steps` steps (at least 1).
     pub fn set_rate(&mut self, steps: u32) -> Result<(), ImdError> {
         let steps = i32::try_from(steps.max(1)).unwrap_or(i32::MAX);
         self.send(MessageType::Rate, steps)
-    }
-
-    /// Leaves the simulation running and closes the connection.
-    pub fn detach(mut self) -> Result<(), ImdError> {
-        self.send(MessageType::Disconnect, 0)
-    }
-
-    /// Asks the engine to stop the simulation (engines may refuse: GROMACS needs `-imdterm`).
-    pub fn kill(mut self) -> Result<(), ImdError> {
-        self.send(MessageType::Kill, 0)
     }
 
     /// A second handle on the socket, for [`leave`] from another thread while this client
@@ -414,7 +399,7 @@ mod tests {
             vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.5, 5.25, 6.0)]
         );
         client.set_rate(10).unwrap();
-        client.detach().unwrap();
+        leave(&client.socket().unwrap());
         let sent = engine.join().unwrap();
         let mut expected = header(3, 0);
         expected.extend(header(8, 10));

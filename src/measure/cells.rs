@@ -1,5 +1,6 @@
 //! A cell list over atoms for the per-vertex question of [`super`]: which atoms' Gaussians
-//! reach a point, and with what weight. Cells are half the longest cutoff wide and the grid
+//! reach a point, and with what weight (binned by the crate's counting sort,
+//! [`crate::model::cells::sort_by_cell`]; the atoms' Gaussian terms kept beside them). Cells are half the longest cutoff wide and the grid
 //! reaches one cutoff beyond the atoms; atoms are stored sorted by cell, x fastest, coordinates
 //! in separate arrays, so the cells of a row along x are one contiguous run. Points are either
 //! asked about one at a time ([`CellList::for_each_gaussian`], rows beyond the cutoff skipped)
@@ -8,6 +9,7 @@
 
 use glam::Vec3;
 
+use crate::model::cells::sort_by_cell;
 use crate::surface::{AtomSet, SurfaceParams};
 
 /// Atoms sorted into cubic cells.
@@ -62,20 +64,8 @@ impl CellList {
                 as usize
         };
         let cells = (dims[0] * dims[1] * dims[2]) as usize;
-        let mut starts = vec![0u32; cells + 1];
         let of: Vec<usize> = atoms.positions.iter().map(|p| cell_of(*p)).collect();
-        for &c in &of {
-            starts[c + 1] += 1;
-        }
-        for c in 0..cells {
-            starts[c + 1] += starts[c];
-        }
-        let mut fill = starts.clone();
-        let mut index = vec![0u32; n];
-        for (i, &c) in of.iter().enumerate() {
-            index[fill[c] as usize] = i as u32;
-            fill[c] += 1;
-        }
+        let (starts, index) = sort_by_cell(&of, cells);
         let pick = |f: &dyn Fn(usize) -> f32| index.iter().map(|&i| f(i as usize)).collect();
         CellList {
             origin: lo,

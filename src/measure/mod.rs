@@ -36,13 +36,13 @@
 //!   self's are within the larger of their bounding radii; births, deaths, merges and splits are
 //!   reported as [`CavityEvent`]s.
 
-pub mod areas;
-pub mod cavities;
+pub(crate) mod areas;
+pub(crate) mod cavities;
 mod cells;
-pub mod csv;
+pub(crate) mod csv;
 pub mod interface;
-pub mod residues;
-pub mod tracking;
+pub(crate) mod residues;
+pub(crate) mod tracking;
 
 pub use areas::{atom_areas, atom_areas_of, vertex_areas};
 pub use cavities::{Cavity, CavityOptions, Component, cavities, components};

@@ -99,21 +99,6 @@ impl CellList {
         )
     }
 
-    /// Corner of cell (0, 0, 0) in Å.
-    pub fn origin(&self) -> Vec3 {
-        self.origin
-    }
-
-    /// Cell edge in Å.
-    pub fn edge(&self) -> f32 {
-        self.edge
-    }
-
-    /// Cells along each axis.
-    pub fn dims(&self) -> IVec3 {
-        self.dims
-    }
-
     /// The cell holding position `p` (Å); outside `0..dims` when `p` is off the cells.
     #[inline]
     pub fn cell_of(&self, p: Vec3) -> IVec3 {
@@ -358,11 +343,6 @@ impl CutoffCells {
         let start = &self.cells.start;
         let (a, b) = (start[first] as usize, start[last + 1] as usize);
         (&self.aligned[a..b], &self.cells.ids[a..b])
-    }
-
-    /// The cell list.
-    pub fn cells(&self) -> &CellList {
-        &self.cells
     }
 
     /// Where `p` lies, when in a cell that some point reaches.

@@ -7,20 +7,20 @@ use glam::Vec3;
 /// `CRYST1 1 1 1`): neither the transforms nor `within` selections wrap across them.
 pub const MIN_BOX_WIDTH: f32 = 4.0;
 
-pub mod beads;
-pub mod bonds;
-pub mod cells;
-pub mod colour;
+pub(crate) mod beads;
+pub(crate) mod bonds;
+pub(crate) mod cells;
+pub(crate) mod colour;
 pub mod colour_data;
 pub mod colour_map;
 pub mod elements;
 pub mod exposure;
-pub mod labels;
-pub mod lipid_like;
-pub mod particles;
-pub mod pbc;
-pub mod radii;
-pub mod residues;
+pub(crate) mod labels;
+pub(crate) mod lipid_like;
+pub(crate) mod particles;
+pub(crate) mod pbc;
+pub(crate) mod radii;
+pub(crate) mod residues;
 pub mod sizing;
 
 pub use beads::BeadModel;

@@ -3,19 +3,19 @@
 //! [`render_to_rgba`] + [`write_png`] for pictures. Used by the viewer window, `mdsurf render`,
 //! screenshots, movies and tests; it never imports the app.
 
-pub mod atoms;
-pub mod camera;
+pub(crate) mod atoms;
+pub(crate) mod camera;
 pub mod colour_bar;
-pub mod headless;
+pub(crate) mod headless;
 mod pipelines;
-pub mod readback;
-pub mod renderer;
-pub mod scene;
+pub(crate) mod readback;
+pub(crate) mod renderer;
+pub(crate) mod scene;
 mod scene_layers;
-pub mod setting_error;
+pub(crate) mod setting_error;
 pub mod settings;
 pub mod shapes;
-pub mod targets;
+pub(crate) mod targets;
 
 pub use atoms::atom_instances;
 pub use camera::{Camera, Projection, bounding_sphere};

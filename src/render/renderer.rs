@@ -515,9 +515,3 @@ fn colour_attachment(
         },
     }
 }
-
-/// The model-view-projection matrix the renderer uses for `camera` at `aspect` (for picking and
-/// tests).
-pub fn view_projection(camera: &Camera, aspect: f32) -> Mat4 {
-    camera.projection_matrix(aspect) * camera.view_matrix()
-}

@@ -7,8 +7,8 @@
 //!   representation's particles and surface ([`frame`]: what it returns).
 
 pub mod defaults;
-pub mod engine;
-pub mod frame;
+pub(crate) mod engine;
+pub(crate) mod frame;
 pub mod layer;
 pub mod movie;
 pub mod representation;

@@ -29,7 +29,7 @@
 
 mod ast;
 mod bind;
-pub mod macros;
+pub(crate) mod macros;
 mod parser;
 mod within;
 

@@ -16,33 +16,17 @@
 
 use rayon::prelude::*;
 
-use super::Mesh;
 use super::analytic::AnalyticField;
 use super::bricks::{BRICK, BrickVolume};
 use super::marching_cubes::{
-    FOREIGN, McScratch, SlabMesh, VertexData, edge_refs, merge, push_cell_triangles, word,
+    FOREIGN, McScratch, SlabMesh, VertexData, edge_refs, push_cell_triangles, word,
 };
 use super::mc_vertex::{edge_geometry_refined, edge_position};
 use super::tables::McTables;
 
-/// The isosurface of `vol` at the isovalue it was prepared for, reusing `scratch`.
-pub fn extract_bricks(vol: &BrickVolume, scratch: &mut McScratch) -> Mesh {
-    extract_bricks_refined(vol, None, scratch)
-}
-
-/// [`extract_bricks`], with every vertex refined on the exact Gaussian sum `field` when given
-/// (as [`super::marching_cubes::extract_refined`]).
-pub fn extract_bricks_refined(
-    vol: &BrickVolume,
-    field: Option<&AnalyticField>,
-    scratch: &mut McScratch,
-) -> Mesh {
-    march_bricks(vol, field, VertexData::Full, scratch);
-    merge(&mut scratch.slabs)
-}
-
-/// The slab walk of [`extract_bricks_refined`], leaving each slab's share of the mesh in
-/// `scratch` (for `merge` or `McScratch::measure`); no slab when the grid is degenerate.
+/// Marching Cubes over the bricks of `vol` (vertices refined on the exact Gaussian sum `field`
+/// when given), leaving each slab's share of the mesh in `scratch` (for `merge` or
+/// `McScratch::measure`); no slab when the grid is degenerate.
 pub(super) fn march_bricks(
     vol: &BrickVolume,
     field: Option<&AnalyticField>,

@@ -19,7 +19,7 @@
 //! it in canonical order, so every stored sample has the same bits as in
 //! [`super::density::compute`]. Colours are not stored per sample: while a layer's colour sums
 //! are at hand, the colour of every vertex Marching Cubes will place on that layer's crossed
-//! edges is interpolated (the formula of [`super::mc_vertex::edge_vertex`]) and kept in the
+//! edges is interpolated (the formula of [`super::mc_vertex::edge_vertex_refined`]) and kept in the
 //! order Marching Cubes numbers the vertices, 12 bytes per vertex instead of 12 per sample.
 //!
 //! Parallelism: rayon over groups of brick layers ([`slab_planes`]), each filled in one pass

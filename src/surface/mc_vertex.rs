@@ -22,22 +22,12 @@ pub struct EdgeVertex {
 /// 2 = z), which the isovalue `iso` must cross (`rho(a) >= iso` differs from `rho(b) >= iso`).
 ///
 /// - `t = (iso - rho(a)) / (rho(b) - rho(a))`, position `p_a + t (p_b - p_a)` (Å);
-/// - normal: `n_a + t (n_b - n_a)` normalised, where `n = -g / |g|` and `g` is the
-///   central-difference gradient (one-sided on the grid boundary) in Å⁻¹; if that vanishes, the
-///   edge direction pointing from the inside sample to the outside one;
+/// - normal: [`interpolated_normal`] of the central-difference gradients (one-sided on the
+///   grid boundary);
 /// - colour: `c_a + t (c_b - c_a)` from the colour volume, else white.
-pub fn edge_vertex(
-    grid: &GridSpec,
-    density: &DensityVolume,
-    iso: f32,
-    a: [usize; 3],
-    axis: usize,
-) -> EdgeVertex {
-    edge_vertex_refined(grid, density, iso, a, axis, None)
-}
-
-/// [`edge_vertex`], with the position and normal refined on the exact Gaussian sum `field`
-/// when given (see [`edge_geometry_refined`]); the colour keeps the linear parameter `t`.
+///
+/// With `field`, the position and normal are refined on the exact Gaussian sum (see
+/// [`edge_geometry_refined`]); the colour keeps the linear parameter `t`.
 pub fn edge_vertex_refined(
     grid: &GridSpec,
     density: &DensityVolume,
@@ -66,7 +56,7 @@ pub fn edge_vertex_refined(
 }
 
 /// The colour of a vertex at parameter `t` on the edge from a sample of colour `ca` to one of
-/// colour `cb` (the formula [`edge_vertex`] uses).
+/// colour `cb` (the formula [`edge_vertex_refined`] uses).
 pub fn lerp_colour(ca: [f32; 3], cb: [f32; 3], t: f32) -> [f32; 3] {
     [0, 1, 2].map(|n| ca[n] + t * (cb[n] - ca[n]))
 }
@@ -83,7 +73,7 @@ pub fn edge_t(va: f32, vb: f32, iso: f32) -> f32 {
 }
 
 /// Position (Å), unit normal and interpolation parameter `t` of the vertex on the edge from
-/// sample `a` to `a + e_axis`, reading densities through `value(sample)`. [`edge_vertex`] on
+/// sample `a` to `a + e_axis`, reading densities through `value(sample)`. [`edge_vertex_refined`] on
 /// a dense volume and the sparse engine ([`super::brick_mc`]) share it, so both give the same
 /// bits from the same sample values.
 #[inline]
@@ -98,19 +88,30 @@ pub fn edge_geometry(
     b[axis] += 1;
     let (va, vb) = (value(a), value(b));
     let (position, t) = edge_position(grid, va, vb, iso, a, axis);
-    // Each end's normal first (normalised -grad rho), then interpolated and normalised again
-    // (DESIGN section 2; the GPU's emit.wgsl does the same).
-    let na = (-gradient_with(grid, &value, a)).normalize_or_zero();
-    let nb = (-gradient_with(grid, &value, b)).normalize_or_zero();
-    let g = na + t * (nb - na);
-    let normal = if g.length_squared() > 0.0 && g.is_finite() {
-        g.normalize()
+    let (ga, gb) = (
+        gradient_with(grid, &value, a),
+        gradient_with(grid, &value, b),
+    );
+    let normal = interpolated_normal(ga, gb, t, axis, va >= iso);
+    (position, normal, t)
+}
+
+/// The normal of the vertex at parameter `t` on an edge along `axis` whose end samples have
+/// density gradients `ga` and `gb` (Å⁻¹): each end's unit normal `n = -g / |g|`, interpolated
+/// as `n_a + t (n_b - n_a)` and normalised (DESIGN section 2; `shaders/emit.wgsl` does the
+/// same). Where that vanishes, the edge direction pointing from the inside end to the outside
+/// one (`a_inside`: the first end has `rho >= I`).
+#[inline]
+pub fn interpolated_normal(ga: Vec3, gb: Vec3, t: f32, axis: usize, a_inside: bool) -> Vec3 {
+    let (na, nb) = ((-ga).normalize_or_zero(), (-gb).normalize_or_zero());
+    let n = na + t * (nb - na);
+    if n.length_squared() > 0.0 && n.is_finite() {
+        n.normalize()
     } else {
         let mut d = Vec3::ZERO;
-        d[axis] = if va >= iso { 1.0 } else { -1.0 };
+        d[axis] = if a_inside { 1.0 } else { -1.0 };
         d
-    };
-    (position, normal, t)
+    }
 }
 
 /// Position (Å) and interpolation parameter `t` of the vertex on the edge from sample `a`
@@ -172,12 +173,8 @@ fn point(grid: &GridSpec, p: [usize; 3]) -> Vec3 {
     grid.point(p[0] as u32, p[1] as u32, p[2] as u32)
 }
 
-/// Central-difference gradient of `values` at sample `p` in Å⁻¹ (one-sided on the boundary).
-pub fn gradient(grid: &GridSpec, values: &[f32], p: [usize; 3]) -> Vec3 {
-    gradient_with(grid, |q| values[index(grid, q)], p)
-}
-
-/// [`gradient`] reading the density through `value(sample)`.
+/// Central-difference gradient in Å⁻¹ of the density at sample `p` (one-sided on the grid
+/// boundary), reading the density through `value(sample)`.
 #[inline]
 pub fn gradient_with(grid: &GridSpec, value: impl Fn([usize; 3]) -> f32, p: [usize; 3]) -> Vec3 {
     let dims = grid.dims.map(|d| d as usize);

@@ -4,21 +4,21 @@
 
 pub mod analytic;
 pub mod bin;
-pub mod brick_mc;
-pub mod bricks;
+pub(crate) mod brick_mc;
+pub(crate) mod bricks;
 pub mod cpu;
 pub mod curved;
 pub mod density;
-pub mod engine;
-pub mod grid;
+pub(crate) mod engine;
+pub(crate) mod grid;
 pub mod marching_cubes;
-pub mod mc_vertex;
-pub mod memory;
-pub mod mesh;
-pub mod params;
+pub(crate) mod mc_vertex;
+pub(crate) mod memory;
+pub(crate) mod mesh;
+pub(crate) mod params;
 pub mod periodic;
-pub mod preset;
-pub mod scan;
+pub(crate) mod preset;
+pub(crate) mod scan;
 pub mod tables;
 
 pub use analytic::VertexMode;

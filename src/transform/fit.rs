@@ -55,11 +55,6 @@ impl Fit {
         })
     }
 
-    /// The fitted atoms.
-    pub fn indices(&self) -> &[u32] {
-        &self.indices
-    }
-
     /// The rotation `R` and the centre `c` of the fitted atoms in `positions` such that
     /// `R (p - c) + reference centre` superposes them on the reference.
     pub fn superposition(&self, positions: &[Vec3]) -> (DMat3, DVec3) {

@@ -9,11 +9,11 @@
 //! (the viewer's frame streamer caches transformed frames; the command line uses
 //! [`reader::TransformedFrames`]).
 
-pub mod center;
-pub mod fit;
-pub mod reader;
+pub(crate) mod center;
+pub(crate) mod fit;
+pub(crate) mod reader;
 pub mod smooth;
-pub mod whole;
+pub(crate) mod whole;
 
 use std::fmt;
 use std::str::FromStr;
@@ -21,7 +21,6 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::model::pbc;
 pub use crate::model::pbc::PbcCell;
 use crate::model::{Frame, Topology};
 use crate::selection::{BoundSelection, Selection, SelectionError};

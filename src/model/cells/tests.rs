@@ -63,9 +63,9 @@ fn cells_hold_the_points_inside_them() {
     points.push(Vec3::NAN);
     let cells = CellList::covering(&items(&points), 2.5, 1);
     let mut total = 0;
-    for z in 0..cells.dims().z {
-        for y in 0..cells.dims().y {
-            for x in 0..cells.dims().x {
+    for z in 0..cells.dims.z {
+        for y in 0..cells.dims.y {
+            for x in 0..cells.dims.x {
                 let c = IVec3::new(x, y, z);
                 let (lo, hi) = cells.cell_box(c);
                 let (held, ids) = cells.cell(c);

@@ -21,7 +21,7 @@ use super::density::PeriodicGrid;
 use crate::surface::DensityVolume;
 use crate::surface::Mesh;
 use crate::surface::marching_cubes::{PlaneSource, SlabMesh, march_slab, merge, word};
-use crate::surface::mc_vertex::{edge_t, lerp_colour};
+use crate::surface::mc_vertex::{edge_t, interpolated_normal, lerp_colour};
 use crate::surface::tables::McTables;
 
 /// The isosurface `rho = iso` of `vol` inside one box of `grid`, positions local (Å from the
@@ -73,8 +73,8 @@ pub struct Vertex {
 }
 
 /// The vertex on the edge from point `a` (any non-negative indices; read modulo the grid) to
-/// `a + e_axis`: position `(a + t e_axis) h` (Å), normal `-(g_a + t (g_b - g_a))` normalised
-/// (central differences wrapping around the box), colour interpolated the same way. The edge
+/// `a + e_axis`: position `(a + t e_axis) h` (Å), normal the [`interpolated_normal`] of the
+/// central differences (wrapping around the box), colour interpolated along the edge. The edge
 /// must be crossed (`rho(a) >= iso` differs from `rho(b) >= iso`).
 pub fn periodic_edge_vertex(
     grid: &PeriodicGrid,
@@ -105,15 +105,7 @@ pub fn periodic_edge_vertex(
         }
         g
     };
-    let (ga, gb) = (gradient(a), gradient(b));
-    let g = -(ga + t * (gb - ga));
-    let normal = if g.length_squared() > 0.0 && g.is_finite() {
-        g.normalize()
-    } else {
-        let mut d = Vec3::ZERO;
-        d[axis] = if va >= iso { 1.0 } else { -1.0 };
-        d
-    };
+    let normal = interpolated_normal(gradient(a), gradient(b), t, axis, va >= iso);
     let colour = match &vol.colours {
         Some(c) => lerp_colour(c[grid.index(a)], c[grid.index(b)], t),
         None => [1.0; 3],

@@ -20,11 +20,11 @@
 //! marched in index space ([`triclinic`]), with the same definitions: area of the Cartesian
 //! triangles, volume of the region `rho >= I` inside one cell.
 
-pub mod cell;
+pub(crate) mod cell;
 pub mod density;
-pub mod mc;
+pub(crate) mod mc;
 pub mod measure;
-pub mod triclinic;
+pub(crate) mod triclinic;
 
 pub use cell::{PeriodicCell, TriclinicCell};
 
@@ -42,7 +42,7 @@ use super::{
 pub const MAX_REPLICATE: u32 = 16;
 
 /// Boxes narrower than this (Å) along any axis are not treated as periodic boxes (the same
-/// limit as [`crate::transform::pbc::MIN_WIDTH`]: a placeholder such as PDB's `CRYST1 1 1 1`).
+/// limit as [`crate::model::pbc::MIN_WIDTH`]: a placeholder such as PDB's `CRYST1 1 1 1`).
 pub const MIN_BOX: f32 = 4.0;
 
 /// An orthorhombic periodic box: `origin + [0, L_x) x [0, L_y) x [0, L_z)` (Å).
