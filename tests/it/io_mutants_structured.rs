@@ -293,6 +293,7 @@ fn run_surface(s: &Subject, file: &Path, stats: &Path) -> (Outcome, Vec<Row>) {
     let mut args = vec!["surface".to_string()];
     args.extend(s.topology.iter().map(|t| t.display().to_string()));
     args.push(file.display().to_string());
+    // One surface of all atoms: its atom count is every atom read.
     for a in [
         "--backend",
         "cpu",
@@ -300,6 +301,8 @@ fn run_surface(s: &Subject, file: &Path, stats: &Path) -> (Outcome, Vec<Row>) {
         "2",
         "-q",
         "--no-timings",
+        "--select",
+        "all",
         "--stats",
     ] {
         args.push(a.to_string());
