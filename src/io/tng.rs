@@ -112,6 +112,15 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
         little: bytes[0] != 0 && bytes[7] == 0,
     };
     let (blocks, damage) = walk(&bytes, ints);
+    // The chain starts with the general information block: the TNG library reads a file whose
+    // first block has another id without complaint, and loses its last frame set.
+    if blocks.first().is_some_and(|b| b.id != GENERAL_INFO) {
+        return Err(TngDamage::Block {
+            block: 0,
+            offset: 0,
+            what: "is not a general information block (wrong id)",
+        });
+    }
     let frame_sets: Vec<&Block> = blocks.iter().filter(|b| b.id == FRAME_SET).collect();
     let info = blocks
         .first()
@@ -235,5 +244,33 @@ fn rehash(bytes: &mut [u8], block: &Block) {
     if bytes[at..at + 16] != [0; 16] {
         let digest = md5::compute(&bytes[block.offset + block.header..block.end()]).0;
         bytes[at..at + 16].copy_from_slice(&digest);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain of one empty block (little-endian, no MD5) with id `id`, in a temporary file.
+    fn one_block(id: i64) -> (tempfile::TempDir, std::path::PathBuf) {
+        let mut bytes = Vec::new();
+        for v in [40i64, 0, id] {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        bytes.resize(40, 0);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("one.tng");
+        std::fs::write(&path, bytes).unwrap();
+        (dir, path)
+    }
+
+    #[test]
+    fn a_first_block_that_is_not_general_information_is_damage() {
+        let (_dir, path) = one_block(GENERAL_INFO);
+        assert!(matches!(salvage(&path), Ok(Salvage::Sound)));
+        let (_dir, path) = one_block(i64::MIN);
+        let e = salvage(&path).err().expect("refused");
+        assert!(matches!(e, TngDamage::Block { block: 0, .. }), "{e}");
+        assert!(e.to_string().contains("wrong id"), "{e}");
     }
 }
