@@ -397,7 +397,7 @@ pub(crate) fn mutate_binary(
             let block = &blocks[rng.below(blocks.len())];
             let what = rng.below(4);
             let at = match what {
-                0 | 1 | 2 => block.offset + 8 * what,
+                0..=2 => block.offset + 8 * what,
                 _ => block.offset + block.header + 8 * rng.below(block.contents.min(128) / 8),
             };
             let v = if rng.below(3) == 0 {
