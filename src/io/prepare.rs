@@ -63,13 +63,16 @@ pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoEr
 }
 
 /// An XYZ file cut or damaged in frame k > 0 as a copy of frames 0..k-1, frame k the damage
-/// (chemfiles refuses the whole file; see [`xyz_frames`]). Damage in frame 0 is left to
-/// chemfiles' own words.
+/// (chemfiles refuses the whole file; see [`xyz_frames`]); damage in frame 0 is an error naming
+/// frame 0.
 fn keep_whole_xyz_frames(path: &Path, prepared: Prepared) -> Result<Prepared, IoError> {
     let damage = xyz_frames::first_damage(&prepared.open_path).map_err(|e| failed(path, e))?;
-    let Some(damage) = damage.filter(|d| d.frame > 0) else {
+    let Some(damage) = damage else {
         return Ok(prepared);
     };
+    if damage.frame == 0 {
+        return Err(IoError::bad_frame(path, 0, damage.reason));
+    }
     let (temp, copy) = temp_file(path, "XYZ")?;
     let mut input = open(&prepared.open_path)?.take(damage.start);
     let mut output = BufWriter::new(create(path, &copy)?);

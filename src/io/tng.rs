@@ -126,12 +126,22 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
         .first()
         .filter(|b| b.id == GENERAL_INFO && b.contents >= 40);
     // How many frame sets to keep, and why not all of them.
+    // Where the sound blocks end.
+    let sound_end = damage.as_ref().map_or(bytes.len(), |(at, _)| *at);
     let (keep, reason) = match damage {
-        // The frame set holding the damage and everything after it go.
-        Some((damaged_at, reason)) => (
-            frame_sets.iter().rposition(|b| b.offset <= damaged_at),
-            reason,
-        ),
+        // The frame set holding the damage and everything after it go; when the damaged block
+        // starts a frame set (a cut inside its first block), the sets before it are whole.
+        Some((damaged_at, reason)) => {
+            let starts_set =
+                bytes.len() >= damaged_at + 24 && ints.get(&bytes, damaged_at + 16) == FRAME_SET;
+            let holding = frame_sets.iter().rposition(|b| b.offset <= damaged_at);
+            let keep = if starts_set {
+                Some(frame_sets.len())
+            } else {
+                holding
+            };
+            (keep, reason)
+        }
         None => {
             let (Some(info), Some(last)) = (info, frame_sets.last().filter(|b| b.contents >= 64))
             else {
@@ -160,7 +170,7 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
     let (Some(j), Some(info)) = (keep.filter(|&j| j > 0), info) else {
         return Err(reason);
     };
-    let cut = frame_sets.get(j).map_or(bytes.len(), |b| b.offset);
+    let cut = frame_sets.get(j).map_or(sound_end, |b| b.offset);
     let last_kept = frame_sets[j - 1].offset as i64;
     let mut kept = bytes[..cut].to_vec();
     // The general information points at the last frame set (40 bytes before the end of its
@@ -262,6 +272,29 @@ mod tests {
         let path = dir.path().join("one.tng");
         std::fs::write(&path, bytes).unwrap();
         (dir, path)
+    }
+
+    #[test]
+    fn a_cut_inside_a_frame_set_block_keeps_the_frame_sets_before_it() {
+        let data = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/argon_npt_compressed.tng"
+        );
+        let bytes = std::fs::read(data).unwrap();
+        // The second (last) frame set starts at byte 398576 with its 149-byte frame-set block.
+        let second = 398576;
+        assert_eq!(Ints { little: true }.get(&bytes, second + 16), FRAME_SET);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cut.tng");
+        std::fs::write(&path, &bytes[..second + 103]).unwrap();
+        match salvage(&path) {
+            Ok(Salvage::Kept { bytes, reason }) => {
+                assert_eq!(bytes.len(), second);
+                assert!(reason.contains("block 8 at byte 398576"), "{reason}");
+            }
+            Ok(Salvage::Sound) => panic!("a cut file read as sound"),
+            Err(e) => panic!("the whole first frame set was lost: {e}"),
+        }
     }
 
     #[test]

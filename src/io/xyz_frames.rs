@@ -3,7 +3,8 @@
 //! cut or damaged ("not enough lines at step 3"), so a file cut inside frame k lost frames
 //! 0..k-1 too. [`first_damage`] walks the frames (an atom count line, a comment line, that many
 //! atom lines) and says where the first one that is not whole starts; the caller gives chemfiles
-//! a copy holding only the frames before it, and that frame becomes the damage. Blank lines after
+//! a copy holding only the frames before it, and that frame becomes the damage (frame 0: an
+//! error naming frame 0). Blank lines after
 //! the last frame and a missing final newline are no damage.
 
 use std::fs::File;

@@ -389,7 +389,17 @@ pub(crate) fn mutate_binary(
                 format!("NaN in the record of frame {k} at byte {at}")
             } else {
                 let (at, what) = pick(rng, &header.fields);
-                set32(&mut out, at, what, true, rng)
+                let label = set32(&mut out, at, what, true, rng);
+                // A smaller record count is the format's word: that many frames, read whole.
+                let records = be32(&out, 4) as usize;
+                if at == 4 && (1..frames.len()).contains(&records) {
+                    let expect = Expect::Frames {
+                        upto: records,
+                        exit: 0,
+                    };
+                    return (out, expect, label);
+                }
+                label
             }
         }
         Binary::Tng => {

@@ -9,7 +9,10 @@
 //!   the unmutated file: exit 0 and the same per-frame atoms, area and volume;
 //! - a cut inside frame k keeps frames 0..k-1 (their statistics as the unmutated file's) and
 //!   ends with exit 2 and one line naming `frame k`; a cut at a frame boundary keeps every
-//!   whole frame with exit 0 (TNG: exit 2 naming the cut frame, as its index promises more);
+//!   whole frame with exit 0 (exit 2 naming the cut frame where the header promises more:
+//!   NetCDF's record count, TNG's index); a cut in the first frame processed need only end
+//!   with exit 2 (NetCDF's header check refuses a file too short for one frame as a damaged
+//!   header; TNG runs start at frame 98, inside its first frame set);
 //! - a hostile header field, count, record length or value either reads every frame with every
 //!   atom (exit 0: no silent loss) or ends with exit 2, and when that line names `frame K` the
 //!   statistics hold frames 0..K-1.
@@ -434,6 +437,10 @@ fn mutants_that_found_bugs_stay_fixed() {
     let mut set_id = tng.bytes.clone();
     set_id[set..set + 8].copy_from_slice(&(-1i64).to_le_bytes());
     cases.push((&tng, "TNG frame set id", set_id, Expect::Hostile));
+    // TNG cut inside the block that starts frame set 1: frame set 0 was lost too.
+    let cut = tng.bytes[..tng.frames[1].start + 103].to_vec();
+    let upto_100 = Expect::Frames { upto: 100, exit: 2 };
+    cases.push((&tng, "TNG cut in a frame-set block", cut, upto_100));
     let bases = [baseline(&xyz, dir.path()), baseline(&tng, dir.path())];
     for (n, (s, what, bytes, expect)) in cases.into_iter().enumerate() {
         let path = dir.path().join(format!("fixed{n}.{}", s.extension));
