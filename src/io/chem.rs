@@ -72,8 +72,9 @@ impl ChemReader {
         let opened =
             quiet::silenced(|| chemfiles::Trajectory::open_with_format(&open_path, 'r', chemfiles))
                 .map_err(|()| IoError::unreadable(path, "the reader failed on this file"))?;
-        let inner =
-            opened.map_err(|e| IoError::unreadable(path, unmask(&e.message, &open_path, path)))?;
+        let inner = opened.map_err(|e| {
+            IoError::unreadable(path, tidy_tng(unmask(&e.message, &open_path, path)))
+        })?;
         let mut reader = ChemReader {
             path: path.to_path_buf(),
             base,
@@ -137,7 +138,7 @@ impl ChemReader {
                 Some(copy) => unmask(&e.message, copy, &self.path),
                 None => e.message.clone(),
             };
-            IoError::bad_frame(&self.path, index, message)
+            IoError::bad_frame(&self.path, index, tidy_tng(message))
         })?;
         Ok(&self.scratch)
     }
@@ -224,6 +225,27 @@ fn unmask(message: &str, copy: &Path, path: &Path) -> String {
         copy.to_string_lossy().as_ref(),
         path.to_string_lossy().as_ref(),
     )
+}
+
+/// chemfiles' words for a failed TNG call (`critical error while calling
+/// tng_util_trajectory_open(this->path().c_str(), mode, &handle_) in the TNG library`, C++
+/// source text) made one for the user: `damaged TNG data (tng_util_trajectory_open failed)`.
+/// Other messages stay as they are.
+fn tidy_tng(message: String) -> String {
+    if !message.contains("in the TNG library") {
+        return message;
+    }
+    let call = message.find("tng_").map(|at| {
+        let rest = &message[at..];
+        let end = rest
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+            .unwrap_or(rest.len());
+        &rest[..end]
+    });
+    match call {
+        Some(call) => format!("damaged TNG data ({call} failed)"),
+        None => "damaged TNG data".to_string(),
+    }
 }
 
 /// Converts chemfiles' positions (f64, Å) to ours (f32, Å).
@@ -476,5 +498,22 @@ mod tests {
         assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
         number_residue_runs(&mut top, &[u32::MAX; 4]);
         assert_eq!(top.residue_index, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn tng_library_failures_read_as_damaged_data() {
+        let open = "critical error while calling tng_util_trajectory_open(this->path().c_str(), \
+                    mode, &handle_) in the TNG library";
+        assert_eq!(
+            tidy_tng(open.into()),
+            "damaged TNG data (tng_util_trajectory_open failed)"
+        );
+        let read = "fatal error in the TNG library while calling 'tng_util_box_shape_read_range'";
+        assert_eq!(
+            tidy_tng(read.into()),
+            "damaged TNG data (tng_util_box_shape_read_range failed)"
+        );
+        let other = "XYZ format: not enough lines at step 2";
+        assert_eq!(tidy_tng(other.into()), other);
     }
 }

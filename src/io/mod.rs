@@ -52,6 +52,7 @@ mod prepare;
 mod quiet;
 mod reader_errors;
 pub(crate) mod stream;
+mod text_clean;
 mod text_scan;
 mod tng;
 mod trajectory;
@@ -61,6 +62,7 @@ mod wwpdb;
 mod xdr;
 mod xdr_error;
 mod xdr_reader;
+mod xyz_frames;
 
 pub use contained::{READER_ARG, reader_main};
 pub use error::IoError;

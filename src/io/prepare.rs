@@ -7,6 +7,8 @@
 //!   are); in the free formats (mmCIF, XYZ, LAMMPS, MOL2) a byte that is not UTF-8 is read as
 //!   Latin-1 and written as UTF-8.
 //! - Lone `\r` line ends (CR-only files) become `\n` in every text format ([`super::line_ends`]).
+//! - A leading UTF-8 byte order mark is dropped ([`super::text_clean`]).
+//! - An XYZ file cut or damaged after its first frame keeps its whole frames ([`super::xyz_frames`]).
 //! - `.gz`, `.bz2` and `.xz` files are decompressed here, by memory-safe Rust decoders
 //!   (flate2, bzip2, lzma-rust2; see [`super::decoders`] for gzip's zero padding and cut `.xz`
 //!   files), into a
@@ -29,7 +31,8 @@ use std::path::{Path, PathBuf};
 use super::decoders::decoder;
 use super::format::FileFormat;
 use super::line_ends::{CrToLf, has_lone_cr, lone_cr_to_lf};
-use super::{IoError, cif_residues, tng};
+use super::text_clean::{BOM, Cleaner, TextKind, text_kind};
+use super::{IoError, cif_residues, tng, xyz_frames};
 
 /// Bytes read at a time while scanning or copying.
 const CHUNK: usize = 1 << 20;
@@ -52,6 +55,40 @@ pub(crate) struct Prepared {
 
 /// Decides how chemfiles should see `path` (in `format`); see the module documentation.
 pub(crate) fn prepare(path: &Path, format: &FileFormat) -> Result<Prepared, IoError> {
+    let prepared = prepare_text(path, format)?;
+    if format.base == "XYZ" && prepared.truncated.is_none() {
+        return keep_whole_xyz_frames(path, prepared);
+    }
+    Ok(prepared)
+}
+
+/// An XYZ file cut or damaged in frame k > 0 as a copy of frames 0..k-1, frame k the damage
+/// (chemfiles refuses the whole file; see [`xyz_frames`]); damage in frame 0 is an error naming
+/// frame 0.
+fn keep_whole_xyz_frames(path: &Path, prepared: Prepared) -> Result<Prepared, IoError> {
+    let damage = xyz_frames::first_damage(&prepared.open_path).map_err(|e| failed(path, e))?;
+    let Some(damage) = damage else {
+        return Ok(prepared);
+    };
+    if damage.frame == 0 {
+        return Err(IoError::bad_frame(path, 0, damage.reason));
+    }
+    let (temp, copy) = temp_file(path, "XYZ")?;
+    let mut input = open(&prepared.open_path)?.take(damage.start);
+    let mut output = BufWriter::new(create(path, &copy)?);
+    std::io::copy(&mut input, &mut output).map_err(|e| write_failed(path, e))?;
+    finish(path, output)?;
+    Ok(Prepared {
+        open_path: copy,
+        chemfiles: prepared.chemfiles,
+        truncated: Some(damage.reason),
+        cut_removed: true,
+        temp: Some(temp),
+    })
+}
+
+/// What [`prepare`] does to any file: decompression, cleaned text, a salvaged TNG.
+fn prepare_text(path: &Path, format: &FileFormat) -> Result<Prepared, IoError> {
     let compression = format
         .chemfiles
         .rsplit_once(" / ")
@@ -195,35 +232,23 @@ fn latin1_as_utf8(bytes: Vec<u8>) -> Vec<u8> {
     out
 }
 
-/// How the text of a format may be cleaned.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum TextKind {
-    /// Fixed columns: every non-ASCII byte becomes `?` (one byte for one byte).
-    Columns,
-    /// Whitespace-separated: invalid UTF-8 bytes are read as Latin-1.
-    Free,
-}
-
-fn text_kind(base: &str) -> Option<TextKind> {
-    match base {
-        "PDB" | "GRO" => Some(TextKind::Columns),
-        "mmCIF" | "XYZ" | "LAMMPS" | "MOL2" => Some(TextKind::Free),
-        _ => None,
-    }
-}
-
 /// True when `path` can go to chemfiles as it is: all ASCII for fixed columns, valid UTF-8 for
-/// free text.
+/// free text, no byte order mark.
 fn scan(path: &Path, kind: TextKind) -> Result<bool, IoError> {
     let mut input = open(path)?;
     let mut buffer = vec![0u8; CHUNK];
     let mut carry = 0usize;
+    let mut first = true;
     loop {
         let n = read_some(path, &mut input, &mut buffer[carry..])?;
         if n == 0 {
             return Ok(carry == 0);
         }
         let filled = carry + n;
+        // A byte order mark goes (the copy drops it).
+        if std::mem::take(&mut first) && buffer[..filled].starts_with(BOM) {
+            return Ok(false);
+        }
         if has_lone_cr(&buffer[..filled]) {
             return Ok(false);
         }
@@ -243,74 +268,6 @@ fn scan(path: &Path, kind: TextKind) -> Result<bool, IoError> {
                 }
                 Err(_) => return Ok(false),
             },
-        }
-    }
-}
-
-/// Turns bytes into clean text, chunk by chunk (a UTF-8 character may span two chunks).
-struct Cleaner {
-    kind: TextKind,
-    pending: Vec<u8>,
-}
-
-impl Cleaner {
-    fn new(kind: TextKind) -> Self {
-        Cleaner {
-            kind,
-            pending: Vec::new(),
-        }
-    }
-
-    /// Cleans `bytes` (the next part of the file) into `out`; `last` flushes what is pending.
-    fn push(&mut self, bytes: &[u8], last: bool, out: &mut Vec<u8>) {
-        match self.kind {
-            TextKind::Columns => {
-                out.extend(bytes.iter().map(|&b| if b.is_ascii() { b } else { b'?' }));
-            }
-            TextKind::Free => {
-                self.pending.extend_from_slice(bytes);
-                let mut rest: &[u8] = &self.pending;
-                loop {
-                    match std::str::from_utf8(rest) {
-                        Ok(s) => {
-                            out.extend_from_slice(s.as_bytes());
-                            rest = &[];
-                            break;
-                        }
-                        Err(e) => {
-                            let valid = e.valid_up_to();
-                            out.extend_from_slice(&rest[..valid]);
-                            match e.error_len() {
-                                Some(bad) => {
-                                    for &b in &rest[valid..valid + bad] {
-                                        let mut utf8 = [0u8; 4];
-                                        out.extend_from_slice(
-                                            char::from(b).encode_utf8(&mut utf8).as_bytes(),
-                                        );
-                                    }
-                                    rest = &rest[valid + bad..];
-                                }
-                                None if last => {
-                                    for &b in &rest[valid..] {
-                                        let mut utf8 = [0u8; 4];
-                                        out.extend_from_slice(
-                                            char::from(b).encode_utf8(&mut utf8).as_bytes(),
-                                        );
-                                    }
-                                    rest = &[];
-                                    break;
-                                }
-                                None => {
-                                    rest = &rest[valid..];
-                                    break;
-                                }
-                            }
-                        }
-                    }
-                }
-                let keep = rest.to_vec();
-                self.pending = keep;
-            }
         }
     }
 }
@@ -568,31 +525,4 @@ fn write_failed(path: &Path, e: std::io::Error) -> IoError {
         path,
         format!("cannot write a temporary copy for reading: {e}"),
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn clean(kind: TextKind, parts: &[&[u8]]) -> Vec<u8> {
-        let mut c = Cleaner::new(kind);
-        let mut out = Vec::new();
-        for p in parts {
-            c.push(p, false, &mut out);
-        }
-        c.push(&[], true, &mut out);
-        out
-    }
-
-    #[test]
-    fn latin1_becomes_utf8_and_utf8_stays() {
-        let out = clean(TextKind::Free, &[b"Prot\xe9ine caf\xc3", b"\xa9 x\xff"]);
-        assert_eq!(String::from_utf8(out).unwrap(), "Protéine café xÿ");
-    }
-
-    #[test]
-    fn columns_keep_their_width() {
-        let out = clean(TextKind::Columns, &[b"AB\xe9C\xc3\xa9"]);
-        assert_eq!(out, b"AB?C??");
-    }
 }

@@ -112,17 +112,36 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
         little: bytes[0] != 0 && bytes[7] == 0,
     };
     let (blocks, damage) = walk(&bytes, ints);
+    // The chain starts with the general information block: the TNG library reads a file whose
+    // first block has another id without complaint, and loses its last frame set.
+    if blocks.first().is_some_and(|b| b.id != GENERAL_INFO) {
+        return Err(TngDamage::Block {
+            block: 0,
+            offset: 0,
+            what: "is not a general information block (wrong id)",
+        });
+    }
     let frame_sets: Vec<&Block> = blocks.iter().filter(|b| b.id == FRAME_SET).collect();
     let info = blocks
         .first()
         .filter(|b| b.id == GENERAL_INFO && b.contents >= 40);
     // How many frame sets to keep, and why not all of them.
+    // Where the sound blocks end.
+    let sound_end = damage.as_ref().map_or(bytes.len(), |(at, _)| *at);
     let (keep, reason) = match damage {
-        // The frame set holding the damage and everything after it go.
-        Some((damaged_at, reason)) => (
-            frame_sets.iter().rposition(|b| b.offset <= damaged_at),
-            reason,
-        ),
+        // The frame set holding the damage and everything after it go; when the damaged block
+        // starts a frame set (a cut inside its first block), the sets before it are whole.
+        Some((damaged_at, reason)) => {
+            let starts_set =
+                bytes.len() >= damaged_at + 24 && ints.get(&bytes, damaged_at + 16) == FRAME_SET;
+            let holding = frame_sets.iter().rposition(|b| b.offset <= damaged_at);
+            let keep = if starts_set {
+                Some(frame_sets.len())
+            } else {
+                holding
+            };
+            (keep, reason)
+        }
         None => {
             let (Some(info), Some(last)) = (info, frame_sets.last().filter(|b| b.contents >= 64))
             else {
@@ -151,7 +170,7 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
     let (Some(j), Some(info)) = (keep.filter(|&j| j > 0), info) else {
         return Err(reason);
     };
-    let cut = frame_sets.get(j).map_or(bytes.len(), |b| b.offset);
+    let cut = frame_sets.get(j).map_or(sound_end, |b| b.offset);
     let last_kept = frame_sets[j - 1].offset as i64;
     let mut kept = bytes[..cut].to_vec();
     // The general information points at the last frame set (40 bytes before the end of its
@@ -235,5 +254,56 @@ fn rehash(bytes: &mut [u8], block: &Block) {
     if bytes[at..at + 16] != [0; 16] {
         let digest = md5::compute(&bytes[block.offset + block.header..block.end()]).0;
         bytes[at..at + 16].copy_from_slice(&digest);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain of one empty block (little-endian, no MD5) with id `id`, in a temporary file.
+    fn one_block(id: i64) -> (tempfile::TempDir, std::path::PathBuf) {
+        let mut bytes = Vec::new();
+        for v in [40i64, 0, id] {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        bytes.resize(40, 0);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("one.tng");
+        std::fs::write(&path, bytes).unwrap();
+        (dir, path)
+    }
+
+    #[test]
+    fn a_cut_inside_a_frame_set_block_keeps_the_frame_sets_before_it() {
+        let data = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/argon_npt_compressed.tng"
+        );
+        let bytes = std::fs::read(data).unwrap();
+        // The second (last) frame set starts at byte 398576 with its 149-byte frame-set block.
+        let second = 398576;
+        assert_eq!(Ints { little: true }.get(&bytes, second + 16), FRAME_SET);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cut.tng");
+        std::fs::write(&path, &bytes[..second + 103]).unwrap();
+        match salvage(&path) {
+            Ok(Salvage::Kept { bytes, reason }) => {
+                assert_eq!(bytes.len(), second);
+                assert!(reason.contains("block 8 at byte 398576"), "{reason}");
+            }
+            Ok(Salvage::Sound) => panic!("a cut file read as sound"),
+            Err(e) => panic!("the whole first frame set was lost: {e}"),
+        }
+    }
+
+    #[test]
+    fn a_first_block_that_is_not_general_information_is_damage() {
+        let (_dir, path) = one_block(GENERAL_INFO);
+        assert!(matches!(salvage(&path), Ok(Salvage::Sound)));
+        let (_dir, path) = one_block(i64::MIN);
+        let e = salvage(&path).err().expect("refused");
+        assert!(matches!(e, TngDamage::Block { block: 0, .. }), "{e}");
+        assert!(e.to_string().contains("wrong id"), "{e}");
     }
 }

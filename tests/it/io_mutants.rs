@@ -23,11 +23,11 @@ const DEFAULT_PER_FORMAT: usize = 100;
 /// The committed seed.
 const DEFAULT_SEED: u64 = 0x5eed_1010;
 /// A run past this is a hang.
-const TIME_LIMIT: Duration = Duration::from_secs(30);
+pub(crate) const TIME_LIMIT: Duration = Duration::from_secs(30);
 /// Peak resident memory allowed per run (KiB).
 const MAX_RSS_KIB: i64 = 1024 * 1024;
 /// Parallel runs.
-const WORKERS: usize = 2;
+pub(crate) const WORKERS: usize = 2;
 
 /// One format under test: the file mutated, the topology it needs (unmutated), and the
 /// extension the mutant is written with.
@@ -123,16 +123,16 @@ fn cases() -> Vec<Case> {
 }
 
 /// A small deterministic generator (xorshift64), so the mutants are the same on every run.
-struct Rng(u64);
+pub(crate) struct Rng(pub(crate) u64);
 
 impl Rng {
-    fn next(&mut self) -> u64 {
+    pub(crate) fn next(&mut self) -> u64 {
         self.0 ^= self.0 << 13;
         self.0 ^= self.0 >> 7;
         self.0 ^= self.0 << 17;
         self.0
     }
-    fn below(&mut self, n: usize) -> usize {
+    pub(crate) fn below(&mut self, n: usize) -> usize {
         (self.next() % n.max(1) as u64) as usize
     }
 }
@@ -164,14 +164,14 @@ fn mutate(bytes: &[u8], rng: &mut Rng) -> Vec<u8> {
 }
 
 /// How one run ended.
-struct Outcome {
+pub(crate) struct Outcome {
     /// Exit code; `None` when a signal ended it.
-    code: Option<i32>,
-    signal: Option<i32>,
-    stderr: String,
-    timed_out: bool,
+    pub(crate) code: Option<i32>,
+    pub(crate) signal: Option<i32>,
+    pub(crate) stderr: String,
+    pub(crate) timed_out: bool,
     /// Peak resident memory (KiB).
-    max_rss_kib: i64,
+    pub(crate) max_rss_kib: i64,
 }
 
 /// Runs `mdsurf ARGS`, killing it after [`TIME_LIMIT`], and collects its peak memory: the
@@ -181,7 +181,7 @@ struct Outcome {
 /// test process that once held 1 GiB (GPU tests beside this one on an NVIDIA machine) made
 /// every mutant look like 1 GiB.
 #[allow(clippy::zombie_processes)] // reaped by `waitpid` below, not by `Child::wait`
-fn run(args: &[String]) -> Outcome {
+pub(crate) fn run(args: &[String]) -> Outcome {
     let mut child = Command::new(env!("CARGO_BIN_EXE_mdsurf"))
         .args(args)
         .env_remove("RUST_BACKTRACE")
@@ -244,7 +244,7 @@ fn own_peak_kib(pid: libc::pid_t) -> Option<i64> {
 }
 
 /// Why an outcome breaks the rules, if it does.
-fn violation(o: &Outcome) -> Option<String> {
+pub(crate) fn violation(o: &Outcome) -> Option<String> {
     let lines: Vec<&str> = o.stderr.lines().filter(|l| !l.trim().is_empty()).collect();
     let noise = ["panicked", "TNG library", "RUST_BACKTRACE", ".cpp:", ".c:"];
     if o.timed_out {
@@ -266,7 +266,7 @@ fn violation(o: &Outcome) -> Option<String> {
     }
 }
 
-fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+pub(crate) fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
     std::env::var(name)
         .ok()
         .and_then(|v| v.parse().ok())
