@@ -69,9 +69,10 @@ fn ambient_occlusion(p: vec2<i32>, d0: f32, noise: f32) -> f32 {
     return 1.0 - u.ao.x * clamp(occlusion / f32(SAMPLES) * 2.2, 0.0, 1.0);
 }
 
-// Interleaved gradient noise 0..1 of a pixel (rotates sample patterns per pixel).
+// Interleaved gradient noise 0..1 of a pixel (rotates sample patterns per pixel), turned by
+// the progressive sample's offset `u.misc.w` (0 for a plain draw).
 fn pixel_noise(clip: vec2<f32>) -> f32 {
-    return fract(52.9829189 * fract(0.06711056 * clip.x + 0.00583715 * clip.y));
+    return fract(52.9829189 * fract(0.06711056 * clip.x + 0.00583715 * clip.y) + u.misc.w);
 }
 
 @fragment

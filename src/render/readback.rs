@@ -124,8 +124,31 @@ pub fn render_to_rgba(
     size: [u32; 2],
 ) -> Result<RgbaImage, RenderError> {
     let mut targets = RenderTargets::new(device, size);
+    if settings.samples <= 1 {
+        renderer.render(device, queue, &mut targets, scene, camera, settings);
+        return read_texture(device, queue, targets.colour_texture());
+    }
+    // Progressive samples: each drawn and read back, then averaged per channel (8-bit sRGB
+    // values averaged, rounded to nearest).
     renderer.render(device, queue, &mut targets, scene, camera, settings);
-    read_texture(device, queue, targets.colour_texture())
+    let mut image = read_texture(device, queue, targets.colour_texture())?;
+    let mut sums: Vec<u32> = image.pixels.iter().map(|&p| u32::from(p)).collect();
+    for sample in 1..settings.samples {
+        let one = RenderSettings {
+            sample,
+            ..*settings
+        };
+        renderer.render(device, queue, &mut targets, scene, camera, &one);
+        let drawn = read_texture(device, queue, targets.colour_texture())?;
+        for (s, &p) in sums.iter_mut().zip(&drawn.pixels) {
+            *s += u32::from(p);
+        }
+    }
+    let n = settings.samples;
+    for (p, &s) in image.pixels.iter_mut().zip(&sums) {
+        *p = ((s + n / 2) / n) as u8;
+    }
+    Ok(image)
 }
 
 /// Copies an RGBA8 texture back to memory (blocking until the GPU is done).

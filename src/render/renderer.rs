@@ -44,6 +44,14 @@ impl ViewUniform {
         settings: &RenderSettings,
     ) -> Self {
         let (near, far) = camera.clip_range();
+        // A progressive sample's sub-pixel camera offset: the projection moved in clip space.
+        let [jx, jy] = RenderSettings::sample_offset(settings.sample);
+        let proj = if settings.sample == 0 {
+            proj
+        } else {
+            let (w, h) = (viewport[2].max(1) as f32, viewport[3].max(1) as f32);
+            Mat4::from_translation(Vec3::new(2.0 * jx / w, 2.0 * jy / h, 0.0)) * proj
+        };
         let bg = settings.background.linear_rgb();
         // Depth cue from the front to the back of the scene's bounding sphere.
         let r = camera.scene_radius.max(1.0);
@@ -72,7 +80,13 @@ impl ViewUniform {
             ],
             surface: [settings.surface_opacity.clamp(0.0, 1.0), single, 0.0, 0.0],
             surface_colour: [sc[0], sc[1], sc[2], 1.0],
-            misc: [0.35, near, far, 0.0],
+            // w: the progressive sample's turn of the AO and shadow patterns (0 to 1).
+            misc: [
+                0.35,
+                near,
+                far,
+                (settings.sample as f32 * 0.618_034).fract(),
+            ],
             ao: [
                 settings.ambient_occlusion.clamp(0.0, 1.0),
                 AO_RADIUS,

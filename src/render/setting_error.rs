@@ -16,6 +16,9 @@ pub enum SettingError {
     /// A shadow strength outside 0 to 1.
     #[error("bad shadow strength {0}: expected 0 (off) to 1")]
     Shadows(f32),
+    /// A progressive sample count outside 1 to [`super::settings::MAX_SAMPLES`].
+    #[error("bad sample count {0}: expected 1 (one plain draw) to {max}", max = super::settings::MAX_SAMPLES)]
+    Samples(u32),
     /// A stereo mode name that is not known (the text as given).
     #[error("unknown stereo mode '{0}' (expected off, sbs, sbs-cross, anaglyph or anaglyph-grey)")]
     Stereo(String),

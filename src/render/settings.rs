@@ -200,6 +200,15 @@ pub struct RenderSettings {
     /// Background pixels get alpha 0 (PNG with a transparent background); what is drawn keeps
     /// alpha 1 (edges of outlines and see-through surfaces may be fractional).
     pub transparent_background: bool,
+    /// Progressive samples per offscreen picture (screenshots, movies, `mdsurf render`): the
+    /// scene is drawn this many times, each with the ambient-occlusion and shadow sample
+    /// patterns turned and the camera moved by a sub-pixel offset, and the draws are averaged
+    /// (smooth occlusion and shadows, anti-aliased edges). 1: one plain draw. The window's own
+    /// draw is always one sample.
+    pub samples: u32,
+    /// Which progressive sample a draw is (0: the plain draw); set by
+    /// [`crate::render::render_to_rgba`] for each of [`RenderSettings::samples`].
+    pub sample: u32,
 }
 
 impl Default for RenderSettings {
@@ -221,6 +230,8 @@ impl Default for RenderSettings {
             outline_colour: [0.0; 3],
             shadows: 0.0,
             transparent_background: false,
+            samples: 1,
+            sample: 0,
         }
     }
 }
@@ -231,6 +242,19 @@ pub const FIGURE_OUTLINE_PX: f32 = 2.0;
 pub const FIGURE_SHADOWS: f32 = 0.5;
 /// Largest outline width in pixels.
 pub const MAX_OUTLINE_PX: f32 = 16.0;
+/// Progressive samples of the high look (see [`RenderSettings::samples`]).
+pub const HIGH_SAMPLES: u32 = 32;
+/// Most progressive samples per picture.
+pub const MAX_SAMPLES: u32 = 256;
+
+/// Checks a progressive sample count: 1 to [`MAX_SAMPLES`].
+pub fn check_samples(n: u32) -> Result<u32, SettingError> {
+    if (1..=MAX_SAMPLES).contains(&n) {
+        Ok(n)
+    } else {
+        Err(SettingError::Samples(n))
+    }
+}
 
 /// Checks an outline width in pixels: finite, 0 (off) to [`MAX_OUTLINE_PX`].
 pub fn check_outline_width(px: f32) -> Result<f32, SettingError> {
@@ -302,6 +326,32 @@ impl RenderSettings {
         self.outline_width = FIGURE_OUTLINE_PX;
         self.outline_colour = [0.0; 3];
         self.shadows = FIGURE_SHADOWS;
+    }
+
+    /// Turns on the high look: the figure look drawn with [`HIGH_SAMPLES`] progressive
+    /// samples per picture.
+    pub fn high(&mut self) {
+        self.figure();
+        self.samples = HIGH_SAMPLES;
+    }
+
+    /// The sub-pixel offset (pixels, each -0.5 to 0.5) of progressive sample `sample`: 0 for
+    /// the plain draw, then the Halton (2, 3) sequence, which covers the pixel evenly.
+    pub fn sample_offset(sample: u32) -> [f32; 2] {
+        let halton = |mut i: u32, base: u32| {
+            let (mut f, mut r) = (1.0f32, 0.0f32);
+            while i > 0 {
+                f /= base as f32;
+                r += f * (i % base) as f32;
+                i /= base;
+            }
+            r
+        };
+        if sample == 0 {
+            [0.0; 2]
+        } else {
+            [halton(sample, 2) - 0.5, halton(sample, 3) - 0.5]
+        }
     }
 
     /// True when the look pass (outlines or shadows) runs.

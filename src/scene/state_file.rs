@@ -165,6 +165,9 @@ pub struct LookState {
     /// Transparent PNG background; absent: as the command line says.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub transparent_background: Option<bool>,
+    /// Progressive samples per picture (1 to 256); absent: as the command line says (1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples: Option<u32>,
 }
 
 impl Default for LookState {
@@ -192,13 +195,15 @@ impl LookState {
                 .then_some(settings.outline_colour),
             shadows: (settings.shadows > 0.0).then_some(settings.shadows),
             transparent_background: settings.transparent_background.then_some(true),
+            samples: (settings.samples > 1).then_some(settings.samples),
         }
     }
 
     /// Applies this look to `settings`; fails naming the first bad value.
     pub fn apply(&self, settings: &mut RenderSettings) -> Result<(), LookError> {
         use crate::render::settings::{
-            check_eye_separation, check_focal_distance, check_outline_width, check_shadows,
+            check_eye_separation, check_focal_distance, check_outline_width, check_samples,
+            check_shadows,
         };
         let setting =
             |key: &'static str| move |source: SettingError| LookError::Setting { key, source };
@@ -234,6 +239,9 @@ impl LookState {
         }
         if let Some(t) = self.transparent_background {
             settings.transparent_background = t;
+        }
+        if let Some(n) = self.samples {
+            settings.samples = check_samples(n).map_err(setting("samples"))?;
         }
         Ok(())
     }

@@ -257,3 +257,70 @@ fn render_look_state_file_keeps_old_files_and_round_trips() {
     );
     assert!(e.to_string().contains("look.shadows"), "{e}");
 }
+
+/// Mean absolute Laplacian of the luminance over the pixels whose 3 x 3 neighbourhood is all
+/// drawn and not outline: the pixel-to-pixel noise of the shading (sample patterns of the
+/// occlusion and shadows show up here; smooth shading hardly does).
+fn interior_noise(image: &RgbaImage) -> f64 {
+    let (w, h) = (image.width as i64, image.height as i64);
+    let mask = drawn(image);
+    let lum = |x: i64, y: i64| luminance(image.pixel(x as u32, y as u32));
+    let (mut sum, mut count) = (0.0, 0usize);
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            // Drawn, and no outline (dark) pixel around: the shading only.
+            let shaded = (-1..=1).all(|dy| {
+                (-1..=1)
+                    .all(|dx| mask[((y + dy) * w + x + dx) as usize] && lum(x + dx, y + dy) > 80.0)
+            });
+            if shaded {
+                let l =
+                    4.0 * lum(x, y) - lum(x - 1, y) - lum(x + 1, y) - lum(x, y - 1) - lum(x, y + 1);
+                sum += l.abs();
+                count += 1;
+            }
+        }
+    }
+    assert!(count > 1000, "only {count} interior pixels");
+    sum / count as f64
+}
+
+#[test]
+fn progressive_samples_smooth_the_figure_look() {
+    // The figure look with ambient occlusion and full-strength shadows, where their sample
+    // patterns show: a sphere with an atom between it and the key light.
+    let l = Vec3::new(-0.4, 0.6, 0.7).normalize() * 9.0;
+    let occluder = Some(([l.x, l.y, l.z], 2.5));
+    let mut figure = RenderSettings {
+        ambient_occlusion: 1.0,
+        ..plain()
+    };
+    figure.figure();
+    figure.shadows = 1.0;
+    let Some(one) = render(&figure, occluder) else {
+        return;
+    };
+    let high = render(
+        &RenderSettings {
+            samples: 16,
+            ..figure
+        },
+        occluder,
+    )
+    .expect("gpu");
+    keep("samples_1.png", &one);
+    keep("samples_16.png", &high);
+    let (noise_one, noise_high) = (interior_noise(&one), interior_noise(&high));
+    assert!(
+        noise_high < 0.6 * noise_one,
+        "16 samples: pixel noise {noise_high:.2}, one sample {noise_one:.2}"
+    );
+    // The same picture on average: averaging smooths, it does not brighten or darken.
+    let (mean, _) = one.difference(&high).expect("same size");
+    assert!(
+        mean < 4.0,
+        "mean difference {mean:.2} between 1 and 16 samples"
+    );
+    // The background stays as it is.
+    assert_eq!(one.pixel(0, 0), high.pixel(0, 0));
+}
