@@ -278,7 +278,7 @@ impl Reader {
                 top.segments.set_id(a, segment);
             }
         }
-        crate::io::chem::number_residue_runs(&mut top, &self.residue_of);
+        crate::io::residue_runs::number_residue_runs(&mut top, &self.residue_of);
         let mut bonds: Vec<[u32; 2]> = self
             .bonds
             .into_iter()
@@ -293,12 +293,8 @@ impl Reader {
             &mut top,
         );
         let cell = match self.cell {
-            Some((lengths, angles)) => {
-                let cell = crate::io::quiet::silenced(|| {
-                    crate::io::chem::cell_rows_of(&chemfiles::UnitCell::triclinic(lengths, angles))
-                });
-                cell.ok()?
-            }
+            // A box chemfiles refused: the file goes the chemfiles way (and its error).
+            Some((lengths, angles)) => crate::io::unit_cell::from_record(lengths, angles).ok()?,
             None => None,
         };
         let frame = Frame {
