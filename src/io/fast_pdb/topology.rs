@@ -88,10 +88,13 @@ impl Reader {
         }
         let length = trim(line).len();
         let n = self.names.len() as i64;
+        // No first serial yet (no atom parsed, though one was seen): not a file this reader
+        // reproduces (found by fuzzing: it indexed an empty list).
+        let first = *self.offsets.first()?;
         let index = |at: usize| -> Option<i64> {
             let id = decode_hybrid36(5, cols(line, at, at + 5))?;
             let below = self.offsets.partition_point(|&o| o < id) as i64;
-            Some(id - below - self.offsets[0])
+            Some(id - below - first)
         };
         let i = index(6)?;
         for at in [11, 16, 21, 26] {
