@@ -7,12 +7,14 @@
 //!
 //! The `app` feature (on by default) adds the file readers ([`io`]), the viewer ([`app`]) and
 //! the command line; without it the crate is the engine alone, as the Python package uses it.
+//! `chemfiles` (on by default) adds the C++ chemfiles library for the formats our own readers
+//! leave to it (TNG, ...); `readers` is [`io`] alone (what the fuzz targets build).
 
 #[cfg(feature = "app")]
 pub mod app;
 pub mod export;
 pub mod gpu;
-#[cfg(feature = "app")]
+#[cfg(feature = "readers")]
 pub mod io;
 pub mod measure;
 pub mod model;

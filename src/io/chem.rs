@@ -9,17 +9,13 @@ use glam::Vec3;
 
 use super::format::FileFormat;
 use super::prepare::prepare;
+use super::residue_runs::number_residue_runs;
 use super::{IoError, dcd, quiet, warnings};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
-use crate::surface::scan::first_failing;
 
 /// Picoseconds per AKMA time unit (CHARMM and NAMD write DCD time steps in AKMA units).
 const PS_PER_AKMA: f64 = 0.048_888_21;
-
-/// Coordinates beyond this (Å, in any direction) are damage, not a structure: they would make
-/// the density grid empty or astronomically large.
-pub(crate) const MAX_COORDINATE: f32 = 1.0e7;
 
 /// One open file, read through chemfiles.
 pub(crate) struct ChemReader {
@@ -256,38 +252,9 @@ fn to_vec3(positions: &[[f64; 3]]) -> Vec<Vec3> {
         .collect()
 }
 
-/// Fails on the first NaN, infinite or absurd (beyond [`MAX_COORDINATE`]) position of frame
-/// `index` of `path`, naming the frame and the atom.
-pub(crate) fn check_positions(
-    path: &Path,
-    index: usize,
-    positions: &[Vec3],
-) -> Result<(), IoError> {
-    if let Some(atom) = first_failing(positions, |p| p.is_finite()) {
-        return Err(IoError::NonFiniteCoordinate {
-            path: path.to_path_buf(),
-            frame: index,
-            atom,
-        });
-    }
-    if let Some(atom) = first_failing(positions, |p| p.abs().max_element() <= MAX_COORDINATE) {
-        return Err(IoError::AbsurdCoordinate {
-            path: path.to_path_buf(),
-            frame: index,
-            atom,
-            value: positions[atom].abs().max_element(),
-        });
-    }
-    Ok(())
-}
-
 /// The periodic box as rows a, b, c in Å, or `None` for an infinite (absent) box.
 fn cell_rows(frame: &chemfiles::Frame) -> Option<[Vec3; 3]> {
-    cell_rows_of(&frame.cell())
-}
-
-/// The periodic box of `cell` as rows a, b, c in Å, or `None` for an infinite (absent) box.
-pub(crate) fn cell_rows_of(cell: &chemfiles::UnitCell) -> Option<[Vec3; 3]> {
+    let cell = frame.cell();
     if cell.shape() == CellShape::Infinite {
         return None;
     }
@@ -375,28 +342,6 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         .map(|[a, b]| [a as u32, b as u32])
         .collect();
     out
-}
-
-/// Sets [`Topology::residue_index`]: a new residue starts at every atom whose (residue number,
-/// name, chain, segment) or `group` differs from the previous atom's; atoms whose `group` is
-/// `u32::MAX` (in no residue) are residues of their own.
-pub(crate) fn number_residue_runs(top: &mut Topology, group: &[u32]) {
-    let n = top.len();
-    top.residue_index.resize(n, 0);
-    let mut next = 0u32;
-    for i in 0..n {
-        let same = i > 0
-            && group[i] != u32::MAX
-            && group[i] == group[i - 1]
-            && top.residue_ids[i] == top.residue_ids[i - 1]
-            && top.residue_names[i] == top.residue_names[i - 1]
-            && top.chains[i] == top.chains[i - 1]
-            && top.segments[i] == top.segments[i - 1];
-        if i > 0 && !same {
-            next += 1;
-        }
-        top.residue_index[i] = next;
-    }
 }
 
 /// Replaces residue numbers and names with those of GRO columns 1-5 and 6-10 (`lines` are the
@@ -493,11 +438,6 @@ mod tests {
         apply_gro_residues(&mut top, &lines);
         assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
         assert_eq!(&top.residue_names[2], "POPE");
-        let mut top = topology(&[(5, "SOL"), (5, "SOL"), (6, "SOL"), (5, "SOL")]);
-        number_residue_runs(&mut top, &[0, 0, 1, 0]);
-        assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
-        number_residue_runs(&mut top, &[u32::MAX; 4]);
-        assert_eq!(top.residue_index, vec![0, 1, 2, 3]);
     }
 
     #[test]

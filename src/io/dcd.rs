@@ -6,11 +6,12 @@
 //! header record (84 bytes: `CORD` + 20 control integers), title record, atom-count record, a
 //! free-atom index record when atoms are fixed; then per frame an optional unit-cell record
 //! (6 doubles), x, y and z records (one f32 per atom), and an optional fourth-dimension record.
-//! Sizes that cannot fit the file are a [`DcdError`].
+//! Sizes that cannot fit the file are a [`DcdError`](super::reader_errors::DcdError).
 
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
+#[cfg(feature = "chemfiles")]
 use super::reader_errors::DcdError;
 
 /// What the file size says about the frames.
@@ -101,6 +102,7 @@ pub(crate) fn measure(path: &Path) -> Option<DcdTail> {
 /// Checks that the sizes in the header of the DCD file at `path` fit the file, before chemfiles
 /// allocates for them (a 4-byte edit of the atom count made it grow to 8 GB). Headers this check
 /// does not understand pass (chemfiles then decides); sizes that cannot fit give the reason.
+#[cfg(feature = "chemfiles")]
 pub(crate) fn check_header(path: &Path) -> Result<(), DcdError> {
     let Ok(mut file) = std::fs::File::open(path) else {
         return Ok(());
@@ -233,6 +235,7 @@ mod tests {
         assert_eq!(measure(&path), None);
     }
 
+    #[cfg(feature = "chemfiles")]
     #[test]
     fn the_header_check_names_sizes_that_cannot_fit() {
         let dir = tempfile::tempdir().expect("tempdir");

@@ -1,5 +1,6 @@
 //! The fast path of [`open`](super::open) for large single-frame text files: plain PDB (`.pdb`,
-//! `.ent`) and plain XYZ files are read here in one pass over their bytes, without chemfiles.
+//! `.ent`) and plain XYZ files (also compressed ones in a build without the `chemfiles`
+//! feature) are read here in one pass over their bytes, without chemfiles.
 //! Through chemfiles a 129k-atom PDB was parsed four times (topology, positions, the frame-0
 //! check, the first frame), plus once by the wwPDB column reader and once for CONECT records,
 //! each time with per-atom strings and C calls.
@@ -44,10 +45,22 @@ pub(crate) fn read(path: &Path, format: &FileFormat) -> Option<FastRead> {
         return None;
     }
     let compressed = format.chemfiles != format.base;
-    if compressed || !matches!(format.base, "PDB" | "XYZ") {
+    if !matches!(format.base, "PDB" | "XYZ") {
         return None;
     }
-    let bytes = super::line_ends::lone_cr_to_lf(std::fs::read(path).ok()?);
+    let bytes = if compressed {
+        // With chemfiles a compressed file goes its way (as it always has); without it, ours
+        // reads the whole decompressed stream (a cut stream is left to the error of that path).
+        if cfg!(feature = "chemfiles") {
+            return None;
+        }
+        match super::prepare::read_all(path, format).ok()? {
+            (bytes, None) => bytes,
+            (_, Some(_cut)) => return None,
+        }
+    } else {
+        super::line_ends::lone_cr_to_lf(std::fs::read(path).ok()?)
+    };
     match format.base {
         "PDB" => fast_pdb::read(&bytes),
         _ => fast_xyz::read(&bytes),
@@ -407,13 +420,13 @@ pub(crate) struct TypeTable {
 }
 
 impl TypeTable {
-    /// chemfiles' mass and charge of an atom whose type is `kind` (0 for unknown types).
+    /// The mass and charge chemfiles gives an atom whose type is `kind` (see
+    /// [`super::type_masses`]; 0 for unknown types).
     pub(crate) fn get(&mut self, kind: &str) -> (f32, f32) {
         if let Some(&v) = self.known.get(kind) {
             return v;
         }
-        let atom = chemfiles::Atom::new(kind);
-        let v = (atom.mass() as f32, atom.charge() as f32);
+        let v = (super::type_masses::type_mass(kind) as f32, 0.0);
         self.known.insert(kind.to_string(), v);
         v
     }

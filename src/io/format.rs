@@ -62,6 +62,7 @@ const FORMATS: [(&str, &str, bool); 16] = [
 
 /// The format named `base` (`GRO`, `Amber NetCDF`) as the static name [`FileFormat::base`]
 /// holds, or `None` when no format has that name.
+#[cfg(feature = "chemfiles")]
 pub(crate) fn base_named(base: &str) -> Option<&'static str> {
     FORMATS.iter().map(|f| f.1).find(|b| *b == base)
 }

@@ -27,7 +27,7 @@ use super::reader_errors::GroError;
 use super::text_scan::{
     FrameSpan, LineScanner, SpanFrames, cell_rows, index_spans, lines, mark_cut_stream, read_span,
 };
-use super::{IoError, chem};
+use super::{IoError, residue_runs};
 use crate::model::{Frame, Labels, Topology};
 
 /// Width of a coordinate field as `gmx` writes it by default (`%8.3f`).
@@ -340,7 +340,7 @@ fn topology(atoms: &[AtomText]) -> Topology {
             group[i] = id;
         }
     }
-    chem::number_residue_runs(&mut top, &group);
+    residue_runs::number_residue_runs(&mut top, &group);
     top
 }
 

@@ -32,7 +32,7 @@ use super::reader_errors::LammpsError;
 use super::text_scan::{
     FrameSpan, LineScanner, SpanFrames, index_spans, lines, mark_cut_stream, read_span,
 };
-use super::{IoError, chem};
+use super::{IoError, residue_runs};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
 
@@ -329,7 +329,7 @@ fn topology(atoms: &[AtomText]) -> Topology {
         top.types.push(&kind);
         top.names.push(&name);
     }
-    chem::number_residue_runs(&mut top, &vec![u32::MAX; n]);
+    residue_runs::number_residue_runs(&mut top, &vec![u32::MAX; n]);
     top
 }
 

@@ -21,11 +21,22 @@
 //! __read-frames`; see [`reader_main`]), never in the process that holds the user's work: a file
 //! that still crashes it costs the frame it crashed on (a one-line error naming the file and the
 //! frame), and its libraries' text never reaches the terminal.
+//!
+//! Without the `chemfiles` cargo feature there is no C++ reader: every format above is read by
+//! our own readers (GRO, LAMMPS dump, DCD, Amber NetCDF in `native`; XTC/TRR; mmCIF; PDB and
+//! XYZ, also compressed, when a fast reader takes the file), and a file only chemfiles reads
+//! (TNG, a multi-model PDB) fails to open with one line saying so (`without_chemfiles`).
+//! [`read_whole_file`] opens a file and reads every frame (the fuzz targets' entry point).
 
+#[cfg(feature = "chemfiles")]
 mod chem;
 mod cif_lexer;
 mod cif_residues;
 mod conect;
+#[cfg(feature = "chemfiles")]
+mod contained;
+#[cfg(not(feature = "chemfiles"))]
+#[path = "without_chemfiles.rs"]
 mod contained;
 mod dcd;
 mod dcd_frames;
@@ -36,6 +47,7 @@ mod fast_pdb;
 mod fast_xyz;
 mod follow;
 pub(crate) mod format;
+mod frame_checks;
 mod gro;
 pub(crate) mod imd;
 mod lammps;
@@ -51,20 +63,25 @@ mod pdb_templates;
 mod prepare;
 mod quiet;
 mod reader_errors;
+mod residue_runs;
 pub(crate) mod stream;
 mod text_clean;
 mod text_scan;
 mod tng;
 mod trajectory;
+mod type_masses;
 mod unit_cell;
 mod warnings;
+pub mod whole_file;
 mod wwpdb;
 mod xdr;
 mod xdr_error;
 mod xdr_reader;
 mod xyz_frames;
 
-pub use contained::{READER_ARG, reader_main};
+#[cfg(feature = "chemfiles")]
+pub use contained::READER_ARG;
+pub use contained::reader_main;
 pub use error::IoError;
 pub use follow::FollowOptions;
 pub use format::{FileFormat, WwFormat, detect};
@@ -74,7 +91,9 @@ pub use stream::{
     StreamerOptions,
 };
 pub use trajectory::{
-    Damage, Trajectory, open, open_following, open_growing, open_live, open_via_chemfiles,
-    open_via_reader_process, reads_fast,
+    Damage, Trajectory, open, open_following, open_growing, open_live, reads_fast,
 };
+#[cfg(feature = "chemfiles")]
+pub use trajectory::{open_via_chemfiles, open_via_reader_process};
 pub use warnings::take_warnings;
+pub use whole_file::{WholeFile, read_whole_file};

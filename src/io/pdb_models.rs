@@ -35,6 +35,7 @@ pub(crate) fn cut_model(bytes: &[u8]) -> Option<(usize, String)> {
 
 /// `message` with `line N: ` in front when it quotes a line of `bytes` (chemfiles quotes the
 /// record it cannot read: `could not read positions in 'ATOM ...'`), else `None`.
+#[cfg(feature = "chemfiles")]
 pub(crate) fn name_line(bytes: &[u8], message: &str) -> Option<String> {
     let start = message.find('\'')?;
     let end = message.rfind('\'')?;
@@ -64,6 +65,7 @@ mod tests {
         );
     }
 
+    #[cfg(feature = "chemfiles")]
     #[test]
     fn quoted_records_get_their_line() {
         let text = b"HEADER\nATOM      1  N   ALA A   1      xx\nEND\n";

@@ -42,6 +42,7 @@ pub(crate) struct Prepared {
     /// The path chemfiles opens (the user's file, or a temporary copy or link).
     pub open_path: PathBuf,
     /// The chemfiles format string for `open_path`.
+    #[cfg_attr(not(feature = "chemfiles"), allow(dead_code))]
     pub chemfiles: String,
     /// Set when the compressed stream ended early or was corrupt: why (the last frame of the
     /// copy is cut).

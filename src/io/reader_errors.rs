@@ -29,6 +29,7 @@ pub(crate) enum DcdError {
     HeaderCut { len: u64, offset: u64, total: u64 },
     /// The file ends inside its header (found by the header check).
     #[error("the file ends inside its header (truncated)")]
+    #[cfg(feature = "chemfiles")] // found by the header check run before chemfiles
     HeaderTruncated,
     /// The header record's closing marker is not 84.
     #[error("the header record's closing marker is not 84 (damaged header)")]
@@ -40,6 +41,7 @@ pub(crate) enum DcdError {
     #[error(
         "the header's title record says {title} bytes, in a file of {total} bytes (damaged header)"
     )]
+    #[cfg(feature = "chemfiles")] // found by the header check run before chemfiles
     HeaderTitleSize { title: i64, total: u64 },
     /// The title record's closing marker differs from its opening one.
     #[error("the title record's closing marker does not match (damaged header)")]
@@ -55,6 +57,7 @@ pub(crate) enum DcdError {
     #[error(
         "the header says {atoms} atoms, which a file of {total} bytes cannot hold (damaged header)"
     )]
+    #[cfg(feature = "chemfiles")] // found by the header check run before chemfiles
     AtomsDontFit { atoms: i64, total: u64 },
     /// A fixed-atom count that is negative or above the atom count.
     #[error("the header says {fixed} fixed atoms out of {atoms} (damaged header)")]
@@ -67,6 +70,7 @@ pub(crate) enum DcdError {
     FreeAtomIndex { k: usize, index: i64, atoms: i64 },
     /// The free-atom list is damaged (found by the header check).
     #[error("the free-atom list in the header is damaged")]
+    #[cfg(feature = "chemfiles")] // found by the header check run before chemfiles
     FreeAtomList,
     /// The file ends `have` bytes into a frame of `expected` bytes holding `atoms` atoms.
     #[error(

@@ -46,6 +46,12 @@ pub(crate) fn from_lengths_angles(
     {
         return Err(CellError::BadAngle(angles));
     }
+    from_columns(matrix_of(lengths, angles))
+}
+
+/// The box matrix of `lengths` (Å) and `angles` (degrees), box vectors as its columns, as
+/// chemfiles builds it (no checks; angles within [`ROUGHLY_RIGHT`] of 90° all made 90°).
+fn matrix_of(lengths: [f64; 3], angles: [f64; 3]) -> DMat3 {
     let angles = if angles.iter().all(|a| (a - 90.0).abs() < ROUGHLY_RIGHT) {
         [90.0; 3]
     } else {
@@ -61,12 +67,66 @@ pub(crate) fn from_lengths_angles(
     let cy = (cos(alpha) - cos(beta) * cos(gamma)) / sin(gamma);
     let cz = (1.0 - cx * cx - cy * cy).sqrt();
     // Columns are the box vectors, as chemfiles holds them.
-    let matrix = DMat3::from_cols(
+    DMat3::from_cols(
         DVec3::new(a, 0.0, 0.0),
         DVec3::new(cos(gamma) * b, sin(gamma) * b, 0.0),
         DVec3::new(cx * c, cy * c, cz * c),
-    );
-    from_columns(matrix)
+    )
+}
+
+/// The box of a PDB `CRYST1` record or an mmCIF `_cell` (lengths in Å, angles in degrees) as
+/// rows a, b, c, exactly as the chemfiles path turned such a record into a box: refused (the
+/// reason) for negative lengths or 0°, negative or ≥ 180° angles, left-handed vectors, or
+/// degenerate vectors at right angles that are not along the axes; `None` (no box) for an
+/// all-zero box and for a box whose rows are not finite (NaN or infinite numbers, or angles no
+/// box can have together), where chemfiles kept an unusable cell.
+pub(crate) fn from_record(
+    lengths: [f64; 3],
+    angles: [f64; 3],
+) -> Result<Option<[Vec3; 3]>, CellError> {
+    // Comparisons false for NaN: a NaN passes these checks, as in chemfiles.
+    if lengths.iter().any(|l| *l < 0.0) {
+        return Err(CellError::NegativeLength(lengths));
+    }
+    if angles
+        .iter()
+        .any(|a| *a < 0.0 || a.abs() < ROUGHLY_ZERO || *a >= 180.0)
+    {
+        return Err(CellError::BadAngle(angles));
+    }
+    // In chemfiles' order; a NaN entry passes the first two checks and makes the rows unusable.
+    let matrix = matrix_of(lengths, angles);
+    if matrix.determinant() < 0.0 {
+        return Err(CellError::LeftHanded);
+    }
+    if looks_orthorhombic_but_is_not_diagonal(matrix) {
+        return Err(CellError::BadAngle(angles));
+    }
+    let zero = |v: f64| v.abs() < ROUGHLY_ZERO;
+    let [x, y, z] = [matrix.x_axis, matrix.y_axis, matrix.z_axis];
+    let diagonal = zero(x.y) && zero(x.z) && zero(y.x) && zero(y.z) && zero(z.x) && zero(z.y);
+    if diagonal && zero(x.x) && zero(y.y) && zero(z.z) {
+        return Ok(None);
+    }
+    let rows = [x, y, z].map(|v| v.as_vec3());
+    Ok(rows.iter().all(|r| r.is_finite()).then_some(rows))
+}
+
+/// chemfiles' last refusal: box vectors (the columns of `matrix`, Å) whose angles are all
+/// (roughly) 90°, or undefined next to a zero-length vector, in a matrix that is not diagonal
+/// (a box with degenerate, nearly zero vectors).
+fn looks_orthorhombic_but_is_not_diagonal(matrix: DMat3) -> bool {
+    let zero = |v: f64| v.abs() < ROUGHLY_ZERO;
+    let [x, y, z] = [matrix.x_axis, matrix.y_axis, matrix.z_axis];
+    let diagonal = zero(x.y) && zero(x.z) && zero(y.x) && zero(y.z) && zero(z.x) && zero(z.y);
+    if diagonal || [x, y, z].iter().all(|v| zero(v.length())) {
+        return false;
+    }
+    // The angle between two vectors in degrees, NaN when one has zero length.
+    let angle = |u: DVec3, v: DVec3| (u.dot(v) / (u.length() * v.length())).acos().to_degrees();
+    [angle(y, z), angle(x, z), angle(x, y)]
+        .iter()
+        .all(|a| a.is_nan() || (a - 90.0).abs() < ROUGHLY_RIGHT)
 }
 
 /// The box whose vectors are the columns of `matrix` (Å) as rows a, b, c, with chemfiles'
@@ -123,5 +183,62 @@ mod tests {
         assert!((angle(b, c) - 70.0).abs() < 1e-3);
         assert!((angle(a, c) - 80.0).abs() < 1e-3);
         assert!((angle(a, b) - 100.0).abs() < 1e-3);
+    }
+
+    /// `from_record` against chemfiles' `UnitCell::triclinic` (the CRYST1 and `_cell` path it
+    /// replaces): the same rows bit for bit, `None` where chemfiles has no usable box, and a
+    /// refusal where chemfiles throws (a panic in its binding).
+    #[cfg(feature = "chemfiles")]
+    #[test]
+    fn records_give_the_boxes_chemfiles_gives() {
+        let lengths = [0.0, 1e-6, 3.5, 10.0, 57.3, -1.0, f64::NAN, f64::INFINITY];
+        let angles = [
+            90.0,
+            89.9995,
+            60.0,
+            100.0,
+            120.0,
+            179.9,
+            0.0,
+            -5.0,
+            180.0,
+            f64::NAN,
+        ];
+        let mut compared = 0;
+        for &a in &lengths {
+            for &b in &lengths[1..5] {
+                for &alpha in &angles {
+                    for &gamma in &angles[..6] {
+                        let (lengths, angles) = ([a, b, 12.0], [alpha, 75.0, gamma]);
+                        let theirs = crate::io::quiet::silenced(|| {
+                            let cell = chemfiles::UnitCell::triclinic(lengths, angles);
+                            if cell.shape() == chemfiles::CellShape::Infinite {
+                                return None;
+                            }
+                            let m = cell.matrix();
+                            let column = |j: usize| {
+                                Vec3::new(m[0][j] as f32, m[1][j] as f32, m[2][j] as f32)
+                            };
+                            let rows = [column(0), column(1), column(2)];
+                            rows.iter().all(|r| r.is_finite()).then_some(rows)
+                        });
+                        let ours = from_record(lengths, angles);
+                        match (theirs, ours) {
+                            (Ok(theirs), Ok(ours)) => {
+                                assert_eq!(ours, theirs, "{lengths:?} {angles:?}")
+                            }
+                            (Err(()), Err(_)) => {}
+                            (theirs, ours) => {
+                                panic!(
+                                    "{lengths:?} {angles:?}: chemfiles {theirs:?}, ours {ours:?}"
+                                )
+                            }
+                        }
+                        compared += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(compared, 8 * 4 * 10 * 6);
     }
 }

@@ -1,17 +1,19 @@
 //! Captures chemfiles' warnings (which it would otherwise print to stderr, once per odd line of a
 //! file) into a small bounded buffer that the application may show or drop.
 
-use std::sync::{Mutex, Once};
+use std::sync::Mutex;
 
 /// At most this many warnings are kept; later ones only bump the dropped counter.
 const MAX_KEPT: usize = 64;
 
 /// Distinct warnings seen since the last [`take_warnings`], and how many did not fit.
 static BUFFER: Mutex<(Vec<String>, usize)> = Mutex::new((Vec::new(), 0));
-static INSTALL: Once = Once::new();
+#[cfg(feature = "chemfiles")]
+static INSTALL: std::sync::Once = std::sync::Once::new();
 
 /// Routes chemfiles' warnings into the buffer. Idempotent and thread-safe; every reader calls it
 /// before touching chemfiles.
+#[cfg(feature = "chemfiles")]
 pub(crate) fn install() {
     INSTALL.call_once(|| {
         chemfiles::set_warning_callback(push);
@@ -19,6 +21,7 @@ pub(crate) fn install() {
 }
 
 /// Keeps `message` (once) in the buffer: a chemfiles warning, here or in a reader process.
+#[cfg_attr(not(feature = "chemfiles"), allow(dead_code))]
 pub(crate) fn push(message: &str) {
     if let Ok(mut buffer) = BUFFER.lock() {
         if buffer.0.iter().any(|kept| kept == message) {

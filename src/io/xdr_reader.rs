@@ -12,7 +12,7 @@ use glam::Vec3;
 use molly::XTCReader;
 use molly::selection::AtomSelection;
 
-use super::chem::check_positions;
+use super::frame_checks::check_positions;
 use super::prepare::Prepared;
 use super::xdr::{Walk, trr_blocks};
 use super::xdr_error::XdrError;

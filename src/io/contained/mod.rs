@@ -34,8 +34,9 @@ use std::thread::JoinHandle;
 
 use glam::Vec3;
 
-use super::chem::{ChemReader, check_and_prepare, check_positions};
+use super::chem::{ChemReader, check_and_prepare};
 use super::format::FileFormat;
+use super::frame_checks::check_positions;
 use super::prepare::read_all;
 use super::{IoError, pdb_models, warnings};
 use crate::model::{Frame, Topology};

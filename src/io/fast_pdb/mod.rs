@@ -250,6 +250,17 @@ fn apply_enrichment(top: &mut Topology, columns: &[Columns], chains: &Labels) {
 mod tests {
     use super::*;
 
+    /// Found by fuzzing (`scripts/fuzz`, target `pdb`): a CONECT record after an atom line the
+    /// reader saw but did not parse indexed the empty list of first serials (a panic). The file
+    /// is now declined (left to the chemfiles path, or its one-line error without chemfiles).
+    #[test]
+    fn conect_without_a_first_serial_is_declined_not_a_panic() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fuzz/pdb_conect_without_first_serial.pdb");
+        let bytes = std::fs::read(path).expect("the regression input");
+        assert!(read(&bytes).is_none());
+    }
+
     #[test]
     fn frames_are_counted_as_chemfiles_counts_them() {
         assert_eq!(frame_count(b"ATOM\n"), 1);

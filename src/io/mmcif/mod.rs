@@ -18,7 +18,7 @@
 //!   `label_comp_id`; the number is `label_seq_id`, or where that is not a number (waters,
 //!   ligands) `auth_seq_id`, else `label_entity_id`, else 0 (see [`super::cif_residues`]). The
 //!   chain is `label_asym_id` (`auth_` columns stand in for absent `label_` ones). Residue runs
-//!   are numbered as everywhere else ([`super::chem::number_residue_runs`]).
+//!   are numbered as everywhere else ([`super::residue_runs::number_residue_runs`]).
 //! - Bonds: with a `pdbx_PDB_model_num` column, the standard residues get their template bonds
 //!   and peptide links as chemfiles' PDB reader makes them ([`super::mmcif_bonds`]);
 //!   consecutive nucleotides are linked O3'-P (chemfiles linked O3' to O3', and never matched
@@ -178,10 +178,8 @@ fn cell_rows(cell: &[Option<f64>; 6]) -> Option<[Vec3; 3]> {
     if lengths == [0.0; 3] || !lengths.iter().chain(&angles).all(|v| v.is_finite()) {
         return None;
     }
-    // Numbers only (no byte of the file): the cell matrix exactly as the chemfiles path had it.
-    super::quiet::silenced(|| {
-        super::chem::cell_rows_of(&chemfiles::UnitCell::triclinic(lengths, angles))
-    })
-    .ok()
-    .flatten()
+    // The cell matrix exactly as the chemfiles path had it.
+    super::unit_cell::from_record(lengths, angles)
+        .ok()
+        .flatten()
 }

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use crate::io::IoError;
-use crate::io::chem::check_positions;
 use crate::io::contained::ContainedReader;
+use crate::io::frame_checks::check_positions;
 use crate::io::native::NativeFrames;
 use crate::io::xdr_reader::XdrReader;
 use crate::model::Frame;

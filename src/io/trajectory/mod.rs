@@ -10,9 +10,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
-use super::chem::check_positions;
 use super::contained::ContainedReader;
 use super::format::{FileFormat, detect};
+use super::frame_checks::check_positions;
 use super::live::LiveCount;
 use super::native;
 use super::prepare::{prepare, read_all};
@@ -91,6 +91,7 @@ pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
 /// reader, and chemfiles run in this process, not in a reader process: the reference those
 /// readers are tested against (tests and benchmarks only; chemfiles' mmCIF reader crashes on
 /// some legal files, and a damaged file can crash this process).
+#[cfg(feature = "chemfiles")]
 pub fn open_via_chemfiles(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, Readers::ChemfilesInProcess)
 }
@@ -99,12 +100,14 @@ pub fn open_via_chemfiles(top: &Path, traj: Option<&Path>) -> Result<Trajectory,
 /// read by chemfiles in its reader process instead, as before those readers existed: how the
 /// tests reach the reader process's crash handling with files that crash chemfiles. The same
 /// as `open` under the environment variable `MDSURF_NO_NATIVE_READ`.
+#[cfg(feature = "chemfiles")]
 pub fn open_via_reader_process(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
     open_with(top, traj, Readers::ChemfilesContained)
 }
 
-/// Which readers [`open_with`] may use.
+/// Which readers [`open_with`] may use (without the `chemfiles` feature, always `Ours`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(not(feature = "chemfiles"), allow(dead_code))]
 enum Readers {
     /// Ours (mmCIF, fast PDB/XYZ, XTC/TRR, the native readers), chemfiles in a reader process
     /// for the rest.

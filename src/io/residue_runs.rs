@@ -1,0 +1,53 @@
+//! How every reader numbers residues: as contiguous runs of atoms, never grouped by residue
+//! number alone (see [`number_residue_runs`]).
+
+use crate::model::Topology;
+
+/// Sets [`Topology::residue_index`]: a new residue starts at every atom whose (residue number,
+/// name, chain, segment) or `group` differs from the previous atom's; atoms whose `group` is
+/// `u32::MAX` (in no residue) are residues of their own.
+pub(crate) fn number_residue_runs(top: &mut Topology, group: &[u32]) {
+    let n = top.len();
+    top.residue_index.resize(n, 0);
+    let mut next = 0u32;
+    for i in 0..n {
+        let same = i > 0
+            && group[i] != u32::MAX
+            && group[i] == group[i - 1]
+            && top.residue_ids[i] == top.residue_ids[i - 1]
+            && top.residue_names[i] == top.residue_names[i - 1]
+            && top.chains[i] == top.chains[i - 1]
+            && top.segments[i] == top.segments[i - 1];
+        if i > 0 && !same {
+            next += 1;
+        }
+        top.residue_index[i] = next;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Labels;
+
+    fn topology(residues: &[(i64, &str)]) -> Topology {
+        let n = residues.len();
+        Topology {
+            names: Labels::filled("C", n),
+            residue_ids: residues.iter().map(|r| r.0).collect(),
+            residue_names: residues.iter().map(|r| r.1.to_string()).collect(),
+            chains: Labels::filled("", n),
+            segments: Labels::filled("", n),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn runs_split_where_number_or_group_change() {
+        let mut top = topology(&[(5, "SOL"), (5, "SOL"), (6, "SOL"), (5, "SOL")]);
+        number_residue_runs(&mut top, &[0, 0, 1, 0]);
+        assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
+        number_residue_runs(&mut top, &[u32::MAX; 4]);
+        assert_eq!(top.residue_index, vec![0, 1, 2, 3]);
+    }
+}
