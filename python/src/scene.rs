@@ -233,25 +233,25 @@ fn build_topology(c: Columns, first: &[Vec3]) -> PyResult<Topology> {
             .collect::<PyResult<_>>()?;
     }
     // Residues as runs of atoms with the same (number, name, chain, segment) and reader
-    // residue, as the crate's chemfiles conversion numbers them; atoms of a file without
-    // residues are residues of their own.
-    let group = residues.unwrap_or_else(|| vec![0; n]);
-    let mut next = 0u32;
-    top.residue_index = (0..n)
-        .map(|i| {
-            let same = has_residues
-                && i > 0
-                && group[i] == group[i - 1]
-                && top.residue_ids[i] == top.residue_ids[i - 1]
-                && top.residue_names[i] == top.residue_names[i - 1]
-                && top.chains[i] == top.chains[i - 1]
-                && top.segments[i] == top.segments[i - 1];
-            if i > 0 && !same {
-                next += 1;
-            }
-            next
-        })
-        .collect();
+    // residue, numbered as the crate's readers number them; atoms of a file without residues
+    // are residues of their own.
+    let group = match (has_residues, residues) {
+        (false, _) => vec![u32::MAX; n],
+        (true, Some(residues)) => {
+            // Only whether an atom's residue equals the previous atom's counts: run numbers.
+            let mut run = 0u32;
+            (0..n)
+                .map(|i| {
+                    if i > 0 && residues[i] != residues[i - 1] {
+                        run = (run + 1) % u32::MAX;
+                    }
+                    run
+                })
+                .collect()
+        }
+        (true, None) => vec![0; n],
+    };
+    top.number_residue_runs(&group);
     top.complete_elements_and_radii();
     fit_untyped_radii(&mut top, first);
     Ok(top)

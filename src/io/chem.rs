@@ -9,7 +9,6 @@ use glam::Vec3;
 
 use super::format::FileFormat;
 use super::prepare::prepare;
-use super::residue_runs::number_residue_runs;
 use super::{IoError, dcd, quiet, warnings};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
@@ -335,7 +334,7 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
             chem_residue[a] = r as u32;
         }
     }
-    number_residue_runs(&mut out, &chem_residue);
+    out.number_residue_runs(&chem_residue);
     out.bonds = top
         .bonds()
         .into_iter()
@@ -363,7 +362,7 @@ fn apply_gro_residues(top: &mut Topology, lines: &[(i64, String)]) {
         run += *g;
         *g = run;
     }
-    number_residue_runs(top, &group);
+    top.number_residue_runs(&group);
 }
 
 /// The residue number and name columns of the first frame of the GRO file `path` (plain,

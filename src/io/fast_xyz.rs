@@ -119,7 +119,7 @@ fn read_in_pieces(bytes: &[u8], piece_bytes: usize) -> Option<FastRead> {
         return None;
     }
     let no_residue = vec![u32::MAX; n];
-    super::residue_runs::number_residue_runs(&mut top, &no_residue);
+    top.number_residue_runs(&no_residue);
     Some(FastRead {
         topology: top,
         frame: Frame {

@@ -19,6 +19,7 @@
 use std::fs::File;
 use std::path::Path;
 
+use super::IoError;
 use super::fast::{QuickMap, parse_u64, trim};
 use super::fast::{TypeTable, cols, columns_text, empty_topology, parse_f64, parse_i64, to_vec3};
 use super::native::NativeOpen;
@@ -27,7 +28,6 @@ use super::reader_errors::GroError;
 use super::text_scan::{
     FrameSpan, LineScanner, SpanFrames, cell_rows, index_spans, lines, mark_cut_stream, read_span,
 };
-use super::{IoError, residue_runs};
 use crate::model::{Frame, Labels, Topology};
 
 /// Width of a coordinate field as `gmx` writes it by default (`%8.3f`).
@@ -340,7 +340,7 @@ fn topology(atoms: &[AtomText]) -> Topology {
             group[i] = id;
         }
     }
-    residue_runs::number_residue_runs(&mut top, &group);
+    top.number_residue_runs(&group);
     top
 }
 

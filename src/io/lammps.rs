@@ -23,6 +23,7 @@
 use std::fs::File;
 use std::path::Path;
 
+use super::IoError;
 use super::fast::{TypeTable, empty_topology, free_text, parse_f64, parse_i64, parse_u64};
 use super::fast::{to_vec3, trim};
 use super::lammps_header::{self, Header, item, words};
@@ -32,7 +33,6 @@ use super::reader_errors::LammpsError;
 use super::text_scan::{
     FrameSpan, LineScanner, SpanFrames, index_spans, lines, mark_cut_stream, read_span,
 };
-use super::{IoError, residue_runs};
 use crate::model::elements::canonical_symbol;
 use crate::model::{Frame, Topology};
 
@@ -329,7 +329,7 @@ fn topology(atoms: &[AtomText]) -> Topology {
         top.types.push(&kind);
         top.names.push(&name);
     }
-    residue_runs::number_residue_runs(&mut top, &vec![u32::MAX; n]);
+    top.number_residue_runs(&vec![u32::MAX; n]);
     top
 }
 

@@ -63,7 +63,6 @@ mod pdb_templates;
 mod prepare;
 mod quiet;
 mod reader_errors;
-mod residue_runs;
 pub(crate) mod stream;
 mod text_clean;
 mod text_scan;

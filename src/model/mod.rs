@@ -20,6 +20,7 @@ pub(crate) mod lipid_like;
 pub(crate) mod particles;
 pub(crate) mod pbc;
 pub(crate) mod radii;
+mod residue_runs;
 pub(crate) mod residues;
 pub mod sizing;
 

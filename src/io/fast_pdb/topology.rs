@@ -281,7 +281,7 @@ impl Reader {
                 top.segments.set_id(a, segment);
             }
         }
-        crate::io::residue_runs::number_residue_runs(&mut top, &self.residue_of);
+        top.number_residue_runs(&self.residue_of);
         let mut bonds: Vec<[u32; 2]> = self
             .bonds
             .into_iter()

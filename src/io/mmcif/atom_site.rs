@@ -340,7 +340,7 @@ impl<'a> AtomSite<'a> {
                 top.chains.set_id(a as usize, chain);
             }
         }
-        crate::io::residue_runs::number_residue_runs(&mut top, &self.group);
+        top.number_residue_runs(&self.group);
         if self.columns.model.is_some() {
             let mut bonds = link_standard_residues(&self.residues, &top.names);
             bonds.sort_unstable();

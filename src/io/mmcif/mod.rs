@@ -18,7 +18,7 @@
 //!   `label_comp_id`; the number is `label_seq_id`, or where that is not a number (waters,
 //!   ligands) `auth_seq_id`, else `label_entity_id`, else 0 (see [`super::cif_residues`]). The
 //!   chain is `label_asym_id` (`auth_` columns stand in for absent `label_` ones). Residue runs
-//!   are numbered as everywhere else ([`super::residue_runs::number_residue_runs`]).
+//!   are numbered as everywhere else ([`crate::model::Topology::number_residue_runs`]).
 //! - Bonds: with a `pdbx_PDB_model_num` column, the standard residues get their template bonds
 //!   and peptide links as chemfiles' PDB reader makes them ([`super::mmcif_bonds`]);
 //!   consecutive nucleotides are linked O3'-P (chemfiles linked O3' to O3', and never matched
