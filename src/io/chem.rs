@@ -412,19 +412,6 @@ fn residue_string(residue: &chemfiles::Residue, keys: &[&str]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Labels;
-
-    fn topology(residues: &[(i64, &str)]) -> Topology {
-        let n = residues.len();
-        Topology {
-            names: Labels::filled("C", n),
-            residue_ids: residues.iter().map(|r| r.0).collect(),
-            residue_names: residues.iter().map(|r| r.1.to_string()).collect(),
-            chains: Labels::filled("", n),
-            segments: Labels::filled("", n),
-            ..Default::default()
-        }
-    }
 
     #[test]
     fn residues_are_runs_not_numbers() {
@@ -433,7 +420,7 @@ mod tests {
             .iter()
             .map(|(i, n)| (*i, n.to_string()))
             .collect();
-        let mut top = topology(&[(1, "ALA"); 4]);
+        let mut top = Topology::of_residues(&[(1, "ALA"); 4]);
         apply_gro_residues(&mut top, &lines);
         assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
         assert_eq!(&top.residue_names[2], "POPE");

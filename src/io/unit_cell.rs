@@ -104,12 +104,19 @@ pub(crate) fn from_record(
     }
     let zero = |v: f64| v.abs() < ROUGHLY_ZERO;
     let [x, y, z] = [matrix.x_axis, matrix.y_axis, matrix.z_axis];
-    let diagonal = zero(x.y) && zero(x.z) && zero(y.x) && zero(y.z) && zero(z.x) && zero(z.y);
+    let diagonal = is_diagonal(matrix);
     if diagonal && zero(x.x) && zero(y.y) && zero(z.z) {
         return Ok(None);
     }
     let rows = [x, y, z].map(|v| v.as_vec3());
     Ok(rows.iter().all(|r| r.is_finite()).then_some(rows))
+}
+
+/// True when every off-diagonal element of `matrix` is (roughly) zero.
+fn is_diagonal(matrix: DMat3) -> bool {
+    let zero = |v: f64| v.abs() < ROUGHLY_ZERO;
+    let [x, y, z] = [matrix.x_axis, matrix.y_axis, matrix.z_axis];
+    zero(x.y) && zero(x.z) && zero(y.x) && zero(y.z) && zero(z.x) && zero(z.y)
 }
 
 /// chemfiles' last refusal: box vectors (the columns of `matrix`, Å) whose angles are all
@@ -118,7 +125,7 @@ pub(crate) fn from_record(
 fn looks_orthorhombic_but_is_not_diagonal(matrix: DMat3) -> bool {
     let zero = |v: f64| v.abs() < ROUGHLY_ZERO;
     let [x, y, z] = [matrix.x_axis, matrix.y_axis, matrix.z_axis];
-    let diagonal = zero(x.y) && zero(x.z) && zero(y.x) && zero(y.z) && zero(z.x) && zero(z.y);
+    let diagonal = is_diagonal(matrix);
     if diagonal || [x, y, z].iter().all(|v| zero(v.length())) {
         return false;
     }
@@ -138,7 +145,7 @@ pub(crate) fn from_columns(matrix: DMat3) -> Result<Option<[Vec3; 3]>, CellError
     }
     let zero = |v: f64| v.abs() < ROUGHLY_ZERO;
     let [x, y, z] = [matrix.x_axis, matrix.y_axis, matrix.z_axis];
-    let diagonal = zero(x.y) && zero(x.z) && zero(y.x) && zero(y.z) && zero(z.x) && zero(z.y);
+    let diagonal = is_diagonal(matrix);
     if diagonal && zero(x.x) && zero(y.y) && zero(z.z) {
         return Ok(None);
     }

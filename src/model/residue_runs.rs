@@ -30,26 +30,30 @@ impl Topology {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::model::Labels;
-
-    fn topology(residues: &[(i64, &str)]) -> Topology {
+impl Topology {
+    /// A test topology of carbon atoms with these (residue number, residue name) pairs, no
+    /// chains or segments, residues not numbered yet.
+    #[cfg(test)]
+    pub(crate) fn of_residues(residues: &[(i64, &str)]) -> Topology {
         let n = residues.len();
         Topology {
-            names: Labels::filled("C", n),
+            names: super::Labels::filled("C", n),
             residue_ids: residues.iter().map(|r| r.0).collect(),
             residue_names: residues.iter().map(|r| r.1.to_string()).collect(),
-            chains: Labels::filled("", n),
-            segments: Labels::filled("", n),
+            chains: super::Labels::filled("", n),
+            segments: super::Labels::filled("", n),
             ..Default::default()
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
 
     #[test]
     fn runs_split_where_number_or_group_change() {
-        let mut top = topology(&[(5, "SOL"), (5, "SOL"), (6, "SOL"), (5, "SOL")]);
+        let mut top = Topology::of_residues(&[(5, "SOL"), (5, "SOL"), (6, "SOL"), (5, "SOL")]);
         top.number_residue_runs(&[0, 0, 1, 0]);
         assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
         top.number_residue_runs(&[u32::MAX; 4]);

@@ -337,15 +337,31 @@ fn mutants_of_every_format_end_cleanly() {
             });
         }
     });
-    for (case, [ok, refused]) in cases.iter().zip(counts.into_inner().unwrap()) {
-        eprintln!("{}: {ok} read, {refused} refused in one line", case.name);
+    report(
+        cases.iter().map(|c| c.name),
+        counts.into_inner().unwrap(),
+        failures.into_inner().unwrap(),
+        jobs.len(),
+        "mutants",
+    );
+}
+
+/// Prints how many mutants of each format (`names`, with `counts` of [read, refused]) were read
+/// or refused, and fails listing every one of the `failures` among `total` runs of `what`.
+pub(crate) fn report<'a>(
+    names: impl Iterator<Item = &'a str>,
+    counts: Vec<[usize; 2]>,
+    failures: Vec<String>,
+    total: usize,
+    what: &str,
+) {
+    for (name, [ok, refused]) in names.zip(counts) {
+        eprintln!("{name}: {ok} read, {refused} refused in one line");
     }
-    let failures = failures.into_inner().unwrap();
     assert!(
         failures.is_empty(),
-        "{} of {} mutants broke the rules:\n{}",
+        "{} of {total} {what} broke the rules:\n{}",
         failures.len(),
-        jobs.len(),
         failures.join("\n")
     );
 }

@@ -505,15 +505,11 @@ fn structured_mutants_of_every_format_end_as_they_must() {
             });
         }
     });
-    for (s, [ok, refused]) in subjects.iter().zip(counts.into_inner().unwrap()) {
-        eprintln!("{}: {ok} read, {refused} refused in one line", s.name);
-    }
-    let failures = failures.into_inner().unwrap();
-    assert!(
-        failures.is_empty(),
-        "{} of {} structured mutants broke the rules:\n{}",
-        failures.len(),
+    crate::io_mutants::report(
+        subjects.iter().map(|s| s.name),
+        counts.into_inner().unwrap(),
+        failures.into_inner().unwrap(),
         jobs.len(),
-        failures.join("\n")
+        "structured mutants",
     );
 }
