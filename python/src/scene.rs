@@ -41,7 +41,7 @@ pub fn scene_err(err: SceneError) -> PyErr {
             S::Gpu(_) => PyRuntimeError::new_err(msg),
             _ => PyValueError::new_err(msg),
         },
-        SceneError::Periodic { .. } => PyValueError::new_err(msg),
+        SceneError::Periodic { .. } | SceneError::Exposure { .. } => PyValueError::new_err(msg),
     }
 }
 

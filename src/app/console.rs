@@ -164,7 +164,7 @@ pub const REP_WORDS: [&str; 13] = [
 ];
 
 const HELP: &str = "commands: rep add \"SEL\" STYLE [as NAME] | rep N|NAME color|spacing|radius-scale|isovalue|quality|opacity|vertices|style|select VALUE | rep N hide|show|delete | frame N | play | pause | fit [\"SEL\"] | view save|open FILE | screenshot FILE [WxH] | select \"SEL\" | imd pause|resume|detach | clear | help [rep]";
-const HELP_REP: &str = "rep add \"SEL\" surface|beads|spheres|sticks|ball-and-stick [as NAME]; rep N (1-based) or rep NAME, then: color SCHEME (element, chain, residue-type, residue-index, b-factor, single:#rrggbb), spacing Å, radius-scale R, isovalue I, quality low|medium|high|max, opacity 0..1, vertices interpolated|refined, style STYLE, select \"SEL\", hide, show, delete";
+const HELP_REP: &str = "rep add \"SEL\" surface|beads|spheres|sticks|ball-and-stick [as NAME]; rep N (1-based) or rep NAME, then: color SCHEME (element, chain, residue-type, residue-index, b-factor, exposure, single:#rrggbb), spacing Å, radius-scale R, isovalue I, quality low|medium|high|max, opacity 0..1, vertices interpolated|refined, style STYLE, select \"SEL\", hide, show, delete";
 
 /// A word of the line and its 1-based column.
 #[derive(Debug, Clone, PartialEq)]

@@ -307,6 +307,7 @@ fn colour_ui(ui: &mut egui::Ui, scheme: &mut ColorScheme) {
                 ColorScheme::ResidueType,
                 ColorScheme::ResidueIndex,
                 ColorScheme::BFactor,
+                ColorScheme::Exposure(crate::model::ColourMap::default()),
                 ColorScheme::Single([0.8, 0.8, 0.8]),
             ] {
                 let name = if let ColorScheme::Single(_) = s {
@@ -329,18 +330,27 @@ fn colour_ui(ui: &mut egui::Ui, scheme: &mut ColorScheme) {
     if let ColorScheme::Data(d) = scheme {
         data_colour_ui(ui, d);
     }
+    if let ColorScheme::Exposure(map) = scheme {
+        colour_map_ui(ui, map);
+        ui.label("0 buried … 1 as exposed as alone");
+    }
+}
+
+/// The colour map picker of data and exposure colours.
+fn colour_map_ui(ui: &mut egui::Ui, map: &mut crate::model::ColourMap) {
+    egui::ComboBox::from_label("colour map")
+        .selected_text(map.name())
+        .show_ui(ui, |ui| {
+            for m in crate::model::ColourMap::ALL {
+                ui.selectable_value(map, m, m.name());
+            }
+        });
 }
 
 /// Colour map and range of data colours (`--color data:FILE.csv`): the range is the data's
 /// (see [`crate::model::ColourMap::default_range`]) until "fixed range" is ticked.
 fn data_colour_ui(ui: &mut egui::Ui, d: &mut crate::model::DataColours) {
-    egui::ComboBox::from_label("colour map")
-        .selected_text(d.map.name())
-        .show_ui(ui, |ui| {
-            for m in crate::model::ColourMap::ALL {
-                ui.selectable_value(&mut d.map, m, m.name());
-            }
-        });
+    colour_map_ui(ui, &mut d.map);
     let mut fixed = d.range.is_some();
     let mut range = d.effective_range();
     ui.horizontal(|ui| {

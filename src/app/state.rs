@@ -158,14 +158,13 @@ impl AppCore {
     }
 
     /// The colour map and value range of the colour bar screenshots and movie frames carry:
-    /// that of the first visible representation coloured by data (`--color data:FILE.csv`),
-    /// as `mdsurf render` draws it; `None` without one.
+    /// that of the first visible representation coloured by data (`--color data:FILE.csv`) or
+    /// exposure, as `mdsurf render` draws it; `None` without one.
     pub fn colour_bar(&self) -> Option<(ColourMap, [f32; 2])> {
         self.reps
             .iter()
             .filter(|r| r.visible)
-            .find_map(|r| r.colour.data())
-            .map(|d| (d.map, d.effective_range()))
+            .find_map(|r| r.colour.colour_bar())
     }
 
     /// The representation the panel edits, if any.

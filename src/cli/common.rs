@@ -41,11 +41,13 @@ pub struct ParticleArgs {
     /// One bead per residue instead of one particle per atom.
     #[arg(long)]
     pub beads: bool,
-    /// Colour scheme: element, chain, residue-type, residue-index, b-factor, single:#rrggbb, or
-    /// data:FILE.csv (rows index,value or frame,index,value; atoms without a value are grey).
+    /// Colour scheme: element, chain, residue-type, residue-index, b-factor, single:#rrggbb,
+    /// data:FILE.csv (rows index,value or frame,index,value; atoms without a value are grey), or
+    /// exposure (each residue's area on its surface over its type's area alone, 0 to 1, per
+    /// frame; surfaces only).
     #[arg(long = "color", value_name = "SCHEME", default_value = "element")]
     pub color: String,
-    /// Colour map of --color data:FILE (and of per-model B-factors): viridis or bwr
+    /// Colour map of --color data:FILE, exposure (and of per-model B-factors): viridis or bwr
     /// (blue-white-red, for signed data).
     #[arg(long = "color-map", value_name = "MAP")]
     pub color_map: Option<ColourMap>,
@@ -70,8 +72,16 @@ impl ParticleArgs {
                 d.range = self.color_range.or(d.range);
             }
             ColorScheme::BFactor => {}
+            ColorScheme::Exposure(map) if self.color_range.is_none() => {
+                *map = self.color_map.unwrap_or(*map);
+            }
+            ColorScheme::Exposure(_) => {
+                bail!("--color-range does not apply to --color exposure (its range is 0 to 1)")
+            }
             _ if self.color_map.is_some() || self.color_range.is_some() => {
-                bail!("--color-map and --color-range apply to --color data:FILE.csv or b-factor")
+                bail!(
+                    "--color-map and --color-range apply to --color data:FILE.csv or b-factor (--color-map also to exposure)"
+                )
             }
             _ => {}
         }

@@ -266,9 +266,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
             &settings,
             args.size,
         )?;
-        // Data colours get a colour bar (the first representation coloured by data).
-        if let Some(d) = reps.iter().find_map(|r| r.rep.colour.data().copied()) {
-            draw_colour_bar(&mut image, d.map, d.effective_range());
+        // Data and exposure colours get a colour bar (the first representation so coloured).
+        if let Some((map, range)) = reps.iter().find_map(|r| r.rep.colour.colour_bar()) {
+            draw_colour_bar(&mut image, map, range);
         }
         if let Some(stats) = stats.as_mut()
             && stats_frame != Some(f)

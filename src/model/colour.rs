@@ -1,5 +1,6 @@
 //! Per-atom colour schemes (element, chain, residue type, residue index, B-factor or any number,
-//! single colour, the user's data through a colour map). Colours are linear RGB in 0..1, as the
+//! single colour, the user's data through a colour map, each residue's solvent exposure on the
+//! surface). Colours are linear RGB in 0..1, as the
 //! colour volume and renderer expect.
 
 use std::fmt;
@@ -9,13 +10,14 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::colour_data::{self, DataId, DataTable};
-use super::colour_map::{ColourMap, parse_range};
+use super::colour_map::{ColourMap, NO_VALUE_GREY, parse_range};
 use super::residues::{ResidueClass, residue_class};
 use super::{Labels, ModelError, Topology};
 
 /// How atoms are coloured. `FromStr` accepts `element`, `chain`, `residue-type`,
 /// `residue-index` (alias `rainbow`), `b-factor`, `single:#rrggbb` (or just `#rrggbb`), and
-/// `data:FILE[;map=viridis|bwr][;range=LOW:HIGH]` (which reads FILE: see [`colour_data`]).
+/// `data:FILE[;map=viridis|bwr][;range=LOW:HIGH]` (which reads FILE: see [`colour_data`]) and
+/// `exposure[;map=viridis|bwr]`.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub enum ColorScheme {
     /// CPK-like colours by element; particles without an element get a colour per name.
@@ -33,6 +35,13 @@ pub enum ColorScheme {
     Single([f32; 3]),
     /// The user's numbers per atom (or per frame and atom) through a colour map.
     Data(DataColours),
+    /// Each residue's exposure on its representation's surface in this frame (its area over the
+    /// largest area a residue of its name has alone, `crate::measure::ExposureTable`) through a
+    /// colour map over 0 (buried) to 1 (as exposed as alone). The exposure needs the surface:
+    /// the scene engine computes it after each surface and colours the surface again
+    /// (`crate::scene::exposure`); until then, and for atom styles, atoms are
+    /// [`super::colour_map::NO_VALUE_GREY`].
+    Exposure(ColourMap),
 }
 
 /// Colouring by a loaded [`colour_data::DataTable`]: which table, the map, and the value range
@@ -98,11 +107,14 @@ impl FromStr for ColorScheme {
             "residue-index" | "residue_index" | "rainbow" => ColorScheme::ResidueIndex,
             "b-factor" | "bfactor" | "b_factor" => ColorScheme::BFactor,
             _ if lower.starts_with("data:") => return parse_data(s.trim()),
+            _ if lower == "exposure" || lower.starts_with("exposure;") => {
+                return parse_exposure(s.trim());
+            }
             _ => {
                 let hex = lower.strip_prefix("single:").unwrap_or(&lower);
                 ColorScheme::Single(parse_hex(hex).ok_or_else(|| {
                     ModelError::Parse(format!(
-                        "bad colour scheme '{s}': use element, chain, residue-type, residue-index, b-factor, single:#rrggbb or data:FILE.csv"
+                        "bad colour scheme '{s}': use element, chain, residue-type, residue-index, b-factor, exposure, single:#rrggbb or data:FILE.csv"
                     ))
                 })?)
             }
@@ -133,6 +145,8 @@ impl fmt::Display for ColorScheme {
                 }
                 Ok(())
             }
+            ColorScheme::Exposure(map) if *map == ColourMap::default() => write!(f, "exposure"),
+            ColorScheme::Exposure(map) => write!(f, "exposure;map={map}"),
         }
     }
 }
@@ -143,6 +157,22 @@ impl ColorScheme {
         match self {
             ColorScheme::Data(d) => d.table().is_some_and(|t| t.per_frame),
             _ => false,
+        }
+    }
+
+    /// True when the colours come from the surface (exposure): the scene engine computes them
+    /// after each surface.
+    pub fn needs_surface(&self) -> bool {
+        matches!(self, ColorScheme::Exposure(_))
+    }
+
+    /// The colour map and value range a colour bar shows for this scheme: data colours over
+    /// their range, exposure over 0 to 1; `None` for the other schemes.
+    pub fn colour_bar(&self) -> Option<(ColourMap, [f32; 2])> {
+        match self {
+            ColorScheme::Data(d) => Some((d.map, d.effective_range())),
+            ColorScheme::Exposure(map) => Some((*map, [0.0, 1.0])),
+            _ => None,
         }
     }
 
@@ -196,6 +226,7 @@ impl ColorScheme {
             ColorScheme::BFactor => colours_from_values(&topology.b_factors),
             ColorScheme::Single(c) => vec![*c; n],
             ColorScheme::Data(d) => d.colours(n, 0),
+            ColorScheme::Exposure(_) => vec![NO_VALUE_GREY; n],
         }
     }
 }
@@ -253,6 +284,22 @@ fn parse_data(s: &str) -> Result<ColorScheme, ModelError> {
     let mut data = DataColours::load(Path::new(path), map)?;
     data.range = range;
     Ok(ColorScheme::Data(data))
+}
+
+/// Parses `exposure[;map=NAME]`.
+fn parse_exposure(s: &str) -> Result<ColorScheme, ModelError> {
+    let mut map = ColourMap::default();
+    for part in s.split(';').skip(1) {
+        match part.split_once('=') {
+            Some(("map", v)) => map = v.parse().map_err(ModelError::Parse)?,
+            _ => {
+                return Err(ModelError::Parse(format!(
+                    "bad colour scheme '{s}': after exposure, expected ;map=viridis|bwr"
+                )));
+            }
+        }
+    }
+    Ok(ColorScheme::Exposure(map))
 }
 
 /// Converts one sRGB channel (0..1) to linear.
@@ -398,6 +445,8 @@ mod tests {
             "residue-index",
             "b-factor",
             "single:#ff8800",
+            "exposure",
+            "exposure;map=bwr",
         ] {
             let scheme: ColorScheme = s.parse().expect(s);
             assert_eq!(scheme.to_string(), s);
@@ -405,6 +454,8 @@ mod tests {
         let c: ColorScheme = "#ff8800".parse().expect("hex");
         assert_eq!(c, "single:#FF8800".parse().expect("hex"));
         assert!("single:#ff88".parse::<ColorScheme>().is_err());
+        let bad = "exposure;range=0:2".parse::<ColorScheme>().unwrap_err();
+        assert!(bad.to_string().contains("exposure;range=0:2"), "{bad}");
         assert!(
             "plaid"
                 .parse::<ColorScheme>()

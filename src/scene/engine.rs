@@ -16,19 +16,23 @@
 //! [`GpuEngine::finish`]. The mesh stays in the engine's buffers ([`LayerResult::gpu_surface`]);
 //! [`SceneEngine::read_mesh`] brings it back when a caller needs the triangles. Periodic
 //! surfaces (`--periodic`) come from the CPU periodic engine whatever the backend.
+//!
+//! A surface coloured by exposure ([`ColorScheme::Exposure`]) takes a second pass once its
+//! first gives the areas: see [`super::exposure`].
 
 use std::collections::HashMap;
 use std::collections::hash_map::Entry as MapEntry;
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::exposure::ExposureColouring;
 use super::frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
 use super::layer::{Layer, LayerFrame};
 use super::representation::Representation;
-use crate::gpu::{Changes, GpuEngine, Work};
-use crate::model::{Frame, RadiusOverrides, Topology};
+use crate::gpu::{Changes, FrameStats, GpuEngine, GpuSurface, Work};
+use crate::model::{ColorScheme, ColourMap, Frame, RadiusOverrides, Topology};
 use crate::surface::periodic::PeriodicEngine;
-use crate::surface::{AtomSet, Mesh, MeshCounts, SurfaceEngine, SurfaceOutput};
+use crate::surface::{AtomSet, Mesh, MeshCounts, SurfaceEngine, SurfaceError, SurfaceOutput};
 use crate::transform::Replicate;
 
 /// The engine a scene computes its surfaces with.
@@ -61,6 +65,8 @@ struct RepSlot {
     last: Option<(usize, Arc<LayerResult>)>,
     /// What its engine's last frame was computed from, to send only what changed since.
     sent: Option<Sent>,
+    /// Its exposure colours' table (kept from the first frame coloured by exposure).
+    exposure: ExposureColouring,
 }
 
 /// Inputs of an engine's last successful frame.
@@ -111,6 +117,18 @@ struct Submitted {
     frame: u64,
     /// Which stages the submit ran.
     work: Work,
+    /// Exposure colours to give the surface once it is collected: the map and the topology
+    /// atoms of the particles (`None`: all).
+    exposure: Option<(ColourMap, Option<Vec<u32>>)>,
+}
+
+/// The colour map of `rep`'s exposure colours, when its surface takes them (atoms, not
+/// beads).
+fn exposure_map(rep: &Representation, beads: bool) -> Option<ColourMap> {
+    match rep.colour {
+        ColorScheme::Exposure(map) if rep.style.is_surface() && !beads => Some(map),
+        _ => None,
+    }
 }
 
 /// A representation's result while a frame is computed: reused as it was, or new (with a GPU
@@ -238,7 +256,7 @@ impl SceneEngine {
         for entry in entries {
             let result = match entry {
                 Entry::Reused(r) => r,
-                Entry::New(r, submitted) => self.collect(index, *r, submitted)?,
+                Entry::New(r, submitted) => self.collect(topology, index, *r, submitted)?,
             };
             layers.push(result);
         }
@@ -339,7 +357,40 @@ impl SceneEngine {
                 match &mut self.backend {
                     SceneBackend::Host(e) => {
                         e.set_vertices(rep.vertices);
-                        result.output = e.compute(&atoms, &rep.params()).map_err(surface_failed)?;
+                        let params = rep.params();
+                        // A surface coloured by exposure is coloured in its second pass.
+                        let map = exposure_map(rep, lf.particles.is_beads());
+                        let first = AtomSet {
+                            colours: atoms.colours.filter(|_| map.is_none()),
+                            ..atoms
+                        };
+                        result.output = e.compute(&first, &params).map_err(surface_failed)?;
+                        // Exposure colours need the mesh (kept unless only measured).
+                        let map = map.filter(|_| result.output.counts_without_mesh.is_none());
+                        if let Some(map) = map {
+                            let colours = slot
+                                .exposure
+                                .colours(
+                                    topology,
+                                    lf.particles.subset(),
+                                    &atoms,
+                                    &e.vertices().effective(&params),
+                                    (&result.output.mesh, result.output.area),
+                                    map,
+                                )
+                                .map_err(|source| SceneError::Exposure {
+                                    frame: index,
+                                    rep: rep.name.clone(),
+                                    source,
+                                })?;
+                            let coloured = AtomSet {
+                                colours: Some(&colours),
+                                ..atoms
+                            };
+                            result.output =
+                                e.compute(&coloured, &params).map_err(surface_failed)?;
+                            result.particles.colours = Arc::new(colours);
+                        }
                     }
                     SceneBackend::Gpu(main) => {
                         // The main engine serves one representation (one that never had an
@@ -360,6 +411,8 @@ impl SceneEngine {
                         submitted = Some(Submitted {
                             frame: info.frame,
                             work: info.work,
+                            exposure: exposure_map(rep, lf.particles.is_beads())
+                                .map(|m| (m, lf.particles.subset().map(<[u32]>::to_vec))),
                         });
                     }
                 }
@@ -376,45 +429,37 @@ impl SceneEngine {
         Ok(Entry::New(Box::new(result), submitted))
     }
 
-    /// Finishes a new result: collects its GPU counters when it was submitted, and keeps it in
-    /// its slot for reuse.
+    /// Finishes a new result: collects its GPU counters when it was submitted (and gives it
+    /// its exposure colours when it takes them), and keeps it in its slot for reuse.
     fn collect(
         &mut self,
+        topology: &Topology,
         index: usize,
         mut result: LayerResult,
         submitted: Option<Submitted>,
     ) -> Result<Arc<LayerResult>, SceneError> {
         let id = result.id;
-        if let Some(Submitted { frame, work }) = submitted {
+        if let Some(Submitted {
+            frame,
+            work,
+            exposure,
+        }) = submitted
+        {
             let started = Instant::now();
-            let p = &result.particles;
-            let atoms = AtomSet {
-                positions: &p.positions,
-                radii: &p.radii,
-                colours: Some(&p.colours),
-            };
-            let params = result.rep.params();
-            let finished = match self.gpu_engine_of(id) {
-                Some(e) => e.finish(frame, &atoms, &params).map(|stats| {
-                    let mut surface = e.surface();
-                    surface.stats = Some(stats);
-                    (stats, surface)
-                }),
-                None => Err(crate::surface::SurfaceError::Gpu(
-                    "the representation's GPU engine is gone".into(),
-                )),
-            };
+            let mut finished = self.finish_gpu(id, (index, frame), &result);
+            if let (Ok((stats, _)), Some((map, subset))) = (&finished, exposure) {
+                let stats = *stats;
+                finished = self
+                    .colour_by_exposure(topology, index, &mut result, &stats, map, subset)
+                    .and_then(|frame| self.finish_gpu(id, (index, frame), &result));
+            }
             let (stats, surface) = match finished {
                 Ok(done) => done,
-                Err(source) => {
+                Err(e) => {
                     if let Some(slot) = self.slots.get_mut(&id) {
                         slot.sent = None;
                     }
-                    return Err(SceneError::Surface {
-                        frame: index,
-                        rep: result.rep.name.clone(),
-                        source,
-                    });
+                    return Err(e);
                 }
             };
             result.output = SurfaceOutput {
@@ -438,6 +483,112 @@ impl SceneEngine {
             slot.last = Some((index, result.clone()));
         }
         Ok(result)
+    }
+
+    /// Collects GPU frame `frame` of representation `id` (scene frame `index`, computed from
+    /// `result`'s particles): its counters and its surface buffers.
+    fn finish_gpu(
+        &mut self,
+        id: RepId,
+        (index, frame): (usize, u64),
+        result: &LayerResult,
+    ) -> Result<(FrameStats, GpuSurface), SceneError> {
+        let p = &result.particles;
+        let atoms = AtomSet {
+            positions: &p.positions,
+            radii: &p.radii,
+            colours: Some(&p.colours),
+        };
+        let params = result.rep.params();
+        let finished = match self.gpu_engine_of(id) {
+            Some(e) => e.finish(frame, &atoms, &params).map(|stats| {
+                let mut surface = e.surface();
+                surface.stats = Some(stats);
+                (stats, surface)
+            }),
+            None => Err(engine_gone()),
+        };
+        finished.map_err(|source| SceneError::Surface {
+            frame: index,
+            rep: result.rep.name.clone(),
+            source,
+        })
+    }
+
+    /// Gives the GPU surface of `result` (its counters `stats`) exposure colours through `map`:
+    /// reads its mesh back, computes the colours of its atoms (topology atoms `subset`, all for
+    /// `None`), stores them in `result`'s particles and submits the colour pass again. Returns
+    /// the engine's frame number to collect.
+    fn colour_by_exposure(
+        &mut self,
+        topology: &Topology,
+        index: usize,
+        result: &mut LayerResult,
+        stats: &FrameStats,
+        map: ColourMap,
+        subset: Option<Vec<u32>>,
+    ) -> Result<u64, SceneError> {
+        let id = result.id;
+        let rep = result.rep.clone();
+        let surface_failed = |source| SceneError::Surface {
+            frame: index,
+            rep: rep.name.clone(),
+            source,
+        };
+        let e = self
+            .gpu_engine_of(id)
+            .ok_or_else(|| surface_failed(engine_gone()))?;
+        let mesh = e
+            .read_mesh(stats)
+            .map_err(|err| surface_failed(SurfaceError::Gpu(err.to_string())))?;
+        let params = e.vertices().effective(&rep.params());
+        let Some(slot) = self.slots.get_mut(&id) else {
+            return Err(surface_failed(engine_gone()));
+        };
+        let p = &result.particles;
+        let atoms = AtomSet {
+            positions: &p.positions,
+            radii: &p.radii,
+            colours: None,
+        };
+        let colours = slot
+            .exposure
+            .colours(
+                topology,
+                subset.as_deref(),
+                &atoms,
+                &params,
+                (&mesh, stats.area),
+                map,
+            )
+            .map_err(|source| SceneError::Exposure {
+                frame: index,
+                rep: rep.name.clone(),
+                source,
+            })?;
+        let colours = Arc::new(colours);
+        if let Some(sent) = slot.sent.as_mut() {
+            sent.colours = colours.clone();
+        }
+        result.particles.colours = colours;
+        let p = &result.particles;
+        let coloured = AtomSet {
+            positions: &p.positions,
+            radii: &p.radii,
+            colours: Some(&p.colours),
+        };
+        let e = self
+            .gpu_engine_of(id)
+            .ok_or_else(|| surface_failed(engine_gone()))?;
+        let only_colours = Changes {
+            positions: false,
+            radii: false,
+            colours: true,
+        };
+        let info = e
+            .submit(&coloured, &rep.params(), only_colours)
+            .map_err(surface_failed)?;
+        Ok(info.frame)
     }
 
     /// The GPU engine of representation `id`, when the backend is the GPU.
@@ -474,18 +625,13 @@ impl SceneEngine {
             rep: layer.rep.name.clone(),
             source,
         };
-        let stats = stats.ok_or_else(|| {
-            failed(crate::surface::SurfaceError::Gpu(
-                "the surface has no counters".into(),
-            ))
-        })?;
+        let stats =
+            stats.ok_or_else(|| failed(SurfaceError::Gpu("the surface has no counters".into())))?;
         match self.gpu_engine_of(layer.id) {
             Some(e) => e
                 .read_mesh(&stats)
-                .map_err(|e| failed(crate::surface::SurfaceError::Gpu(e.to_string()))),
-            None => Err(failed(crate::surface::SurfaceError::Gpu(
-                "the representation's GPU engine is gone".into(),
-            ))),
+                .map_err(|e| failed(SurfaceError::Gpu(e.to_string()))),
+            None => Err(failed(engine_gone())),
         }
     }
 
@@ -528,6 +674,7 @@ fn slot_of<'a>(
                 gpu: slot.gpu.take(),
                 last: None,
                 sent: None,
+                exposure: ExposureColouring::default(),
             };
             slot
         }
@@ -536,8 +683,14 @@ fn slot_of<'a>(
             gpu: None,
             last: None,
             sent: None,
+            exposure: ExposureColouring::default(),
         }),
     })
+}
+
+/// The error of a representation whose GPU engine was dropped under it.
+fn engine_gone() -> SurfaceError {
+    SurfaceError::Gpu("the representation's GPU engine is gone".into())
 }
 
 /// A new GPU engine on the same device as `engine` (for a further surface representation).

@@ -11,6 +11,7 @@ use glam::Vec3;
 use super::layer::LayerError;
 use super::representation::Representation;
 use crate::gpu::{GpuSurface, Work};
+use crate::measure::MeasureError;
 use crate::surface::SurfaceError;
 use crate::surface::SurfaceOutput;
 use crate::surface::periodic::PeriodicError;
@@ -148,6 +149,16 @@ pub enum SceneError {
         /// What went wrong.
         source: PeriodicError,
     },
+    /// A surface's exposure colours could not be computed.
+    #[error("frame {frame}: representation '{rep}': exposure colours: {source}")]
+    Exposure {
+        /// Frame index.
+        frame: usize,
+        /// Representation name.
+        rep: String,
+        /// What went wrong.
+        source: MeasureError,
+    },
 }
 
 impl SceneError {
@@ -157,7 +168,8 @@ impl SceneError {
             SceneError::Bind(_) => None,
             SceneError::Particles { frame, .. }
             | SceneError::Surface { frame, .. }
-            | SceneError::Periodic { frame, .. } => Some(*frame),
+            | SceneError::Periodic { frame, .. }
+            | SceneError::Exposure { frame, .. } => Some(*frame),
         }
     }
 }

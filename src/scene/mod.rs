@@ -8,6 +8,7 @@
 
 pub mod defaults;
 pub(crate) mod engine;
+pub(crate) mod exposure;
 pub(crate) mod frame;
 pub mod layer;
 pub mod movie;

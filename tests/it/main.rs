@@ -26,6 +26,7 @@ mod cli_gpu;
 mod cli_measure;
 mod cli_surface;
 mod colour_data;
+mod colour_exposure;
 mod export_atomic;
 mod export_formats;
 mod export_gltf_anim;

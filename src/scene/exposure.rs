@@ -1,0 +1,80 @@
+//! Exposure colours (`--color exposure`): each atom takes the colour of its residue's exposure
+//! on the representation's own surface in this frame, the same numbers `surface --per-residue`
+//! writes: the residue's area (the sum of its atoms' shares, [`measure::atom_areas`]) over the
+//! largest area a residue of its name has alone ([`ExposureTable`], built once per
+//! representation from its first frame). The colour map spans exposure 0 (buried) to 1 (as
+//! exposed as alone); larger values take the top colour.
+//!
+//! The surface must exist before its exposure does, so a representation coloured this way is
+//! computed in two passes: the surface, then (these colours known) its colour pass again. On the
+//! GPU the second pass is a colour-only submit ([`crate::gpu::Work::Colour`]); host engines
+//! compute the surface again with the colours.
+
+use std::collections::HashMap;
+
+use crate::measure::{self, ExposureTable, MeasureError};
+use crate::model::{ColourMap, Topology};
+use crate::surface::{AtomSet, CpuEngine, Mesh, SurfaceParams};
+
+/// What one representation keeps between frames for its exposure colours.
+#[derive(Debug, Default)]
+pub(crate) struct ExposureColouring {
+    /// The residue names' isolated areas (Å²), from the first frame coloured.
+    table: Option<ExposureTable>,
+}
+
+impl ExposureColouring {
+    /// The colour of each atom of `atoms` (the topology atoms `atom_indices`, all of them for
+    /// `None`) through `map`, from the surface `mesh` computed with `params` (the effective
+    /// ones, see [`crate::surface::VertexMode::effective`]) whose area is `area` Å².
+    ///
+    /// Fails on mismatched lengths or indices (see [`measure::atom_areas`]) or when an
+    /// isolated residue's surface fails.
+    pub fn colours(
+        &mut self,
+        topology: &Topology,
+        atom_indices: Option<&[u32]>,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        (mesh, area): (&Mesh, f64),
+        map: ColourMap,
+    ) -> Result<Vec<[f32; 3]>, MeasureError> {
+        let plain = AtomSet {
+            colours: None,
+            ..*atoms
+        };
+        let table = match &mut self.table {
+            Some(t) => t,
+            empty => empty.insert(ExposureTable::from_isolated_residues(
+                &mut CpuEngine::new(),
+                topology,
+                atom_indices,
+                &plain,
+                params,
+            )?),
+        };
+        let mut areas = measure::atom_areas(mesh, &plain, params)?;
+        // Shares of the triangle area, scaled to the surface's area (the same to rounding with
+        // interpolated vertices; the curved area with refined ones), as `--per-residue` does.
+        let sum: f64 = areas.iter().sum();
+        if sum > 0.0 && area.is_finite() {
+            areas.iter_mut().for_each(|a| *a *= area / sum);
+        }
+        let residues = measure::residue_areas(topology, atom_indices, &areas)?;
+        let exposure: HashMap<u32, f32> = residues
+            .iter()
+            .map(|r| (r.residue, table.exposure(r).map_or(f32::NAN, |e| e as f32)))
+            .collect();
+        let colour_of = |atom: u32| {
+            let residue = topology.residue_index[atom as usize];
+            map.colour(
+                exposure.get(&residue).copied().unwrap_or(f32::NAN),
+                [0.0, 1.0],
+            )
+        };
+        Ok(match atom_indices {
+            Some(ix) => ix.iter().map(|&a| colour_of(a)).collect(),
+            None => (0..atoms.len() as u32).map(colour_of).collect(),
+        })
+    }
+}
