@@ -9,6 +9,10 @@ use super::layout::measure as m;
 use super::resources::{Buffers, OUTPUT_SETS};
 use super::types::MeasureUniform;
 
+/// Workgroups of the partial area/volume sums (`PARTIAL_GROUPS` in `shaders/measure.wgsl`): each
+/// writes one partial, and the final sum's one workgroup of as many threads adds them.
+pub(crate) const PARTIAL_GROUPS: u32 = 256;
+
 /// The bookkeeping and reduction kernels, their uniform and cached bind groups.
 #[derive(Debug)]
 pub struct Measure {
@@ -116,7 +120,7 @@ impl Measure {
         } else {
             &self.partial_sums
         };
-        sums.dispatch(pass, partial_sums, &[], [256, 1, 1]);
+        sums.dispatch(pass, partial_sums, &[], [PARTIAL_GROUPS, 1, 1]);
         self.final_sum
             .dispatch(pass, &self.binds[2], &[], [1, 1, 1]);
     }

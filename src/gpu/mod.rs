@@ -32,6 +32,8 @@ pub mod output;
 pub mod plan;
 pub(crate) mod resources;
 pub(crate) mod scan;
+#[cfg(test)]
+mod shader_constants;
 pub mod shaders;
 pub mod table1;
 pub(crate) mod timing;

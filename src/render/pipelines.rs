@@ -5,7 +5,7 @@
 //! (outlines, shadows) passes.
 
 use super::scene::{CylinderInstance, SphereInstance};
-use super::targets::{ACCUM_FORMAT, COLOUR_FORMAT, DEPTH_FORMAT, REVEAL_FORMAT};
+use super::targets::{ACCUM_FORMAT, COLOUR_FORMAT, DEPTH_FORMAT, MEAN_FORMAT, REVEAL_FORMAT};
 
 /// WGSL of the scene pass (after the shared view uniform, `shaders/render_view.wgsl`).
 pub const SCENE_WGSL: &str = concat!(
@@ -36,8 +36,10 @@ pub const ALL: &[(&str, &str)] = &[
     ("render_look.wgsl", LOOK_WGSL),
 ];
 
-/// Vertices per cylinder instance (12 segments, two triangles each; see `vs_cylinder`).
-pub const CYLINDER_VERTICES: u32 = 12 * 6;
+/// Segments around a cylinder (`CYLINDER_SEGMENTS` in `shaders/render_scene.wgsl`).
+pub(crate) const CYLINDER_SEGMENTS: u32 = 12;
+/// Vertices per cylinder instance (two triangles per segment; see `vs_cylinder`).
+pub const CYLINDER_VERTICES: u32 = CYLINDER_SEGMENTS * 6;
 
 pub(crate) struct Pipelines {
     pub view_layout: wgpu::BindGroupLayout,
@@ -58,6 +60,11 @@ pub(crate) struct Pipelines {
     pub anaglyph: wgpu::RenderPipeline,
     /// The luminance (grey) anaglyph composition.
     pub anaglyph_grey: wgpu::RenderPipeline,
+    /// Adds a sample's image to the running mean of progressive samples (weight: the blend
+    /// constant).
+    pub mean_add: wgpu::RenderPipeline,
+    /// Writes the running mean into an output image.
+    pub mean_show: wgpu::RenderPipeline,
 }
 
 /// The look pass's pipelines, one per combination of its parts (ambient occlusion, outlines,
@@ -427,6 +434,23 @@ impl Pipelines {
             device,
             post_spec("grey anaglyph", "fs_anaglyph_grey", &opaque_target),
         );
+        // The running mean of progressive samples: mean = w * sample + (1 - w) * mean, w the
+        // blend constant (1 / samples so far), in linear colour at half-float precision.
+        let weighted = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::Constant,
+            dst_factor: wgpu::BlendFactor::OneMinusConstant,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let mean_target = [Some(wgpu::ColorTargetState {
+            format: MEAN_FORMAT,
+            blend: Some(wgpu::BlendState {
+                color: weighted,
+                alpha: weighted,
+            }),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let mean_add = pipeline(device, post_spec("mean add", "fs_copy", &mean_target));
+        let mean_show = pipeline(device, post_spec("mean show", "fs_copy", &opaque_target));
         // Multiplies the image by the occlusion factor (colour = dst * src; alpha kept).
         let multiply = [colour_target(Some(wgpu::BlendState {
             color: wgpu::BlendComponent {
@@ -473,6 +497,8 @@ impl Pipelines {
             resolve,
             anaglyph,
             anaglyph_grey,
+            mean_add,
+            mean_show,
         }
     }
 }

@@ -106,52 +106,27 @@ pub fn assert_mesh_close(
     false
 }
 
-/// Radius in Å of an element symbol (DESIGN section 2).
-pub fn element_radius(element: &str) -> f32 {
-    match element.trim().to_ascii_uppercase().as_str() {
-        "H" => 1.0,
-        "C" => 1.5,
-        "N" => 1.4,
-        "O" => 1.3,
-        "F" => 1.2,
-        "S" => 1.9,
-        "P" => 1.8,
-        _ => 1.5,
-    }
-}
-
-/// Atoms of a wwPDB file under `tests/data` (ATOM/HETATM records, element column), coloured
-/// by element so the colour pass has something to do.
+/// Atoms of the first frame of a structure under `tests/data`, read by mdsurf's own reader,
+/// with the radii and element colours `mdsurf surface` gives them (so the colour pass has
+/// something to do).
 pub fn load_pdb(name: &str) -> Atoms {
-    let path = crate::data_support::DATA.to_string() + name;
-    let text = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("test data {path} is missing ({e}); see tests/data/README.md"));
-    let mut atoms = Atoms {
-        colours: Some(Vec::new()),
-        ..Default::default()
-    };
-    for line in text
-        .lines()
-        .filter(|l| l.starts_with("ATOM") || l.starts_with("HETATM"))
-    {
-        let f = |a: usize, b: usize| line.get(a..b).unwrap_or("").trim();
-        let xyz = [f(30, 38), f(38, 46), f(46, 54)].map(|s| s.parse::<f32>().expect("coordinate"));
-        let element = f(76, 78);
-        atoms.positions.push(Vec3::from(xyz));
-        atoms.radii.push(element_radius(element));
-        let colour = match element {
-            "C" => [0.5, 0.5, 0.5],
-            "N" => [0.2, 0.2, 1.0],
-            "O" => [1.0, 0.1, 0.1],
-            "S" => [1.0, 0.9, 0.2],
-            _ => [0.9, 0.9, 0.9],
-        };
-        if let Some(c) = atoms.colours.as_mut() {
-            c.push(colour);
-        }
+    let path = crate::data_support::data(name);
+    let traj = mdsurf::io::open(&path, None)
+        .unwrap_or_else(|e| panic!("{}: {e}; see tests/data/README.md", path.display()));
+    let frame = traj.read_frame(0).expect("frame 0");
+    let options = mdsurf::model::ParticleOptions::default();
+    let particles = mdsurf::model::Particles::new_subset(traj.topology(), &frame, &options, None)
+        .expect("particles");
+    assert!(
+        !frame.positions.is_empty(),
+        "no atoms in {}",
+        path.display()
+    );
+    Atoms {
+        radii: particles.radii().to_vec(),
+        colours: Some(particles.colours().to_vec()),
+        positions: frame.positions,
     }
-    assert!(!atoms.positions.is_empty(), "no atoms in {path}");
-    atoms
 }
 
 /// A copy of `atoms` with every coordinate moved by up to `amp` Å (deterministic per `seed`).

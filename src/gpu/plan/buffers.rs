@@ -8,8 +8,8 @@ use super::*;
 pub const BYTES_PER_VERTEX: u64 = size_of::<GpuVertex>() as u64;
 /// Bytes of one output triangle (three u32 indices).
 pub const BYTES_PER_TRIANGLE: u64 = 12;
-/// Bytes of the area/volume partial sums (256 workgroups, two f32 each).
-pub const PARTIALS_BYTES: u64 = 256 * 8;
+/// Bytes of the area/volume partial sums (two f32 per workgroup of the partial sums).
+pub const PARTIALS_BYTES: u64 = crate::gpu::measure::PARTIAL_GROUPS as u64 * 8;
 /// Bytes of an indirect dispatch buffer (3 u32 arguments plus one spare word).
 pub const DISPATCH_ARGS_BYTES: u64 = 16;
 /// The engine's default mesh headroom: grown mesh buffers hold this many times the counts
