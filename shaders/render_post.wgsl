@@ -1,6 +1,7 @@
 // Full-screen passes of the renderer (src/render/renderer.rs) that run after the scene pass:
 // resolving the weighted blended transparency targets over the opaque image, and composing two
 // eye images into a red/cyan anaglyph (colour, or grey from each eye's luminance).
+// Also the copy progressive samples average with.
 
 struct FullscreenOut {
     @builtin(position) clip: vec4<f32>,
@@ -59,4 +60,12 @@ fn fs_anaglyph_grey(i: FullscreenOut) -> @location(0) vec4<f32> {
     let l = luminance(textureLoad(tex_a, p, 0).rgb);
     let r = luminance(textureLoad(tex_b, p, 0).rgb);
     return vec4<f32>(l, r, r, 1.0);
+}
+
+// tex_a: a colour image, copied as it is. Progressive samples (src/render/progressive.rs) draw
+// each sample's image into their running mean with this (blended by a constant weight), and
+// the mean into the shown image.
+@fragment
+fn fs_copy(i: FullscreenOut) -> @location(0) vec4<f32> {
+    return textureLoad(tex_a, vec2<i32>(i.clip.xy), 0);
 }

@@ -5,7 +5,7 @@
 //! code from a computed frame to pixels.
 
 use crate::render::{
-    Camera, GpuScene, RenderError, RenderSettings, RenderTargets, Renderer, RgbaImage,
+    Camera, GpuScene, RenderError, RenderSettings, Renderer, RgbaImage, StillDraw, StillView,
     render_to_rgba,
 };
 
@@ -17,7 +17,10 @@ pub struct ViewRenderer {
     queue: wgpu::Queue,
     renderer: Renderer,
     scene: GpuScene,
-    targets: Option<RenderTargets>,
+    /// The picture, with progressive samples while the view is still.
+    view: StillView,
+    /// True when the scene changed since the last draw.
+    scene_changed: bool,
 }
 
 impl ViewRenderer {
@@ -28,7 +31,8 @@ impl ViewRenderer {
             device,
             queue,
             scene: GpuScene::new(),
-            targets: None,
+            view: StillView::default(),
+            scene_changed: true,
         }
     }
 
@@ -65,33 +69,41 @@ impl ViewRenderer {
             .filter_map(|l| Some((l.as_ref(), now(l.id)?)));
         self.scene
             .show_layers(&self.device, &self.queue, layers, &core.render);
+        self.scene_changed = true;
         true
     }
 
     /// Draws the scene at `size` pixels (at least 1 x 1) into the offscreen targets, made anew
-    /// when the size changed; returns true when they were. Submits and does not wait.
-    pub fn draw(&mut self, camera: &Camera, settings: &RenderSettings, size: [u32; 2]) -> bool {
-        let size = [size[0].max(1), size[1].max(1)];
-        let resized = self.targets.as_ref().is_none_or(|t| t.size() != size);
-        if resized {
-            self.targets = Some(RenderTargets::new(&self.device, size));
-        }
-        if let Some(targets) = self.targets.as_mut() {
-            self.renderer.render(
-                &self.device,
-                &self.queue,
-                targets,
-                &self.scene,
-                camera,
-                settings,
-            );
-        }
-        resized
+    /// when the size changed: the first sample of a view, then, while camera, look, size and
+    /// scene stay the same, one more of the look's progressive samples per call
+    /// ([`StillView`]). Submits and does not wait.
+    pub fn draw(
+        &mut self,
+        camera: &Camera,
+        settings: &RenderSettings,
+        size: [u32; 2],
+    ) -> StillDraw {
+        let changed = std::mem::take(&mut self.scene_changed);
+        self.view.draw(
+            &self.device,
+            &self.queue,
+            &self.renderer,
+            &self.scene,
+            camera,
+            settings,
+            size,
+            changed,
+        )
     }
 
-    /// The targets of the last draw.
-    pub fn targets(&self) -> Option<&RenderTargets> {
-        self.targets.as_ref()
+    /// The picture to show (texture and view), once drawn.
+    pub fn shown(&self) -> Option<(&wgpu::Texture, &wgpu::TextureView)> {
+        self.view.shown()
+    }
+
+    /// Size in pixels of the last draw.
+    pub fn size(&self) -> Option<[u32; 2]> {
+        self.view.targets().map(|t| t.size())
     }
 
     /// Renders the current scene offscreen at `size` and reads it back (screenshots, movies).

@@ -524,6 +524,7 @@ impl eframe::App for Viewer {
             || self.movie.is_some()
             || self.scripted()
             || self.loading.is_some()
+            || self.gpu.as_ref().is_some_and(|g| g.sampling)
         {
             ctx.request_repaint();
         } else if self.core.is_live() {

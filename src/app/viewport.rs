@@ -18,6 +18,8 @@ pub struct GpuView {
     texture: Option<egui::TextureId>,
     /// Time of the last render in ms (CPU side: encoding and submission).
     pub render_ms: f64,
+    /// True while the still view has more progressive samples to draw: the window repaints.
+    pub sampling: bool,
 }
 
 impl GpuView {
@@ -34,6 +36,7 @@ impl GpuView {
             egui_renderer: state.renderer.clone(),
             texture: None,
             render_ms: 0.0,
+            sampling: false,
         }
     }
 
@@ -55,24 +58,22 @@ impl GpuView {
         size: [u32; 2],
     ) -> Option<egui::TextureId> {
         let t0 = Instant::now();
-        let resized = self.view.draw(camera, settings, size);
-        let targets = self.view.targets()?;
-        if resized {
+        let drawn = self.view.draw(camera, settings, size);
+        self.sampling = drawn.more;
+        let (_, shown) = self.view.shown()?;
+        if drawn.new_texture || self.texture.is_none() {
             let device = self.view.device().0;
             let mut r = self.egui_renderer.write();
             match self.texture {
                 Some(id) => r.update_egui_texture_from_wgpu_texture(
                     device,
-                    targets.colour_view(),
+                    shown,
                     wgpu::FilterMode::Linear,
                     id,
                 ),
                 None => {
-                    self.texture = Some(r.register_native_texture(
-                        device,
-                        targets.colour_view(),
-                        wgpu::FilterMode::Linear,
-                    ))
+                    self.texture =
+                        Some(r.register_native_texture(device, shown, wgpu::FilterMode::Linear))
                 }
             }
         }
@@ -97,7 +98,7 @@ impl GpuView {
 
     /// Size in pixels of the last window render.
     pub fn size(&self) -> Option<[u32; 2]> {
-        self.view.targets().map(|t| t.size())
+        self.view.size()
     }
 }
 

@@ -1,13 +1,15 @@
 //! Drawing: an orbit [`Camera`], the GPU-side [`GpuScene`] (surface mesh, atom spheres, bond
 //! cylinders), the [`Renderer`] with its one render-to-texture function [`Renderer::render`], and
-//! [`render_to_rgba`] + [`write_png`] for pictures. Used by the viewer window, `mdsurf render`,
+//! [`render_to_rgba`] + [`write_png`] for pictures, progressive samples averaged on the GPU
+//! ([`SampleMean`], and [`StillView`] for the window). Used by the viewer window, `mdsurf render`,
 //! screenshots, movies and tests; it never imports the app.
 
 pub(crate) mod atoms;
 pub(crate) mod camera;
 pub mod colour_bar;
 pub(crate) mod headless;
-mod pipelines;
+pub(crate) mod pipelines;
+pub(crate) mod progressive;
 pub(crate) mod readback;
 pub(crate) mod renderer;
 pub(crate) mod scene;
@@ -24,6 +26,7 @@ pub use pipelines::{AO_WGSL, LOOK_WGSL, POST_WGSL, SCENE_WGSL};
 
 /// Every render shader as `(file name, full source)` as the device compiles it.
 pub const SHADERS: &[(&str, &str)] = pipelines::ALL;
+pub use progressive::{SampleMean, StillDraw, StillView};
 pub use readback::{
     MEAN_TOLERANCE, OUTLIER_FRACTION, OUTLIER_LEVEL, RgbaImage, read_texture, render_to_rgba,
     write_png,

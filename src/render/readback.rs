@@ -6,6 +6,7 @@ use std::path::Path;
 
 use super::RenderError;
 use super::camera::Camera;
+use super::progressive::SampleMean;
 use super::renderer::Renderer;
 use super::scene::GpuScene;
 use super::settings::RenderSettings;
@@ -128,27 +129,18 @@ pub fn render_to_rgba(
         renderer.render(device, queue, &mut targets, scene, camera, settings);
         return read_texture(device, queue, targets.colour_texture());
     }
-    // Progressive samples: each drawn and read back, then averaged per channel (8-bit sRGB
-    // values averaged, rounded to nearest).
-    renderer.render(device, queue, &mut targets, scene, camera, settings);
-    let mut image = read_texture(device, queue, targets.colour_texture())?;
-    let mut sums: Vec<u32> = image.pixels.iter().map(|&p| u32::from(p)).collect();
-    for sample in 1..settings.samples {
+    // Progressive samples: each drawn and added to their running mean on the GPU (as the
+    // window's still view does), which is read back once.
+    let mean = SampleMean::new(device, targets.size());
+    for sample in 0..settings.samples {
         let one = RenderSettings {
             sample,
             ..*settings
         };
         renderer.render(device, queue, &mut targets, scene, camera, &one);
-        let drawn = read_texture(device, queue, targets.colour_texture())?;
-        for (s, &p) in sums.iter_mut().zip(&drawn.pixels) {
-            *s += u32::from(p);
-        }
+        mean.add(device, queue, renderer, &targets, sample);
     }
-    let n = settings.samples;
-    for (p, &s) in image.pixels.iter_mut().zip(&sums) {
-        *p = ((s + n / 2) / n) as u8;
-    }
-    Ok(image)
+    read_texture(device, queue, mean.shown_texture())
 }
 
 /// Copies an RGBA8 texture back to memory (blocking until the GPU is done).

@@ -308,6 +308,49 @@ impl Renderer {
         queue.submit([encoder.finish()]);
     }
 
+    /// Adds the image `drawn` as progressive sample `k` (from 0) to the running mean in
+    /// `mean` (`mean` = `drawn` for `k` = 0, else `mean` + (`drawn` - `mean`) / (`k` + 1)), then
+    /// writes the mean into `shown` (an image of [`super::COLOUR_FORMAT`]). Submits and does not
+    /// wait.
+    pub(crate) fn add_sample(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        drawn: &wgpu::TextureView,
+        (mean, shown): (&wgpu::TextureView, &wgpu::TextureView),
+        k: u32,
+    ) {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("progressive sample"),
+        });
+        for (source, target, pipeline, weight) in [
+            (
+                drawn,
+                mean,
+                &self.pipelines.mean_add,
+                1.0 / f64::from(k + 1),
+            ),
+            (mean, shown, &self.pipelines.mean_show, 1.0),
+        ] {
+            let group = self.post_group(device, source, source);
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("progressive sample"),
+                color_attachments: &[Some(colour_attachment(target, None))],
+                ..Default::default()
+            });
+            rp.set_pipeline(pipeline);
+            rp.set_blend_constant(wgpu::Color {
+                r: weight,
+                g: weight,
+                b: weight,
+                a: weight,
+            });
+            rp.set_bind_group(0, &group, &[]);
+            rp.draw(0..3, 0..1);
+        }
+        queue.submit([encoder.finish()]);
+    }
+
     fn post_group(
         &self,
         device: &wgpu::Device,

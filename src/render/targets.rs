@@ -9,10 +9,12 @@ pub const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSr
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Transparency accumulation target (premultiplied colour times weight, and weight).
 pub const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Running mean of progressive samples (linear colour; blendable at half-float precision).
+pub const MEAN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Transparency revealage target (product of 1 - alpha).
 pub const REVEAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
 
-fn texture(
+pub(crate) fn texture(
     device: &wgpu::Device,
     label: &str,
     size: [u32; 2],

@@ -8,7 +8,7 @@ use std::process::Command;
 
 use glam::Vec3;
 use mdsurf::render::{
-    Background, Camera, GpuScene, RenderSettings, Renderer, RgbaImage, SphereInstance,
+    Background, Camera, GpuScene, HeadlessGpu, RenderSettings, Renderer, RgbaImage, SphereInstance,
     render_to_rgba, shapes::icosphere, write_png,
 };
 
@@ -18,7 +18,7 @@ use crate::render_images::gpu;
 const SIZE: [u32; 2] = [160, 160];
 
 /// Plain lighting on a white background: no ambient occlusion or depth cue.
-fn plain() -> RenderSettings {
+pub(crate) fn plain() -> RenderSettings {
     RenderSettings {
         background: Background::Light,
         ambient_occlusion: 0.0,
@@ -32,6 +32,19 @@ fn plain() -> RenderSettings {
 fn render(settings: &RenderSettings, occluder: Option<([f32; 3], f32)>) -> Option<RgbaImage> {
     let g = gpu()?;
     let renderer = Renderer::new(&g.device);
+    let (scene, camera) = sphere_scene(&g, occluder);
+    let image = render_to_rgba(
+        &g.device, &g.queue, &renderer, &scene, &camera, settings, SIZE,
+    )
+    .expect("render");
+    Some(image)
+}
+
+/// The scene of [`render`] on `g`, with its camera.
+pub(crate) fn sphere_scene(
+    g: &HeadlessGpu,
+    occluder: Option<([f32; 3], f32)>,
+) -> (GpuScene, Camera) {
     let mut scene = GpuScene::new();
     scene.set_mesh(
         &g.device,
@@ -49,11 +62,7 @@ fn render(settings: &RenderSettings, occluder: Option<([f32; 3], f32)>) -> Optio
         };
         scene.set_atoms(&g.device, &g.queue, &[s], &[]);
     }
-    let image = render_to_rgba(
-        &g.device, &g.queue, &renderer, &scene, &camera, settings, SIZE,
-    )
-    .expect("render");
-    Some(image)
+    (scene, camera)
 }
 
 fn luminance(p: [u8; 4]) -> f64 {
