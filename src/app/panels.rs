@@ -383,6 +383,15 @@ pub fn look_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     ui.add(egui::Slider::new(&mut s.ambient_occlusion, 0.0..=1.0).text("ambient occlusion"));
     ui.add(egui::Slider::new(&mut s.outline_width, 0.0..=4.0).text("outline (px)"));
     ui.add(egui::Slider::new(&mut s.shadows, 0.0..=1.0).text("shadows"));
+    ui.add(
+        egui::Slider::new(&mut s.samples, 1..=64)
+            .logarithmic(true)
+            .text("samples"),
+    )
+    .on_hover_text(
+        "progressive samples: while the view is still the window adds one per repaint; \
+         screenshots and movies draw them all",
+    );
     egui::ComboBox::from_label("stereo")
         .selected_text(s.stereo.name())
         .show_ui(ui, |ui| {
