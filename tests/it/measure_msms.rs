@@ -94,8 +94,9 @@ fn measure_msms_buried_area_of_1hpv_within_5_percent() {
 }
 
 /// The two small interfaces (300 to 400 Å², under 2 % of the complex's area) miss the issue's
-/// 5 %: mdsurf buries 21 % more than MSMS on 7ddo and 11 % more on 1a28 (a Gaussian surface
-/// sums the two sides' densities, so it fills the rim of a contact that the probe leaves open).
+/// 5 %: mdsurf buries 21 % more than MSMS on 7ddo and 11 % more on 1a28 (84 and 34 Å²; the
+/// complex's area falls further below MSMS's than the sides' do, most likely because the two
+/// sides' Gaussians add up at the rim of the contact, which the probe leaves open).
 /// This test holds them to what they meet: 25 %.
 #[test]
 fn measure_msms_buried_area_of_7ddo_and_1a28_within_25_percent() {
@@ -105,8 +106,9 @@ fn measure_msms_buried_area_of_7ddo_and_1a28_within_25_percent() {
     }
 }
 
-/// `mdsurf surface --preset ses --interface` places the interface's vertices as the preset
-/// says (refined), not by the CPU engine's default: its buried area is the library's.
+/// `mdsurf surface --preset ses --interface` computes the interface with the preset's radii and
+/// vertices (refined unless `--vertices` says otherwise), not mdsurf's default radii and the CPU
+/// engine's interpolated vertices: its buried area is the library's.
 #[test]
 fn measure_msms_cli_interface_follows_the_preset_vertices() {
     let dir = tempfile::tempdir().expect("tempdir");
