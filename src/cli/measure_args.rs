@@ -16,7 +16,7 @@ use mdsurf::model::{Frame, RadiusOverrides, Topology};
 use mdsurf::scene::layer::Layer;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, SceneEngine, SceneFrame};
-use mdsurf::surface::{AtomSet, CpuEngine, SurfaceParams};
+use mdsurf::surface::{AtomSet, CpuEngine, RadiusSet, SurfaceParams, VertexMode};
 
 /// Measurement flags of `mdsurf surface`.
 #[derive(clap::Args, Debug, Clone)]
@@ -95,19 +95,24 @@ pub struct Measurer {
 
 impl Measurer {
     /// Checks the flags against the system (selections bind and pick atoms in `first`) and
-    /// starts empty tables.
+    /// starts empty tables. The interface's surfaces start from the radii of `radii` and place
+    /// their vertices by `vertices` (the preset's unless `--vertices` says otherwise), as the
+    /// reported surfaces do.
     pub fn new(
         args: &MeasureArgs,
         topology: &Topology,
         first: &Frame,
         radius_overrides: &RadiusOverrides,
         params: &SurfaceParams,
+        radii: RadiusSet,
+        vertices: VertexMode,
     ) -> Result<Measurer> {
         let interface = match args.interface.as_deref() {
             Some([a, b]) => {
                 let side = |name: &str, sel: &str| -> Result<Layer> {
                     let mut rep = Representation::new(name, sel, RepStyle::Surface);
                     rep.set_params(params);
+                    rep.radii = radii;
                     rep.validate().map_err(|e| anyhow!("--interface: {e}"))?;
                     let layer = Layer::new(rep, topology, radius_overrides)
                         .map_err(|e| anyhow!("--interface: {e}"))?;
@@ -118,7 +123,7 @@ impl Measurer {
                 };
                 Some(Interface {
                     sides: [side("A", a)?, side("B", b)?],
-                    engine: CpuEngine::new(),
+                    engine: CpuEngine::new().with_vertices(vertices),
                     params: *params,
                     rows: String::new(),
                 })

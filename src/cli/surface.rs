@@ -180,6 +180,8 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         &first,
         &options.radius_overrides,
         &params,
+        args.params.radius_set(),
+        args.params.vertex_mode(),
     )?;
     // A .glb without {frame} takes every frame as an animation.
     let animate = output
