@@ -244,6 +244,70 @@ fn measure<'py>(
     Ok((PyArray1::from_vec(py, area), PyArray1::from_vec(py, volume)))
 }
 
+/// Per-frame values and per-atom areas: area (F,) in Å², volume (F,) in Å³, each atom's share
+/// of the area (F, N) in Å².
+type AtomMeasures<'py> = (Measures<'py>, Measures<'py>, Bound<'py, PyArray2<f64>>);
+
+/// Area, volume and each atom's share of the area per frame (the rule of `mdsurf surface
+/// --per-atom`, docs/measure.md: a triangle's area goes a third to each vertex, a vertex's
+/// share to the atoms by their Gaussians there, scaled to the surface's area); the frames of
+/// `mdsurf.analysis.GaussianSurface(per_residue=True)`.
+#[pyfunction]
+#[pyo3(signature = (trajectory, radii, spacing, radius_scale, isovalue, quality, backend, vertices))]
+#[allow(clippy::too_many_arguments)]
+fn atom_areas<'py>(
+    py: Python<'py>,
+    trajectory: PyReadonlyArrayDyn<'py, f32>,
+    radii: PyReadonlyArrayDyn<'py, f32>,
+    spacing: f32,
+    radius_scale: f32,
+    isovalue: f32,
+    quality: &str,
+    backend: &str,
+    vertices: &str,
+) -> PyResult<AtomMeasures<'py>> {
+    let (params, backend, vertices) =
+        settings(spacing, radius_scale, isovalue, quality, backend, vertices)?;
+    let (frames, atoms) = arrays::trajectory(&trajectory)?;
+    let radii = arrays::radii(&radii, atoms)?;
+    let view = trajectory.as_array();
+    let result = py.detach(|| {
+        engines::with_engine(backend, vertices, |engine| {
+            let (mut area, mut volume) = (Vec::with_capacity(frames), Vec::with_capacity(frames));
+            let mut shares = Vec::with_capacity(frames * atoms);
+            let mut positions = Vec::with_capacity(atoms);
+            // The parameters the engine computes with (refined vertices run at quality max).
+            let effective = engine.vertices().effective(&params);
+            engine.set_keep_mesh(true);
+            for f in 0..frames {
+                arrays::frame_into(&view, f, &mut positions);
+                let set = AtomSet {
+                    positions: &positions,
+                    radii: &radii,
+                    colours: None,
+                };
+                let out = engine
+                    .compute(&set, &params)
+                    .map_err(|e| surface_err(&format!("frame {f}: "), e))?;
+                let per_atom = mdsurf::measure::atom_areas_of(&out, &set, &effective)
+                    .map_err(|e| PyRuntimeError::new_err(format!("frame {f}: {e}")))?;
+                area.push(out.area);
+                volume.push(out.volume);
+                shares.extend(per_atom);
+            }
+            Ok::<_, PyErr>((area, volume, shares))
+        })
+    });
+    let (area, volume, shares) = result.map_err(PyRuntimeError::new_err)??;
+    let shares = numpy::ndarray::Array2::from_shape_vec((frames, atoms), shares)
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    Ok((
+        PyArray1::from_vec(py, area),
+        PyArray1::from_vec(py, volume),
+        PyArray2::from_owned_array(py, shares),
+    ))
+}
+
 /// See `mdsurf.engine_info`.
 #[pyfunction]
 fn engine_info(py: Python<'_>, backend: &str) -> PyResult<String> {
@@ -266,6 +330,7 @@ fn _mdsurf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Grid>()?;
     m.add_function(wrap_pyfunction!(surface, m)?)?;
     m.add_function(wrap_pyfunction!(measure, m)?)?;
+    m.add_function(wrap_pyfunction!(atom_areas, m)?)?;
     m.add_function(wrap_pyfunction!(engine_info, m)?)?;
     m.add_function(wrap_pyfunction!(_gpu_opened, m)?)?;
     m.add_class::<scene::SceneCore>()?;

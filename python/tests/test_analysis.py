@@ -72,3 +72,54 @@ def test_selection_and_explicit_radii(universe):
         GaussianSurface(ca, radii=[1.0, 2.0])
     with pytest.raises(ValueError, match="unknown quality 'fine'"):
         GaussianSurface(ca, quality="fine")
+
+
+@pytest.fixture(scope="module")
+def per_residue(universe):
+    protein = universe.select_atoms("protein")
+    return GaussianSurface(protein, per_residue=True).run(step=STEP)
+
+
+def test_per_residue_areas_sum_to_the_area(universe, serial, per_residue):
+    r = per_residue.results
+    protein = universe.select_atoms("protein")
+    assert r.atom_area.shape == (len(serial.frames), len(protein))
+    assert r.residue_area.shape == (len(serial.frames), len(protein.residues))
+    assert list(r.residues.resids) == list(protein.residues.resids)
+    # The same surfaces: adk_open.pdb is all protein.
+    np.testing.assert_array_equal(r.area, serial.results.area)
+    np.testing.assert_allclose(r.atom_area.sum(axis=1), r.area, rtol=1e-9)
+    np.testing.assert_allclose(r.residue_area.sum(axis=1), r.area, rtol=1e-9)
+    assert np.all(r.atom_area >= 0) and np.count_nonzero(r.atom_area[0]) > len(protein) // 3
+
+
+def test_per_residue_areas_equal_the_scenes(universe, per_residue):
+    # The scene's measurement path (as `mdsurf surface --per-residue`) on the same frames.
+    scene = mdsurf.Scene(universe, select="protein")
+    frames = list(per_residue.frames)
+    expected = scene.per_residue_areas("selection", frames=frames)
+    assert list(expected.resids) == list(per_residue.results.residues.resids)
+    np.testing.assert_allclose(per_residue.results.residue_area, expected.area_A2, rtol=1e-6)
+    # Residues' areas change as adenylate kinase opens.
+    spread = np.ptp(per_residue.results.residue_area, axis=0)
+    assert spread.max() > 20.0
+
+
+def test_per_residue_in_parallel_equals_serial(universe, per_residue):
+    protein = universe.select_atoms("protein")
+    par = GaussianSurface(protein, per_residue=True).run(
+        step=STEP, backend="multiprocessing", n_workers=2
+    )
+    np.testing.assert_array_equal(par.results.residue_area, per_residue.results.residue_area)
+    np.testing.assert_array_equal(par.results.atom_area, per_residue.results.atom_area)
+
+
+def test_per_residue_with_a_selection_has_universe_columns(universe):
+    run = GaussianSurface(universe, select="resid 1:30", per_residue=True).run(stop=2)
+    r = run.results
+    assert r.atom_area.shape == (2, universe.atoms.n_atoms)
+    outside = universe.select_atoms("not resid 1:30").ix
+    assert np.all(r.atom_area[:, outside] == 0)
+    np.testing.assert_allclose(r.atom_area.sum(axis=1), r.area, rtol=1e-9)
+    assert r.residue_area.shape == (2, len(universe.residues))
+    assert np.all(r.residue_area[:, 30:] == 0) and np.all(r.residue_area[:, :30] > 0)

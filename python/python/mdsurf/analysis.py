@@ -99,6 +99,11 @@ class GaussianSurface(AnalysisBase):
         Selections (mdsurf's language) to centre in the box and to fit onto the first frame.
     smooth : int
         Average positions over ±``smooth`` frames.
+    per_residue : bool
+        Also share each frame's area among the atoms (the rule of ``mdsurf surface
+        --per-atom``: a triangle's area goes a third to each vertex, a vertex's share to the
+        atoms by their Gaussians there) and sum it per residue. Exposure (area over the
+        residue type's area alone) is in :meth:`mdsurf.Scene.per_residue_areas`.
 
     Results
     -------
@@ -106,6 +111,13 @@ class GaussianSurface(AnalysisBase):
         Surface area in Å² per analysed frame.
     results.volume : numpy.ndarray, shape (n_frames,)
         Enclosed volume in Å³ per analysed frame.
+    results.atom_area : numpy.ndarray, shape (n_frames, n_atoms)
+        With ``per_residue``: each atom's area in Å² (atoms of ``atomgroup``, or of the universe
+        with ``select``, where atoms not selected in a frame have 0); each row sums to
+        ``results.area``.
+    results.residue_area : numpy.ndarray, shape (n_frames, n_residues)
+        With ``per_residue``: the sum over each residue's atoms, residues of
+        ``results.residues`` (those of ``atomgroup``, or of the universe with ``select``).
     """
 
     _analysis_algorithm_is_parallelizable = True
@@ -129,12 +141,16 @@ class GaussianSurface(AnalysisBase):
         center=None,
         fit=None,
         smooth=0,
+        per_residue=False,
         **kwargs,
     ):
         atomgroup = atomgroup.atoms
         super().__init__(atomgroup.universe.trajectory, **kwargs)
         self._ag = atomgroup
         self._select = None if select is None else str(select)
+        self._per_residue = bool(per_residue)
+        # The atoms the per-atom columns stand for, and the residues of the per-residue ones.
+        self._columns = atomgroup if self._select is None else atomgroup.universe.atoms
         self._transforms = dict(
             whole=None if whole is None else bool(whole),
             center=None if center is None else str(center),
@@ -191,6 +207,10 @@ class GaussianSurface(AnalysisBase):
     def _prepare(self):
         self.results.area = np.full(self.n_frames, np.nan)
         self.results.volume = np.full(self.n_frames, np.nan)
+        if self._per_residue:
+            n_atoms, n_residues = len(self._columns), len(self._columns.residues)
+            self.results.atom_area = np.full((self.n_frames, n_atoms), np.nan)
+            self.results.residue_area = np.full((self.n_frames, n_residues), np.nan)
 
     def _single_frame(self):
         # The time step is updated in place by any read: its frame is taken first.
@@ -205,24 +225,48 @@ class GaussianSurface(AnalysisBase):
             radii = self._radii
         else:
             radii = self._radii[picked]
+        shares = np.zeros(len(picked))
         if len(picked) == 0:
             area, volume = [0.0], [0.0]
+        elif self._per_residue:
+            area, volume, per_atom = _mdsurf.atom_areas(
+                positions[picked][np.newaxis], radii, *self._settings.values()
+            )
+            shares = per_atom[0]
         else:
             area, volume = _mdsurf.measure(
                 positions[picked][np.newaxis], radii, *self._settings.values()
             )
         self.results.area[self._frame_index] = area[0]
         self.results.volume[self._frame_index] = volume[0]
+        if self._per_residue:
+            row = np.zeros(len(self._columns))
+            # Columns: atomgroup order without a selection, universe indices with one.
+            row[np.arange(len(picked)) if self._select is None else picked] = shares
+            self.results.atom_area[self._frame_index] = row
+            self.results.residue_area[self._frame_index] = self._sum_per_residue(row)
         global _frames_measured
         _frames_measured += 1
 
+    def _sum_per_residue(self, row):
+        """Sums per-atom values (one per column atom) over the columns' residues."""
+        residues = self._columns.residues.resindices
+        owner = np.searchsorted(residues, self._columns.resindices)
+        return np.bincount(owner, weights=row, minlength=len(residues))
+
+    def _conclude(self):
+        if self._per_residue:
+            self.results.residues = self._columns.residues
+
     def _get_aggregator(self):
-        return ResultsGroup(
-            lookup={
-                "area": ResultsGroup.ndarray_hstack,
-                "volume": ResultsGroup.ndarray_hstack,
-            }
-        )
+        lookup = {
+            "area": ResultsGroup.ndarray_hstack,
+            "volume": ResultsGroup.ndarray_hstack,
+        }
+        if self._per_residue:
+            lookup["atom_area"] = ResultsGroup.ndarray_vstack
+            lookup["residue_area"] = ResultsGroup.ndarray_vstack
+        return ResultsGroup(lookup=lookup)
 
     def _configure_backend(self, backend, n_workers, unsupported_backend=False):
         executor = super()._configure_backend(
