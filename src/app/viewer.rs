@@ -508,7 +508,15 @@ impl eframe::App for Viewer {
             cmds.extend(view_cmds);
             if let Some(gpu) = self.gpu.as_mut() {
                 gpu.sync(&mut self.core);
-                gpu.render(&self.core.camera, &self.core.render, size);
+                // Progressive samples only while still: one sample per frame while playing.
+                let look = match self.core.timeline.playing || self.core.turntable.is_some() {
+                    true => RenderSettings {
+                        samples: 1,
+                        ..self.core.render
+                    },
+                    false => self.core.render,
+                };
+                gpu.render(&self.core.camera, &look, size);
             }
         });
         cmds.extend(super::keys::shortcuts_overlay_ui(
