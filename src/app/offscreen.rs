@@ -187,6 +187,7 @@ pub fn play(
     core.wait_idle(Duration::from_secs(600));
     view.sync(&mut core);
     for _ in 0..DRAWS_ALONE {
+        view.redraw();
         let t = Instant::now();
         view.draw(&core.camera, &core.render, opts.size);
         ctx.wait()?;

@@ -96,6 +96,13 @@ impl ViewRenderer {
         )
     }
 
+    /// Makes the next [`ViewRenderer::draw`] draw its first sample again even if nothing
+    /// changed (a still view is otherwise not drawn again once its samples are in): for timing
+    /// draws.
+    pub fn redraw(&mut self) {
+        self.scene_changed = true;
+    }
+
     /// The picture to show (texture and view), once drawn.
     pub fn shown(&self) -> Option<(&wgpu::Texture, &wgpu::TextureView)> {
         self.view.shown()
