@@ -168,7 +168,13 @@ pub(super) fn first_disagreement(
             "VELOCITIES"
         };
         let Some(range) = particles(bytes, ints, b) else {
-            return damage(b, format!("the {name} block at byte {} is cut", b.offset));
+            return damage(
+                b,
+                format!(
+                    "the {name} block at byte {} ends inside its data header",
+                    b.offset
+                ),
+            );
         };
         let Some((first, n)) = range else { continue };
         let inside = first >= 0
@@ -187,7 +193,7 @@ pub(super) fn first_disagreement(
         }
         if b.id == POSITIONS && frame_set.is_some() {
             first_positions.get_or_insert(b);
-            held += n;
+            held = held.saturating_add(n);
         }
     }
     short(&molecules, frame_set, first_positions, held)
@@ -225,7 +231,7 @@ fn read_molecules(bytes: &[u8], ints: Ints, block: &Block) -> Result<Molecules, 
         atoms: 0,
         types: Vec::new(),
     };
-    // Each type takes at least 50 bytes, so a hostile count ends at the block's end.
+    // Each type takes at least 57 bytes, so a hostile count ends at the block's end.
     for m in 0..types.max(0) as usize {
         let read = |c: &mut Cursor| -> Option<(String, i64, i64)> {
             c.int()?;
