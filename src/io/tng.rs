@@ -9,6 +9,8 @@
 //! blocks' MD5 recomputed, so the good frames stay readable. The frame set holding the damage is
 //! dropped whole (a damaged block cannot say which frame set it belonged to).
 
+mod atoms;
+
 use std::fs::File;
 use std::io::Read;
 use std::path::Path;
@@ -30,6 +32,10 @@ pub(crate) enum TngDamage {
         offset: usize,
         what: &'static str,
     },
+    /// The MOLECULES block's atom count disagrees with the atoms a positions or velocities
+    /// block holds, or cannot be read (see [`atoms`]); the text says which and the values.
+    #[error("{0} (damaged file)")]
+    Atoms(String),
     /// The chain ends after `have` frame sets, one short of what the index points to.
     #[error(
         "the file ends after frame set {have} of the {promised} its index promises (truncated)"
@@ -111,7 +117,7 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
     let ints = Ints {
         little: bytes[0] != 0 && bytes[7] == 0,
     };
-    let (blocks, damage) = walk(&bytes, ints);
+    let (mut blocks, mut damage) = walk(&bytes, ints);
     // The chain starts with the general information block: the TNG library reads a file whose
     // first block has another id without complaint, and loses its last frame set.
     if blocks.first().is_some_and(|b| b.id != GENERAL_INFO) {
@@ -120,6 +126,11 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
             offset: 0,
             what: "is not a general information block (wrong id)",
         });
+    }
+    // The TNG library trusts the atom count: particle data that disagree are damage.
+    if let Some((at, why)) = atoms::first_disagreement(&bytes, ints, &blocks) {
+        blocks.retain(|b| b.offset < at);
+        damage = Some((at, why));
     }
     let frame_sets: Vec<&Block> = blocks.iter().filter(|b| b.id == FRAME_SET).collect();
     let info = blocks

@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use mdsurf::io::{self, IoError};
 
 use crate::data_support::data;
+use crate::io_mutants_binary::{le64, tng_molecule_count_at, tng_patched};
 
 /// The result of one run of the binary with a time limit.
 struct Outcome {
@@ -338,6 +339,33 @@ fn damaged_tng_is_refused_in_one_line() {
     let e = io::open(&f, None).expect_err("a flipped byte fails the block checksum");
     assert!(e.to_string().contains("checksum"), "{e}");
     assert!(io::open(&data("argon_npt_compressed.tng"), None).is_ok());
+}
+
+/// The TNG library takes the atom count from the MOLECULES block and trusts it: a molecule count
+/// of 32,768 (MD5 recomputed) in the 1,000-atom argon file read 32,768 atoms of garbage with exit
+/// 0, and 999 aborted the reader. Each is one line naming the file, the count and what the
+/// positions hold.
+#[test]
+fn tng_with_a_hostile_molecule_count_is_refused_naming_the_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let t = std::fs::read(data("argon_npt_compressed.tng")).unwrap();
+    let count = tng_molecule_count_at(&t);
+    assert_eq!(le64(&t, count), 1000);
+    for (value, holds) in [
+        (32_768, "hold 1000"),
+        (1 << 31, "hold 1000"),
+        (999, "holds atoms 0 to 999"),
+        (0, "holds atoms 0 to 999"),
+        (-1, "-1 molecules"),
+    ] {
+        let name = format!("count{value}.tng");
+        let path = write(dir.path(), &name, &tng_patched(&t, count, value));
+        let o = surface(dir.path(), &[&path], &[]);
+        assert_clean_error(&o, &name, &name);
+        for part in ["MOLECULES", &value.to_string(), holds] {
+            assert!(o.stderr.contains(part), "{name}: no '{part}': {}", o.stderr);
+        }
+    }
 }
 
 #[test]

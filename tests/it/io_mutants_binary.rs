@@ -52,7 +52,7 @@ fn le32(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(b[at..at + 4].try_into().unwrap())
 }
 
-fn le64(b: &[u8], at: usize) -> i64 {
+pub(crate) fn le64(b: &[u8], at: usize) -> i64 {
     i64::from_le_bytes(b[at..at + 8].try_into().unwrap())
 }
 
@@ -241,6 +241,49 @@ fn tng_rehash(b: &mut [u8], block: &TngBlock) {
         let digest = md5::compute(&b[contents]).0;
         b[at..at + 16].copy_from_slice(&digest);
     }
+}
+
+/// Where the contents of the TNG blocks with id `id` start, in file order.
+pub(crate) fn tng_contents_of(bytes: &[u8], id: i64) -> Vec<usize> {
+    tng_blocks(bytes)
+        .iter()
+        .filter(|b| b.id == id)
+        .map(|b| b.offset + b.header)
+        .collect()
+}
+
+/// A copy of the TNG file `bytes` with the 8-byte value at byte `at` (inside a block's
+/// contents) set to `value` and that block's MD5 recomputed: a hostile edit the checksum
+/// cannot see.
+pub(crate) fn tng_patched(bytes: &[u8], at: usize, value: i64) -> Vec<u8> {
+    let mut out = bytes.to_vec();
+    out[at..at + 8].copy_from_slice(&value.to_le_bytes());
+    let blocks = tng_blocks(bytes);
+    let block = blocks
+        .iter()
+        .find(|b| (b.offset + b.header..b.offset + b.header + b.contents).contains(&at))
+        .expect("a byte inside a block's contents");
+    tng_rehash(&mut out, block);
+    out
+}
+
+/// The byte of the first molecule type's molecule count in a TNG file (its MOLECULES block,
+/// id 1: the number of types, then the type's id, name, quaternary structure and count).
+pub(crate) fn tng_molecule_count_at(bytes: &[u8]) -> usize {
+    let c = tng_contents_of(bytes, 1)[0];
+    let name = bytes[c + 16..]
+        .iter()
+        .position(|&b| b == 0)
+        .expect("a name");
+    c + 16 + name + 1 + 8
+}
+
+/// The byte of the atom count of the `k`-th POSITIONS block (id 0x10000001) of a TNG file
+/// whose positions are compressed, sparse and per frame and atom (after the data type,
+/// dependency, sparse flag, values per atom, codec, multiplier, first frame, stride and first
+/// atom).
+pub(crate) fn tng_positions_count_at(bytes: &[u8], k: usize) -> usize {
+    tng_contents_of(bytes, 0x1000_0001)[k] + 51
 }
 
 /// One seeded structured mutant of the binary file `bytes` (its frames from

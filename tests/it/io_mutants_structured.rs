@@ -10,9 +10,9 @@
 //! - a cut inside frame k keeps frames 0..k-1 (their statistics as the unmutated file's) and
 //!   ends with exit 2 and one line naming `frame k`; a cut at a frame boundary keeps every
 //!   whole frame with exit 0 (exit 2 naming the cut frame where the header promises more:
-//!   NetCDF's record count, TNG's index); a cut in the first frame processed need only end
-//!   with exit 2 (NetCDF's header check refuses a file too short for one frame as a damaged
-//!   header; TNG runs start at frame 98, inside its first frame set);
+//!   NetCDF's record count, TNG's index); a cut in frame 0 names frame 0 too (NetCDF's
+//!   header check once called a file too short for one frame a damaged header); a cut in the
+//!   first frame set of a TNG run (it starts at frame 98) need only end with exit 2;
 //! - a hostile header field, count, record length or value either reads every frame with every
 //!   atom (exit 0: no silent loss) or ends with exit 2, and when that line names `frame K` the
 //!   statistics hold frames 0..K-1.
@@ -33,7 +33,10 @@ use std::sync::Mutex;
 
 use crate::data_support::data;
 use crate::io_mutants::{Outcome, Rng, WORKERS, env_or, run, violation};
-use crate::io_mutants_binary::{Binary, binary_frames, mutate_binary};
+use crate::io_mutants_binary::{
+    Binary, binary_frames, le64, mutate_binary, tng_molecule_count_at, tng_patched,
+    tng_positions_count_at,
+};
 use crate::io_mutants_text::{Text, TextLayout, mutate_text};
 
 /// Mutants per format in CI.
@@ -356,7 +359,9 @@ fn broken(s: &Subject, expect: Expect, base: &[Row], o: &Outcome, got: &[Row]) -
             Some(format!("exit {:?}, not {exit}", o.code))
         }
         Expect::Frames { upto, exit }
-            if exit == 2 && named_frame(&o.stderr) != Some(upto) && upto > s.first =>
+            if exit == 2
+                && named_frame(&o.stderr) != Some(upto)
+                && (upto > s.first || s.first == 0) =>
         {
             Some(format!("the error does not name frame {upto}"))
         }
@@ -441,6 +446,17 @@ fn mutants_that_found_bugs_stay_fixed() {
     let cut = tng.bytes[..tng.frames[1].start + 103].to_vec();
     let upto_100 = Expect::Frames { upto: 100, exit: 2 };
     cases.push((&tng, "TNG cut in a frame-set block", cut, upto_100));
+    // TNG atom counts with their MD5 recomputed: a molecule count of 32,768 (the file holds
+    // 1,000 atoms) read 32,768 atoms with exit 0; a positions block of frame set 1 holding 500
+    // atoms is damage in frame 100 (frame set 0 kept).
+    let count = tng_molecule_count_at(&tng.bytes);
+    assert_eq!(le64(&tng.bytes, count), 1000);
+    let molecules = tng_patched(&tng.bytes, count, 32_768);
+    cases.push((&tng, "TNG molecule count", molecules, Expect::Hostile));
+    let held = tng_positions_count_at(&tng.bytes, 1);
+    assert_eq!(le64(&tng.bytes, held), 1000);
+    let positions = tng_patched(&tng.bytes, held, 500);
+    cases.push((&tng, "TNG frame set 1 atom count", positions, upto_100));
     let bases = [baseline(&xyz, dir.path()), baseline(&tng, dir.path())];
     for (n, (s, what, bytes, expect)) in cases.into_iter().enumerate() {
         let path = dir.path().join(format!("fixed{n}.{}", s.extension));

@@ -535,6 +535,36 @@ fn netcdf_streaming_cut_and_hostile_files() {
     }
 }
 
+/// A cut inside frame 0 names frame 0, as cuts in later frames do: where one record is larger
+/// than the whole cut file, the header check called it "damaged header" and named no frame.
+#[test]
+fn netcdf_cut_inside_frame_0_names_frame_0() {
+    let dir = tempfile::tempdir().unwrap();
+    for atoms in [4, 300] {
+        let top = topology(dir.path(), atoms as usize);
+        let spec = Nc {
+            version: 1,
+            numrecs: Some(3),
+            coordinates: true,
+            atoms,
+        };
+        let full = write_nc(&spec, 3);
+        let record = 4 + 12 * atoms as usize + 48;
+        let cut = &full[..full.len() - 3 * record + record / 2];
+        let path = dir.path().join(format!("cut{atoms}.nc"));
+        std::fs::write(&path, cut).unwrap();
+        let e = io::open(&top, Some(&path)).unwrap_err();
+        one_line(
+            &e,
+            &[
+                &format!("cut{atoms}.nc"),
+                "frame 0",
+                "ends inside this frame",
+            ],
+        );
+    }
+}
+
 /// Opening adk_dims.dcd and reading every frame: our reader against chemfiles in this process
 /// (faster than chemfiles in the reader process that `open` used before). Medians of 5,
 /// printed (`--nocapture`); ours must not be more than 3× slower even on a loaded machine.

@@ -43,6 +43,7 @@ mod io_bad;
 mod io_contained;
 mod io_data;
 mod io_fast;
+mod io_fuzz_regressions;
 mod io_hostile;
 mod io_mmcif;
 mod io_model;

@@ -256,7 +256,7 @@ mod tests {
     #[test]
     fn conect_without_a_first_serial_is_declined_not_a_panic() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fuzz/pdb_conect_without_first_serial.pdb");
+            .join("tests/fuzz/pdb/conect_without_first_serial.pdb");
         let bytes = std::fs::read(path).expect("the regression input");
         assert!(read(&bytes).is_none());
     }

@@ -102,11 +102,22 @@ pub(crate) enum NetcdfError {
     /// A cell dimension (`cell_spatial`, `cell_angular`) that is not 3 long.
     #[error("the '{0}' dimension is not 3")]
     BadCellDimension(&'static str),
-    /// A record variable of more bytes per frame than the `file_len`-byte file.
+    /// A record variable of more bytes per frame than a `u64` holds, or than the
+    /// `file_len`-byte file when its header promises no frames.
     #[error(
         "variable '{variable}' needs more bytes per frame than the {file_len}-byte file has (damaged header)"
     )]
     RecordTooLarge { variable: String, file_len: u64 },
+    /// A record variable of `bytes` bytes per frame in a `file_len`-byte file whose header
+    /// promises frames: the file ends inside frame 0.
+    #[error(
+        "the file ends inside this frame (truncated: variable '{variable}' needs {bytes} bytes per frame, the file has {file_len})"
+    )]
+    FirstFrameCut {
+        variable: String,
+        bytes: u64,
+        file_len: u64,
+    },
     /// A `units` attribute naming no known distance unit (this text, trimmed and lower-cased).
     #[error("unknown distance unit '{0}'")]
     UnknownUnit(String),

@@ -62,7 +62,10 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
         .map_err(|e| IoError::unreadable(path, e))?
         .len();
     let header = read_header(&file, total).map_err(|e| IoError::unreadable(path, e))?;
-    let layout = Layout::new(&header, total).map_err(|e| IoError::unreadable(path, e))?;
+    let layout = Layout::new(&header, total).map_err(|e| match e {
+        NetcdfError::FirstFrameCut { .. } => IoError::bad_frame(path, 0, e),
+        e => IoError::unreadable(path, e),
+    })?;
     let (len, damage) = layout.count_frames(header.records, total);
     let damage = damage.map(|reason| IoError::bad_frame(path, len, reason));
     if len == 0 {
@@ -186,16 +189,31 @@ impl Layout {
         // Bytes of one record of every record variable (each padded to 4 bytes unless it is
         // the only one).
         let per_record = |v: &Variable| -> Result<u64, NetcdfError> {
-            v.dimensions[1..]
+            let bytes = v.dimensions[1..]
                 .iter()
                 .try_fold(v.kind.size(), |acc, &d| {
                     acc.checked_mul(header.dimensions[d].len)
                 })
-                .filter(|&b| b <= total)
                 .ok_or_else(|| NetcdfError::RecordTooLarge {
                     variable: v.name.clone(),
                     file_len: total,
-                })
+                })?;
+            if bytes > total {
+                // A record larger than the file: where the header promises frames, the file
+                // ends inside frame 0.
+                return Err(match header.records {
+                    Some(0) => NetcdfError::RecordTooLarge {
+                        variable: v.name.clone(),
+                        file_len: total,
+                    },
+                    _ => NetcdfError::FirstFrameCut {
+                        variable: v.name.clone(),
+                        bytes,
+                        file_len: total,
+                    },
+                });
+            }
+            Ok(bytes)
         };
         let record_vars: Vec<&Variable> = header
             .variables
