@@ -190,6 +190,7 @@ impl AppCore {
             || old.params() != rep.params()
             || old.vertices != rep.vertices
             || old.radii != rep.radii
+            || old.cavities != rep.cavities
             || old.visible != rep.visible;
         *old = rep;
         if recompute {
