@@ -17,6 +17,7 @@ use mdsurf::app::worker::Worker;
 use mdsurf::app::{AppCore, Command};
 use mdsurf::measure::{self, Cavity};
 use mdsurf::model::{Frame, Topology};
+use mdsurf::render::{GpuScene, RenderSettings};
 use mdsurf::scene::cavity_layer::{CAVITY_RGB, cavity_options};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, RepRequest, SceneBackend, SceneEngine};
@@ -168,6 +169,42 @@ fn gpu_layer_carries_the_cavities_of_its_read_back_mesh() {
     let (on, mesh) = shell_layer(&mut engine, true);
     assert!(on.gpu_surface.is_some());
     check_layer("gpu", &on, &mesh);
+}
+
+/// What the window and `render` draw ([`GpuScene::show_layers`]): the surface, then its
+/// cavities as one more layer, opaque and in the cavity colour under a see-through surface; no
+/// cavity layer once the switch is off in the representation drawn.
+#[test]
+fn cavities_are_drawn_as_an_opaque_layer_after_their_surface() {
+    let Some(ctx) = crate::gpu_support::context() else {
+        return;
+    };
+    let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(CpuEngine::new())));
+    let (layer, mesh) = shell_layer(&mut engine, true);
+    let walls = &layer.cavities.as_ref().expect("cavities").mesh;
+    let mut scene = GpuScene::new();
+    let look = RenderSettings::default();
+    let drawn = Representation {
+        opacity: 0.3,
+        ..rep(true)
+    };
+    scene.show_layers(&ctx.device, &ctx.queue, [(layer.as_ref(), &drawn)], &look);
+    assert_eq!(scene.surface_count(), 2);
+    assert_eq!(
+        scene.triangle_count() as usize,
+        mesh.triangle_count() + walls.triangle_count()
+    );
+    assert_eq!(scene.layer_mut(0).opacity, Some(0.3));
+    assert_eq!(scene.layer_mut(0).colour, None);
+    assert_eq!(scene.layer_mut(1).opacity, Some(1.0));
+    assert_eq!(scene.layer_mut(1).colour, Some(CAVITY_RGB));
+    let off = Representation {
+        cavities: false,
+        ..drawn
+    };
+    scene.show_layers(&ctx.device, &ctx.queue, [(layer.as_ref(), &off)], &look);
+    assert_eq!(scene.surface_count(), 1);
+    assert_eq!(scene.triangle_count() as usize, mesh.triangle_count());
 }
 
 /// The window's Cavities section on the shell: the switch turns cavity finding on, the list
