@@ -10,6 +10,7 @@
 
 use std::path::PathBuf;
 
+use super::command::OnOff;
 use super::state::{AppCore, Command};
 use super::timeline::TimelineCmd;
 use crate::model::ColorScheme;
@@ -244,15 +245,6 @@ fn value<T: std::str::FromStr<Err = E>, E: std::fmt::Display>(w: &Word) -> Resul
     w.text.parse().or_else(|e: E| perr(w.column, e.to_string()))
 }
 
-/// `on` or `off` (also `true`/`false`, `yes`/`no`).
-fn on_off(w: &Word) -> Result<bool, ConsoleError> {
-    match w.text.to_ascii_lowercase().as_str() {
-        "on" | "true" | "yes" => Ok(true),
-        "off" | "false" | "no" => Ok(false),
-        other => perr(w.column, format!("expected on or off, got '{other}'")),
-    }
-}
-
 fn size(w: &Word) -> Result<[u32; 2], ConsoleError> {
     let bad = || {
         perr(
@@ -328,7 +320,7 @@ pub fn parse(line: &str) -> Result<Option<ConsoleCommand>, ConsoleError> {
                     "opacity" => RepEdit::Opacity(number(arg()?, "opacity")?),
                     "quality" => RepEdit::Quality(value(arg()?)?),
                     "vertices" => RepEdit::Vertices(value(arg()?)?),
-                    "cavities" => RepEdit::Cavities(on_off(arg()?)?),
+                    "cavities" => RepEdit::Cavities(value::<OnOff, _>(arg()?)?.0),
                     "style" => RepEdit::Style(value(arg()?)?),
                     "select" => RepEdit::Select(selection(arg()?)?),
                     other => {
