@@ -92,3 +92,18 @@ pub enum Command {
     /// layer; see `app::settings_store`).
     ResetLayout,
 }
+
+/// A switch typed as `on` or `off` (console settings such as `rep N cavities`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OnOff(pub bool);
+
+impl std::str::FromStr for OnOff {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "on" => Ok(OnOff(true)),
+            "off" => Ok(OnOff(false)),
+            other => Err(format!("expected on or off, got '{other}'")),
+        }
+    }
+}

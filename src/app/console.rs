@@ -10,6 +10,7 @@
 
 use std::path::PathBuf;
 
+use super::command::OnOff;
 use super::state::{AppCore, Command};
 use super::timeline::TimelineCmd;
 use crate::model::ColorScheme;
@@ -72,6 +73,8 @@ pub enum RepEdit {
     Opacity(f32),
     /// Vertex placement.
     Vertices(VertexMode),
+    /// Cavities found and drawn (surfaces).
+    Cavities(bool),
     /// Drawing style.
     Style(RepStyle),
     /// New selection.
@@ -147,7 +150,7 @@ pub const COMMAND_WORDS: [&str; 11] = [
 ];
 
 /// The words after `rep N`.
-pub const REP_WORDS: [&str; 13] = [
+pub const REP_WORDS: [&str; 14] = [
     "color",
     "spacing",
     "radius-scale",
@@ -155,6 +158,7 @@ pub const REP_WORDS: [&str; 13] = [
     "quality",
     "opacity",
     "vertices",
+    "cavities",
     "style",
     "select",
     "hide",
@@ -163,8 +167,8 @@ pub const REP_WORDS: [&str; 13] = [
     "add",
 ];
 
-const HELP: &str = "commands: rep add \"SEL\" STYLE [as NAME] | rep N|NAME color|spacing|radius-scale|isovalue|quality|opacity|vertices|style|select VALUE | rep N hide|show|delete | frame N | play | pause | fit [\"SEL\"] | view save|open FILE | screenshot FILE [WxH] | select \"SEL\" | imd pause|resume|detach | clear | help [rep]";
-const HELP_REP: &str = "rep add \"SEL\" surface|beads|spheres|sticks|ball-and-stick [as NAME]; rep N (1-based) or rep NAME, then: color SCHEME (element, chain, residue-type, residue-index, b-factor, exposure, single:#rrggbb), spacing Å, radius-scale R, isovalue I, quality low|medium|high|max, opacity 0..1, vertices interpolated|refined, style STYLE, select \"SEL\", hide, show, delete";
+const HELP: &str = "commands: rep add \"SEL\" STYLE [as NAME] | rep N|NAME color|spacing|radius-scale|isovalue|quality|opacity|vertices|cavities|style|select VALUE | rep N hide|show|delete | frame N | play | pause | fit [\"SEL\"] | view save|open FILE | screenshot FILE [WxH] | select \"SEL\" | imd pause|resume|detach | clear | help [rep]";
+const HELP_REP: &str = "rep add \"SEL\" surface|beads|spheres|sticks|ball-and-stick [as NAME]; rep N (1-based) or rep NAME, then: color SCHEME (element, chain, residue-type, residue-index, b-factor, exposure, single:#rrggbb), spacing Å, radius-scale R, isovalue I, quality low|medium|high|max, opacity 0..1, vertices interpolated|refined, cavities on|off, style STYLE, select \"SEL\", hide, show, delete";
 
 /// A word of the line and its 1-based column.
 #[derive(Debug, Clone, PartialEq)]
@@ -316,6 +320,7 @@ pub fn parse(line: &str) -> Result<Option<ConsoleCommand>, ConsoleError> {
                     "opacity" => RepEdit::Opacity(number(arg()?, "opacity")?),
                     "quality" => RepEdit::Quality(value(arg()?)?),
                     "vertices" => RepEdit::Vertices(value(arg()?)?),
+                    "cavities" => RepEdit::Cavities(value::<OnOff, _>(arg()?)?.0),
                     "style" => RepEdit::Style(value(arg()?)?),
                     "select" => RepEdit::Select(selection(arg()?)?),
                     other => {
@@ -477,6 +482,7 @@ impl ConsoleCommand {
                     RepEdit::Quality(q) => rep.quality = *q,
                     RepEdit::Opacity(v) => rep.opacity = *v,
                     RepEdit::Vertices(v) => rep.vertices = *v,
+                    RepEdit::Cavities(on) => rep.cavities = *on,
                     RepEdit::Style(s) => rep.style = *s,
                     RepEdit::Select(s) => rep.selection = s.clone(),
                 }

@@ -19,7 +19,7 @@ pub fn complete(line: &str, rep_names: &[String]) -> Option<String> {
             .collect(),
         ["rep", "add", ..] if head.matches('"').count() % 2 == 0 && words.len() >= 3 => styles,
         ["rep", _, "style"] => styles,
-        ["rep", _] => REP_WORDS[..12].iter().map(|s| s.to_string()).collect(),
+        ["rep", _] => REP_WORDS[..13].iter().map(|s| s.to_string()).collect(),
         ["rep", _, "color" | "colour"] => [
             "element",
             "chain",
@@ -35,6 +35,7 @@ pub fn complete(line: &str, rep_names: &[String]) -> Option<String> {
             .iter()
             .map(|s| s.to_string())
             .collect(),
+        ["rep", _, "cavities"] => vec!["on".into(), "off".into()],
         ["view"] => vec!["save".into(), "open".into()],
         ["imd"] => vec!["pause".into(), "resume".into(), "detach".into()],
         ["help"] => vec!["rep".into()],

@@ -4,6 +4,7 @@
 //! [`state::Command`]s, applied in one place ([`state::AppCore::apply`] and the window layer in
 //! [`viewer::Viewer`]). Nothing below this module imports it.
 
+pub mod cavity_panel;
 pub(crate) mod command;
 pub mod console;
 pub(crate) mod console_complete;

@@ -61,6 +61,8 @@ pub struct AppCore {
     pub shown: Option<Shown>,
     /// Area and volume per frame for the current parameters.
     pub history: History,
+    /// Cavities tracked over the shown frames, per representation (their `cavities` switch on).
+    pub cavity_tracks: super::cavity_panel::CavityTracks,
     /// Latest error (one line), shown until dismissed.
     pub error: Option<String>,
     /// Latest informational message.
@@ -98,6 +100,7 @@ impl AppCore {
             timeline: Timeline::new(0),
             shown: None,
             history: History::default(),
+            cavity_tracks: Default::default(),
             error: None,
             status: String::new(),
             live_paused: false,
@@ -187,6 +190,7 @@ impl AppCore {
             || old.params() != rep.params()
             || old.vertices != rep.vertices
             || old.radii != rep.radii
+            || old.cavities != rep.cavities
             || old.visible != rep.visible;
         *old = rep;
         if recompute {
@@ -339,6 +343,7 @@ impl AppCore {
     fn invalidate(&mut self) {
         self.generation += 1;
         self.history.clear();
+        self.cavity_tracks.clear();
         self.request_current();
     }
 
@@ -464,6 +469,7 @@ impl AppCore {
                         self.history
                             .record(c.frame, &l.rep.name, l.output.area, l.output.volume);
                     }
+                    self.cavity_tracks.record(&c.scene);
                 }
                 if self.in_flight == Some((c.generation, c.frame)) {
                     self.in_flight = None;

@@ -469,6 +469,8 @@ impl eframe::App for Viewer {
                     ui.separator();
                     cmds.extend(look_ui(ui, &self.core));
                     ui.separator();
+                    cmds.extend(super::cavity_panel::cavity_ui(ui, &self.core));
+                    ui.separator();
                     if super::trajectory_panel::trajectory_ui(ui, &mut self.transforms) {
                         self.reload_transformed(ui.ctx());
                     }

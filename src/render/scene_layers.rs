@@ -1,10 +1,13 @@
 //! From a computed scene frame ([`crate::scene::SceneFrame`]) to what the renderer draws: one
 //! surface layer per surface representation (GPU buffers drawn in place, or a host mesh
-//! uploaded) with its opacity, and the atoms of every atom representation in one instance list.
+//! uploaded) with its opacity, the cavities of a surface whose `cavities` switch is on as one
+//! more, opaque layer in the cavity colour ([`crate::scene::cavity_layer`]), and the atoms of
+//! every atom representation in one instance list.
 //! The window ([`crate::app::view_renderer`]) and `mdsurf render` both go through
 //! [`GpuScene::show_layers`], so a frame looks the same in either.
 
 use crate::scene::LayerResult;
+use crate::scene::cavity_layer::CAVITY_RGB;
 use crate::scene::representation::Representation;
 
 use super::atoms::atom_instances;
@@ -47,8 +50,20 @@ impl GpuScene {
                 }
                 None => self.set_layer_mesh(k, device, queue, &layer.output.mesh),
             }
-            self.layer_mut(k).opacity = Some(rep.opacity);
+            let surface = self.layer_mut(k);
+            surface.opacity = Some(rep.opacity);
+            surface.colour = None;
             k += 1;
+            // Its cavities, opaque (seen through the surface when that is see-through), hidden
+            // with the surface when it is faded out.
+            let walls = layer.cavities.as_ref().map(|c| &c.mesh);
+            if let Some(walls) = walls.filter(|m| rep.cavities && !m.indices.is_empty()) {
+                self.set_layer_mesh(k, device, queue, walls);
+                let cavity = self.layer_mut(k);
+                cavity.opacity = Some(if rep.opacity > 0.0 { 1.0 } else { 0.0 });
+                cavity.colour = Some(CAVITY_RGB);
+                k += 1;
+            }
         }
         self.set_surface_count(k);
         self.set_atoms(device, queue, &spheres, &cylinders);

@@ -25,6 +25,7 @@ use std::collections::hash_map::Entry as MapEntry;
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::cavity_layer::CavitySource;
 use super::exposure::ExposureColouring;
 use super::frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
 use super::layer::{Layer, LayerFrame};
@@ -107,7 +108,9 @@ fn compute_key(rep: &Representation) -> impl PartialEq + '_ {
         &rep.selection,
         rep.style,
         rep.colour,
-        rep.style.is_surface().then(|| (rep.params(), rep.vertices)),
+        rep.style
+            .is_surface()
+            .then(|| (rep.params(), rep.vertices, rep.cavities)),
     )
 }
 
@@ -135,7 +138,7 @@ fn exposure_map(rep: &Representation, beads: bool) -> Option<ColourMap> {
 /// submit still to collect).
 enum Entry {
     Reused(Arc<LayerResult>),
-    New(Box<LayerResult>, Option<Submitted>),
+    New(Box<LayerResult>, Option<Submitted>, Option<CavitySource>),
 }
 
 /// Computes the representations of frames; see the module documentation.
@@ -256,7 +259,9 @@ impl SceneEngine {
         for entry in entries {
             let result = match entry {
                 Entry::Reused(r) => r,
-                Entry::New(r, submitted) => self.collect(topology, index, *r, submitted)?,
+                Entry::New(r, submitted, cavities) => {
+                    self.collect(topology, index, *r, submitted, cavities)?
+                }
             };
             layers.push(result);
         }
@@ -330,6 +335,7 @@ impl SceneEngine {
             gpu_work: None,
             reused: false,
             compute_ms: 0.0,
+            cavities: None,
         };
         let mut submitted = None;
         if rep.style.is_surface() && !lf.positions.is_empty() {
@@ -424,19 +430,29 @@ impl SceneEngine {
                 });
             }
         }
+        // Cavities are found once the surface is collected (only when the switch is on).
+        let cavities =
+            (rep.cavities && rep.style.is_surface() && !lf.positions.is_empty()).then(|| {
+                CavitySource {
+                    subset: lf.particles.subset().map(<[u32]>::to_vec),
+                    beads: lf.particles.is_beads(),
+                }
+            });
         result.particles.positions = lf.positions;
         result.compute_ms = started.elapsed().as_secs_f64() * 1e3;
-        Ok(Entry::New(Box::new(result), submitted))
+        Ok(Entry::New(Box::new(result), submitted, cavities))
     }
 
     /// Finishes a new result: collects its GPU counters when it was submitted (and gives it
-    /// its exposure colours when it takes them), and keeps it in its slot for reuse.
+    /// its exposure colours when it takes them), finds its cavities when `cavities` says from
+    /// which atoms, and keeps it in its slot for reuse.
     fn collect(
         &mut self,
         topology: &Topology,
         index: usize,
         mut result: LayerResult,
         submitted: Option<Submitted>,
+        cavities: Option<CavitySource>,
     ) -> Result<Arc<LayerResult>, SceneError> {
         let id = result.id;
         if let Some(Submitted {
@@ -476,6 +492,11 @@ impl SceneEngine {
             };
             result.gpu_surface = Some(surface);
             result.gpu_work = Some(work);
+            result.compute_ms += started.elapsed().as_secs_f64() * 1e3;
+        }
+        if let Some(source) = cavities {
+            let started = Instant::now();
+            result.cavities = self.cavities_of(topology, index, &result, &source)?;
             result.compute_ms += started.elapsed().as_secs_f64() * 1e3;
         }
         let result = Arc::new(result);

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::cavity_layer::CavityLayer;
 use super::layer::LayerError;
 use super::representation::Representation;
 use crate::gpu::{GpuSurface, Work};
@@ -64,8 +65,11 @@ pub struct LayerResult {
     /// True when this result was reused from an earlier frame request (nothing recomputed).
     pub reused: bool,
     /// Wall-clock time spent on this representation in ms: its particles and its surface
-    /// (submit and collect on the GPU).
+    /// (submit and collect on the GPU), and its cavities when found.
     pub compute_ms: f64,
+    /// The surface's cavities, when the representation's `cavities` switch is on (`None`
+    /// otherwise, for atom styles, and for a host surface whose mesh was not kept).
+    pub cavities: Option<Arc<CavityLayer>>,
 }
 
 impl LayerResult {
@@ -159,6 +163,16 @@ pub enum SceneError {
         /// What went wrong.
         source: MeasureError,
     },
+    /// A surface's cavities could not be found.
+    #[error("frame {frame}: representation '{rep}': cavities: {source}")]
+    Cavities {
+        /// Frame index.
+        frame: usize,
+        /// Representation name.
+        rep: String,
+        /// What went wrong.
+        source: MeasureError,
+    },
 }
 
 impl SceneError {
@@ -169,7 +183,8 @@ impl SceneError {
             SceneError::Particles { frame, .. }
             | SceneError::Surface { frame, .. }
             | SceneError::Periodic { frame, .. }
-            | SceneError::Exposure { frame, .. } => Some(*frame),
+            | SceneError::Exposure { frame, .. }
+            | SceneError::Cavities { frame, .. } => Some(*frame),
         }
     }
 }

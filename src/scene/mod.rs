@@ -6,6 +6,7 @@
 //! - [`engine`]: the [`SceneEngine`], the one frame path from a frame to every
 //!   representation's particles and surface ([`frame`]: what it returns).
 
+pub mod cavity_layer;
 pub mod defaults;
 pub(crate) mod engine;
 pub(crate) mod exposure;

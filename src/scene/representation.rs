@@ -133,6 +133,10 @@ pub struct Representation {
     /// `mdsurf`.
     #[serde(with = "as_text")]
     pub radii: RadiusSet,
+    /// Surfaces: find the enclosed cavities of the surface every frame and draw them in their
+    /// own colour (see [`super::cavity_layer`]). Off by default (nothing is computed); state
+    /// files written before it existed load as off.
+    pub cavities: bool,
     /// Drawn (and, for surfaces, computed) when true.
     pub visible: bool,
 }
@@ -152,6 +156,7 @@ impl Default for Representation {
             quality: p.quality,
             vertices: VertexMode::default(),
             radii: RadiusSet::default(),
+            cavities: false,
             visible: true,
         }
     }

@@ -16,6 +16,7 @@
 //! radius_scale = 1.0
 //! isovalue = 0.5
 //! quality = "medium"
+//! cavities = false  # surfaces: find and draw the enclosed cavities every frame
 //! visible = true
 //!
 //! [camera]          # optional: without it the camera fits the scene
@@ -438,6 +439,25 @@ mod tests {
         assert!(text.contains("version = 1"), "{text}");
         let back = StateFile::parse(&text, "s.toml").expect("parse");
         assert_eq!(back, state);
+    }
+
+    #[test]
+    fn keeps_the_cavities_switch_and_old_files_load_without_it() {
+        let state = StateFile::new(vec![
+            Representation {
+                cavities: true,
+                ..Representation::new("protein", "protein", RepStyle::Surface)
+            },
+            Representation::new("rest", "all", RepStyle::Surface),
+        ]);
+        let text = state.to_toml();
+        assert!(text.contains("cavities = true"), "{text}");
+        let back = StateFile::parse(&text, "s.toml").expect("parse");
+        assert_eq!(back, state);
+        assert!(back.representations[0].cavities && !back.representations[1].cavities);
+        let old = "version = 1\n[[representation]]\nname = \"p\"\nselection = \"all\"\n";
+        let old = StateFile::parse(old, "old.toml").expect("an old file loads");
+        assert!(!old.representations[0].cavities);
     }
 
     #[test]

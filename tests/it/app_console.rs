@@ -64,6 +64,15 @@ fn every_command_parses() {
     );
     assert_eq!(ok("rep 2 spacing 1.5"), C::Rep(n(2), RepEdit::Spacing(1.5)));
     assert_eq!(
+        ok("rep 2 cavities on"),
+        C::Rep(n(2), RepEdit::Cavities(true))
+    );
+    assert_eq!(
+        ok("rep 2 cavities off"),
+        C::Rep(n(2), RepEdit::Cavities(false))
+    );
+    assert!(parse("rep 2 cavities maybe").is_err());
+    assert_eq!(
         ok("rep 2 radius-scale 1.2"),
         C::Rep(n(2), RepEdit::RadiusScale(1.2))
     );

@@ -72,6 +72,7 @@ mod render_refined;
 mod render_script;
 mod render_stereo;
 mod render_still;
+mod scene_cavities;
 mod scene_lipids;
 mod scene_movie;
 mod scene_one_path;
