@@ -279,7 +279,7 @@ impl RangeSource {
             .rev()
             .find(|&b| missing(self, b))
             .unwrap_or(start);
-        while end + 1 < blocks_in_file && end + 1 <= last + ahead && missing(self, end + 1) {
+        while end + 1 < blocks_in_file && end < last + ahead && missing(self, end + 1) {
             end += 1;
         }
         let end_byte = ((end + 1) * BLOCK_BYTES).min(self.size);
