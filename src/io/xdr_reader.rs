@@ -49,6 +49,8 @@ pub(crate) struct XdrReader {
     reader: XTCReader<Box<dyn ByteSource>>,
     /// The file's size in bytes.
     size: u64,
+    /// True when the bytes come from a URL (range requests), not a file.
+    remote: bool,
     /// Keeps a decompressed copy alive while it is read.
     _copy: Option<tempfile::TempDir>,
     /// Decoded XTC frame, reused between reads.
@@ -74,11 +76,12 @@ impl XdrReader {
             .len();
         let mut reader = Self::from_source(path, Box::new(file), size, kind, walk);
         reader._copy = prepared.temp;
+        reader.remote = false;
         Ok(reader)
     }
 
     /// A reader of the frames `walk` found sound in `source` (`size` bytes), which holds the
-    /// user's file `path` (a URL read through range requests).
+    /// user's file `path`: a URL read through range requests ([`XdrReader::is_remote`]).
     pub(crate) fn from_source(
         path: &Path,
         source: Box<dyn ByteSource>,
@@ -93,6 +96,7 @@ impl XdrReader {
             offsets: walk.offsets.clone(),
             reader: XTCReader::new(source),
             size,
+            remote: true,
             _copy: None,
             xtc_frame: molly::Frame::default(),
             scratch: Vec::new(),
@@ -102,6 +106,11 @@ impl XdrReader {
     /// The file read.
     pub(crate) fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// True when the frames are read from a URL (through range requests).
+    pub(crate) fn is_remote(&self) -> bool {
+        self.remote
     }
 
     /// The format name, as chemfiles spells it (`XTC`, `TRR`).
