@@ -358,4 +358,41 @@ mod tests {
         assert!(url_of(Path::new("top.gro")).is_none());
         assert_eq!(file_name("https://h/a/b/traj.xtc?sig=1#x"), "traj.xtc");
     }
+
+    #[test]
+    fn the_cache_keeps_at_most_its_size_and_drops_the_least_recently_used() {
+        let blocks_cached = CACHE_BYTES / BLOCK_BYTES;
+        let mut source = RangeSource {
+            url: "http://127.0.0.1:1/t.xtc".to_string(),
+            agent: agent(),
+            size: 4 * CACHE_BYTES,
+            position: 0,
+            blocks: HashMap::new(),
+            by_use: BTreeMap::new(),
+            clock: 0,
+            read_ahead: 0,
+        };
+        let block = |k: u64| vec![k as u8; BLOCK_BYTES as usize];
+        for k in 0..blocks_cached {
+            source.store(k, block(k));
+        }
+        assert_eq!(source.blocks.len() as u64, blocks_cached);
+        // Block 0 is read again: block 1 is now the least recently used.
+        assert_eq!(source.touch(0).map(|b| b[0]), Some(0));
+        source.store(blocks_cached, block(7));
+        assert_eq!(source.blocks.len() as u64 * BLOCK_BYTES, CACHE_BYTES);
+        assert!(source.blocks.contains_key(&0));
+        assert!(!source.blocks.contains_key(&1));
+        // Cached bytes are read without the network (the URL has no server).
+        source.seek(SeekFrom::Start(BLOCK_BYTES * 2 + 5)).unwrap();
+        let mut read = [0u8; 3];
+        source.read_exact(&mut read).unwrap();
+        assert_eq!(read, [2, 2, 2]);
+        // A missing block needs the network: a one-line error naming the byte range.
+        source.seek(SeekFrom::Start(BLOCK_BYTES)).unwrap();
+        let error = source.read_exact(&mut read).unwrap_err();
+        let reason = super::super::xdr_error::remote_failure(&error).unwrap();
+        assert!(reason.starts_with("bytes 4096-"), "{reason}");
+        assert!(!reason.contains('\n'), "{reason}");
+    }
 }
