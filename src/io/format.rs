@@ -70,6 +70,11 @@ pub(crate) fn base_named(base: &str) -> Option<&'static str> {
 /// Checks that `path` is a readable regular file and names a known format.
 pub fn detect(path: &Path) -> Result<FileFormat, IoError> {
     check_readable(path)?;
+    detect_name(path)
+}
+
+/// The format `path`'s name says, without looking at the file (for a URL).
+pub(crate) fn detect_name(path: &Path) -> Result<FileFormat, IoError> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_lowercase())

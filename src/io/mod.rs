@@ -49,6 +49,8 @@ mod follow;
 pub(crate) mod format;
 mod frame_checks;
 mod gro;
+#[cfg(feature = "app")]
+mod http;
 pub(crate) mod imd;
 mod lammps;
 mod lammps_header;

@@ -43,13 +43,29 @@ pub(crate) struct Walk {
 /// Walks the frames of the XTC or TRR file `path` (`base` is `"XTC"` or `"TRR"`). `Ok(None)` for
 /// other formats; `Err` (a one-line reason) when not even the first frame is sound.
 pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, XdrError> {
-    let step: fn(&mut Reader<File>, u64) -> Result<FrameInfo, XdrError> = match base {
+    if !matches!(base, "XTC" | "TRR") {
+        return Ok(None);
+    }
+    let file = File::open(path).map_err(XdrError::os)?;
+    let size = file.metadata().map_err(XdrError::os)?.len();
+    walk_source(file, size, base, &mut |_| {})
+}
+
+/// [`walk`] over any source of `size` bytes (a file, or a URL read through range requests),
+/// calling `on_frame` with the byte offset reached after each sound frame. A network failure of
+/// the source (see [`super::xdr_error::RemoteFailure`]) is returned as the error, not taken for
+/// damage.
+pub(crate) fn walk_source<F: Read + Seek>(
+    file: F,
+    size: u64,
+    base: &str,
+    on_frame: &mut dyn FnMut(u64),
+) -> Result<Option<Walk>, XdrError> {
+    let step: fn(&mut Reader<F>, u64) -> Result<FrameInfo, XdrError> = match base {
         "XTC" => xtc_frame,
         "TRR" => trr_frame,
         _ => return Ok(None),
     };
-    let file = File::open(path).map_err(XdrError::os)?;
-    let size = file.metadata().map_err(XdrError::os)?.len();
     let mut reader = Reader { file, size };
     let mut offset = 0u64;
     let mut offsets = Vec::new();
@@ -82,7 +98,9 @@ pub(crate) fn walk(path: &Path, base: &str) -> Result<Option<Walk>, XdrError> {
                 offsets.push(offset);
                 offset += info.bytes;
                 frames += 1;
+                on_frame(offset);
             }
+            Err(reason) if reason.remote().is_some() => return Err(reason),
             Err(reason) => {
                 damage = Some(reason);
                 break;
@@ -133,7 +151,11 @@ pub(crate) struct TrrBlocks {
 }
 
 /// Reads the blocks of the TRR frame at `offset` of `file` (whose size is `size` bytes).
-pub(crate) fn trr_blocks(file: &mut File, size: u64, offset: u64) -> Result<TrrBlocks, XdrError> {
+pub(crate) fn trr_blocks(
+    file: &mut (impl Read + Seek),
+    size: u64,
+    offset: u64,
+) -> Result<TrrBlocks, XdrError> {
     let mut reader = Reader { file, size };
     Ok(trr_header(&mut reader, offset)?.1)
 }

@@ -92,6 +92,15 @@ impl XdrError {
         XdrError::Os(Arc::new(e))
     }
 
+    /// The one-line reason when this is a remote source's network failure ([`RemoteFailure`]),
+    /// not damage in the file.
+    pub(crate) fn remote(&self) -> Option<String> {
+        match self {
+            XdrError::Os(e) => remote_failure(e),
+            _ => None,
+        }
+    }
+
     /// True when the file ends inside a frame or its header.
     pub(crate) fn is_truncation(&self) -> bool {
         matches!(
@@ -99,4 +108,19 @@ impl XdrError {
             XdrError::Truncated { .. } | XdrError::TruncatedHeader { .. }
         )
     }
+}
+
+/// A remote byte source's failure (a server gone, a dropped connection, a short reply), carried
+/// inside a `std::io::Error` by the HTTP source (`super::http`): not damage in the file, so the
+/// header walk stops with it instead of ending the readable frames there. Prints as one line
+/// naming the byte range.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub(crate) struct RemoteFailure(pub String);
+
+/// The reason `e` gives when it carries a [`RemoteFailure`].
+pub(crate) fn remote_failure(e: &std::io::Error) -> Option<String> {
+    e.get_ref()
+        .and_then(|inner| inner.downcast_ref::<RemoteFailure>())
+        .map(|failure| failure.0.clone())
 }

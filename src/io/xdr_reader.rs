@@ -31,6 +31,12 @@ pub(crate) enum XdrKind {
     Trr,
 }
 
+/// Where an [`XdrReader`] reads bytes: a file, or a URL read through range requests
+/// (`super::http`).
+pub(crate) trait ByteSource: Read + Seek + Send {}
+
+impl<T: Read + Seek + Send> ByteSource for T {}
+
 /// One open XTC or TRR file with the offsets of its readable frames.
 pub(crate) struct XdrReader {
     path: PathBuf,
@@ -38,10 +44,13 @@ pub(crate) struct XdrReader {
     natoms: usize,
     /// Byte offset of each readable frame.
     offsets: Vec<u64>,
-    /// The open file (molly's reader wraps it; TRR frames are read from it directly).
-    reader: XTCReader<File>,
+    /// The open file or remote source (molly's reader wraps it; TRR frames are read from it
+    /// directly).
+    reader: XTCReader<Box<dyn ByteSource>>,
     /// The file's size in bytes.
     size: u64,
+    /// True when the bytes come from a URL (range requests), not a file.
+    remote: bool,
     /// Keeps a decompressed copy alive while it is read.
     _copy: Option<tempfile::TempDir>,
     /// Decoded XTC frame, reused between reads.
@@ -65,22 +74,43 @@ impl XdrReader {
             .metadata()
             .map_err(|e| IoError::unreadable(path, e.to_string()))?
             .len();
-        Ok(XdrReader {
+        let mut reader = Self::from_source(path, Box::new(file), size, kind, walk);
+        reader._copy = prepared.temp;
+        reader.remote = false;
+        Ok(reader)
+    }
+
+    /// A reader of the frames `walk` found sound in `source` (`size` bytes), which holds the
+    /// user's file `path`: a URL read through range requests ([`XdrReader::is_remote`]).
+    pub(crate) fn from_source(
+        path: &Path,
+        source: Box<dyn ByteSource>,
+        size: u64,
+        kind: XdrKind,
+        walk: &Walk,
+    ) -> Self {
+        XdrReader {
             path: path.to_path_buf(),
             kind,
             natoms: walk.natoms,
             offsets: walk.offsets.clone(),
-            reader: XTCReader::new(file),
+            reader: XTCReader::new(source),
             size,
-            _copy: prepared.temp,
+            remote: true,
+            _copy: None,
             xtc_frame: molly::Frame::default(),
             scratch: Vec::new(),
-        })
+        }
     }
 
     /// The file read.
     pub(crate) fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// True when the frames are read from a URL (through range requests).
+    pub(crate) fn is_remote(&self) -> bool {
+        self.remote
     }
 
     /// The format name, as chemfiles spells it (`XTC`, `TRR`).
@@ -160,7 +190,7 @@ fn cell_from_rows(rows_nm: [Vec3; 3]) -> Option<[Vec3; 3]> {
 
 /// Reads the TRR frame at `offset`: its positions (`natoms` of them), box and time.
 fn read_trr(
-    file: &mut File,
+    file: &mut (impl Read + Seek),
     size: u64,
     natoms: usize,
     offset: u64,
@@ -187,7 +217,12 @@ fn read_trr(
 }
 
 /// Reads `count` big-endian reals of `real` bytes (4 or 8) at `offset`.
-fn reals(file: &mut File, offset: u64, count: usize, real: u64) -> Result<Vec<f64>, XdrError> {
+fn reals(
+    file: &mut (impl Read + Seek),
+    offset: u64,
+    count: usize,
+    real: u64,
+) -> Result<Vec<f64>, XdrError> {
     let mut bytes = vec![0u8; count * real as usize];
     file.seek(SeekFrom::Start(offset))
         .and_then(|_| file.read_exact(&mut bytes))

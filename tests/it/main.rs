@@ -45,6 +45,7 @@ mod io_data;
 mod io_fast;
 mod io_fuzz_regressions;
 mod io_hostile;
+mod io_http;
 mod io_mmcif;
 mod io_model;
 mod io_mutants;

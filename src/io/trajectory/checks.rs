@@ -117,8 +117,13 @@ impl Trajectory {
     }
 
     /// Checks the last few frames; if some fail to read, the readable length ends at the first
-    /// failing one (a truncated file) and the failure is kept as [`Damage`].
+    /// failing one (a truncated file) and the failure is kept as [`Damage`]. Not for a file
+    /// read over HTTP: each probe would be a download (its headers were walked, so a cut file
+    /// is already found), and a network failure is no damage.
     pub(super) fn probe_tail(&mut self) {
+        if self.lock().is_remote() {
+            return;
+        }
         let start = self.len.saturating_sub(TAIL_PROBE).max(1);
         let mut first_bad = None;
         for index in start..self.len {

@@ -84,6 +84,11 @@ impl FrameSource {
         }
     }
 
+    /// True when the frames come from a URL (through range requests).
+    pub(super) fn is_remote(&self) -> bool {
+        matches!(self, FrameSource::Xdr(r) if r.is_remote())
+    }
+
     pub(super) fn truncated(&self) -> Option<(&str, bool)> {
         match self {
             FrameSource::Chem(r) => r.truncated(),

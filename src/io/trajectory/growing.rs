@@ -53,6 +53,7 @@ pub fn open_following(top: &Path, options: &FollowOptions) -> Result<Trajectory,
         reader: Mutex::new(source),
         damage: None,
         live,
+        _download: None,
     })
 }
 

@@ -24,6 +24,8 @@ use crate::model::{Frame, Topology, sizing};
 mod checks;
 mod frame_source;
 mod growing;
+#[cfg(feature = "app")]
+mod remote;
 
 use frame_source::{FirstFrame, FrameSource};
 pub use growing::{open_following, open_growing, open_live};
@@ -53,6 +55,8 @@ pub struct Trajectory {
     damage: Option<Damage>,
     /// Frames received so far, for a running simulation ([`open_live`]).
     live: Option<LiveCount>,
+    /// The folder holding a topology downloaded from a URL, kept while the trajectory lives.
+    _download: Option<tempfile::TempDir>,
 }
 
 impl std::fmt::Debug for Trajectory {
@@ -84,6 +88,10 @@ impl std::fmt::Debug for Trajectory {
 /// `MDSURF_IN_PROCESS_READ` runs chemfiles in this process (for timing the paths against each
 /// other).
 pub fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoError> {
+    #[cfg(feature = "app")]
+    if remote::is_remote(top, traj) {
+        return remote::open(top, traj);
+    }
     open_with(top, traj, Readers::Ours)
 }
 
@@ -215,6 +223,12 @@ fn open_with(top: &Path, traj: Option<&Path>, readers: Readers) -> Result<Trajec
                 truncated,
             }
         }
+        #[cfg(feature = "app")]
+        (Some(path), _, _) if super::http::url_of(path).is_some() => {
+            let (source, w) = remote::open_frames(path, top, topology.len())?;
+            walk = Some(w);
+            source
+        }
         (Some(path), top_reader, _) => {
             let format = detect(path)?;
             drop(top_reader);
@@ -241,15 +255,7 @@ fn open_with(top: &Path, traj: Option<&Path>, readers: Readers) -> Result<Trajec
                     let w = xdr::walk(&prepared.open_path, format.base)
                         .map_err(|reason| IoError::bad_frame(path, 0, reason))?
                         .ok_or_else(|| IoError::unreadable(path, "not an XTC or TRR file"))?;
-                    if w.natoms != topology.len() {
-                        return Err(IoError::AtomCountMismatch {
-                            topology: top.to_path_buf(),
-                            topology_atoms: topology.len(),
-                            trajectory: path.to_path_buf(),
-                            trajectory_atoms: w.natoms,
-                            frame: 0,
-                        });
-                    }
+                    check_walk_atoms(top, topology.len(), path, &w)?;
                     let reader = XdrReader::new(path, prepared, kind, &w)?;
                     walk = Some(w);
                     FrameSource::Xdr(reader)
@@ -269,6 +275,7 @@ fn open_with(top: &Path, traj: Option<&Path>, readers: Readers) -> Result<Trajec
         reader: Mutex::new(reader),
         damage: None,
         live: None,
+        _download: None,
     };
     if let Some(w) = walk {
         trajectory.apply_walk(w)?;
@@ -281,6 +288,26 @@ fn open_with(top: &Path, traj: Option<&Path>, readers: Readers) -> Result<Trajec
     trajectory.probe_tail();
     trajectory.check_dcd_size();
     Ok(trajectory)
+}
+
+/// Fails unless the XTC/TRR file `path` (its header walk `walk`) has as many atoms as the
+/// topology `top` (`topology_atoms`).
+fn check_walk_atoms(
+    top: &Path,
+    topology_atoms: usize,
+    path: &Path,
+    walk: &xdr::Walk,
+) -> Result<(), IoError> {
+    if walk.natoms != topology_atoms {
+        return Err(IoError::AtomCountMismatch {
+            topology: top.to_path_buf(),
+            topology_atoms,
+            trajectory: path.to_path_buf(),
+            trajectory_atoms: walk.natoms,
+            frame: 0,
+        });
+    }
+    Ok(())
 }
 
 impl Trajectory {
