@@ -191,17 +191,8 @@ fn list_ui(ui: &mut egui::Ui, tracks: &RepTracks) {
 /// Volume (Å³) against frame for every cavity id tracked, on one scale, with the current frame
 /// marked (the style of [`super::plot::plot_ui`]).
 fn volume_plot_ui(ui: &mut egui::Ui, tracks: &RepTracks, current: usize, frames: usize) {
-    let size = egui::vec2(ui.available_width().max(120.0), 90.0);
-    let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
-    let painter = ui.painter_at(rect);
-    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
-    let x_of =
-        |f: usize| rect.left() + rect.width() * f as f32 / frames.saturating_sub(1).max(1) as f32;
-    let x = x_of(current);
-    painter.line_segment(
-        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
-        (1.0, egui::Color32::GRAY),
-    );
+    let width = ui.available_width().max(120.0);
+    let (painter, rect, x_of) = super::plot::frame_axes(ui, width, 90.0, current, frames);
     let hi = tracks
         .volumes
         .values()

@@ -128,17 +128,7 @@ pub fn plot_ui(
             out.push(Command::ExportCsv(None));
         }
     });
-    let size = egui::vec2(ui.available_width(), 110.0);
-    let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
-    let painter = ui.painter_at(rect);
-    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
-    let x_of =
-        |f: usize| rect.left() + rect.width() * f as f32 / frames.saturating_sub(1).max(1) as f32;
-    let x = x_of(current);
-    painter.line_segment(
-        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
-        (1.0, egui::Color32::GRAY),
-    );
+    let (painter, rect, x_of) = frame_axes(ui, ui.available_width(), 110.0, current, frames);
     let lines = history.reps().iter().enumerate().flat_map(|(k, rep)| {
         let fade = |c: egui::Color32| c.gamma_multiply(1.0 / (1.0 + k as f32 * 0.6));
         [(0, fade(AREA), rep), (1, fade(VOLUME), rep)]
@@ -186,6 +176,31 @@ pub fn plot_ui(
 
 const AREA: egui::Color32 = egui::Color32::from_rgb(90, 170, 255);
 const VOLUME: egui::Color32 = egui::Color32::from_rgb(255, 160, 60);
+
+/// The frame of a plot over frames: `height` px tall and `width` px wide, the background
+/// filled and the `current` frame of `frames` marked by a vertical line. Returns the painter,
+/// the plot's rectangle and the x of a frame.
+pub(crate) fn frame_axes(
+    ui: &mut egui::Ui,
+    width: f32,
+    height: f32,
+    current: usize,
+    frames: usize,
+) -> (egui::Painter, egui::Rect, impl Fn(usize) -> f32 + use<>) {
+    let size = egui::vec2(width, height);
+    let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
+    let x_of = move |f: usize| {
+        rect.left() + rect.width() * f as f32 / frames.saturating_sub(1).max(1) as f32
+    };
+    let x = x_of(current);
+    painter.line_segment(
+        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
+        (1.0, egui::Color32::GRAY),
+    );
+    (painter, rect, x_of)
+}
 
 #[cfg(test)]
 mod tests {

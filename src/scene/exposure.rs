@@ -12,9 +12,19 @@
 
 use std::collections::HashMap;
 
+use super::frame::SceneError;
 use crate::measure::{self, ExposureTable, MeasureError};
 use crate::model::{ColourMap, Topology};
 use crate::surface::{AtomSet, CpuEngine, Mesh, SurfaceParams};
+
+/// The scene error of representation `rep`'s exposure colours failing in frame `frame`.
+pub(crate) fn exposure_failed(frame: usize, rep: &str) -> impl FnOnce(MeasureError) -> SceneError {
+    move |source| SceneError::Exposure {
+        frame,
+        rep: rep.to_string(),
+        source,
+    }
+}
 
 /// What one representation keeps between frames for its exposure colours.
 #[derive(Debug, Default)]

@@ -28,7 +28,18 @@ fn set<'a>(positions: &'a [Vec3], radii: &'a [f32]) -> AtomSet<'a> {
 /// 1hpv's topology, the indices of `selection`'s atoms, their positions and radii (`preset`'s
 /// radius set, exposure applied, or the default radii).
 fn hpv(selection: &str, preset: Option<Preset>) -> (Topology, Vec<u32>, Vec<Vec3>, Vec<f32>) {
-    let traj = mdsurf::io::open(&data("1hpv.pdb"), None).expect("open 1hpv");
+    selected_atoms("1hpv.pdb", selection, preset)
+}
+
+/// The topology of the first frame of `file` (under `tests/data`), the indices of
+/// `selection`'s atoms, their positions and radii (`preset`'s radius set with exposure applied
+/// over the selected atoms, as the command line does, or the default radii).
+pub(crate) fn selected_atoms(
+    file: &str,
+    selection: &str,
+    preset: Option<Preset>,
+) -> (Topology, Vec<u32>, Vec<Vec3>, Vec<f32>) {
+    let traj = mdsurf::io::open(&data(file), None).expect("open");
     let frame = traj.read_frame(0).expect("frame 0");
     let options = match preset {
         Some(p) => p.radius_set().particle_options(ParticleOptions::default()),

@@ -6,33 +6,18 @@
 
 use glam::{DVec3, Vec3};
 use mdsurf::measure::{Cavity, CavityOptions, cavities, interface};
-use mdsurf::model::{ParticleOptions, Particles};
-use mdsurf::selection::Selection;
 use mdsurf::surface::{AtomSet, CpuEngine, Preset, SurfaceEngine, SurfaceParams, VertexMode};
 
 use crate::cli_common::{Csv, mdsurf};
-use crate::data_support::{DATA, data};
+use crate::data_support::DATA;
+use crate::measure_areas::selected_atoms;
 
 /// Positions and `--preset ses` radii (Å; exposure applied over the selected atoms, as the
 /// command line does for each side of `--interface`) of `selection`'s atoms in the first frame
 /// of `file`.
 fn ses_atoms(file: &str, selection: &str) -> (Vec<Vec3>, Vec<f32>) {
-    let traj = mdsurf::io::open(&data(file), None).expect("open");
-    let frame = traj.read_frame(0).expect("frame 0");
-    let options = Preset::Ses
-        .radius_set()
-        .particle_options(ParticleOptions::default());
-    let idx = Selection::parse(selection)
-        .expect("selection")
-        .bind(traj.topology())
-        .indices(&frame);
-    let particles =
-        Particles::new_subset(traj.topology(), &frame, &options, Some(&idx)).expect("particles");
-    let pos = particles.positions(&frame).expect("positions");
-    let radii = particles
-        .frame_radii(&pos)
-        .unwrap_or_else(|| particles.radii().to_vec());
-    (pos, radii)
+    let (_, _, positions, radii) = selected_atoms(file, selection, Some(Preset::Ses));
+    (positions, radii)
 }
 
 fn set<'a>(positions: &'a [Vec3], radii: &'a [f32]) -> AtomSet<'a> {

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use super::{SceneBackend, SceneEngine};
 use crate::gpu::{Changes, FrameStats, GpuEngine, GpuSurface};
 use crate::model::{ColourMap, Topology};
+use crate::scene::exposure::exposure_failed;
 use crate::scene::frame::{LayerResult, RepId, SceneError, SceneFrame};
 use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceError};
 
@@ -87,11 +88,7 @@ impl SceneEngine {
                 (&mesh, stats.area),
                 map,
             )
-            .map_err(|source| SceneError::Exposure {
-                frame: index,
-                rep: rep.name.clone(),
-                source,
-            })?;
+            .map_err(exposure_failed(index, &rep.name))?;
         let colours = Arc::new(colours);
         if let Some(sent) = slot.sent.as_mut() {
             sent.colours = colours.clone();

@@ -32,7 +32,7 @@ mod gpu;
 use gpu::sibling_of;
 
 use super::cavity_layer::CavitySource;
-use super::exposure::ExposureColouring;
+use super::exposure::{ExposureColouring, exposure_failed};
 use super::frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
 use super::layer::{Layer, LayerFrame};
 use super::representation::Representation;
@@ -390,11 +390,7 @@ impl SceneEngine {
                                     (&result.output.mesh, result.output.area),
                                     map,
                                 )
-                                .map_err(|source| SceneError::Exposure {
-                                    frame: index,
-                                    rep: rep.name.clone(),
-                                    source,
-                                })?;
+                                .map_err(exposure_failed(index, &rep.name))?;
                             let coloured = AtomSet {
                                 colours: Some(&colours),
                                 ..atoms
