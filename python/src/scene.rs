@@ -41,7 +41,9 @@ pub fn scene_err(err: SceneError) -> PyErr {
             S::Gpu(_) => PyRuntimeError::new_err(msg),
             _ => PyValueError::new_err(msg),
         },
-        SceneError::Periodic { .. } | SceneError::Exposure { .. } => PyValueError::new_err(msg),
+        SceneError::Periodic { .. } | SceneError::Exposure { .. } | SceneError::Cavities { .. } => {
+            PyValueError::new_err(msg)
+        }
     }
 }
 
