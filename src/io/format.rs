@@ -73,12 +73,12 @@ pub fn detect(path: &Path) -> Result<FileFormat, IoError> {
     detect_name(path)
 }
 
-/// The format `path`'s name says, without looking at the file (for a URL).
+/// The format `path`'s name says, without looking at the file (for a URL: its last path
+/// segment, a query string or fragment left out, as in `traj.xtc?token=...`).
 pub(crate) fn detect_name(path: &Path) -> Result<FileFormat, IoError> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_lowercase())
-        .unwrap_or_default();
+    let text = path.to_string_lossy();
+    let end = text.find(['?', '#']).unwrap_or(text.len());
+    let name = text[..end].rsplit('/').next().unwrap_or("").to_lowercase();
     let mut parts: Vec<&str> = name.split('.').skip(1).collect();
     let compression = match parts.last() {
         Some(last) => COMPRESSIONS

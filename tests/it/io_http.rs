@@ -77,7 +77,9 @@ fn answer(
     let mut reader = BufReader::new(stream.try_clone()?);
     let mut request = String::new();
     reader.read_line(&mut request)?;
-    let target = request.split_whitespace().nth(1).unwrap_or("").to_string();
+    // The path without its query string, as static file servers (and signed URLs) serve it.
+    let target = request.split_whitespace().nth(1).unwrap_or("");
+    let target = target.split('?').next().unwrap_or("").to_string();
     let mut range = None;
     loop {
         let mut line = String::new();
@@ -242,4 +244,22 @@ fn a_dropped_connection_is_one_line() {
 fn other_formats_over_http_are_one_line() {
     let server = Server::start(Mode::Ranges);
     fails_naming_the_url(&server, "md_1u19.dcd", &["only XTC and TRR"]);
+}
+
+#[test]
+fn urls_with_a_query_string_read_as_their_file() {
+    // Signed URLs (object stores) carry a token after the name.
+    let server = Server::start(Mode::Ranges);
+    let dir = tempfile::tempdir().unwrap();
+    let token = "?token=a1b2&expires=99";
+    let run = surface(
+        dir.path(),
+        &format!("{}{token}", server.url("md_1u19.gro")),
+        &format!("{}{token}", server.url("md_1u19.xtc")),
+        "s.csv",
+        &["--frames", "3"],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let stats = std::fs::read_to_string(dir.path().join("s.csv")).unwrap();
+    assert_eq!(stats.lines().count(), 2, "{stats}");
 }
