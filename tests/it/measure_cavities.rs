@@ -9,7 +9,7 @@ use mdsurf::model::Topology;
 use mdsurf::surface::{AtomSet, CpuEngine, SurfaceEngine, SurfaceParams};
 
 /// `n` points spread evenly on a sphere of radius `radius` (Å) around `centre` (Fibonacci).
-fn shell(n: usize, radius: f32, centre: Vec3) -> Vec<Vec3> {
+pub(crate) fn shell(n: usize, radius: f32, centre: Vec3) -> Vec<Vec3> {
     let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
     (0..n)
         .map(|k| {

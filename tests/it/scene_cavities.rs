@@ -30,15 +30,7 @@ const SHELL_ATOMS: usize = 600;
 
 /// `SHELL_ATOMS` points spread evenly (Fibonacci) on a sphere of `radius` Å around the origin.
 fn shell(radius: f32) -> Vec<Vec3> {
-    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    (0..SHELL_ATOMS)
-        .map(|k| {
-            let z = 1.0 - 2.0 * (k as f32 + 0.5) / SHELL_ATOMS as f32;
-            let r = (1.0 - z * z).sqrt();
-            let phi = golden * k as f32;
-            radius * Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-        .collect()
+    crate::measure_cavities::shell(SHELL_ATOMS, radius, Vec3::ZERO)
 }
 
 /// A topology of `SHELL_ATOMS` carbon atoms of radius 1.5 Å, ten per residue.
