@@ -14,7 +14,10 @@ mod measurements;
 mod scene;
 mod topology;
 
-use mdsurf::surface::{AtomSet, Quality, SurfaceError, SurfaceOutput, SurfaceParams, VertexMode};
+use mdsurf::measure::ExposureTable;
+use mdsurf::surface::{
+    AtomSet, CpuEngine, Quality, SurfaceError, SurfaceOutput, SurfaceParams, VertexMode,
+};
 use numpy::{PyArray1, PyArray2, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -308,6 +311,65 @@ fn atom_areas<'py>(
     ))
 }
 
+/// The exposure table of `mdsurf.analysis.GaussianSurface(per_residue=True)`: for each residue
+/// name, the largest area (Å²) of its first residues each computed alone on the CPU (the rule of
+/// `mdsurf surface --per-residue`, `ExposureTable`), from `positions` (N, 3) in Å, `radii` (N,)
+/// in Å, `residue_of_atom` (N,) (indices into `residue_names`, residues in topology order) and
+/// the surface settings. Returns (names, areas).
+#[pyfunction]
+#[pyo3(signature = (positions, radii, residue_of_atom, residue_names, spacing, radius_scale, isovalue, quality, vertices))]
+#[allow(clippy::too_many_arguments)]
+fn exposure_table(
+    py: Python<'_>,
+    positions: PyReadonlyArrayDyn<'_, f32>,
+    radii: PyReadonlyArrayDyn<'_, f32>,
+    residue_of_atom: Vec<u32>,
+    residue_names: Vec<String>,
+    spacing: f32,
+    radius_scale: f32,
+    isovalue: f32,
+    quality: &str,
+    vertices: &str,
+) -> PyResult<(Vec<String>, Vec<f64>)> {
+    let (params, _, vertices) =
+        settings(spacing, radius_scale, isovalue, quality, "cpu", vertices)?;
+    let positions = arrays::positions(&positions)?;
+    let radii = arrays::radii(&radii, positions.len())?;
+    if residue_of_atom.len() != positions.len() {
+        return Err(PyValueError::new_err(format!(
+            "residue_of_atom has {} entries for {} atoms",
+            residue_of_atom.len(),
+            positions.len()
+        )));
+    }
+    let mut members = vec![Vec::new(); residue_names.len()];
+    for (atom, &residue) in residue_of_atom.iter().enumerate() {
+        let slot = members.get_mut(residue as usize).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "residue index {residue} of atom {atom} is past the {} residue names",
+                residue_names.len()
+            ))
+        })?;
+        slot.push(atom);
+    }
+    let set = AtomSet {
+        positions: &positions,
+        radii: &radii,
+        colours: None,
+    };
+    let effective = vertices.effective(&params);
+    let table = py.detach(|| {
+        ExposureTable::from_residue_members(
+            &mut CpuEngine::new(),
+            residue_names.into_iter().zip(members),
+            &set,
+            &effective,
+        )
+    });
+    let table = table.map_err(|e| PyValueError::new_err(format!("exposure table: {e}")))?;
+    Ok(table.entries().map(|(n, a)| (n.to_string(), a)).unzip())
+}
+
 /// See `mdsurf.engine_info`.
 #[pyfunction]
 fn engine_info(py: Python<'_>, backend: &str) -> PyResult<String> {
@@ -331,6 +393,7 @@ fn _mdsurf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(surface, m)?)?;
     m.add_function(wrap_pyfunction!(measure, m)?)?;
     m.add_function(wrap_pyfunction!(atom_areas, m)?)?;
+    m.add_function(wrap_pyfunction!(exposure_table, m)?)?;
     m.add_function(wrap_pyfunction!(engine_info, m)?)?;
     m.add_function(wrap_pyfunction!(_gpu_opened, m)?)?;
     m.add_class::<scene::SceneCore>()?;

@@ -100,6 +100,11 @@ def test_per_residue_areas_equal_the_scenes(universe, per_residue):
     expected = scene.per_residue_areas("selection", frames=frames)
     assert list(expected.resids) == list(per_residue.results.residues.resids)
     np.testing.assert_allclose(per_residue.results.residue_area, expected.area_A2, rtol=1e-6)
+    # Exposure: the same table (first frame, residues alone) and the same quotients.
+    assert per_residue.frames[0] == 0
+    np.testing.assert_allclose(per_residue.results.exposure, expected.exposure, rtol=1e-6)
+    assert np.nanmax(per_residue.results.exposure) > 0.5
+    assert np.all(per_residue.results.exposure[np.isfinite(per_residue.results.exposure)] >= 0)
     # Residues' areas change as adenylate kinase opens.
     spread = np.ptp(per_residue.results.residue_area, axis=0)
     assert spread.max() > 20.0
@@ -112,6 +117,7 @@ def test_per_residue_in_parallel_equals_serial(universe, per_residue):
     )
     np.testing.assert_array_equal(par.results.residue_area, per_residue.results.residue_area)
     np.testing.assert_array_equal(par.results.atom_area, per_residue.results.atom_area)
+    np.testing.assert_array_equal(par.results.exposure, per_residue.results.exposure)
 
 
 def test_per_residue_with_a_selection_has_universe_columns(universe):
@@ -123,3 +129,8 @@ def test_per_residue_with_a_selection_has_universe_columns(universe):
     np.testing.assert_allclose(r.atom_area.sum(axis=1), r.area, rtol=1e-9)
     assert r.residue_area.shape == (2, len(universe.residues))
     assert np.all(r.residue_area[:, 30:] == 0) and np.all(r.residue_area[:, :30] > 0)
+    # Residues outside the surface have no exposure; those inside their area over the table's.
+    assert np.all(np.isnan(r.exposure[:, 30:])) and np.all(np.isfinite(r.exposure[:, :30]))
+    scene = mdsurf.Scene(universe, select="resid 1:30")
+    expected = scene.per_residue_areas("selection", frames=[0, 1])
+    np.testing.assert_allclose(r.exposure[:, :30], expected.exposure, rtol=1e-6)

@@ -157,16 +157,44 @@ impl ExposureTable {
                 .or_default()
                 .push(k);
         }
-        let mut done: BTreeMap<String, usize> = BTreeMap::new();
-        let mut table = ExposureTable::default();
-        let (mut pos, mut radii): (Vec<Vec3>, Vec<f32>) = (Vec::new(), Vec::new());
-        for set in members.values() {
+        let residues = members.into_values().map(|set| {
             let name = topology
                 .residue_names
                 .get(indices[set[0]] as usize)
                 .unwrap_or("")
-                .trim()
                 .to_string();
+            (name, set)
+        });
+        Self::from_residue_members(engine, residues, atoms, params)
+    }
+
+    /// The table of residues given as (name, indices of their atoms in `atoms`), in the order
+    /// whose first [`Self::SAMPLES`] of each name are computed alone (see
+    /// [`Self::from_isolated_residues`], which gives the topology's residues in file order).
+    ///
+    /// Fails on an index past the set or a surface that fails.
+    pub fn from_residue_members(
+        engine: &mut dyn SurfaceEngine,
+        residues: impl IntoIterator<Item = (String, Vec<usize>)>,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+    ) -> Result<ExposureTable, MeasureError> {
+        atoms.validate()?;
+        let mut done: BTreeMap<String, usize> = BTreeMap::new();
+        let mut table = ExposureTable::default();
+        let (mut pos, mut radii): (Vec<Vec3>, Vec<f32>) = (Vec::new(), Vec::new());
+        for (name, set) in residues {
+            let name = name.trim().to_string();
+            if set.is_empty() {
+                continue;
+            }
+            if let Some(&k) = set.iter().find(|&&k| k >= atoms.len()) {
+                return Err(MeasureError::IndexOutOfRange {
+                    what: "residue member atom",
+                    index: k,
+                    len: atoms.len(),
+                });
+            }
             let seen = done.entry(name.clone()).or_default();
             if *seen >= Self::SAMPLES {
                 continue;

@@ -102,8 +102,11 @@ class GaussianSurface(AnalysisBase):
     per_residue : bool
         Also share each frame's area among the atoms (the rule of ``mdsurf surface
         --per-atom``: a triangle's area goes a third to each vertex, a vertex's share to the
-        atoms by their Gaussians there) and sum it per residue. Exposure (area over the
-        residue type's area alone) is in :meth:`mdsurf.Scene.per_residue_areas`.
+        atoms by their Gaussians there) and sum it per residue, with each residue's exposure:
+        its area over the largest area a residue of its name has alone (the first five of
+        each name in the trajectory's first frame, computed alone on the CPU with the same
+        settings, as :meth:`mdsurf.Scene.per_residue_areas` and ``mdsurf surface
+        --per-residue`` build it from their first frame).
 
     Results
     -------
@@ -118,6 +121,10 @@ class GaussianSurface(AnalysisBase):
     results.residue_area : numpy.ndarray, shape (n_frames, n_residues)
         With ``per_residue``: the sum over each residue's atoms, residues of
         ``results.residues`` (those of ``atomgroup``, or of the universe with ``select``).
+    results.exposure : numpy.ndarray, shape (n_frames, n_residues)
+        With ``per_residue``: ``residue_area`` over the residue name's area alone (see
+        ``per_residue``); NaN for a residue with no atom in the frame's surface or whose name
+        had no residue in the first frame.
     """
 
     _analysis_algorithm_is_parallelizable = True
@@ -189,6 +196,32 @@ class GaussianSurface(AnalysisBase):
             np.ones(1, np.float32),
             *self._settings.values(),
         )
+        if self._per_residue:
+            self._exposure_reference = self._isolated_areas(core)
+
+    def _isolated_areas(self, core):
+        """The exposure denominator of each column residue (NaN where its name is missing):
+        the table of the trajectory's first frame (see ``per_residue``)."""
+        trajectory = self._ag.universe.trajectory
+        was = trajectory.ts.frame
+        positions, picked = core._core.transformed(0, core._reader, self._select)
+        if trajectory.ts.frame != was:
+            trajectory[was]
+        if picked is None:
+            atoms, radii = self._ag, self._radii
+        else:
+            atoms, radii = self._ag.universe.atoms[picked], self._radii[picked]
+        residues = self._columns.residues
+        owner = np.searchsorted(residues.resindices, atoms.resindices)
+        names, areas = _mdsurf.exposure_table(
+            np.ascontiguousarray(positions[atoms.ix], np.float32),
+            radii,
+            owner.astype(np.uint32).tolist(),
+            [str(n) for n in residues.resnames],
+            *(v for k, v in self._settings.items() if k != "backend"),
+        )
+        table = dict(zip(names, areas))
+        return np.array([table.get(str(n).strip(), np.nan) for n in residues.resnames])
 
     def _scene(self):
         """The frame reader through the transformations (built once per process)."""
@@ -211,6 +244,7 @@ class GaussianSurface(AnalysisBase):
             n_atoms, n_residues = len(self._columns), len(self._columns.residues)
             self.results.atom_area = np.full((self.n_frames, n_atoms), np.nan)
             self.results.residue_area = np.full((self.n_frames, n_residues), np.nan)
+            self.results.exposure = np.full((self.n_frames, n_residues), np.nan)
 
     def _single_frame(self):
         # The time step is updated in place by any read: its frame is taken first.
@@ -244,7 +278,14 @@ class GaussianSurface(AnalysisBase):
             # Columns: atomgroup order without a selection, universe indices with one.
             row[np.arange(len(picked)) if self._select is None else picked] = shares
             self.results.atom_area[self._frame_index] = row
-            self.results.residue_area[self._frame_index] = self._sum_per_residue(row)
+            residue_area = self._sum_per_residue(row)
+            self.results.residue_area[self._frame_index] = residue_area
+            present = np.zeros(len(self._columns))
+            present[np.arange(len(picked)) if self._select is None else picked] = 1.0
+            with np.errstate(divide="ignore", invalid="ignore"):
+                exposure = residue_area / self._exposure_reference
+            exposure[(self._sum_per_residue(present) == 0) | ~(self._exposure_reference > 0)] = np.nan
+            self.results.exposure[self._frame_index] = exposure
         global _frames_measured
         _frames_measured += 1
 
@@ -266,6 +307,7 @@ class GaussianSurface(AnalysisBase):
         if self._per_residue:
             lookup["atom_area"] = ResultsGroup.ndarray_vstack
             lookup["residue_area"] = ResultsGroup.ndarray_vstack
+            lookup["exposure"] = ResultsGroup.ndarray_vstack
         return ResultsGroup(lookup=lookup)
 
     def _configure_backend(self, backend, n_workers, unsupported_backend=False):
