@@ -42,15 +42,19 @@ fn num(text: &str) -> f64 {
     text.parse().expect("number")
 }
 
+/// The `external` row of `complex` in `tests/data/msms_interface.csv`.
+fn interface_row(complex: &str) -> Vec<String> {
+    rows("msms_interface.csv")
+        .into_iter()
+        .find(|r| r[0] == complex && r[6] == "external")
+        .unwrap_or_else(|| panic!("no row for {complex}"))
+}
+
 /// MSMS's buried SES area of `complex` (Å², the external surface: MSMS's default, what the
 /// preset was fitted to), mdsurf's under `--preset ses` with `vertices` on the same sides, and
 /// mdsurf's deviation from MSMS in %.
 fn buried_against_msms(complex: &str, vertices: VertexMode) -> (f64, f64, f64) {
-    let reference = rows("msms_interface.csv");
-    let row = reference
-        .iter()
-        .find(|r| r[0] == complex && r[6] == "external")
-        .unwrap_or_else(|| panic!("no row for {complex}"));
+    let row = interface_row(complex);
     let (a, ra) = ses_atoms(&row[1], &row[2]);
     let (b, rb) = ses_atoms(&row[1], &row[3]);
     assert_eq!(
@@ -79,15 +83,53 @@ fn measure_msms_buried_area_of_1hpv_within_5_percent() {
 }
 
 /// The two small interfaces (300 to 400 Å², under 2 % of the complex's area) miss the issue's
-/// 5 %: mdsurf buries 21 % more than MSMS on 7ddo and 11 % more on 1a28 (84 and 34 Å²; the
-/// complex's area falls further below MSMS's than the sides' do, most likely because the two
-/// sides' Gaussians add up at the rim of the contact, which the probe leaves open).
-/// This test holds them to what they meet: 25 %.
+/// 5 %: mdsurf buries 21 % more than MSMS on 7ddo and 11 % more on 1a28 (84 and 34 Å²), on
+/// the atoms in contact with the other side (3 to 5 Å from it); none of the preset's values
+/// tried (R, I, radii, exposure counts and weight, and a search over them) brings them and 1hpv
+/// within 5 % while whole proteins keep 2 % (docs/measure.md, "Where the small interfaces'
+/// excess comes from"). This test holds them to what they meet: 25 %.
 #[test]
 fn measure_msms_buried_area_of_7ddo_and_1a28_within_25_percent() {
     for complex in ["7ddo", "1a28"] {
         let (_, _, dev) = buried_against_msms(complex, Preset::Ses.vertices());
         assert!(dev.abs() <= 25.0, "{complex}: {dev:+.2} %");
+    }
+}
+
+/// The exposure counts do not make the small interfaces' excess: the complex's surface with
+/// its radii counted over the complex (as `--select` of both sides gives it) instead of over
+/// each side alone (as `--interface` feeds it) moves the buried area by at most 2 % (measured:
+/// -0.9 % on 7ddo, -0.06 % on 1a28), against the 11 to 21 % by which it exceeds MSMS's.
+#[test]
+fn measure_msms_small_interfaces_hardly_move_with_the_exposure_counts() {
+    for complex in ["7ddo", "1a28"] {
+        let row = interface_row(complex);
+        let (_, ia, a, ra) = selected_atoms(&row[1], &row[2], Some(Preset::Ses));
+        let (_, ib, b, rb) = selected_atoms(&row[1], &row[3], Some(Preset::Ses));
+        let both = format!("({}) or ({})", row[2], row[3]);
+        let (_, iu, _, ru) = selected_atoms(&row[1], &both, Some(Preset::Ses));
+        assert_eq!(iu.len(), ia.len() + ib.len(), "{complex}: sides overlap");
+        let in_complex: std::collections::HashMap<u32, f32> = iu.into_iter().zip(ru).collect();
+        let counted_over_complex =
+            |idx: &[u32]| -> Vec<f32> { idx.iter().map(|i| in_complex[i]).collect() };
+        let (rca, rcb) = (counted_over_complex(&ia), counted_over_complex(&ib));
+        assert!(
+            rca.iter().zip(&ra).any(|(c, s)| c > s),
+            "{complex}: no radius grows in the complex"
+        );
+        let params = Preset::Ses.apply(SurfaceParams::default());
+        let mut engine = CpuEngine::new().with_vertices(Preset::Ses.vertices());
+        let own = interface(&mut engine, &set(&a, &ra), &set(&b, &rb), &params).expect("sides");
+        let counted =
+            interface(&mut engine, &set(&a, &rca), &set(&b, &rcb), &params).expect("complex");
+        let buried = 0.5 * (own.area_a + own.area_b - counted.area_complex);
+        let change = 100.0 * (buried / own.buried - 1.0);
+        eprintln!(
+            "{complex}: buried {:.1} Å² with each side's counts, {buried:.1} Å² with the \
+             complex's counts for the complex ({change:+.2} %); MSMS {}",
+            own.buried, row[10]
+        );
+        assert!(change.abs() <= 2.0, "{complex}: {change:+.2} %");
     }
 }
 
