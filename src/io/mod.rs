@@ -91,6 +91,8 @@ pub use stream::{
     FrameHook, FrameHookError, FrameResult, FrameStatus, FrameStreamer, ReadyCallback,
     StreamerOptions,
 };
+#[doc(hidden)]
+pub use tng::check_chain as check_tng_chain;
 pub use trajectory::{
     Damage, Trajectory, open, open_following, open_growing, open_live, reads_fast,
 };

@@ -110,6 +110,11 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
     File::open(path)
         .and_then(|mut f| f.read_to_end(&mut bytes))
         .map_err(|e| TngDamage::Os(Arc::new(e)))?;
+    salvage_bytes(&bytes)
+}
+
+/// [`salvage`] of a file's bytes.
+fn salvage_bytes(bytes: &[u8]) -> Result<Salvage, TngDamage> {
     if bytes.len() < 8 {
         return Err(TngDamage::FirstBlockCut);
     }
@@ -207,6 +212,19 @@ pub(crate) fn salvage(path: &Path) -> Result<Salvage, TngDamage> {
         bytes: kept,
         reason: format!("{reason}; the frame sets before it are kept"),
     })
+}
+
+/// The structural check of a TNG file's bytes, for the fuzz target `tng` (fuzz/): `Ok(None)`
+/// when the chain is sound, `Ok(Some(copy))` with the frame sets kept before the damage, or the
+/// one-line reason none is sound. The fuzz target holds a kept copy to the check itself: it
+/// must be sound.
+#[doc(hidden)]
+pub fn check_chain(bytes: &[u8]) -> Result<Option<Vec<u8>>, String> {
+    match salvage_bytes(bytes) {
+        Ok(Salvage::Sound) => Ok(None),
+        Ok(Salvage::Kept { bytes, .. }) => Ok(Some(bytes)),
+        Err(damage) => Err(damage.to_string()),
+    }
 }
 
 /// Walks the chain; returns the sound blocks and, when the chain breaks, the offset of the
@@ -316,5 +334,25 @@ mod tests {
         let e = salvage(&path).err().expect("refused");
         assert!(matches!(e, TngDamage::Block { block: 0, .. }), "{e}");
         assert!(e.to_string().contains("wrong id"), "{e}");
+    }
+
+    #[test]
+    fn a_kept_copy_passes_the_check_itself() {
+        // The property the fuzz target `tng` holds on every input, on cuts of the real file.
+        let data = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/argon_npt_compressed.tng"
+        );
+        let bytes = std::fs::read(data).unwrap();
+        assert_eq!(check_chain(&bytes), Ok(None));
+        let mut kept_any = 0;
+        for cut in (bytes.len() / 2..bytes.len()).step_by(997) {
+            if let Ok(Some(copy)) = check_chain(&bytes[..cut]) {
+                assert!(copy.len() < cut, "a cut at {cut} kept {} bytes", copy.len());
+                assert_eq!(check_chain(&copy), Ok(None), "the copy of a cut at {cut}");
+                kept_any += 1;
+            }
+        }
+        assert!(kept_any > 0, "no cut kept a frame set");
     }
 }

@@ -15,7 +15,7 @@ use crate::io_mutants::{Outcome, run, violation};
 
 /// The fuzz targets (folder names under `tests/fuzz/`), the extension each writes its input
 /// with, and whether the format carries atom names (else a topology is needed).
-const TARGETS: [(&str, &str, bool); 9] = [
+const TARGETS: [(&str, &str, bool); 10] = [
     ("pdb", "pdb", true),
     ("mmcif", "cif", true),
     ("gro", "gro", true),
@@ -25,6 +25,7 @@ const TARGETS: [(&str, &str, bool); 9] = [
     ("netcdf", "nc", false),
     ("xtc", "xtc", false),
     ("trr", "trr", false),
+    ("tng", "tng", true),
 ];
 
 /// A generated topology has at most this many atoms (a hostile count is not built).

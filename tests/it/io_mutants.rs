@@ -290,9 +290,60 @@ fn mutants_of_every_format_end_cleanly() {
             jobs.push((c, k, path));
         }
     }
+    let (counts, failures) = run_pool(&jobs, cases.len(), |(c, k, path)| {
+        let case = &cases[*c];
+        let mut args = vec!["surface".to_string()];
+        args.extend(case.topology.iter().map(|t| t.display().to_string()));
+        args.push(path.display().to_string());
+        // Two frames keep it quick; a damaged middle or end is still probed when the file
+        // opens.
+        args.extend(
+            [
+                "--backend",
+                "cpu",
+                "--spacing",
+                "2",
+                "-q",
+                "--frames",
+                "0:2",
+            ]
+            .map(String::from),
+        );
+        let o = run(&args);
+        let failure = violation(&o).map(|why| {
+            let kept = std::env::temp_dir()
+                .join(format!("mdsurf_mutant_{seed:x}_{c}_{k}.{}", case.extension));
+            std::fs::copy(path, &kept).ok();
+            format!(
+                "{} mutant {k} (seed {seed:#x}, kept as {}): {why}: {}",
+                case.name,
+                kept.display(),
+                o.stderr.trim()
+            )
+        });
+        (*c, o, failure)
+    });
+    report(
+        cases.iter().map(|c| c.name),
+        counts,
+        failures,
+        jobs.len(),
+        "mutants",
+    );
+}
+
+/// Runs `check` on every one of `jobs` on [`WORKERS`] threads. `check` runs one mutant and gives
+/// its format's index (below `formats`), the run's outcome and, when it broke the rules, the
+/// failure line. Returns the [read, refused in one line] counts per format and the failure
+/// lines.
+pub(crate) fn run_pool<J: Sync>(
+    jobs: &[J],
+    formats: usize,
+    check: impl Fn(&J) -> (usize, Outcome, Option<String>) + Sync,
+) -> (Vec<[usize; 2]>, Vec<String>) {
     let next = Mutex::new(0usize);
     let failures = Mutex::new(Vec::new());
-    let counts = Mutex::new(vec![[0usize; 2]; cases.len()]);
+    let counts = Mutex::new(vec![[0usize; 2]; formats]);
     std::thread::scope(|scope| {
         for _ in 0..WORKERS {
             scope.spawn(|| {
@@ -302,48 +353,15 @@ fn mutants_of_every_format_end_cleanly() {
                         *n += 1;
                         jobs.get(*n - 1)
                     };
-                    let Some((c, k, path)) = job else { break };
-                    let case = &cases[*c];
-                    let mut args = vec!["surface".to_string()];
-                    args.extend(case.topology.iter().map(|t| t.display().to_string()));
-                    args.push(path.display().to_string());
-                    // Two frames keep it quick; a damaged middle or end is still probed when
-                    // the file opens.
-                    for a in [
-                        "--backend",
-                        "cpu",
-                        "--spacing",
-                        "2",
-                        "-q",
-                        "--frames",
-                        "0:2",
-                    ] {
-                        args.push(a.to_string());
-                    }
-                    let o = run(&args);
-                    counts.lock().unwrap()[*c][usize::from(o.code == Some(2))] += 1;
-                    if let Some(why) = violation(&o) {
-                        let kept = std::env::temp_dir()
-                            .join(format!("mdsurf_mutant_{seed:x}_{c}_{k}.{}", case.extension));
-                        std::fs::copy(path, &kept).ok();
-                        failures.lock().unwrap().push(format!(
-                            "{} mutant {k} (seed {seed:#x}, kept as {}): {why}: {}",
-                            case.name,
-                            kept.display(),
-                            o.stderr.trim()
-                        ));
-                    }
+                    let Some(job) = job else { break };
+                    let (format, o, failure) = check(job);
+                    counts.lock().unwrap()[format][usize::from(o.code == Some(2))] += 1;
+                    failures.lock().unwrap().extend(failure);
                 }
             });
         }
     });
-    report(
-        cases.iter().map(|c| c.name),
-        counts.into_inner().unwrap(),
-        failures.into_inner().unwrap(),
-        jobs.len(),
-        "mutants",
-    );
+    (counts.into_inner().unwrap(), failures.into_inner().unwrap())
 }
 
 /// Prints how many mutants of each format (`names`, with `counts` of [read, refused]) were read

@@ -485,46 +485,31 @@ fn structured_mutants_of_every_format_end_as_they_must() {
             jobs.push((c, k, path, expect, label));
         }
     }
-    let next = Mutex::new(0usize);
-    let failures = Mutex::new(Vec::new());
-    let counts = Mutex::new(vec![[0usize; 2]; subjects.len()]);
-    std::thread::scope(|scope| {
-        for _ in 0..WORKERS {
-            scope.spawn(|| {
-                loop {
-                    let job = {
-                        let mut n = next.lock().unwrap();
-                        *n += 1;
-                        jobs.get(*n - 1)
-                    };
-                    let Some((c, k, path, expect, label)) = job else {
-                        break;
-                    };
-                    let s = &subjects[*c];
-                    let stats = path.with_extension("csv");
-                    let (o, got) = run_surface(s, path, &stats);
-                    counts.lock().unwrap()[*c][usize::from(o.code == Some(2))] += 1;
-                    if let Some(why) = broken(s, *expect, &base[*c], &o, &got) {
-                        let kept = std::env::temp_dir().join(format!(
-                            "mdsurf_structured_{seed:x}_{c}_{k}.{}",
-                            s.extension
-                        ));
-                        std::fs::copy(path, &kept).ok();
-                        failures.lock().unwrap().push(format!(
-                            "{} mutant {k} ({label}; {expect:?}; kept as {}): {why}: {}",
-                            s.name,
-                            kept.display(),
-                            o.stderr.trim()
-                        ));
-                    }
-                }
-            });
-        }
+    let pooled = crate::io_mutants::run_pool(&jobs, subjects.len(), |job| {
+        let (c, k, path, expect, label) = job;
+        let s = &subjects[*c];
+        let stats = path.with_extension("csv");
+        let (o, got) = run_surface(s, path, &stats);
+        let failure = broken(s, *expect, &base[*c], &o, &got).map(|why| {
+            let kept = std::env::temp_dir().join(format!(
+                "mdsurf_structured_{seed:x}_{c}_{k}.{}",
+                s.extension
+            ));
+            std::fs::copy(path, &kept).ok();
+            format!(
+                "{} mutant {k} ({label}; {expect:?}; kept as {}): {why}: {}",
+                s.name,
+                kept.display(),
+                o.stderr.trim()
+            )
+        });
+        (*c, o, failure)
     });
+    let (counts, failures) = pooled;
     crate::io_mutants::report(
         subjects.iter().map(|s| s.name),
-        counts.into_inner().unwrap(),
-        failures.into_inner().unwrap(),
+        counts,
+        failures,
         jobs.len(),
         "structured mutants",
     );
