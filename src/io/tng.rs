@@ -122,7 +122,7 @@ fn salvage_bytes(bytes: &[u8]) -> Result<Salvage, TngDamage> {
     let ints = Ints {
         little: bytes[0] != 0 && bytes[7] == 0,
     };
-    let (mut blocks, mut damage) = walk(&bytes, ints);
+    let (mut blocks, mut damage) = walk(bytes, ints);
     // The chain starts with the general information block: the TNG library reads a file whose
     // first block has another id without complaint, and loses its last frame set.
     if blocks.first().is_some_and(|b| b.id != GENERAL_INFO) {
@@ -133,7 +133,7 @@ fn salvage_bytes(bytes: &[u8]) -> Result<Salvage, TngDamage> {
         });
     }
     // The TNG library trusts the atom count: particle data that disagree are damage.
-    if let Some((at, why)) = atoms::first_disagreement(&bytes, ints, &blocks) {
+    if let Some((at, why)) = atoms::first_disagreement(bytes, ints, &blocks) {
         blocks.retain(|b| b.offset < at);
         damage = Some((at, why));
     }
@@ -149,7 +149,7 @@ fn salvage_bytes(bytes: &[u8]) -> Result<Salvage, TngDamage> {
         // starts a frame set (a cut inside its first block), the sets before it are whole.
         Some((damaged_at, reason)) => {
             let starts_set =
-                bytes.len() >= damaged_at + 24 && ints.get(&bytes, damaged_at + 16) == FRAME_SET;
+                bytes.len() >= damaged_at + 24 && ints.get(bytes, damaged_at + 16) == FRAME_SET;
             let holding = frame_sets.iter().rposition(|b| b.offset <= damaged_at);
             let keep = if starts_set {
                 Some(frame_sets.len())
@@ -164,8 +164,8 @@ fn salvage_bytes(bytes: &[u8]) -> Result<Salvage, TngDamage> {
                 return Ok(Salvage::Sound);
             };
             // A sound chain cut at a block boundary: the index still points past the end.
-            let last_pointer = ints.get(&bytes, info.end() - 32);
-            let next = ints.get(&bytes, last.end() - 64);
+            let last_pointer = ints.get(bytes, info.end() - 32);
+            let next = ints.get(bytes, last.end() - 64);
             if last_pointer == last.offset as i64 && next == -1 {
                 return Ok(Salvage::Sound);
             }
