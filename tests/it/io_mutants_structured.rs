@@ -29,10 +29,9 @@
 use std::io::Read;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
 use crate::data_support::data;
-use crate::io_mutants::{Outcome, Rng, WORKERS, env_or, run, violation};
+use crate::io_mutants::{Outcome, Rng, env_or, run, violation};
 use crate::io_mutants_binary::{
     Binary, binary_frames, le64, mutate_binary, tng_molecule_count_at, tng_patched,
     tng_positions_count_at,
