@@ -3,12 +3,15 @@
 //! It honours `Range: bytes=a-b` (206 and `Content-Range`) and counts, per file, the requests
 //! and the body bytes it sends; other modes ignore ranges (200 and the whole file) or drop the
 //! connection part way. `/redirect/CODE/NAME` answers status CODE (301, 302, 307, 308) with
-//! `Location: /NAME`.
+//! `Location: /NAME`. [`Server::serve_tls`] serves HTTPS (rustls) with a self-signed
+//! certificate for 127.0.0.1 made by rcgen, whose PEM it gives for `MDSURF_CA_FILE`.
 
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::sync::{Arc, Mutex};
+
+use rustls::pki_types::{CertificateDer, PrivateKeyDer, PrivatePkcs8KeyDer};
 
 use crate::cli_common::data;
 
@@ -46,6 +49,32 @@ impl Server {
 
     /// Serves `files` (name, bytes) under `/NAME`.
     pub fn serve(mode: Mode, files: Vec<(String, Vec<u8>)>) -> Server {
+        Server::listen(mode, files, None)
+    }
+
+    /// Serves `files` over HTTPS with a new self-signed certificate for 127.0.0.1; returns the
+    /// server and the certificate's PEM.
+    pub fn serve_tls(files: Vec<(String, Vec<u8>)>) -> (Server, String) {
+        let made = rcgen::generate_simple_self_signed(vec!["127.0.0.1".to_string()]).unwrap();
+        let key = PrivatePkcs8KeyDer::from(made.signing_key.serialize_der());
+        let chain = vec![CertificateDer::from(made.cert.der().to_vec())];
+        let provider = Arc::new(rustls::crypto::ring::default_provider());
+        let config = rustls::ServerConfig::builder_with_provider(provider)
+            .with_safe_default_protocol_versions()
+            .unwrap()
+            .with_no_client_auth()
+            .with_single_cert(chain, PrivateKeyDer::Pkcs8(key))
+            .unwrap();
+        let server = Server::listen(Mode::Ranges, files, Some(Arc::new(config)));
+        (server, made.cert.pem())
+    }
+
+    /// Listens on 127.0.0.1 (HTTPS with `tls`) and answers each connection in a thread.
+    fn listen(
+        mode: Mode,
+        files: Vec<(String, Vec<u8>)>,
+        tls: Option<Arc<rustls::ServerConfig>>,
+    ) -> Server {
         let files: Arc<Vec<(String, Vec<u8>)>> = Arc::new(
             files
                 .into_iter()
@@ -53,14 +82,18 @@ impl Server {
                 .collect(),
         );
         let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-        let base = format!("http://{}", listener.local_addr().unwrap());
+        let scheme = if tls.is_some() { "https" } else { "http" };
+        let base = format!("{scheme}://{}", listener.local_addr().unwrap());
         let counts = Counts::default();
         let shared = Arc::clone(&counts);
         std::thread::spawn(move || {
             for stream in listener.incoming().flatten() {
-                let (files, counts) = (Arc::clone(&files), Arc::clone(&shared));
+                let (files, counts, tls) = (Arc::clone(&files), Arc::clone(&shared), tls.clone());
                 std::thread::spawn(move || {
-                    let _ = answer(stream, &files, mode, &counts);
+                    let _ = match tls {
+                        Some(config) => answer_tls(stream, config, &files, &counts),
+                        None => answer_plain(stream, &files, mode, &counts),
+                    };
                 });
             }
         });
@@ -88,14 +121,40 @@ impl Server {
     }
 }
 
-/// Answers one request on `stream` and closes it (`Connection: close`).
-fn answer(
+/// Answers one request on the TCP `stream` and closes it.
+fn answer_plain(
     mut stream: TcpStream,
     files: &[(String, Vec<u8>)],
     mode: Mode,
     counts: &Mutex<HashMap<String, (u64, u64)>>,
 ) -> std::io::Result<()> {
-    let mut reader = BufReader::new(stream.try_clone()?);
+    answer(&mut stream, files, mode, counts)?;
+    stream.shutdown(std::net::Shutdown::Both)
+}
+
+/// Answers one request over TLS on `stream` and closes it (`close_notify`).
+fn answer_tls(
+    stream: TcpStream,
+    config: Arc<rustls::ServerConfig>,
+    files: &[(String, Vec<u8>)],
+    counts: &Mutex<HashMap<String, (u64, u64)>>,
+) -> std::io::Result<()> {
+    let connection = rustls::ServerConnection::new(config).map_err(std::io::Error::other)?;
+    let mut tls = rustls::StreamOwned::new(connection, stream);
+    answer(&mut tls, files, Mode::Ranges, counts)?;
+    tls.conn.send_close_notify();
+    tls.flush()
+}
+
+/// Answers one request on `stream` (`Connection: close`).
+fn answer<S: Read + Write>(
+    stream: &mut S,
+    files: &[(String, Vec<u8>)],
+    mode: Mode,
+    counts: &Mutex<HashMap<String, (u64, u64)>>,
+) -> std::io::Result<()> {
+    // A request has no body: nothing is buffered past its blank line.
+    let mut reader = BufReader::new(&mut *stream);
     let mut request = String::new();
     reader.read_line(&mut request)?;
     // The path without its query string, as static file servers (and signed URLs) serve it.
@@ -115,6 +174,7 @@ fn answer(
             }
         }
     }
+    drop(reader);
     if let Some(rest) = target.strip_prefix("/redirect/")
         && let Some((code, name)) = rest.split_once('/')
     {
@@ -162,6 +222,5 @@ fn answer(
         *served += body.len() as u64;
     }
     stream.write_all(body)?;
-    stream.flush()?;
-    stream.shutdown(std::net::Shutdown::Both)
+    stream.flush()
 }

@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use crate::cli_common::{Run, data, mdsurf};
+use crate::cli_common::{Run, data, mdsurf, mdsurf_env};
 use crate::http_server::{Mode, Server};
 
 /// The test system's files.
@@ -188,4 +188,79 @@ fn the_window_reads_urls() {
     let size = std::fs::metadata(data(MD[1])).unwrap().len();
     let served = server.served(MD[1]);
     assert!(served > 0 && served < size, "{served} of {size}");
+}
+
+/// The one error line of a failed `run` (progress and representation lines aside).
+fn error_line(run: &Run) -> String {
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    let lines: Vec<&str> = run
+        .stderr
+        .lines()
+        .filter(|l| !l.starts_with("frame") && !l.starts_with("rep "))
+        .collect();
+    assert_eq!(lines.len(), 1, "{}", run.stderr);
+    lines[0].to_string()
+}
+
+#[test]
+fn https_trusts_the_certificates_of_mdsurf_ca_file() {
+    let files = MD
+        .iter()
+        .map(|name| (name.to_string(), std::fs::read(data(name)).unwrap()))
+        .collect();
+    let (server, pem) = Server::serve_tls(files);
+    let dir = tempfile::tempdir().unwrap();
+    let ca = dir.path().join("ca.pem");
+    std::fs::write(&ca, pem).unwrap();
+    let (gro, xtc) = (server.url(MD[0]), server.url(MD[1]));
+    assert!(gro.starts_with("https://127.0.0.1:"), "{gro}");
+    let local = surface(
+        dir.path(),
+        &data(MD[0]),
+        &data(MD[1]),
+        "l.csv",
+        &["--frames", "3"],
+    );
+    assert_eq!(local.code, 0, "{}", local.stderr);
+    let args = |stats: &'static str| {
+        let common = [
+            "surface",
+            "--backend",
+            "cpu",
+            "--no-timings",
+            "--frames",
+            "3",
+        ];
+        let mut args: Vec<String> = common.iter().map(|a| a.to_string()).collect();
+        args.extend([
+            gro.clone(),
+            xtc.clone(),
+            "--stats".to_string(),
+            stats.to_string(),
+        ]);
+        args
+    };
+    let run = |stats: &'static str, env: &[(&str, &str)]| {
+        let args = args(stats);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        mdsurf_env(dir.path(), &args, env)
+    };
+    let trusted = run("r.csv", &[("MDSURF_CA_FILE", ca.to_str().unwrap())]);
+    assert_eq!(trusted.code, 0, "{}", trusted.stderr);
+    let read = |name: &str| std::fs::read_to_string(dir.path().join(name)).unwrap();
+    assert_eq!(read("r.csv"), read("l.csv"));
+    assert!(server.served(MD[1]) > 0);
+    // Not trusted (the built-in roots): one line naming the URL and the certificate.
+    let line = error_line(&run("u.csv", &[]));
+    assert!(
+        line.contains(&gro) && line.to_lowercase().contains("certificate"),
+        "{line}"
+    );
+    // A CA file without a certificate: one line naming the variable and the file.
+    std::fs::write(&ca, "not a certificate\n").unwrap();
+    let line = error_line(&run("b.csv", &[("MDSURF_CA_FILE", ca.to_str().unwrap())]));
+    assert!(
+        line.contains("MDSURF_CA_FILE=") && line.contains("ca.pem"),
+        "{line}"
+    );
 }
