@@ -135,6 +135,7 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
 
 /// Opens the DCD file `path` whose `total` bytes `source` holds (a URL read through range
 /// requests): only the header is read here.
+#[cfg_attr(not(feature = "app"), allow(dead_code))]
 pub(crate) fn open_source(
     path: &Path,
     source: Box<dyn ByteSource>,

@@ -75,6 +75,44 @@ fn a_dcd_over_http_reads_the_header_and_the_frames_played() {
     assert!(served * 3 < size, "{served} of {size}");
 }
 
+#[test]
+fn a_cut_dcd_over_http_keeps_its_whole_frames_like_the_local_file() {
+    // 1,000 bytes short: frame 97 is cut, found from the size alone (no frame is read).
+    let dcd = std::fs::read(data("adk_dims.dcd")).unwrap();
+    let cut = dcd[..dcd.len() - 1000].to_vec();
+    let dir = tempfile::tempdir().unwrap();
+    let local = dir.path().join("cut.dcd");
+    std::fs::write(&local, &cut).unwrap();
+    let pdb = std::fs::read(data("adk_open.pdb")).unwrap();
+    let files = vec![
+        ("adk_open.pdb".to_string(), pdb),
+        ("cut.dcd".to_string(), cut.clone()),
+    ];
+    let server = Server::serve(Mode::Ranges, files);
+    // Frames 90 to the end: the 7 whole ones are written, then the cut frame 97 is the error,
+    // for the URL as for the file.
+    let pdb = data("adk_open.pdb");
+    let here = surface(dir.path(), &pdb, local.to_str().unwrap(), "l.csv", "90:");
+    let url = server.url("cut.dcd");
+    let there = surface(
+        dir.path(),
+        &server.url("adk_open.pdb"),
+        &url,
+        "r.csv",
+        "90:",
+    );
+    assert_ne!(here.code, 0, "{}", here.stderr);
+    assert_eq!(there.code, here.code, "{}", there.stderr);
+    let read = |name: &str| std::fs::read_to_string(dir.path().join(name)).unwrap();
+    assert_eq!(read("l.csv").lines().count(), 8, "{}", read("l.csv"));
+    assert_eq!(read("r.csv"), read("l.csv"));
+    let line = there.stderr.lines().find(|l| l.starts_with("error: "));
+    let line = line.unwrap_or_else(|| panic!("no error line: {}", there.stderr));
+    assert!(line.contains(&url) && line.contains("frame 97"), "{line}");
+    let (served, size) = (server.served("cut.dcd"), cut.len() as u64);
+    assert!(served * 2 < size, "{served} of {size}");
+}
+
 /// An Amber NetCDF copy of the first `frames` frames of `adk_dims.dcd` (3,341 atoms), written
 /// by chemfiles.
 fn adk_netcdf(frames: usize) -> Vec<u8> {

@@ -49,8 +49,10 @@ pub(super) fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoErro
                 } else {
                     format!("{} files are read from a local copy", format.base)
                 };
-                let dir = download_folder(&mut folder, path)?;
-                Some(http::download(path, url, dir, Some(&why))?)
+                // Its own folder: a topology of the same file name stays as it is.
+                let dir = download_folder(&mut folder, path)?.join("trajectory");
+                std::fs::create_dir(&dir).map_err(|e| IoError::unreadable(path, e))?;
+                Some(http::download(path, url, &dir, Some(&why))?)
             }
             _ => Some(path.to_path_buf()),
         },
