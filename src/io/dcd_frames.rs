@@ -11,19 +11,25 @@
 //! or their cosines when all three are within ±1), or, for CHARMM versions above 25, the
 //! symmetric box matrix `[A, B, C; B, D, E; C, E, F]` packed as `A, B, D, C, E, F`.
 //!
+//! A DCD file read over HTTP ([`open_source`]) is indexed from its header and size alone (fixed
+//! frame sizes: nothing past the header is read when it opens); its frames' record markers are
+//! checked when each frame is read.
+//!
 //! Errors are [`DcdError`]s, wrapped in an [`IoError`] naming the file (and frame).
 
 use std::fs::File;
-use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use glam::{DMat3, DVec3, Vec3};
 
 use super::IoError;
 use super::native::{NativeFrames, NativeOpen};
+use super::positioned::Positioned;
 use super::prepare::Prepared;
 use super::reader_errors::DcdError;
 use super::unit_cell;
+use super::xdr_reader::ByteSource;
 use crate::model::Frame;
 
 /// Picoseconds per AKMA time unit (CHARMM and NAMD write DCD time steps in AKMA units).
@@ -124,10 +130,31 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
         .metadata()
         .map_err(|e| IoError::unreadable(path, e))?
         .len();
-    let layout = read_header(&file, total).map_err(|e| IoError::unreadable(path, e))?;
+    open_bytes(path, Positioned::File(file), total, Some(prepared))
+}
+
+/// Opens the DCD file `path` whose `total` bytes `source` holds (a URL read through range
+/// requests): only the header is read here.
+#[cfg_attr(not(feature = "app"), allow(dead_code))]
+pub(crate) fn open_source(
+    path: &Path,
+    source: Box<dyn ByteSource>,
+    total: u64,
+) -> Result<NativeOpen, IoError> {
+    open_bytes(path, Positioned::Source(Mutex::new(source)), total, None)
+}
+
+/// Opens the DCD file `path` held in `bytes` (`total` bytes long) and indexes its frames.
+fn open_bytes(
+    path: &Path,
+    bytes: Positioned,
+    total: u64,
+    prepared: Option<Prepared>,
+) -> Result<NativeOpen, IoError> {
+    let layout = read_header(&bytes, total).map_err(|e| IoError::unreadable(path, e))?;
     let mut reader = DcdFrames {
         path: path.to_path_buf(),
-        file,
+        bytes,
         layout,
         len: 0,
         damage: None,
@@ -143,7 +170,7 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
 }
 
 /// Reads `len` bytes at `offset`, or says the file ends first.
-fn read_at(file: &File, offset: u64, len: u64, total: u64) -> Result<Vec<u8>, DcdError> {
+fn read_at(file: &Positioned, offset: u64, len: u64, total: u64) -> Result<Vec<u8>, DcdError> {
     if offset.checked_add(len).is_none_or(|end| end > total) {
         return Err(DcdError::HeaderCut { len, offset, total });
     }
@@ -153,7 +180,7 @@ fn read_at(file: &File, offset: u64, len: u64, total: u64) -> Result<Vec<u8>, Dc
 }
 
 /// Parses the header records; see the module documentation.
-fn read_header(file: &File, total: u64) -> Result<Layout, DcdError> {
+fn read_header(file: &Positioned, total: u64) -> Result<Layout, DcdError> {
     let head = read_at(file, 0, 92, total).map_err(|_| DcdError::TooShort)?;
     let little = match (&head[0..4], &head[4..8]) {
         ([84, 0, 0, 0], b"CORD") => true,
@@ -260,7 +287,8 @@ fn read_header(file: &File, total: u64) -> Result<Layout, DcdError> {
 /// An open DCD file.
 struct DcdFrames {
     path: PathBuf,
-    file: File,
+    /// The file's bytes (a file, or a URL read through range requests).
+    bytes: Positioned,
     layout: Layout,
     len: usize,
     damage: Option<IoError>,
@@ -268,13 +296,13 @@ struct DcdFrames {
     fixed: Vec<Vec3>,
     /// One frame's bytes.
     buffer: Vec<u8>,
-    /// Keeps a decompressed copy alive.
-    _prepared: Prepared,
+    /// Keeps a decompressed copy alive (none over HTTP).
+    _prepared: Option<Prepared>,
 }
 
 impl DcdFrames {
-    /// Counts the frames the file holds whole and checks every frame's record markers; the
-    /// first cut or damaged frame is the damage.
+    /// Counts the frames the file holds whole and checks every frame's record markers (over
+    /// HTTP, each frame's when it is read); the first cut or damaged frame is the damage.
     fn index(&mut self, total: u64) -> Result<(), IoError> {
         let layout = &self.layout;
         let body = total.saturating_sub(layout.header_bytes);
@@ -285,7 +313,8 @@ impl DcdFrames {
         };
         let mut len = whole;
         let mut damage = None;
-        for index in 0..whole {
+        let walk = if self.bytes.is_remote() { 0 } else { whole };
+        for index in 0..walk {
             if let Err(reason) = self.check_markers(index) {
                 len = index;
                 damage = Some(reason);
@@ -327,7 +356,7 @@ impl DcdFrames {
         let mut marker = [0u8; 4];
         for (bytes, what) in self.layout.records(index) {
             for at in [offset, offset + 4 + bytes] {
-                self.file.read_exact_at(&mut marker, at)?;
+                self.bytes.read_exact_at(&mut marker, at)?;
                 let found = self.layout.int(&marker);
                 if found != bytes as i64 {
                     return Err(DcdError::RecordMarker {
@@ -363,6 +392,27 @@ impl DcdFrames {
     }
 }
 
+/// Checks the record markers of frame `index` in its bytes `frame` (what
+/// [`DcdFrames::check_markers`] checks in the file, for a frame read over HTTP).
+fn check_markers_in(layout: &Layout, index: usize, frame: &[u8]) -> Result<(), DcdError> {
+    let mut offset = 0usize;
+    for (bytes, what) in layout.records(index) {
+        let end = offset + 4 + bytes as usize;
+        for at in [offset, end] {
+            let found = frame.get(at..at + 4).map_or(-1, |b| layout.int(b));
+            if found != bytes as i64 {
+                return Err(DcdError::RecordMarker {
+                    record: what,
+                    found,
+                    expected: bytes,
+                });
+            }
+        }
+        offset = end + 4;
+    }
+    Ok(())
+}
+
 impl NativeFrames for DcdFrames {
     fn path(&self) -> &Path {
         &self.path
@@ -380,6 +430,10 @@ impl NativeFrames for DcdFrames {
         self.damage.as_ref()
     }
 
+    fn is_remote(&self) -> bool {
+        self.bytes.is_remote()
+    }
+
     fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
         if index >= self.len {
             return Err(IoError::FrameOutOfRange {
@@ -395,9 +449,10 @@ impl NativeFrames for DcdFrames {
             self.layout.frame_bytes
         } as usize;
         self.buffer.resize(size, 0);
-        self.file
+        self.bytes
             .read_exact_at(&mut self.buffer, self.layout.offset(index))
             .map_err(|e| bad(e.into()))?;
+        check_markers_in(&self.layout, index, &self.buffer).map_err(bad)?;
         let layout = &self.layout;
         let mut at = 0usize;
         let cell = if layout.has_cell {

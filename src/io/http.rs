@@ -2,7 +2,7 @@
 //! view of a URL that fetches only the byte ranges read (HTTP range requests, status 206),
 //! in aligned blocks kept in a bounded least-recently-used cache, so that the XTC/TRR header
 //! walk and frame reader ([`super::xdr`], [`super::xdr_reader`]) run over it as over a file.
-//! [`download`] fetches a small file (a topology) whole.
+//! [`download`] fetches a file whole: a topology, or a trajectory that cannot be read in place.
 //!
 //! The client is `ureq` (blocking, rustls for HTTPS), with connect and read timeouts. A server
 //! that answers a ranged GET with anything but 206 does not support ranges and is refused; a
@@ -10,10 +10,11 @@
 //! is a one-line error naming the URL (and the byte range).
 
 use std::collections::{BTreeMap, HashMap};
-use std::io::{self, Read, Seek, SeekFrom, Write};
+use std::io::{self, IsTerminal, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use indicatif::{HumanBytes, ProgressBar, ProgressStyle};
 use ureq::Agent;
 
 use super::IoError;
@@ -27,6 +28,13 @@ pub(crate) const CACHE_BYTES: u64 = 64 * 1024 * 1024;
 /// Bytes fetched past a read's end in the same request while frames are read (256 KiB), up to
 /// the first block already cached (the next frame's header, after the walk).
 pub(crate) const READ_AHEAD_BYTES: u64 = 256 * 1024;
+/// While the headers are walked (no read-ahead set), a fetch that starts less than this many
+/// bytes (12 KiB) after the previous fetch's end also fetches [`READ_AHEAD_BYTES`] past it:
+/// frames that small (a small system's XTC frames are a few kB) are walked in a request per
+/// 256 KiB instead of one per frame, for at most 4 times the bytes of fetching each header's
+/// block. Frames further apart are fetched header by header: where the next header lies is
+/// known only once this one is read.
+pub(crate) const WALK_GAP_BYTES: u64 = 3 * BLOCK_BYTES;
 /// Longest wait for a connection (10 s).
 const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
 /// Longest wait for a reply's head, and for its body (30 s each).
@@ -46,14 +54,41 @@ pub(crate) fn file_name(url: &str) -> &str {
     path.rsplit('/').next().unwrap_or(path)
 }
 
-fn agent() -> Agent {
-    Agent::config_builder()
+/// The environment variable naming a PEM file of the certificates trusted for HTTPS in place
+/// of the built-in web roots (a self-hosted server's own certificate authority, as curl's
+/// `--cacert`).
+pub(crate) const CA_FILE_VAR: &str = "MDSURF_CA_FILE";
+
+/// The HTTP client: timeouts, statuses as replies, and the roots of [`CA_FILE_VAR`] when set
+/// (the reason, one line, when that file gives no certificate).
+fn agent() -> Result<Agent, String> {
+    let mut config = Agent::config_builder()
         .timeout_connect(Some(CONNECT_TIMEOUT))
         .timeout_recv_response(Some(READ_TIMEOUT))
         .timeout_recv_body(Some(READ_TIMEOUT))
-        .http_status_as_error(false)
-        .build()
-        .into()
+        .http_status_as_error(false);
+    if let Some(file) = std::env::var_os(CA_FILE_VAR) {
+        let shown = Path::new(&file).display().to_string();
+        let pem = std::fs::read(&file).map_err(|e| format!("{CA_FILE_VAR}={shown}: {e}"))?;
+        let mut roots = Vec::new();
+        for item in ureq::tls::parse_pem(&pem) {
+            match item {
+                Ok(ureq::tls::PemItem::Certificate(cert)) => roots.push(cert),
+                Ok(_) => {}
+                Err(e) => return Err(format!("{CA_FILE_VAR}={shown}: {}", one_line(e))),
+            }
+        }
+        if roots.is_empty() {
+            return Err(format!(
+                "{CA_FILE_VAR}={shown}: no PEM certificate in the file"
+            ));
+        }
+        let tls = ureq::tls::TlsConfig::builder()
+            .root_certs(ureq::tls::RootCerts::new_with_certs(&roots))
+            .build();
+        config = config.tls_config(tls);
+    }
+    Ok(config.build().into())
 }
 
 /// One line from a client error (ureq's messages may wrap).
@@ -81,10 +116,17 @@ fn failure(start: u64, end: u64, reason: impl std::fmt::Display) -> io::Error {
 }
 
 /// Downloads `url` (the user's `path`) whole into `dir`, under the URL's file name (so that
-/// its extension says its format). Returns the file written.
-pub(crate) fn download(path: &Path, url: &str, dir: &Path) -> Result<PathBuf, IoError> {
+/// its extension says its format). Returns the file written. With `why` (a trajectory that
+/// cannot be read in place), a note on stderr says the file is downloaded whole, its size and
+/// why, and a bar shows the download when stderr is a terminal.
+pub(crate) fn download(
+    path: &Path,
+    url: &str,
+    dir: &Path,
+    why: Option<&str>,
+) -> Result<PathBuf, IoError> {
     let fail = |message: String| IoError::unreadable(path, message);
-    let mut reply = match agent().get(url).call() {
+    let mut reply = match agent().map_err(&fail)?.get(url).call() {
         Ok(reply) => reply,
         Err(e) => return Err(fail(one_line(e))),
     };
@@ -100,12 +142,18 @@ pub(crate) fn download(path: &Path, url: &str, dir: &Path) -> Result<PathBuf, Io
         .get("content-length")
         .and_then(|v| v.to_str().ok())
         .and_then(|v| v.trim().parse::<u64>().ok());
+    let bar = match why {
+        Some(why) => download_note(url, announced, why),
+        None => ProgressBar::hidden(),
+    };
     let name = file_name(url);
     let name = if name.is_empty() { "download" } else { name };
     let target = dir.join(name);
     let mut file = std::fs::File::create(&target).map_err(|e| fail(e.to_string()))?;
-    let copied = io::copy(&mut reply.body_mut().as_reader(), &mut file)
+    let mut body = bar.wrap_read(reply.body_mut().as_reader());
+    let copied = io::copy(&mut body, &mut file)
         .map_err(|e| fail(format!("the download broke off ({})", one_line(e))))?;
+    bar.finish_and_clear();
     if let Some(announced) = announced
         && copied != announced
     {
@@ -115,6 +163,26 @@ pub(crate) fn download(path: &Path, url: &str, dir: &Path) -> Result<PathBuf, Io
     }
     file.flush().map_err(|e| fail(e.to_string()))?;
     Ok(target)
+}
+
+/// Prints the note that `url` (of `size` bytes, when announced) is downloaded whole and `why`;
+/// returns a bar of the download, on stderr when it is a terminal (hidden otherwise).
+fn download_note(url: &str, size: Option<u64>, why: &str) -> ProgressBar {
+    let shown = size.map_or("size not announced".to_string(), |n| {
+        HumanBytes(n).to_string()
+    });
+    eprintln!("note: downloading {url} whole ({shown}): {why}");
+    if !io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = size.map_or_else(ProgressBar::no_length, ProgressBar::new);
+    if let Ok(style) =
+        ProgressStyle::with_template("downloading {msg} {bar:30} {bytes}/{total_bytes} {eta}")
+    {
+        bar.set_style(style);
+    }
+    bar.set_message(file_name(url).to_string());
+    bar
 }
 
 /// A file behind a URL, read through range requests: `Read + Seek` over its bytes.
@@ -133,6 +201,8 @@ pub(crate) struct RangeSource {
     clock: u64,
     /// Bytes fetched past a read's end (0 while the headers are walked).
     read_ahead: u64,
+    /// The block after the last one fetched (where a forward walk's next fetch would start).
+    fetched_to: u64,
 }
 
 impl RangeSource {
@@ -141,7 +211,7 @@ impl RangeSource {
     /// ahead until [`RangeSource::set_read_ahead`].
     pub(crate) fn open(path: &Path, url: &str) -> Result<RangeSource, IoError> {
         let fail = |message: String| IoError::unreadable(path, message);
-        let agent = agent();
+        let agent = agent().map_err(&fail)?;
         let reply = agent
             .get(url)
             .header("Range", format!("bytes=0-{}", BLOCK_BYTES - 1))
@@ -181,6 +251,7 @@ impl RangeSource {
             by_use: BTreeMap::new(),
             clock: 0,
             read_ahead: 0,
+            fetched_to: 1,
         };
         let first = BLOCK_BYTES.min(size);
         let bytes = source
@@ -274,7 +345,13 @@ impl RangeSource {
             return Ok(());
         };
         let blocks_in_file = self.size.div_ceil(BLOCK_BYTES);
-        let ahead = self.read_ahead / BLOCK_BYTES;
+        let walking_small_frames = self.read_ahead == 0
+            && start >= self.fetched_to
+            && (start - self.fetched_to) * BLOCK_BYTES < WALK_GAP_BYTES;
+        let ahead = match walking_small_frames {
+            true => READ_AHEAD_BYTES / BLOCK_BYTES,
+            false => self.read_ahead / BLOCK_BYTES,
+        };
         let mut end = (start..=last)
             .rev()
             .find(|&b| missing(self, b))
@@ -285,6 +362,7 @@ impl RangeSource {
         let end_byte = ((end + 1) * BLOCK_BYTES).min(self.size);
         let bytes = self.fetch(start * BLOCK_BYTES, end_byte)?;
         self.store(start, bytes);
+        self.fetched_to = end + 1;
         Ok(())
     }
 
@@ -364,13 +442,14 @@ mod tests {
         let blocks_cached = CACHE_BYTES / BLOCK_BYTES;
         let mut source = RangeSource {
             url: "http://127.0.0.1:1/t.xtc".to_string(),
-            agent: agent(),
+            agent: agent().unwrap(),
             size: 4 * CACHE_BYTES,
             position: 0,
             blocks: HashMap::new(),
             by_use: BTreeMap::new(),
             clock: 0,
             read_ahead: 0,
+            fetched_to: 0,
         };
         let block = |k: u64| vec![k as u8; BLOCK_BYTES as usize];
         for k in 0..blocks_cached {

@@ -62,6 +62,7 @@ mod native;
 mod netcdf;
 mod pdb_models;
 mod pdb_templates;
+mod positioned;
 mod prepare;
 mod quiet;
 mod reader_errors;

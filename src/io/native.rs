@@ -30,6 +30,11 @@ pub(crate) trait NativeFrames: Send {
     /// [`NativeFrames::len`] (a cut or damaged frame), found when the file was indexed.
     fn damage(&self) -> Option<&IoError>;
 
+    /// True when the frames are read from a URL (through range requests), not a file.
+    fn is_remote(&self) -> bool {
+        false
+    }
+
     /// Reads frame `index` (from 0, below [`NativeFrames::len`]): positions in Å, box in Å,
     /// time in ps. Fails with a one-line [`IoError`] naming the file and frame.
     fn read_frame(&mut self, index: usize) -> Result<Frame, IoError>;

@@ -1,140 +1,18 @@
 //! Reading over HTTP (issue 35 section 3): `mdsurf surface URL_GRO URL_XTC` against a local
-//! HTTP/1.1 server started by the test (std's `TcpListener` on 127.0.0.1, a thread per
-//! connection) that serves `tests/data/md_1u19.gro` and `.xtc` from memory. It honours
-//! `Range: bytes=a-b` (206 and `Content-Range`) and counts the XTC bytes it sends; other modes
-//! ignore ranges (200 and the whole file) or drop the connection part way. The surface of the
+//! HTTP/1.1 server started by the test (`http_server`) that serves `tests/data/md_1u19.gro`
+//! and `.xtc` from memory. It honours `Range: bytes=a-b` (206 and `Content-Range`) and counts
+//! the bytes it sends; other modes ignore ranges (200 and the whole file) or drop the
+//! connection part way. The surface of the
 //! URLs equals that of the local files row for row, one frame costs a fraction of the file,
 //! and each server failure is exit status 2 with one line naming the URL.
 
-use std::io::{BufRead, BufReader, Write};
-use std::net::{TcpListener, TcpStream};
 use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::cli_common::{Run, data, mdsurf};
+use crate::cli_common::{Run, data, mdsurf, mdsurf_env};
+use crate::http_server::{Mode, Server};
 
-/// How the test server answers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
-    /// Ranges honoured (206 with `Content-Range`).
-    Ranges,
-    /// Ranges ignored: 200 and the whole file, as a server without range support.
-    NoRanges,
-    /// Ranges honoured, but the connection drops once this many XTC bytes have been sent.
-    DropAfter(u64),
-}
-
-/// A running test server.
-struct Server {
-    /// `http://127.0.0.1:PORT`.
-    base: String,
-    /// Bytes of XTC data sent so far (response bodies).
-    xtc_served: Arc<AtomicU64>,
-}
-
-impl Server {
-    /// Serves the test system's GRO and XTC under `/md_1u19.gro` and `/md_1u19.xtc` (any other
-    /// path is a 404).
-    fn start(mode: Mode) -> Server {
-        let files: Arc<Vec<(String, Vec<u8>)>> = Arc::new(
-            ["md_1u19.gro", "md_1u19.xtc"]
-                .iter()
-                .map(|name| (format!("/{name}"), std::fs::read(data(name)).unwrap()))
-                .collect(),
-        );
-        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-        let base = format!("http://{}", listener.local_addr().unwrap());
-        let xtc_served = Arc::new(AtomicU64::new(0));
-        let served = Arc::clone(&xtc_served);
-        std::thread::spawn(move || {
-            for stream in listener.incoming().flatten() {
-                let (files, served) = (Arc::clone(&files), Arc::clone(&served));
-                std::thread::spawn(move || {
-                    let _ = answer(stream, &files, mode, &served);
-                });
-            }
-        });
-        Server { base, xtc_served }
-    }
-
-    fn url(&self, name: &str) -> String {
-        format!("{}/{name}", self.base)
-    }
-
-    fn xtc_served(&self) -> u64 {
-        self.xtc_served.load(Ordering::SeqCst)
-    }
-}
-
-/// Answers one request on `stream` and closes it (`Connection: close`).
-fn answer(
-    mut stream: TcpStream,
-    files: &[(String, Vec<u8>)],
-    mode: Mode,
-    served: &AtomicU64,
-) -> std::io::Result<()> {
-    let mut reader = BufReader::new(stream.try_clone()?);
-    let mut request = String::new();
-    reader.read_line(&mut request)?;
-    // The path without its query string, as static file servers (and signed URLs) serve it.
-    let target = request.split_whitespace().nth(1).unwrap_or("");
-    let target = target.split('?').next().unwrap_or("").to_string();
-    let mut range = None;
-    loop {
-        let mut line = String::new();
-        if reader.read_line(&mut line)? == 0 || line.trim().is_empty() {
-            break;
-        }
-        let lower = line.to_ascii_lowercase();
-        if let Some(spec) = lower.strip_prefix("range:") {
-            let spec = spec.trim().trim_start_matches("bytes=");
-            if let Some((a, b)) = spec.split_once('-') {
-                range = Some((a.parse::<u64>().unwrap(), b.parse::<u64>().unwrap()));
-            }
-        }
-    }
-    let Some((_, bytes)) = files.iter().find(|(path, _)| *path == target) else {
-        let head = "HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n";
-        return stream.write_all(head.as_bytes());
-    };
-    let total = bytes.len() as u64;
-    let (status, body, extra) = match range {
-        Some((a, b)) if mode != Mode::NoRanges && a < total => {
-            let end = b.min(total - 1);
-            let extra = format!("Content-Range: bytes {a}-{end}/{total}\r\n");
-            (
-                "206 Partial Content",
-                &bytes[a as usize..=end as usize],
-                extra,
-            )
-        }
-        _ => ("200 OK", &bytes[..], String::new()),
-    };
-    let head = format!(
-        "HTTP/1.1 {status}\r\nContent-Length: {}\r\nAccept-Ranges: {}\r\n{extra}Connection: close\r\n\r\n",
-        body.len(),
-        if mode == Mode::NoRanges {
-            "none"
-        } else {
-            "bytes"
-        },
-    );
-    stream.write_all(head.as_bytes())?;
-    let is_xtc = target.ends_with(".xtc");
-    let mut body = body;
-    if let (true, Mode::DropAfter(limit)) = (is_xtc, mode) {
-        let already = served.load(Ordering::SeqCst);
-        let allowed = limit.saturating_sub(already).min(body.len() as u64) as usize;
-        body = &body[..allowed];
-    }
-    if is_xtc {
-        served.fetch_add(body.len() as u64, Ordering::SeqCst);
-    }
-    stream.write_all(body)?;
-    stream.flush()?;
-    stream.shutdown(std::net::Shutdown::Both)
-}
+/// The test system's files.
+const MD: [&str; 2] = ["md_1u19.gro", "md_1u19.xtc"];
 
 /// `mdsurf surface TOP TRAJ --backend cpu --no-timings --stats STATS [EXTRA]` in `dir`.
 fn surface(dir: &Path, top: &str, traj: &str, stats: &str, extra: &[&str]) -> Run {
@@ -154,7 +32,7 @@ fn surface(dir: &Path, top: &str, traj: &str, stats: &str, extra: &[&str]) -> Ru
 
 #[test]
 fn surface_of_urls_equals_the_local_files() {
-    let server = Server::start(Mode::Ranges);
+    let server = Server::start(Mode::Ranges, &MD);
     let dir = tempfile::tempdir().unwrap();
     let frames = ["--frames", "0:51:10"];
     let local = surface(
@@ -177,12 +55,12 @@ fn surface_of_urls_equals_the_local_files() {
     let remote = std::fs::read_to_string(dir.path().join("remote.csv")).unwrap();
     assert_eq!(local.lines().count(), 7, "{local}");
     assert_eq!(remote, local);
-    assert!(server.xtc_served() > 0);
+    assert!(server.served("md_1u19.xtc") > 0);
 }
 
 #[test]
 fn one_frame_over_http_transfers_a_fraction_of_the_file() {
-    let server = Server::start(Mode::Ranges);
+    let server = Server::start(Mode::Ranges, &MD);
     let dir = tempfile::tempdir().unwrap();
     let run = surface(
         dir.path(),
@@ -195,7 +73,7 @@ fn one_frame_over_http_transfers_a_fraction_of_the_file() {
     let stats = std::fs::read_to_string(dir.path().join("s.csv")).unwrap();
     assert_eq!(stats.lines().count(), 2, "{stats}");
     let size = std::fs::metadata(data("md_1u19.xtc")).unwrap().len();
-    let served = server.xtc_served();
+    let served = server.served("md_1u19.xtc");
     eprintln!("one frame over HTTP: {served} of {size} XTC bytes served");
     assert!(served > 0 && served * 10 < size * 4, "{served} of {size}");
 }
@@ -224,32 +102,32 @@ fn fails_naming_the_url(server: &Server, xtc: &str, words: &[&str]) {
 
 #[test]
 fn a_server_without_ranges_is_one_line() {
-    let server = Server::start(Mode::NoRanges);
+    let server = Server::start(Mode::NoRanges, &MD);
     fails_naming_the_url(&server, "md_1u19.xtc", &["does not support range requests"]);
 }
 
 #[test]
 fn a_missing_url_is_one_line() {
-    let server = Server::start(Mode::Ranges);
+    let server = Server::start(Mode::Ranges, &MD);
     fails_naming_the_url(&server, "missing.xtc", &["404"]);
 }
 
 #[test]
 fn a_dropped_connection_is_one_line() {
-    let server = Server::start(Mode::DropAfter(30_000));
+    let server = Server::start(Mode::DropAfter(30_000), &MD);
     fails_naming_the_url(&server, "md_1u19.xtc", &["bytes ", "connection dropped"]);
 }
 
 #[test]
-fn other_formats_over_http_are_one_line() {
-    let server = Server::start(Mode::Ranges);
-    fails_naming_the_url(&server, "md_1u19.dcd", &["only XTC and TRR"]);
+fn an_unknown_extension_over_http_is_one_line() {
+    let server = Server::start(Mode::Ranges, &MD);
+    fails_naming_the_url(&server, "md_1u19.abc", &["abc"]);
 }
 
 #[test]
 fn urls_with_a_query_string_read_as_their_file() {
     // Signed URLs (object stores) carry a token after the name.
-    let server = Server::start(Mode::Ranges);
+    let server = Server::start(Mode::Ranges, &MD);
     let dir = tempfile::tempdir().unwrap();
     let token = "?token=a1b2&expires=99";
     let run = surface(
@@ -262,4 +140,127 @@ fn urls_with_a_query_string_read_as_their_file() {
     assert_eq!(run.code, 0, "{}", run.stderr);
     let stats = std::fs::read_to_string(dir.path().join("s.csv")).unwrap();
     assert_eq!(stats.lines().count(), 2, "{stats}");
+}
+
+/// The window on URLs (`mdsurf URL_GRO URL_XTC --script FILE --quit` under Xvfb): the script
+/// goes to frame 2 and takes a screenshot; the PNG is not uniform and the XTC was read in
+/// place (a fraction of it served). Skipped without Xvfb or a wgpu adapter unless
+/// `REQUIRE_GPU=1`.
+#[test]
+fn the_window_reads_urls() {
+    let skip = |reason: &str| {
+        if std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1") {
+            panic!("REQUIRE_GPU=1 but {reason}");
+        }
+        eprintln!("note: skipping the window-over-HTTP test: {reason}");
+    };
+    let xvfb = std::process::Command::new("xvfb-run")
+        .arg("--help")
+        .output();
+    if xvfb.is_err() {
+        return skip("xvfb-run is not installed");
+    }
+    if let Err(e) = mdsurf::render::HeadlessGpu::new() {
+        return skip(&format!("no wgpu adapter: {e}"));
+    }
+    let server = Server::start(Mode::Ranges, &MD);
+    let dir = tempfile::tempdir().unwrap();
+    let (shot, script) = (dir.path().join("shot.png"), dir.path().join("s.mdsurf"));
+    let text = format!("frame 2\nscreenshot \"{}\" 400x300\n", shot.display());
+    std::fs::write(&script, text).unwrap();
+    let (_one_server_at_a_time, mut xvfb) = crate::xvfb_support::xvfb_run();
+    let out = xvfb
+        .arg(env!("CARGO_BIN_EXE_mdsurf"))
+        .arg(server.url(MD[0]))
+        .arg(server.url(MD[1]))
+        .arg("--script")
+        .arg(&script)
+        .args(["--quit", "--cpu"])
+        .env("XDG_RUNTIME_DIR", dir.path())
+        .output()
+        .expect("run xvfb-run");
+    let log = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "exit {}: {log}", out.status);
+    assert!(log.contains("last frame 2"), "{log}");
+    let image = mdsurf::render::RgbaImage::read_png(&shot).unwrap_or_else(|e| panic!("{e}: {log}"));
+    assert_eq!((image.width, image.height), (400, 300));
+    assert!(image.distinct_colours() > 10, "uniform screenshot: {log}");
+    let size = std::fs::metadata(data(MD[1])).unwrap().len();
+    let served = server.served(MD[1]);
+    assert!(served > 0 && served < size, "{served} of {size}");
+}
+
+/// The one error line of a failed `run` (progress and representation lines aside).
+fn error_line(run: &Run) -> String {
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    let lines: Vec<&str> = run
+        .stderr
+        .lines()
+        .filter(|l| !l.starts_with("frame") && !l.starts_with("rep "))
+        .collect();
+    assert_eq!(lines.len(), 1, "{}", run.stderr);
+    lines[0].to_string()
+}
+
+#[test]
+fn https_trusts_the_certificates_of_mdsurf_ca_file() {
+    let files = MD
+        .iter()
+        .map(|name| (name.to_string(), std::fs::read(data(name)).unwrap()))
+        .collect();
+    let (server, pem) = Server::serve_tls(files);
+    let dir = tempfile::tempdir().unwrap();
+    let ca = dir.path().join("ca.pem");
+    std::fs::write(&ca, pem).unwrap();
+    let (gro, xtc) = (server.url(MD[0]), server.url(MD[1]));
+    assert!(gro.starts_with("https://127.0.0.1:"), "{gro}");
+    let local = surface(
+        dir.path(),
+        &data(MD[0]),
+        &data(MD[1]),
+        "l.csv",
+        &["--frames", "3"],
+    );
+    assert_eq!(local.code, 0, "{}", local.stderr);
+    let args = |stats: &'static str| {
+        let common = [
+            "surface",
+            "--backend",
+            "cpu",
+            "--no-timings",
+            "--frames",
+            "3",
+        ];
+        let mut args: Vec<String> = common.iter().map(|a| a.to_string()).collect();
+        args.extend([
+            gro.clone(),
+            xtc.clone(),
+            "--stats".to_string(),
+            stats.to_string(),
+        ]);
+        args
+    };
+    let run = |stats: &'static str, env: &[(&str, &str)]| {
+        let args = args(stats);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        mdsurf_env(dir.path(), &args, env)
+    };
+    let trusted = run("r.csv", &[("MDSURF_CA_FILE", ca.to_str().unwrap())]);
+    assert_eq!(trusted.code, 0, "{}", trusted.stderr);
+    let read = |name: &str| std::fs::read_to_string(dir.path().join(name)).unwrap();
+    assert_eq!(read("r.csv"), read("l.csv"));
+    assert!(server.served(MD[1]) > 0);
+    // Not trusted (the built-in roots): one line naming the URL and the certificate.
+    let line = error_line(&run("u.csv", &[]));
+    assert!(
+        line.contains(&gro) && line.to_lowercase().contains("certificate"),
+        "{line}"
+    );
+    // A CA file without a certificate: one line naming the variable and the file.
+    std::fs::write(&ca, "not a certificate\n").unwrap();
+    let line = error_line(&run("b.csv", &[("MDSURF_CA_FILE", ca.to_str().unwrap())]));
+    assert!(
+        line.contains("MDSURF_CA_FILE=") && line.contains("ca.pem"),
+        "{line}"
+    );
 }

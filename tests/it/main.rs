@@ -4,6 +4,7 @@
 mod cli_common;
 mod data_support;
 mod gpu_support;
+mod http_server;
 mod surface_common;
 mod xvfb_support;
 
@@ -46,6 +47,7 @@ mod io_fast;
 mod io_fuzz_regressions;
 mod io_hostile;
 mod io_http;
+mod io_http_formats;
 mod io_mmcif;
 mod io_model;
 mod io_mutants;

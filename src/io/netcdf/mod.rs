@@ -10,14 +10,17 @@
 //! time), nanometre coordinates are scaled by 10 (chemfiles uses 10⁴), and `Conventions` may
 //! list AMBER among others.
 //!
+//! Over HTTP ([`open_source`]) only the header is read when the file opens (record variables
+//! lie at computed offsets), then the slices of each frame read.
+//!
 //! Errors are [`NetcdfError`]s, wrapped in an [`IoError`] naming the file (and frame).
 
 mod error;
 mod header;
 
 use std::fs::File;
-use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use glam::Vec3;
 
@@ -25,8 +28,10 @@ use self::error::NetcdfError;
 use self::header::{Header, HeaderError, NcType, Value, Variable};
 use super::IoError;
 use super::native::{NativeFrames, NativeOpen};
+use super::positioned::Positioned;
 use super::prepare::Prepared;
 use super::unit_cell;
+use super::xdr_reader::ByteSource;
 use crate::model::Frame;
 
 /// Headers are read in pieces of this many bytes, growing until they parse.
@@ -61,6 +66,28 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
         .metadata()
         .map_err(|e| IoError::unreadable(path, e))?
         .len();
+    open_bytes(path, Positioned::File(file), total, Some(prepared))
+}
+
+/// Opens the Amber NetCDF file `path` whose `total` bytes `source` holds (a URL read through
+/// range requests): only the header is read here.
+#[cfg_attr(not(feature = "app"), allow(dead_code))]
+pub(crate) fn open_source(
+    path: &Path,
+    source: Box<dyn ByteSource>,
+    total: u64,
+) -> Result<NativeOpen, IoError> {
+    open_bytes(path, Positioned::Source(Mutex::new(source)), total, None)
+}
+
+/// Opens the Amber NetCDF file `path` held in `file` (`total` bytes long) and indexes its
+/// frames.
+fn open_bytes(
+    path: &Path,
+    file: Positioned,
+    total: u64,
+    prepared: Option<Prepared>,
+) -> Result<NativeOpen, IoError> {
     let header = read_header(&file, total).map_err(|e| IoError::unreadable(path, e))?;
     let layout = Layout::new(&header, total).map_err(|e| match e {
         NetcdfError::FirstFrameCut { .. } => IoError::bad_frame(path, 0, e),
@@ -86,7 +113,7 @@ pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoErro
 }
 
 /// Reads and parses the header, reading more of the file while it needs more.
-fn read_header(file: &File, total: u64) -> Result<Header, NetcdfError> {
+fn read_header(file: &Positioned, total: u64) -> Result<Header, NetcdfError> {
     let mut bytes = Vec::new();
     let mut want = HEADER_CHUNK.min(total);
     loop {
@@ -340,13 +367,14 @@ impl Layout {
 /// An open Amber NetCDF file.
 struct NetcdfFrames {
     path: PathBuf,
-    file: File,
+    /// The file's bytes (a file, or a URL read through range requests).
+    file: Positioned,
     layout: Layout,
     len: usize,
     damage: Option<IoError>,
     buffer: Vec<u8>,
-    /// Keeps a decompressed copy alive.
-    _prepared: Prepared,
+    /// Keeps a decompressed copy alive (none over HTTP).
+    _prepared: Option<Prepared>,
 }
 
 impl NetcdfFrames {
@@ -388,6 +416,10 @@ impl NativeFrames for NetcdfFrames {
 
     fn damage(&self) -> Option<&IoError> {
         self.damage.as_ref()
+    }
+
+    fn is_remote(&self) -> bool {
+        self.file.is_remote()
     }
 
     fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {

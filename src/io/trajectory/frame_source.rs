@@ -86,7 +86,11 @@ impl FrameSource {
 
     /// True when the frames come from a URL (through range requests).
     pub(super) fn is_remote(&self) -> bool {
-        matches!(self, FrameSource::Xdr(r) if r.is_remote())
+        match self {
+            FrameSource::Xdr(r) => r.is_remote(),
+            FrameSource::Native(r) => r.is_remote(),
+            FrameSource::Chem(_) | FrameSource::Memory { .. } => false,
+        }
     }
 
     pub(super) fn truncated(&self) -> Option<(&str, bool)> {

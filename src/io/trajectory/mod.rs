@@ -226,7 +226,7 @@ fn open_with(top: &Path, traj: Option<&Path>, readers: Readers) -> Result<Trajec
         #[cfg(feature = "app")]
         (Some(path), _, _) if super::http::url_of(path).is_some() => {
             let (source, w) = remote::open_frames(path, top, topology.len())?;
-            walk = Some(w);
+            walk = w;
             source
         }
         (Some(path), top_reader, _) => {
