@@ -63,7 +63,10 @@ impl RepTracks {
         if self.first_frame == Some(frame) {
             let n = self.current.len();
             let first = self.current.first().map_or(0, |c| c.id);
-            lines.push((first, format!("frame {frame}: tracking starts: {n} cavities")));
+            lines.push((
+                first,
+                format!("frame {frame}: tracking starts: {n} cavities"),
+            ));
         } else {
             for e in events {
                 lines.push(event_line(frame, e, previous, &self.current));
@@ -81,7 +84,9 @@ fn volume_of(cavities: &[TrackedCavity], id: u64, was: &str) -> String {
     cavities
         .iter()
         .find(|c| c.id == id)
-        .map_or(String::new(), |c| format!(" ({was}{:.1} Å³)", c.cavity.volume))
+        .map_or(String::new(), |c| {
+            format!(" ({was}{:.1} Å³)", c.cavity.volume)
+        })
 }
 
 /// `3`, `3 and 5`, `3, 5 and 7`.

@@ -8,17 +8,15 @@ use std::sync::Arc;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use glam::{DVec3, Vec3};
+use mdsurf::app::AppCore;
 use mdsurf::app::cavity_panel::{EVENT_LOG_LINES, cavity_ui, id_colour};
 use mdsurf::app::worker::Worker;
-use mdsurf::app::AppCore;
 use mdsurf::measure::Cavity;
 use mdsurf::model::{Frame, Topology};
 use mdsurf::render::{Camera, GpuScene, RenderSettings, Renderer, render_to_rgba};
 use mdsurf::scene::cavity_layer::{CavityLayer, cavity_rgb, with_cavity_ids};
 use mdsurf::scene::representation::{RepStyle, Representation};
-use mdsurf::scene::{
-    LayerResult, ParticleData, RepRequest, SceneBackend, SceneEngine, SceneFrame,
-};
+use mdsurf::scene::{LayerResult, ParticleData, RepRequest, SceneBackend, SceneEngine, SceneFrame};
 use mdsurf::surface::{CpuEngine, Mesh, SurfaceOutput};
 
 /// Atoms per shell (about 1 Å apart on the larger one, closer on the smaller).
@@ -355,8 +353,14 @@ fn panel_logs_births_merges_splits_and_deaths() {
         tracks.log().collect::<Vec<_>>(),
         ["frame 2: tracking starts: 2 cavities"]
     );
-    assert!(h.query_by_label(expected[0]).is_none(), "the old log is gone");
-    assert!(h.query_by_label("frame 2: tracking starts: 2 cavities").is_some());
+    assert!(
+        h.query_by_label(expected[0]).is_none(),
+        "the old log is gone"
+    );
+    assert!(
+        h.query_by_label("frame 2: tracking starts: 2 cavities")
+            .is_some()
+    );
     // Switching cavities off in the panel is still one command away.
     h.get_by_label("Find cavities").click();
     h.run();
