@@ -274,6 +274,8 @@ fn log_ui(ui: &mut egui::Ui, tracks: &RepTracks) {
     egui::ScrollArea::vertical()
         .id_salt("cavity events")
         .max_height(120.0)
+        // Inside the side panel's own scroll area it would otherwise shrink to 64 points.
+        .min_scrolled_height(120.0)
         .auto_shrink([false, true])
         .show(ui, |ui| {
             for (_, id, line) in &tracks.log {

@@ -164,18 +164,14 @@ fn pixels_near(rgba: &[u8], colour: egui::Color32) -> usize {
         .count()
 }
 
-/// The picture of the two shells under a see-through surface shows both walls, each in its
-/// id's colour: many pixels near each of the two colours, on the side of its shell.
-#[test]
-fn rendered_cavities_show_both_colours() {
-    let Some(ctx) = crate::gpu_support::context() else {
-        return;
-    };
-    let layer = shells_layer();
+/// Pixels near the colours of ids 1 and 2 in the left and right halves of the picture of
+/// `layer` (the two shells) under its surface at opacity 0.15: `[1 left, 1 right, 2 left,
+/// 2 right]`.
+fn colour_counts(ctx: &mdsurf::gpu::GpuContext, layer: &LayerResult) -> [usize; 4] {
     let drawn = rep(0.15);
     let mut scene = GpuScene::new();
     let look = RenderSettings::default();
-    scene.show_layers(&ctx.device, &ctx.queue, [(layer.as_ref(), &drawn)], &look);
+    scene.show_layers(&ctx.device, &ctx.queue, [(layer, &drawn)], &look);
     let mut camera = Camera::default();
     let (lo, hi) = scene.bounds().expect("the scene has bounds");
     camera.fit(lo, hi);
@@ -202,15 +198,27 @@ fn rendered_cavities_show_both_colours() {
             .collect()
     };
     let (left, right) = (half(true), half(false));
-    let found = layer.cavities.as_ref().expect("cavities");
-    // Cavity 1 is the larger void, the left shell's.
-    assert!(found.cavities[0].centroid.x < 0.0 && found.cavities[1].centroid.x > 0.0);
-    let counts = [
+    [
         pixels_near(&left, id_colour(1)),
         pixels_near(&right, id_colour(1)),
         pixels_near(&left, id_colour(2)),
         pixels_near(&right, id_colour(2)),
-    ];
+    ]
+}
+
+/// The picture of the two shells under a see-through surface shows both walls, each in its
+/// id's colour: many pixels near each of the two colours, on the side of its shell. With both
+/// walls in one colour (ids 1 and 1) the count tells: no pixel of the second colour.
+#[test]
+fn rendered_cavities_show_both_colours() {
+    let Some(ctx) = crate::gpu_support::context() else {
+        return;
+    };
+    let layer = shells_layer();
+    let found = layer.cavities.as_ref().expect("cavities");
+    // Cavity 1 is the larger void, the left shell's.
+    assert!(found.cavities[0].centroid.x < 0.0 && found.cavities[1].centroid.x > 0.0);
+    let counts = colour_counts(&ctx, &layer);
     assert!(
         counts[0] > 1000 && counts[3] > 300,
         "pixels of colour 1 left, 1 right, 2 left, 2 right: {counts:?}"
@@ -218,6 +226,13 @@ fn rendered_cavities_show_both_colours() {
     assert!(
         counts[1] < counts[0] / 10 && counts[2] < counts[3] / 10,
         "{counts:?}"
+    );
+    let mut one_colour = layer.clone();
+    with_cavity_ids(&mut one_colour, &[1, 1]);
+    let same = colour_counts(&ctx, &one_colour);
+    assert!(
+        same[1] > 300 && same[3] < counts[3] / 10,
+        "both walls in colour 1: {same:?} (two colours: {counts:?})"
     );
 }
 
