@@ -63,10 +63,8 @@ impl RepTracks {
         if self.first_frame == Some(frame) {
             let n = self.current.len();
             let first = self.current.first().map_or(0, |c| c.id);
-            lines.push((
-                first,
-                format!("frame {frame}: tracking starts: {n} cavities"),
-            ));
+            let noun = if n == 1 { "cavity" } else { "cavities" };
+            lines.push((first, format!("frame {frame}: tracking starts: {n} {noun}")));
         } else {
             for e in events {
                 lines.push(event_line(frame, e, previous, &self.current));
