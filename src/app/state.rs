@@ -463,13 +463,13 @@ impl AppCore {
 
     fn accept(&mut self, reply: Reply) -> bool {
         match reply {
-            Reply::Done(c) => {
+            Reply::Done(mut c) => {
                 if c.generation == self.generation {
                     for l in c.surfaces() {
                         self.history
                             .record(c.frame, &l.rep.name, l.output.area, l.output.volume);
                     }
-                    self.cavity_tracks.record(&c.scene);
+                    self.cavity_tracks.record(&mut c.scene);
                 }
                 if self.in_flight == Some((c.generation, c.frame)) {
                     self.in_flight = None;

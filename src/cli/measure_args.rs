@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 use mdsurf::measure::{
-    self, AtomCsv, CavityCsv, CavityOptions, CavityTracker, ExposureTable, ResidueCsv, Side,
+    self, AtomCsv, CavityCsv, CavityEventCsv, CavityOptions, CavityTracker, ExposureTable,
+    ResidueCsv, Side,
 };
 use mdsurf::model::{Frame, RadiusOverrides, Topology};
 use mdsurf::scene::layer::Layer;
@@ -32,6 +33,11 @@ pub struct MeasureArgs {
     /// frame,rep,cavity_id,volume_A3,area_A2,cx,cy,cz,lining.
     #[arg(long, value_name = "FILE.csv")]
     pub cavities: Option<PathBuf>,
+    /// What tracking the cavities saw (the ids of `--cavities`): frame,rep,event,cavity_id,ids
+    /// with event birth, death, merge (cavity_id continues, ids ended) or split (ids split off
+    /// cavity_id).
+    #[arg(long, value_name = "FILE.csv")]
+    pub cavity_events: Option<PathBuf>,
     /// Smallest cavity reported, in Å³ (smaller voids are mostly gaps between a few atoms).
     #[arg(long, value_name = "A3", default_value_t = 1.0, value_parser = parse_volume)]
     pub min_cavity_volume: f64,
@@ -49,7 +55,12 @@ pub struct MeasureArgs {
 impl MeasureArgs {
     /// True when the surfaces' meshes are needed on the host.
     pub fn needs_meshes(&self) -> bool {
-        self.per_residue.is_some() || self.per_atom.is_some() || self.cavities.is_some()
+        self.per_residue.is_some() || self.per_atom.is_some() || self.tracks_cavities()
+    }
+
+    /// True when cavities are found and tracked (`--cavities` or `--cavity-events`).
+    pub fn tracks_cavities(&self) -> bool {
+        self.cavities.is_some() || self.cavity_events.is_some()
     }
 
     /// The output files asked for.
@@ -58,6 +69,7 @@ impl MeasureArgs {
             &self.per_residue,
             &self.per_atom,
             &self.cavities,
+            &self.cavity_events,
             &self.interface_csv,
         ]
         .into_iter()
@@ -88,6 +100,7 @@ pub struct Measurer {
     residues: ResidueCsv,
     atoms: AtomCsv,
     cavities: CavityCsv,
+    cavity_events: CavityEventCsv,
     trackers: HashMap<String, CavityTracker>,
     exposure: HashMap<String, ExposureTable>,
     interface: Option<Interface>,
@@ -136,6 +149,7 @@ impl Measurer {
             residues: ResidueCsv::new(),
             atoms: AtomCsv::new(),
             cavities: CavityCsv::new(),
+            cavity_events: CavityEventCsv::new(),
             trackers: HashMap::new(),
             exposure: HashMap::new(),
             interface,
@@ -213,7 +227,7 @@ impl Measurer {
                     .push(index, name, &residues, self.exposure.get(name));
             }
         }
-        if self.args.cavities.is_some() {
+        if self.args.tracks_cavities() {
             let options = CavityOptions {
                 min_volume: self.args.min_cavity_volume,
                 ..CavityOptions::default()
@@ -226,6 +240,7 @@ impl Measurer {
                 .update(index, &found);
             self.cavities
                 .push(index, name, topology, atom_indices, &tracked.cavities)?;
+            self.cavity_events.push(index, name, &tracked.events);
         }
         Ok(())
     }
@@ -241,6 +256,9 @@ impl Measurer {
         }
         if let Some(path) = &a.cavities {
             self.cavities.write(path)?;
+        }
+        if let Some(path) = &a.cavity_events {
+            self.cavity_events.write(path)?;
         }
         if let (Some(path), Some(interface)) = (&a.interface_csv, &self.interface) {
             let text = format!(

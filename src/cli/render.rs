@@ -19,6 +19,7 @@ use mdsurf::export::video::{Mp4Movie, check_even_size, is_mp4};
 use mdsurf::export::{StatsRow, StatsWriter};
 use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
+use mdsurf::scene::cavity_layer::MovieCavityIds;
 use mdsurf::scene::movie::Shot;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::{CameraState, StateFile};
@@ -176,6 +177,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let progress = super::progress::Progress::new(length, args.quiet, args.verbose);
     let started = Instant::now();
     let mut images = 0usize;
+    let mut cavity_ids = MovieCavityIds::default();
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;
@@ -217,9 +219,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             }
         };
         let read_ms = ms_since(t0);
-        let computed = engine
+        let mut computed = engine
             .frame(&topology, f, &frame, &reps)
             .map_err(|e| anyhow!("{files}: {e}"))?;
+        if block.contains(&i) {
+            // Each cavity in its id's colour, ids followed over the images.
+            cavity_ids.track(&mut computed);
+        }
         // The script's fades: a representation faded out is not drawn.
         let shot = shots.get(i);
         let drawn = faded_layers(&computed.layers, shot);

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::residues::{residue_label, topology_atoms};
-use super::{ExposureTable, MeasureError, ResidueArea, TrackedCavity};
+use super::{CavityEvent, ExposureTable, MeasureError, ResidueArea, TrackedCavity};
 use crate::export::ExportError;
 use crate::export::atomic::write_atomic;
 use crate::model::Topology;
@@ -204,6 +204,46 @@ impl CavityCsv {
     }
 }
 
+/// Cavity tracking events: `frame,rep,event,cavity_id,ids` with `event` one of `birth`,
+/// `death`, `merge`, `split`; `cavity_id` the cavity born or dead, the one a merge continues
+/// in, or the one parts split off from; `ids` the others (a merge's ended ids, a split's new
+/// ids), space-separated. The first frame's cavities are births.
+#[derive(Debug, Clone)]
+pub struct CavityEventCsv(Table);
+
+impl Default for CavityEventCsv {
+    fn default() -> Self {
+        CavityEventCsv(Table::new("frame,rep,event,cavity_id,ids"))
+    }
+}
+
+impl CavityEventCsv {
+    /// An empty table.
+    pub fn new() -> CavityEventCsv {
+        CavityEventCsv::default()
+    }
+
+    /// Adds the events of one frame of representation `rep`.
+    pub fn push(&mut self, frame: usize, rep: &str, events: &[CavityEvent]) {
+        let rep = field(rep);
+        let list = |ids: &[u64]| ids.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
+        for e in events {
+            let (kind, id, others) = match e {
+                CavityEvent::Birth { id } => ("birth", id, String::new()),
+                CavityEvent::Death { id } => ("death", id, String::new()),
+                CavityEvent::Merge { from, into } => ("merge", into, list(from)),
+                CavityEvent::Split { from, into } => ("split", from, list(into)),
+            };
+            let _ = writeln!(self.0.rows, "{frame},{rep},{kind},{id},{others}");
+        }
+    }
+
+    /// Writes the table to `path` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
+        self.0.write(path)
+    }
+}
+
 /// Labels (`A:LEU12`) of the residues of `atoms` (indices into an atom set holding the
 /// topology atoms `atom_indices`, `None`: all), once each, in topology order.
 pub fn lining_residues(
@@ -252,6 +292,31 @@ mod tests {
         assert_eq!(field("protein"), "protein");
         assert_eq!(field("a,b"), "\"a,b\"");
         assert_eq!(field("say \"hi\""), "\"say \"\"hi\"\"\"");
+    }
+
+    #[test]
+    fn measure_cavity_events_are_one_row_each() {
+        let mut csv = CavityEventCsv::new();
+        csv.push(
+            4,
+            "a,b",
+            &[
+                CavityEvent::Birth { id: 7 },
+                CavityEvent::Merge {
+                    from: vec![3, 5],
+                    into: 2,
+                },
+                CavityEvent::Split {
+                    from: 1,
+                    into: vec![8],
+                },
+                CavityEvent::Death { id: 6 },
+            ],
+        );
+        assert_eq!(
+            csv.0.rows,
+            "4,\"a,b\",birth,7,\n4,\"a,b\",merge,2,3 5\n4,\"a,b\",split,1,8\n4,\"a,b\",death,6,\n"
+        );
     }
 
     #[test]

@@ -1,13 +1,13 @@
 //! From a computed scene frame ([`crate::scene::SceneFrame`]) to what the renderer draws: one
 //! surface layer per surface representation (GPU buffers drawn in place, or a host mesh
 //! uploaded) with its opacity, the cavities of a surface whose `cavities` switch is on as one
-//! more, opaque layer in the cavity colour ([`crate::scene::cavity_layer`]), and the atoms of
+//! more, opaque layer, each cavity in its id's colour (per vertex, see
+//! [`crate::scene::cavity_layer`]), and the atoms of
 //! every atom representation in one instance list.
 //! The window ([`crate::app::view_renderer`]) and `mdsurf render` both go through
 //! [`GpuScene::show_layers`], so a frame looks the same in either.
 
 use crate::scene::LayerResult;
-use crate::scene::cavity_layer::CAVITY_RGB;
 use crate::scene::representation::Representation;
 
 use super::atoms::atom_instances;
@@ -61,7 +61,8 @@ impl GpuScene {
                 self.set_layer_mesh(k, device, queue, walls);
                 let cavity = self.layer_mut(k);
                 cavity.opacity = Some(if rep.opacity > 0.0 { 1.0 } else { 0.0 });
-                cavity.colour = Some(CAVITY_RGB);
+                // The walls' own colours: each cavity's id's.
+                cavity.colour = None;
                 k += 1;
             }
         }

@@ -1,8 +1,13 @@
 //! The cavities of a surface representation in one frame, for the window and `render`: when a
 //! representation's `cavities` switch is on ([`Representation::cavities`]), the scene engine
 //! runs [`measure::cavities`] on its surface (the host mesh, or the GPU mesh read back) and keeps
-//! the cavities, their lining residues and their walls as one mesh in [`CAVITY_RGB`] in the
+//! the cavities, their lining residues and their walls as one mesh in the
 //! [`super::LayerResult`]. With the switch off nothing here runs.
+//!
+//! Each cavity's wall is coloured by its id ([`cavity_rgb`], per vertex): the ids the engine
+//! gives are 1, 2, … largest volume first (what a tracker starting at that frame gives); the
+//! window's tracks hand their ids over with [`with_cavity_ids`], so a cavity is drawn in the
+//! colour its id has in the Cavities panel.
 //!
 //! The walls are turned inside out: the surface's triangles face into the void (outward from the
 //! density), the cavity mesh's face out of it, so a cavity is drawn as a solid blob seen through
@@ -10,11 +15,13 @@
 //!
 //! [`Representation::cavities`]: super::representation::Representation::cavities
 
+use std::collections::HashMap;
+use std::ops::Range;
 use std::sync::Arc;
 
 use super::engine::SceneEngine;
-use super::frame::{LayerResult, SceneError};
-use crate::measure::{self, Cavity, CavityOptions, MeasureError};
+use super::frame::{LayerResult, RepId, SceneError, SceneFrame};
+use crate::measure::{self, Cavity, CavityOptions, CavityTracker, MeasureError};
 use crate::model::Topology;
 use crate::surface::{AtomSet, Mesh, SurfaceParams};
 
@@ -22,8 +29,27 @@ use crate::surface::{AtomSet, Mesh, SurfaceParams};
 /// mostly gaps between a few atoms).
 pub const MIN_CAVITY_VOLUME_A3: f64 = 1.0;
 
-/// The colour cavities are drawn in: orange, linear RGB 0..1.
-pub const CAVITY_RGB: [f32; 3] = [1.0, 0.35, 0.02];
+/// The colours of cavity ids, sRGB bytes: id 1 takes the first, id 7 the first again.
+const CAVITY_PALETTE_SRGB: [[u8; 3]; 6] = [
+    [255, 140, 40],
+    [90, 170, 255],
+    [120, 210, 110],
+    [230, 90, 160],
+    [200, 190, 70],
+    [170, 130, 255],
+];
+
+/// The colour of cavity id `id` (ids from 1) as sRGB bytes: the Cavities panel's colour for it.
+pub fn cavity_srgb8(id: u64) -> [u8; 3] {
+    let n = CAVITY_PALETTE_SRGB.len() as u64;
+    CAVITY_PALETTE_SRGB[(id.saturating_sub(1) % n) as usize]
+}
+
+/// The colour cavity id `id`'s wall is drawn in, linear RGB 0..1 ([`cavity_srgb8`] made
+/// linear).
+pub fn cavity_rgb(id: u64) -> [f32; 3] {
+    cavity_srgb8(id).map(|v| crate::model::colour::srgb_to_linear(f32::from(v) / 255.0))
+}
 
 /// Lining residues listed per cavity at most (the panel shows the first few).
 const MAX_LINING_LABELS: usize = 64;
@@ -44,9 +70,65 @@ pub struct CavityLayer {
     /// Per cavity, labels (`A:LEU12`) of its lining residues in topology order, at most 64
     /// (empty for bead surfaces, whose particles are not atoms).
     pub lining: Vec<Vec<String>>,
-    /// The walls of every cavity, turned to face out of the void, in [`CAVITY_RGB`];
-    /// positions in Å.
+    /// Per cavity, the id its wall is coloured by (1, 2, … as found; tracked ids once
+    /// [`with_cavity_ids`] handed them over).
+    pub ids: Vec<u64>,
+    /// Per cavity, its wall's vertices in `mesh` (a range of vertex indices).
+    pub wall_vertices: Vec<Range<usize>>,
+    /// The walls of every cavity, turned to face out of the void, each in the colour of its
+    /// id ([`cavity_rgb`]); positions in Å.
     pub mesh: Mesh,
+}
+
+impl CavityLayer {
+    /// The layer with its cavities coloured by `ids` (one per cavity, in order; a cavity past
+    /// the end of `ids` keeps its id).
+    pub fn recoloured(&self, ids: &[u64]) -> CavityLayer {
+        let mut out = self.clone();
+        for (k, (range, &id)) in self.wall_vertices.iter().zip(ids).enumerate() {
+            out.ids[k] = id;
+            out.mesh.colours[range.clone()].fill(cavity_rgb(id));
+        }
+        out
+    }
+}
+
+/// Hands tracked `ids` (one per cavity of `layer`, in the order found) to `layer`'s cavities,
+/// so their walls are drawn in those ids' colours. The layer is left as it is when it has no
+/// cavities or already has these ids; otherwise it becomes a copy with recoloured walls (the
+/// engine may share the original).
+pub fn with_cavity_ids(layer: &mut Arc<LayerResult>, ids: &[u64]) {
+    let Some(found) = &layer.cavities else {
+        return;
+    };
+    if found.ids.iter().zip(ids).all(|(a, b)| a == b) {
+        return;
+    }
+    let recoloured = Arc::new(found.recoloured(ids));
+    Arc::make_mut(layer).cavities = Some(recoloured);
+}
+
+/// Cavity ids over the frames of a movie (`mdsurf render`): one tracker per representation,
+/// fed the frames in the order drawn, so a cavity keeps its colour from frame to frame.
+#[derive(Debug, Default)]
+pub struct MovieCavityIds {
+    trackers: HashMap<RepId, CavityTracker>,
+}
+
+impl MovieCavityIds {
+    /// Tracks the cavities of `scene`'s layers from the frame before and hands their ids to
+    /// the layers ([`with_cavity_ids`]).
+    pub fn track(&mut self, scene: &mut SceneFrame) {
+        for layer in &mut scene.layers {
+            let Some(found) = layer.cavities.clone() else {
+                continue;
+            };
+            let tracker = self.trackers.entry(layer.id).or_default();
+            let update = tracker.update(scene.frame, &found.cavities);
+            let ids: Vec<u64> = update.cavities.iter().map(|c| c.id).collect();
+            with_cavity_ids(layer, &ids);
+        }
+    }
 }
 
 /// Which atoms a surface was computed from, for the lining residues.
@@ -81,14 +163,16 @@ pub fn find_cavities(
             })
             .collect::<Result<_, MeasureError>>()?
     };
-    let mesh = if cavities.is_empty() {
-        Mesh::default()
+    let (mesh, wall_vertices) = if cavities.is_empty() {
+        (Mesh::default(), Vec::new())
     } else {
         walls(mesh, &cavities)?
     };
     Ok(CavityLayer {
+        ids: (1..=cavities.len() as u64).collect(),
         cavities,
         lining,
+        wall_vertices,
         mesh,
     })
 }
@@ -132,29 +216,35 @@ impl SceneEngine {
 }
 
 /// The triangles of the components of `mesh` that are `cavities` (the same area and volume as
-/// [`measure::components`] computes them), turned inside out, in the cavity colour.
-fn walls(mesh: &Mesh, cavities: &[Cavity]) -> Result<Mesh, MeasureError> {
-    let is_cavity = |c: &measure::Component| {
-        cavities
-            .iter()
-            .any(|k| k.volume == -c.volume && k.area == c.area && k.centroid == c.centroid)
-    };
+/// [`measure::components`] computes them), turned inside out, cavity by cavity in the order of
+/// `cavities`, each in the colour of its place (id 1, 2, …); with each cavity's vertex range.
+fn walls(mesh: &Mesh, cavities: &[Cavity]) -> Result<(Mesh, Vec<Range<usize>>), MeasureError> {
+    let components = measure::components(mesh)?;
     let mut out = Mesh::default();
+    let mut ranges = Vec::with_capacity(cavities.len());
     let mut new_index = vec![u32::MAX; mesh.positions.len()];
-    for c in measure::components(mesh)?.iter().filter(|c| is_cavity(c)) {
-        for &v in &c.vertices {
-            new_index[v as usize] = out.positions.len() as u32;
-            out.positions.push(mesh.positions[v as usize]);
-            out.normals
-                .push(-mesh.normals.get(v as usize).copied().unwrap_or_default());
-            out.colours.push(CAVITY_RGB);
+    for (k, cavity) in cavities.iter().enumerate() {
+        let start = out.positions.len();
+        let wall = components.iter().find(|c| {
+            cavity.volume == -c.volume && cavity.area == c.area && cavity.centroid == c.centroid
+        });
+        if let Some(c) = wall {
+            let colour = cavity_rgb(k as u64 + 1);
+            for &v in &c.vertices {
+                new_index[v as usize] = out.positions.len() as u32;
+                out.positions.push(mesh.positions[v as usize]);
+                out.normals
+                    .push(-mesh.normals.get(v as usize).copied().unwrap_or_default());
+                out.colours.push(colour);
+            }
+            for &t in &c.triangles {
+                let t = 3 * t as usize;
+                let [a, b, d] = [0, 1, 2].map(|j| new_index[mesh.indices[t + j] as usize]);
+                // Reversed winding: the triangle now faces out of the void.
+                out.indices.extend([a, d, b]);
+            }
         }
-        for &t in &c.triangles {
-            let t = 3 * t as usize;
-            let [a, b, d] = [0, 1, 2].map(|k| new_index[mesh.indices[t + k] as usize]);
-            // Reversed winding: the triangle now faces out of the void.
-            out.indices.extend([a, d, b]);
-        }
+        ranges.push(start..out.positions.len());
     }
-    Ok(out)
+    Ok((out, ranges))
 }

@@ -3,7 +3,7 @@
 //! its contact residues, cavities of adenylate kinase tracked over its trajectory, and bad
 //! flags in one line.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use crate::cli_common::{Csv, data, mdsurf};
 
@@ -135,11 +135,14 @@ fn adenylate_kinase_cavities_keep_their_ids_over_frames() {
             "cpu",
             "--cavities",
             "cav.csv",
+            "--cavity-events",
+            "events.csv",
             "-q",
         ],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
     let csv = Csv::read(&dir.path().join("cav.csv"));
+    check_events(&csv, &Csv::read(&dir.path().join("events.csv")));
     assert!(!csv.rows.is_empty());
     let frames: Vec<String> = csv.text_col("frame");
     let ids: Vec<String> = csv.text_col("cavity_id");
@@ -154,4 +157,62 @@ fn adenylate_kinase_cavities_keep_their_ids_over_frames() {
         "--min-cavity-volume 1 Å³"
     );
     assert!(csv.text_col("lining").iter().all(|l| !l.is_empty()));
+}
+
+/// The events of `--cavity-events` agree with the ids of `--cavities`: at each frame, the ids
+/// that first appear are the births and the parts split off, and the ids of the frame before
+/// that are gone are the deaths and the ids that ended in a merge; a merge or split continues
+/// in an id of both frames.
+fn check_events(cavities: &Csv, events: &Csv) {
+    let mut ids_at: BTreeMap<usize, BTreeSet<u64>> = BTreeMap::new();
+    for (f, id) in cavities
+        .text_col("frame")
+        .iter()
+        .zip(cavities.text_col("cavity_id"))
+    {
+        ids_at
+            .entry(f.parse().unwrap())
+            .or_default()
+            .insert(id.parse().unwrap());
+    }
+    let mut frame_col = cavities.text_col("frame");
+    frame_col.extend(events.text_col("frame"));
+    let frames = frame_col.iter().map(|f| f.parse().unwrap()).max().unwrap();
+    let kinds = events.text_col("event");
+    assert!(kinds.iter().any(|k| k != "birth"), "{kinds:?}");
+    let ids = |s: &str| -> Vec<u64> { s.split_whitespace().map(|v| v.parse().unwrap()).collect() };
+    for f in 0..=frames {
+        let now = ids_at.get(&f).cloned().unwrap_or_default();
+        let before = match f {
+            0 => BTreeSet::new(),
+            _ => ids_at.get(&(f - 1)).cloned().unwrap_or_default(),
+        };
+        let (mut new, mut ended) = (BTreeSet::new(), BTreeSet::new());
+        for (k, row) in events.text_col("frame").iter().enumerate() {
+            if row.parse::<usize>().unwrap() != f {
+                continue;
+            }
+            let id: u64 = events.text_col("cavity_id")[k].parse().unwrap();
+            let others = ids(&events.text_col("ids")[k]);
+            match kinds[k].as_str() {
+                "birth" => new.insert(id),
+                "death" => ended.insert(id),
+                "merge" | "split" => {
+                    assert!(now.contains(&id) && before.contains(&id), "frame {f}: {id}");
+                    let set = if kinds[k] == "merge" {
+                        &mut ended
+                    } else {
+                        &mut new
+                    };
+                    set.extend(others);
+                    true
+                }
+                other => panic!("event {other}"),
+            };
+        }
+        let appeared: BTreeSet<u64> = now.difference(&before).copied().collect();
+        let gone: BTreeSet<u64> = before.difference(&now).copied().collect();
+        assert_eq!(new, appeared, "frame {f}: new ids");
+        assert_eq!(ended, gone, "frame {f}: ended ids");
+    }
 }

@@ -20,6 +20,7 @@ mod app_stream_source;
 mod app_surface_mode;
 mod app_time_label;
 mod app_window;
+mod cavity_events;
 mod cli_bench;
 mod cli_chunks;
 mod cli_errors;

@@ -18,7 +18,7 @@ use mdsurf::app::{AppCore, Command};
 use mdsurf::measure::{self, Cavity};
 use mdsurf::model::{Frame, Topology};
 use mdsurf::render::{GpuScene, RenderSettings};
-use mdsurf::scene::cavity_layer::{CAVITY_RGB, cavity_options};
+use mdsurf::scene::cavity_layer::{cavity_options, cavity_rgb};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, RepRequest, SceneBackend, SceneEngine};
 use mdsurf::surface::{AtomSet, CpuEngine, Mesh};
@@ -99,7 +99,7 @@ fn measured(layer: &LayerResult, mesh: &Mesh) -> Vec<Cavity> {
     measure::cavities(mesh, &atoms, &params, &cavity_options()).expect("cavities measure")
 }
 
-/// The layer's cavities are those of its own mesh: one void, its walls in the cavity colour,
+/// The layer's cavities are those of its own mesh: one void, its walls in id 1's colour,
 /// as many triangles as the void's wall, facing out of the void (the mesh's winding reversed:
 /// a positive enclosed volume).
 fn check_layer(backend: &str, layer: &LayerResult, mesh: &Mesh) {
@@ -117,7 +117,10 @@ fn check_layer(backend: &str, layer: &LayerResult, mesh: &Mesh) {
         found.lining[0]
     );
     let walls = &found.mesh;
-    assert!(walls.colours.iter().all(|c| *c == CAVITY_RGB), "{backend}");
+    assert!(
+        walls.colours.iter().all(|c| *c == cavity_rgb(1)),
+        "{backend}"
+    );
     let wall = measure::components(mesh)
         .expect("components")
         .into_iter()
@@ -164,7 +167,7 @@ fn gpu_layer_carries_the_cavities_of_its_read_back_mesh() {
 }
 
 /// What the window and `render` draw ([`GpuScene::show_layers`]): the surface, then its
-/// cavities as one more layer, opaque and in the cavity colour under a see-through surface; no
+/// cavities as one more layer, opaque and in its walls' own colours under a see-through surface; no
 /// cavity layer once the switch is off in the representation drawn.
 #[test]
 fn cavities_are_drawn_as_an_opaque_layer_after_their_surface() {
@@ -189,7 +192,7 @@ fn cavities_are_drawn_as_an_opaque_layer_after_their_surface() {
     assert_eq!(scene.layer_mut(0).opacity, Some(0.3));
     assert_eq!(scene.layer_mut(0).colour, None);
     assert_eq!(scene.layer_mut(1).opacity, Some(1.0));
-    assert_eq!(scene.layer_mut(1).colour, Some(CAVITY_RGB));
+    assert_eq!(scene.layer_mut(1).colour, None, "the walls' vertex colours");
     let off = Representation {
         cavities: false,
         ..drawn
