@@ -196,13 +196,17 @@ fn salvage_bytes(bytes: &[u8]) -> Result<Salvage, TngDamage> {
     rehash(&mut kept, info);
     // Frame set contents end with: next, previous, medium-stride next and previous, long-stride
     // next and previous frame set positions, the first frame's time and the time per frame.
+    // A next pointer must lead forward to a kept frame set; any other (past the cut, or a
+    // hostile one pointing back, which would loop the library) is cleared.
+    let kept_sets: Vec<i64> = frame_sets[..j].iter().map(|b| b.offset as i64).collect();
     for set in &frame_sets[..j] {
         if set.contents < 64 {
             return Err(reason);
         }
         let end = set.end();
         for back in [64, 48, 32] {
-            if ints.get(&kept, end - back) >= cut as i64 {
+            let next = ints.get(&kept, end - back);
+            if next <= set.offset as i64 || !kept_sets.contains(&next) {
                 ints.put(&mut kept, end - back, -1);
             }
         }
@@ -354,5 +358,20 @@ mod tests {
             }
         }
         assert!(kept_any > 0, "no cut kept a frame set");
+    }
+
+    #[test]
+    fn fuzz_findings_keep_copies_that_pass_the_check() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fuzz/tng");
+        let mut seen = 0;
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            let bytes = std::fs::read(&path).unwrap();
+            if let Ok(Some(copy)) = check_chain(&bytes) {
+                assert_eq!(check_chain(&copy), Ok(None), "{}", path.display());
+            }
+            seen += 1;
+        }
+        assert!(seen > 0, "no finding in {dir}");
     }
 }
