@@ -22,6 +22,7 @@ use crate::gpu::resources::Buffers;
 use crate::gpu::timing::Timer;
 use crate::gpu::types::{GpuCounters, pack_colour};
 use crate::gpu::{GpuError, inputs};
+use crate::model::exposure::ExposureModel;
 use crate::surface::{
     AtomSet, GridSpec, Mesh, MeshCounts, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
     SurfaceParams, VertexMode,
@@ -203,7 +204,26 @@ impl GpuEngine {
 
     /// Bytes of GPU memory the engine's buffers hold.
     pub fn gpu_bytes(&self) -> u64 {
-        self.buffers.bytes()
+        self.buffers.bytes() + self.stages.exposure.bytes()
+    }
+
+    /// Makes the engine compute the atoms' radii from exposure ([`crate::gpu::exposure`]):
+    /// `Some((model, heavy))`, one heavy flag per atom, and the radii each frame gives are the
+    /// atoms' own, which the device multiplies by the model's factor of their heavy neighbour
+    /// counts; `None` (the default): the radii given are used as they are. A model that does
+    /// not [`crate::gpu::exposure::runs_on_gpu`] counts as `None`. Returns true when the
+    /// engine now computes the radii (otherwise the caller gives the frame's radii). A change
+    /// makes the next frame a full one.
+    pub fn set_exposure(&mut self, exposure: Option<(ExposureModel, &[bool])>) -> bool {
+        if self.stages.exposure.set(exposure) {
+            self.state.params = None;
+        }
+        self.stages.exposure.active()
+    }
+
+    /// True when the engine computes radii from exposure ([`GpuEngine::set_exposure`]).
+    pub fn exposure_on_device(&self) -> bool {
+        self.stages.exposure.active()
     }
 
     /// Makes the next [`SurfaceEngine::compute`] a full frame (upload, binning, density) even
