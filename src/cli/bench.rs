@@ -337,11 +337,12 @@ fn time_case(
         let t1 = Instant::now();
         // Radii that follow exposure (`--preset ses`): the GPU engine counts them on the
         // device from the particles' own radii; the CPU engine gets the host's.
-        let gpu_exposure = match (&*source, &mut *engine) {
-            (Source::Real(sys), BenchEngine::Gpu(gpu)) => {
-                gpu.set_exposure(sys.particles.exposure())
-            }
-            _ => false,
+        let gpu_exposure = match &mut *engine {
+            BenchEngine::Gpu(gpu) => gpu.set_exposure(match &*source {
+                Source::Real(sys) => sys.particles.exposure(),
+                Source::Synthetic(_) => None,
+            }),
+            BenchEngine::Cpu(_) => false,
         };
         let frame_radii = match source {
             Source::Real(sys) if !gpu_exposure => sys.particles.frame_radii(&positions),
