@@ -202,9 +202,16 @@ impl GpuEngine {
         self.ctx.objects()
     }
 
-    /// Bytes of GPU memory the engine's buffers hold.
+    /// Bytes of GPU memory the engine's buffers hold (the exposure pass's only while it runs:
+    /// unused, its nine placeholders of 16 bytes are left out, as the plan leaves them out).
     pub fn gpu_bytes(&self) -> u64 {
-        self.buffers.bytes() + self.stages.exposure.bytes()
+        let exposure = &self.stages.exposure;
+        self.buffers.bytes()
+            + if exposure.active() {
+                exposure.bytes()
+            } else {
+                0
+            }
     }
 
     /// Makes the engine compute the atoms' radii from exposure ([`crate::gpu::exposure`]):
