@@ -335,9 +335,18 @@ fn time_case(
         let t0 = Instant::now();
         let read_ms = read_frame(source, i, &mut positions)?;
         let t1 = Instant::now();
+        // Radii that follow exposure (`--preset ses`): the GPU engine counts them on the
+        // device from the particles' own radii; the CPU engine gets the host's.
+        let gpu_exposure = match &mut *engine {
+            BenchEngine::Gpu(gpu) => gpu.set_exposure(match &*source {
+                Source::Real(sys) => sys.particles.exposure(),
+                Source::Synthetic(_) => None,
+            }),
+            BenchEngine::Cpu(_) => false,
+        };
         let frame_radii = match source {
-            Source::Real(sys) => sys.particles.frame_radii(&positions),
-            Source::Synthetic(_) => None,
+            Source::Real(sys) if !gpu_exposure => sys.particles.frame_radii(&positions),
+            _ => None,
         };
         let atoms = match source {
             Source::Real(sys) => {
@@ -386,6 +395,7 @@ fn time_case(
         triangles: last_triangles,
         read_ms: median(reads),
         stages: StageTimings {
+            exposure_ms: med(&|s| s.exposure_ms),
             upload_ms: med(&|s| s.upload_ms),
             bin_ms: med(&|s| s.bin_ms),
             density_ms: med(&|s| s.density_ms),

@@ -1,12 +1,14 @@
 //! The result table of `mdsurf bench`: one row per case and engine with per-stage medians (ms),
 //! frames per second and peak memory, as aligned text for the terminal and as CSV.
+//! `exposure_ms` is the GPU's pass of the SES preset's exposure radii (`--preset ses`,
+//! [`mdsurf::gpu::exposure`]); the CPU engine's counts are host work before it, in no column.
 //! `bricks_active_%` is "-" on the GPU engine: it marches every brick some atom reaches
 //! (`bricks_occupied_%`) and does not count the bricks the surface crosses.
 
 use super::bench::BenchResult;
 
 /// Column headers, in order (text and CSV share them).
-pub const COLUMNS: [&str; 18] = [
+pub const COLUMNS: [&str; 19] = [
     "case",
     "backend",
     "atoms",
@@ -15,6 +17,7 @@ pub const COLUMNS: [&str; 18] = [
     "triangles",
     "read_ms",
     "upload_ms",
+    "exposure_ms",
     "bin_ms",
     "density_ms",
     "mc_ms",
@@ -49,6 +52,7 @@ impl Table {
                     r.triangles.to_string(),
                     format!("{:.2}", r.read_ms),
                     format!("{:.2}", s.upload_ms),
+                    format!("{:.2}", s.exposure_ms),
                     format!("{:.2}", s.bin_ms),
                     format!("{:.2}", s.density_ms),
                     format!("{:.2}", s.mc_ms),

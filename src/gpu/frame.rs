@@ -1,4 +1,5 @@
-//! Recording one frame's compute work (DESIGN section 3, steps 2 to 5): binning and, on sparse
+//! Recording one frame's compute work (DESIGN section 3, steps 2 to 5): the exposure radii of
+//! the SES preset when the engine has a model ([`super::exposure`]), binning and, on sparse
 //! bricks, the list of reached bricks ([`super::bricks`]), then per z-slab the density pass (over
 //! the reached bricks into their brick slots, or over every voxel) and the Marching Cubes
 //! pass (classify, three scans, compaction, emission and, with refined vertices, refinement),
@@ -12,6 +13,7 @@ use super::bin::Binner;
 use super::bricks::BrickStage;
 use super::context::GpuContext;
 use super::density::{DensityGather, DensityMode, DensityStage};
+use super::exposure::ExposureStage;
 use super::mc::{Classify, Compact, Emit, Refine};
 use super::measure::Measure;
 use super::plan::{FramePlan, Slab};
@@ -39,6 +41,8 @@ pub enum Work {
 pub struct Stages {
     scanner: Scanner,
     binner: Binner,
+    /// The SES preset's exposure radii, before binning (when the engine has a model).
+    pub(crate) exposure: ExposureStage,
     bricks: BrickStage,
     density: DensityStage,
     classify: Classify,
@@ -90,6 +94,7 @@ impl<'a> Recorder<'a> {
         self.ctx.wait()?;
         let ms = start.elapsed().as_secs_f64() * 1e3;
         match stage {
+            Stage::Exposure => t.exposure_ms += ms,
             Stage::Bin => t.bin_ms += ms,
             Stage::Density => t.density_ms += ms,
             Stage::Mc => t.mc_ms += ms,
@@ -151,6 +156,7 @@ impl Stages {
         Stages {
             scanner: Scanner::new(ctx, max_groups),
             binner: Binner::new(ctx, max_groups),
+            exposure: ExposureStage::new(ctx, max_groups),
             bricks: BrickStage::new(ctx, max_groups),
             density: DensityStage::new(ctx),
             classify: Classify::new(ctx),
@@ -196,6 +202,7 @@ impl Stages {
         b.slab_uniforms.write(ctx, &self.slab_values);
         let b = &*b;
         if work != Work::Mc {
+            self.exposure.prepare(ctx, &self.scanner, b, plan, atoms);
             self.binner
                 .prepare(ctx, &self.scanner, b, plan, atoms, params.radius_scale);
             if sparse {
@@ -242,6 +249,7 @@ impl Stages {
     /// [`Work::Full`] on sparse bricks): the engine counts a first frame's reached bricks from
     /// the slot table it writes before sizing the brick slots.
     pub fn record_bricks(&self, rec: &mut Recorder<'_>, b: &Buffers) {
+        self.exposure.record(rec.encoder(), &self.scanner, None);
         self.binner.record(rec.encoder(), &self.scanner, b, None);
         self.bricks.record(rec.encoder(), &self.scanner);
     }
@@ -262,6 +270,11 @@ impl Stages {
         colour: bool,
         refined: bool,
     ) -> Result<(), GpuError> {
+        if work != Work::Mc && self.exposure.active() {
+            let ts = timer.pass(Stage::Exposure);
+            self.exposure.record(rec.encoder(), &self.scanner, ts);
+            rec.end_stage(Stage::Exposure)?;
+        }
         if work != Work::Mc {
             let ts = timer.pass(Stage::Bin);
             self.binner.record(rec.encoder(), &self.scanner, b, ts);

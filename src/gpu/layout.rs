@@ -29,7 +29,7 @@ pub struct Slot {
     pub kind: Kind,
 }
 
-const fn slot(binding: u32, name: &'static str, kind: Kind) -> Slot {
+pub(crate) const fn slot(binding: u32, name: &'static str, kind: Kind) -> Slot {
     Slot {
         binding,
         name,
@@ -398,6 +398,7 @@ pub const SHADERS: &[(&str, &[Slot])] = &[
     ("emit.wgsl", emit::ALL),
     ("refine.wgsl", refine::ALL),
     ("measure.wgsl", measure::ALL),
+    ("exposure.wgsl", crate::gpu::exposure::slots::ALL),
 ];
 
 /// One disagreement between a binding table and the WGSL; one line naming the shader file.

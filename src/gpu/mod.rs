@@ -1,6 +1,6 @@
 //! The GPU surface engine: the whole per-frame surface computed in wgpu compute shaders
 //! (DESIGN section 3). Atoms are uploaded ([`engine`]), binned into cells by counting sort
-//! ([`bin`], [`scan`]), the sparse bricks the atoms reach listed ([`bricks`]), the density and
+//! ([`bin`], [`scan`]; before it, the SES preset's exposure radii, [`exposure`]), the sparse bricks the atoms reach listed ([`bricks`]), the density and
 //! colour volumes gathered per voxel of those bricks ([`density`]), and the
 //! surface extracted by Marching Cubes ([`mc`]: classify, compact, emit) and measured
 //! ([`measure`]). [`frame`] records a frame's passes, [`plan`] sizes it (cells, z-slabs),
@@ -20,6 +20,7 @@ pub(crate) mod bricks;
 pub(crate) mod context;
 pub(crate) mod density;
 pub mod engine;
+pub mod exposure;
 pub(crate) mod factory;
 pub mod frame;
 pub mod inputs;

@@ -211,7 +211,7 @@ impl Buffers {
         let copy = U::COPY_DST | U::COPY_SRC;
         let buffers = Buffers {
             positions: Grow::new(device, "positions", U::COPY_DST),
-            radii: Grow::new(device, "radii", U::COPY_DST),
+            radii: Grow::new(device, "radii", U::COPY_DST | U::COPY_SRC),
             colours: Grow::new(device, "colours", U::COPY_DST),
             sorted_atoms: Grow::new(device, "sorted atoms", U::empty()),
             sorted_colours: Grow::new(device, "sorted colours", U::empty()),

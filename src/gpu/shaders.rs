@@ -94,6 +94,9 @@ pub const REFINE: &str = wgsl!(
 /// and the exact Gaussian sum, `shaders/field.wgsl`, which its sharp triangles are measured on).
 pub const MEASURE: &str = wgsl!("counters.wgsl", "field.wgsl", "measure.wgsl");
 
+/// Exposure counts and radii of the SES preset (`shaders/exposure.wgsl`).
+pub const EXPOSURE: &str = wgsl!("exposure.wgsl");
+
 /// Every compute stage as `(file name, full source)`, for validation.
 pub const ALL: &[(&str, &str)] = &[
     ("bin.wgsl", BIN),
@@ -105,6 +108,7 @@ pub const ALL: &[(&str, &str)] = &[
     ("emit.wgsl", EMIT),
     ("refine.wgsl", REFINE),
     ("measure.wgsl", MEASURE),
+    ("exposure.wgsl", EXPOSURE),
 ];
 
 #[cfg(test)]

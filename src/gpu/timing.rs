@@ -9,6 +9,8 @@ use crate::surface::StageTimings;
 /// Which paper stage a compute pass belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
+    /// Exposure counts and radii of the SES preset ([`super::exposure`]).
+    Exposure,
     /// Binning (t_sort).
     Bin,
     /// Density and colour gather (t_d).
@@ -108,6 +110,7 @@ impl Timer {
         for (stage, pair) in passes.iter().zip(ticks.chunks_exact(2)) {
             let ms = pair[1].saturating_sub(pair[0]) as f64 * self.period_ns / 1e6;
             match stage {
+                Stage::Exposure => t.exposure_ms += ms,
                 Stage::Bin => t.bin_ms += ms,
                 Stage::Density => t.density_ms += ms,
                 Stage::Mc => t.mc_ms += ms,

@@ -24,6 +24,36 @@ pub struct BinUniform {
 }
 const _: () = assert!(std::mem::size_of::<BinUniform>() == 48);
 
+/// Exposure counting parameters ([`super::exposure`]). Twin: `ExposureUniform` in
+/// `shaders/exposure.wgsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
+pub struct ExposureUniform {
+    /// Corner of cell (0, 0, 0) in Å.
+    pub cell_origin: [f32; 3],
+    /// Edge of one cubic cell in Å.
+    pub cell_size: f32,
+    /// Cells along x, y, z.
+    pub cell_dims: [u32; 3],
+    /// Number of atoms.
+    pub atom_count: u32,
+    /// Number of heavy atoms.
+    pub heavy_count: u32,
+    /// Cell offsets in the offsets buffer.
+    pub offset_count: u32,
+    /// Count at which an atom stops counting (the model's saturation).
+    pub cap: u32,
+    /// Square of the counting radius in Å² (rounded as the host rounds it).
+    pub radius_sq: f32,
+    /// Always 0: keeps the squares of distances from being fused into multiply-adds.
+    pub zero_bits: u32,
+    /// Total number of cells.
+    pub cell_count: u32,
+    /// Padding to 16 bytes.
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<ExposureUniform>() == 64);
+
 /// Exclusive-scan level parameters. Twin: `ScanUniform` in `shaders/scan.wgsl`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]

@@ -182,6 +182,15 @@ impl Particles {
         Some(model.apply(&self.radii, positions, heavy))
     }
 
+    /// How the radii follow exposure, when they do: the model and which particles are heavy
+    /// atoms (the GPU engine computes [`Particles::frame_radii`] itself from these,
+    /// [`crate::gpu::exposure`]).
+    pub fn exposure(&self) -> Option<(ExposureModel, &[bool])> {
+        self.exposure
+            .as_ref()
+            .map(|(heavy, model)| (*model, heavy.as_slice()))
+    }
+
     /// The engine input for `positions` (from [`Particles::positions`]), with colours and the
     /// constant radii ([`Particles::frame_radii`] gives those of a frame when they follow
     /// exposure; [`crate::scene::layer::LayerFrame::atom_set`] uses them).

@@ -35,7 +35,8 @@ pub struct RepRequest {
 pub struct ParticleData {
     /// Positions in Å.
     pub positions: Vec<Vec3>,
-    /// Radii in Å.
+    /// Radii in Å: this frame's, or, for a GPU surface whose radii follow exposure, the
+    /// particles' own (the engine applied the exposure on the device, [`crate::gpu::exposure`]).
     pub radii: Arc<Vec<f32>>,
     /// Linear RGB colours.
     pub colours: Arc<Vec<[f32; 3]>>,

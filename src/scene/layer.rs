@@ -139,6 +139,18 @@ impl Layer {
 
     /// The particles of this representation in `frame`.
     pub fn frame(&mut self, topology: &Topology, frame: &Frame) -> Result<LayerFrame, LayerError> {
+        self.frame_with(topology, frame, true)
+    }
+
+    /// [`Layer::frame`]; with `host_exposure` false, radii that follow exposure are left to the
+    /// engine ([`LayerFrame::frame_radii`] stays `None` and the radii are the particles' own:
+    /// the GPU engine counts the exposure itself, [`crate::gpu::exposure`]).
+    pub fn frame_with(
+        &mut self,
+        topology: &Topology,
+        frame: &Frame,
+        host_exposure: bool,
+    ) -> Result<LayerFrame, LayerError> {
         let model_err = |source| LayerError::Model {
             name: self.rep.name.clone(),
             source,
@@ -178,7 +190,11 @@ impl Layer {
             unreachable!("built above")
         };
         let positions = particles.positions(frame).map_err(model_err)?;
-        let frame_radii = particles.frame_radii(&positions);
+        let frame_radii = if host_exposure {
+            particles.frame_radii(&positions)
+        } else {
+            None
+        };
         Ok(LayerFrame {
             particles: particles.clone(),
             positions,

@@ -289,6 +289,7 @@ impl CpuEngine {
             area,
             volume: enclosed,
             timings: StageTimings {
+                exposure_ms: 0.0,
                 upload_ms: 0.0,
                 bin_ms,
                 density_ms,

@@ -78,6 +78,9 @@ impl AtomSet<'_> {
 /// Wall-clock or GPU-timestamp time of each stage, in milliseconds (0 where a stage did not run).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimings {
+    /// Exposure counts and radii of the SES preset on the GPU (0 elsewhere: the host computes
+    /// them with the particles, [`crate::model::exposure`]).
+    pub exposure_ms: f64,
     /// Upload of positions (and radii/colours when they changed) to the engine.
     pub upload_ms: f64,
     /// Binning atoms into cells (the paper's t_sort).
@@ -89,9 +92,10 @@ pub struct StageTimings {
 }
 
 impl StageTimings {
-    /// Binning + density + Marching Cubes in ms (the paper's Table 1 total).
+    /// Exposure + binning + density + Marching Cubes in ms (without exposure radii, the
+    /// paper's Table 1 total).
     pub fn compute_ms(&self) -> f64 {
-        self.bin_ms + self.density_ms + self.mc_ms
+        self.exposure_ms + self.bin_ms + self.density_ms + self.mc_ms
     }
 }
 

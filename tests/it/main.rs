@@ -33,6 +33,7 @@ mod export_atomic;
 mod export_formats;
 mod export_gltf_anim;
 mod gpu_double_buffer;
+mod gpu_exposure;
 mod gpu_frames;
 mod gpu_parity;
 mod gpu_plan_memory;

@@ -46,6 +46,22 @@ impl GpuEngine {
         Ok(sparse_classes(plan, &table, &entries))
     }
 
+    /// Test hook: the radii (Å) the last frame binned: the given ones, or those its exposure
+    /// pass wrote ([`GpuEngine::set_exposure`]).
+    pub fn read_radii(&self) -> Result<Vec<f32>, GpuError> {
+        let n = self.state.atoms;
+        self.staging()?
+            .read_pod(&self.ctx, &self.buffers.radii.buffer, n)
+    }
+
+    /// Test hook: the heavy atoms the last frame's exposure pass counted per atom (capped at
+    /// the model's saturation).
+    pub fn read_exposure_counts(&self) -> Result<Vec<u32>, GpuError> {
+        let n = self.state.atoms;
+        self.staging()?
+            .read_pod(&self.ctx, self.stages.exposure.counts_buffer(), n)
+    }
+
     /// Test hook: first slot of every bin cell after the scan.
     pub fn read_cell_starts(&self) -> Result<Vec<u32>, GpuError> {
         self.read_planned(&self.buffers.cell_start.buffer, FramePlan::cell_count)

@@ -22,6 +22,7 @@ use crate::gpu::resources::Buffers;
 use crate::gpu::timing::Timer;
 use crate::gpu::types::{GpuCounters, pack_colour};
 use crate::gpu::{GpuError, inputs};
+use crate::model::exposure::ExposureModel;
 use crate::surface::{
     AtomSet, GridSpec, Mesh, MeshCounts, StageTimings, SurfaceEngine, SurfaceError, SurfaceOutput,
     SurfaceParams, VertexMode,
@@ -201,9 +202,35 @@ impl GpuEngine {
         self.ctx.objects()
     }
 
-    /// Bytes of GPU memory the engine's buffers hold.
+    /// Bytes of GPU memory the engine's buffers hold (the exposure pass's only while it runs:
+    /// unused, its nine placeholders of 16 bytes are left out, as the plan leaves them out).
     pub fn gpu_bytes(&self) -> u64 {
+        let exposure = &self.stages.exposure;
         self.buffers.bytes()
+            + if exposure.active() {
+                exposure.bytes()
+            } else {
+                0
+            }
+    }
+
+    /// Makes the engine compute the atoms' radii from exposure ([`crate::gpu::exposure`]):
+    /// `Some((model, heavy))`, one heavy flag per atom, and the radii each frame gives are the
+    /// atoms' own, which the device multiplies by the model's factor of their heavy neighbour
+    /// counts; `None` (the default): the radii given are used as they are. A model that does
+    /// not [`crate::gpu::exposure::runs_on_gpu`] counts as `None`. Returns true when the
+    /// engine now computes the radii (otherwise the caller gives the frame's radii). A change
+    /// makes the next frame a full one.
+    pub fn set_exposure(&mut self, exposure: Option<(ExposureModel, &[bool])>) -> bool {
+        if self.stages.exposure.set(exposure) {
+            self.state.params = None;
+        }
+        self.stages.exposure.active()
+    }
+
+    /// True when the engine computes radii from exposure ([`GpuEngine::set_exposure`]).
+    pub fn exposure_on_device(&self) -> bool {
+        self.stages.exposure.active()
     }
 
     /// Makes the next [`SurfaceEngine::compute`] a full frame (upload, binning, density) even

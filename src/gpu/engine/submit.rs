@@ -82,9 +82,23 @@ impl GpuEngine {
             let (lo, hi, max_r) = inputs::bounds(atoms, changes.radii, old_r)?;
             st.bounds = Some((lo, hi, max_r));
         }
-        let Some((lo, hi, max_r)) = st.bounds else {
+        let Some((lo, hi, own_max_r)) = st.bounds else {
             return Err(SurfaceError::EmptySystem);
         };
+        // Radii that follow exposure are computed on the device: the grid is sized for the
+        // largest they can be (the largest own radius times the model's largest factor).
+        let exposure = &self.stages.exposure;
+        if exposure.active() && exposure.atoms() != atoms.positions.len() {
+            return Err(SurfaceError::InvalidParameter {
+                name: "heavy atom flags",
+                value: format!(
+                    "{} entries for {} atoms",
+                    exposure.atoms(),
+                    atoms.positions.len()
+                ),
+            });
+        }
+        let max_r = own_max_r * exposure.max_factor();
         let grid = GridSpec::for_atoms(&[lo, hi], &[max_r], params)?;
         let plan = plan_frame(
             grid,
@@ -170,7 +184,9 @@ impl GpuEngine {
                 bytemuck::cast_slice(atoms.positions),
             );
         }
-        if changes.radii || replaced {
+        if (changes.radii || replaced) && self.stages.exposure.active() {
+            self.stages.exposure.upload_radii(&self.ctx, atoms.radii);
+        } else if changes.radii || replaced {
             q.write_buffer(
                 &self.buffers.radii.buffer,
                 0,
@@ -213,7 +229,7 @@ impl GpuEngine {
             }
         }
         let set = st.output_set;
-        self.timer.begin_frame(d, 2 + 2 * plan.slabs.len() as u32);
+        self.timer.begin_frame(d, 3 + 2 * plan.slabs.len() as u32);
         self.stages.prepare(
             &self.ctx,
             &mut self.buffers,

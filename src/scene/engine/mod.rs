@@ -17,6 +17,10 @@
 //! [`SceneEngine::read_mesh`] brings it back when a caller needs the triangles. Periodic
 //! surfaces (`--periodic`) come from the CPU periodic engine whatever the backend.
 //!
+//! On the GPU, radii that follow exposure (the SES preset) are counted by the engine
+//! ([`crate::gpu::exposure`]): the layer skips its host pass and the result's particles keep
+//! their own radii, unless cavities, exposure colours or periodic surfaces need the frame's.
+//!
 //! A surface coloured by exposure ([`ColorScheme::Exposure`]) takes a second pass once its
 //! first gives the areas: see [`super::exposure`].
 //!
@@ -36,6 +40,7 @@ use super::exposure::{ExposureColouring, exposure_failed};
 use super::frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
 use super::layer::{Layer, LayerFrame};
 use super::representation::Representation;
+use crate::gpu::exposure::runs_on_gpu;
 use crate::gpu::{Changes, GpuEngine, Work};
 use crate::model::{ColorScheme, ColourMap, Frame, RadiusOverrides, Topology};
 use crate::surface::periodic::PeriodicEngine;
@@ -303,9 +308,18 @@ impl SceneEngine {
                 ..(**last).clone()
             })));
         }
+        // Radii that follow exposure are counted by the GPU engine itself (issue 33) when no
+        // host step needs this frame's radii (cavities, exposure colours, periodic surfaces
+        // read them): the particles then keep their own radii here.
+        let exposure_on_gpu = matches!(self.backend, SceneBackend::Gpu(_))
+            && rep.style.is_surface()
+            && self.replicate.is_none()
+            && !rep.cavities
+            && exposure_map(rep, false).is_none()
+            && rep.radii.exposure().is_some_and(|m| runs_on_gpu(&m));
         let lf = slot
             .layer
-            .frame(topology, frame)
+            .frame_with(topology, frame, !exposure_on_gpu)
             .map_err(|source| SceneError::Particles {
                 frame: index,
                 source,
@@ -413,6 +427,8 @@ impl SceneEngine {
                             slot.gpu.get_or_insert_with(|| sibling_of(main)).as_mut()
                         };
                         e.set_vertices(rep.vertices);
+                        let exposure = lf.particles.exposure().filter(|_| exposure_on_gpu);
+                        e.set_exposure(exposure);
                         let info = e
                             .submit(&atoms, &rep.params(), changes)
                             .map_err(surface_failed)?;

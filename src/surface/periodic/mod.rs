@@ -269,6 +269,7 @@ impl PeriodicEngine {
         }
         let mesh = replicate_mesh(mesh, grid.extent(), replicate);
         let timings = StageTimings {
+            exposure_ms: 0.0,
             upload_ms: 0.0,
             bin_ms,
             density_ms,

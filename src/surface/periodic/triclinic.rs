@@ -351,6 +351,7 @@ pub fn compute(
     let mesh = to_cartesian(index_mesh, &geo, replicate);
     let area = area.unwrap_or_else(|| mesh.area());
     let timings = StageTimings {
+        exposure_ms: 0.0,
         upload_ms: 0.0,
         bin_ms,
         density_ms,
