@@ -118,7 +118,13 @@ fn count_neighbours(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_
             continue;
         }
         let cell = cell_index(c);
-        let last = atomicLoad(&cell_end[cell]);
+        // The scan's starts are exclusive: a cell ends where the next begins (the last cell at
+        // the heavy count). Not cell_end: count_neighbours keeps to 8 storage buffers, the
+        // WebGPU default per stage.
+        var last = u.heavy_count;
+        if (cell + 1u < u.cell_count) {
+            last = cell_start[cell + 1u];
+        }
         for (var s = cell_start[cell]; s < last; s++) {
             // As glam's q.distance_squared(p): ((dx * dx) + (dy * dy)) + (dz * dz).
             let d = sorted_heavy[s].xyz - p;
