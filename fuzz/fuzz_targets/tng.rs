@@ -7,7 +7,9 @@
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     if let Ok(Some(kept)) = mdsurf::io::check_tng_chain(data) {
-        assert!(kept.len() < data.len(), "the kept copy is not shorter");
+        // Not shorter in every case: a chain cut at a block boundary keeps every byte and
+        // only clears the index's pointers to the missing frame sets.
+        assert!(kept.len() <= data.len(), "the kept copy is longer");
         assert_eq!(
             mdsurf::io::check_tng_chain(&kept),
             Ok(None),
