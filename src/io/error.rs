@@ -126,6 +126,55 @@ pub enum IoError {
 }
 
 impl IoError {
+    /// The same error with the file `from` called `to` (its path fields, and where a message
+    /// quotes it): a trajectory downloaded from a URL names the URL, not its temporary copy.
+    pub(crate) fn renamed(mut self, from: &std::path::Path, to: &std::path::Path) -> Self {
+        let rename = |path: &mut PathBuf| {
+            if path == from {
+                *path = to.to_path_buf();
+            }
+        };
+        let (old, new) = (from.display().to_string(), to.display().to_string());
+        let requote = |text: &mut String| {
+            if !old.is_empty() && text.contains(&old) {
+                *text = text.replace(&old, &new);
+            }
+        };
+        match &mut self {
+            IoError::NotFound { path, reason: text }
+            | IoError::Unreadable {
+                path,
+                message: text,
+            }
+            | IoError::BadFrame {
+                path,
+                message: text,
+                ..
+            }
+            | IoError::LiveEnded {
+                path, reason: text, ..
+            } => {
+                rename(path);
+                requote(text);
+            }
+            IoError::UnknownFormat { path, .. }
+            | IoError::FrameOutOfRange { path, .. }
+            | IoError::NonFiniteCoordinate { path, .. }
+            | IoError::AbsurdCoordinate { path, .. }
+            | IoError::Empty { path, .. }
+            | IoError::NeedsTopology { path } => rename(path),
+            IoError::AtomCountMismatch {
+                topology,
+                trajectory,
+                ..
+            } => {
+                rename(topology);
+                rename(trajectory);
+            }
+        }
+        self
+    }
+
     /// Builds an [`IoError::Unreadable`], squeezing a multi-line message onto one line.
     pub(crate) fn unreadable(path: &std::path::Path, message: impl std::fmt::Display) -> Self {
         IoError::Unreadable {

@@ -352,7 +352,11 @@ mod tests {
         let mut kept_any = 0;
         for cut in (bytes.len() / 2..bytes.len()).step_by(997) {
             if let Ok(Some(copy)) = check_chain(&bytes[..cut]) {
-                assert!(copy.len() <= cut, "a cut at {cut} kept {} bytes", copy.len());
+                assert!(
+                    copy.len() <= cut,
+                    "a cut at {cut} kept {} bytes",
+                    copy.len()
+                );
                 assert_eq!(check_chain(&copy), Ok(None), "the copy of a cut at {cut}");
                 kept_any += 1;
             }

@@ -271,3 +271,29 @@ fn the_header_walk_of_small_xtc_frames_takes_a_few_requests() {
         "{requests} requests for {size} bytes"
     );
 }
+
+#[test]
+fn a_damaged_downloaded_trajectory_names_its_url_not_the_copy() {
+    // The argon TNG cut inside its second frame set (which starts at byte 398576): locally
+    // frames 0-99 are read, then frame 100 is the damage.
+    let mut tng = std::fs::read(data("argon_npt_compressed.tng")).unwrap();
+    tng.truncate(398_576 + 103);
+    let server = Server::serve(Mode::Ranges, vec![("cut.tng".to_string(), tng)]);
+    let url = server.url("cut.tng");
+    let dir = tempfile::tempdir().unwrap();
+    let run = mdsurf(
+        dir.path(),
+        &["surface", &url, "--backend", "cpu", "--spacing", "2", "-q"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    let error = run.stderr.lines().find(|l| l.starts_with("error:"));
+    let error = error.unwrap_or_else(|| panic!("no error line in: {}", run.stderr));
+    assert!(
+        error.starts_with(&format!("error: {url}: frame 100: cannot read:")),
+        "{error}"
+    );
+    assert!(
+        !error.contains("mdsurf-http"),
+        "names the temporary copy: {error}"
+    );
+}

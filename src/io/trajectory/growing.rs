@@ -54,6 +54,7 @@ pub fn open_following(top: &Path, options: &FollowOptions) -> Result<Trajectory,
         damage: None,
         live,
         _download: None,
+        downloaded: Vec::new(),
     })
 }
 

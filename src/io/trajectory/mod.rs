@@ -57,6 +57,8 @@ pub struct Trajectory {
     live: Option<LiveCount>,
     /// The folder holding a topology downloaded from a URL, kept while the trajectory lives.
     _download: Option<tempfile::TempDir>,
+    /// (local copy, URL) of each downloaded file: errors name the URL.
+    downloaded: Vec<(PathBuf, PathBuf)>,
 }
 
 impl std::fmt::Debug for Trajectory {
@@ -276,6 +278,7 @@ fn open_with(top: &Path, traj: Option<&Path>, readers: Readers) -> Result<Trajec
         damage: None,
         live: None,
         _download: None,
+        downloaded: Vec::new(),
     };
     if let Some(w) = walk {
         trajectory.apply_walk(w)?;
@@ -361,9 +364,19 @@ impl Trajectory {
                 len: self.len,
             });
         }
-        let frame = self.lock().read_frame(index)?;
+        let frame = self
+            .lock()
+            .read_frame(index)
+            .map_err(|e| self.named_as_given(e))?;
         self.check_fits(&frame, index)?;
         Ok(frame)
+    }
+
+    /// `error` naming the URLs of downloaded files instead of their local copies.
+    fn named_as_given(&self, error: IoError) -> IoError {
+        self.downloaded
+            .iter()
+            .fold(error, |e, (local, url)| e.renamed(local, url))
     }
 
     /// Fails unless `frame` (frame `index`) has one position per topology atom.

@@ -14,7 +14,7 @@ use std::path::Path;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::frame_source::FrameSource;
-use super::{Readers, Trajectory, check_walk_atoms, open_with};
+use super::{Damage, Readers, Trajectory, check_walk_atoms, open_with};
 use crate::io::format::{FileFormat, detect_name};
 use crate::io::http::{self, READ_AHEAD_BYTES, RangeSource};
 use crate::io::xdr_reader::{XdrKind, XdrReader};
@@ -58,10 +58,33 @@ pub(super) fn open(top: &Path, traj: Option<&Path>) -> Result<Trajectory, IoErro
         },
         _ => None,
     };
-    let mut trajectory = open_with(&local_top, local_traj.as_deref(), Readers::Ours)?;
+    // (local copy, URL) of what was downloaded: errors name the URL the user gave.
+    let mut downloaded = Vec::new();
+    if local_top != top {
+        downloaded.push((local_top.clone(), top.to_path_buf()));
+    }
+    if let (Some(local), Some(given)) = (&local_traj, traj)
+        && local != given
+    {
+        downloaded.push((local.clone(), given.to_path_buf()));
+    }
+    let rename = |e: IoError| {
+        downloaded
+            .iter()
+            .fold(e, |e, (local, url)| e.renamed(local, url))
+    };
+    let mut trajectory =
+        open_with(&local_top, local_traj.as_deref(), Readers::Ours).map_err(rename)?;
     trajectory.topology_path = top.to_path_buf();
     trajectory.frames_path = traj.unwrap_or(top).to_path_buf();
     trajectory._download = folder;
+    if let Some(damage) = trajectory.damage.take() {
+        trajectory.damage = Some(Damage {
+            frame: damage.frame,
+            error: rename(damage.error),
+        });
+    }
+    trajectory.downloaded = downloaded;
     Ok(trajectory)
 }
 
