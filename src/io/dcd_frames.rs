@@ -17,7 +17,6 @@
 //!
 //! Errors are [`DcdError`]s, wrapped in an [`IoError`] naming the file (and frame).
 
-use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -122,15 +121,8 @@ fn frame_size(stored: usize, has_cell: bool, four_d: bool) -> u64 {
 
 /// Opens the DCD file `path` (bytes at `prepared.open_path`) and indexes its frames.
 pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoError> {
-    let file = File::open(&prepared.open_path).map_err(|e| IoError::NotFound {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    let total = file
-        .metadata()
-        .map_err(|e| IoError::unreadable(path, e))?
-        .len();
-    open_bytes(path, Positioned::File(file), total, Some(prepared))
+    let (bytes, total) = Positioned::open_file(path, &prepared.open_path)?;
+    open_bytes(path, bytes, total, Some(prepared))
 }
 
 /// Opens the DCD file `path` whose `total` bytes `source` holds (a URL read through range

@@ -9,6 +9,7 @@ use std::io::{self, SeekFrom};
 use std::os::unix::fs::FileExt;
 use std::sync::Mutex;
 
+use super::IoError;
 use super::xdr_reader::ByteSource;
 
 /// Where a reader's bytes are: a file, or another source of `size` bytes.
@@ -20,6 +21,23 @@ pub(crate) enum Positioned {
 }
 
 impl Positioned {
+    /// The local file at `open_path` (the user's file `path`, or its decompressed copy) and its
+    /// length in bytes; errors name `path`.
+    pub(crate) fn open_file(
+        path: &std::path::Path,
+        open_path: &std::path::Path,
+    ) -> Result<(Positioned, u64), IoError> {
+        let file = File::open(open_path).map_err(|e| IoError::NotFound {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        let total = file
+            .metadata()
+            .map_err(|e| IoError::unreadable(path, e))?
+            .len();
+        Ok((Positioned::File(file), total))
+    }
+
     /// Fills `buf` with the bytes at `offset` (bytes from the start).
     pub(crate) fn read_exact_at(&self, buf: &mut [u8], offset: u64) -> io::Result<()> {
         match self {

@@ -18,7 +18,6 @@
 mod error;
 mod header;
 
-use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -58,15 +57,8 @@ impl Slice {
 
 /// Opens the Amber NetCDF file `path` (bytes at `prepared.open_path`) and indexes its frames.
 pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoError> {
-    let file = File::open(&prepared.open_path).map_err(|e| IoError::NotFound {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    let total = file
-        .metadata()
-        .map_err(|e| IoError::unreadable(path, e))?
-        .len();
-    open_bytes(path, Positioned::File(file), total, Some(prepared))
+    let (bytes, total) = Positioned::open_file(path, &prepared.open_path)?;
+    open_bytes(path, bytes, total, Some(prepared))
 }
 
 /// Opens the Amber NetCDF file `path` whose `total` bytes `source` holds (a URL read through
