@@ -15,7 +15,7 @@ use crate::http_server::{Mode, Server};
 const MD: [&str; 2] = ["md_1u19.gro", "md_1u19.xtc"];
 
 /// `mdsurf surface TOP TRAJ --backend cpu --no-timings --stats STATS [EXTRA]` in `dir`.
-fn surface(dir: &Path, top: &str, traj: &str, stats: &str, extra: &[&str]) -> Run {
+pub(crate) fn surface(dir: &Path, top: &str, traj: &str, stats: &str, extra: &[&str]) -> Run {
     let mut args = vec![
         "surface",
         top,

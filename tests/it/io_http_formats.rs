@@ -10,36 +10,32 @@ use std::path::Path;
 
 use crate::cli_common::{Run, data, mdsurf};
 use crate::http_server::{Mode, Server};
+use crate::io_http::surface;
 
 /// Bytes the reader fetches past each read once frames are read (`http::READ_AHEAD_BYTES`).
 const READ_AHEAD: u64 = 256 * 1024;
 /// The reader's block (`http::BLOCK_BYTES`): a read may fetch up to one more at each end.
 const BLOCK: u64 = 4 * 1024;
 
-/// `mdsurf surface TOP TRAJ --backend cpu --no-timings --stats STATS --frames FRAMES` in `dir`.
-fn surface(dir: &Path, top: &str, traj: &str, stats: &str, frames: &str) -> Run {
-    let args = [
-        "surface",
-        top,
-        traj,
-        "--backend",
-        "cpu",
-        "--no-timings",
-        "--stats",
-        stats,
-        "--frames",
-        frames,
-    ];
-    mdsurf(dir, &args)
-}
-
 /// Runs `surface` on the local files and on the URLs; both succeed with the same stats
 /// (`rows` frames). Returns the remote run.
 fn same_as_local(local: (&str, &str), remote: (&str, &str), frames: &str, rows: usize) -> Run {
     let dir = tempfile::tempdir().unwrap();
-    let here = surface(dir.path(), local.0, local.1, "local.csv", frames);
+    let here = surface(
+        dir.path(),
+        local.0,
+        local.1,
+        "local.csv",
+        &["--frames", frames],
+    );
     assert_eq!(here.code, 0, "{}", here.stderr);
-    let there = surface(dir.path(), remote.0, remote.1, "remote.csv", frames);
+    let there = surface(
+        dir.path(),
+        remote.0,
+        remote.1,
+        "remote.csv",
+        &["--frames", frames],
+    );
     assert_eq!(there.code, 0, "{}", there.stderr);
     let here = std::fs::read_to_string(dir.path().join("local.csv")).unwrap();
     let there_stats = std::fs::read_to_string(dir.path().join("remote.csv")).unwrap();
@@ -92,14 +88,20 @@ fn a_cut_dcd_over_http_keeps_its_whole_frames_like_the_local_file() {
     // Frames 90 to the end: the 7 whole ones are written, then the cut frame 97 is the error,
     // for the URL as for the file.
     let pdb = data("adk_open.pdb");
-    let here = surface(dir.path(), &pdb, local.to_str().unwrap(), "l.csv", "90:");
+    let here = surface(
+        dir.path(),
+        &pdb,
+        local.to_str().unwrap(),
+        "l.csv",
+        &["--frames", "90:"],
+    );
     let url = server.url("cut.dcd");
     let there = surface(
         dir.path(),
         &server.url("adk_open.pdb"),
         &url,
         "r.csv",
-        "90:",
+        &["--frames", "90:"],
     );
     assert_ne!(here.code, 0, "{}", here.stderr);
     assert_eq!(there.code, here.code, "{}", there.stderr);
@@ -211,7 +213,7 @@ fn the_header_walk_of_102_xtc_frames_takes_few_requests() {
         &server.url("md_1u19.gro"),
         &server.url("twice.xtc"),
         "s.csv",
-        "101",
+        &["--frames", "101"],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
     let requests = server.requests("twice.xtc");
