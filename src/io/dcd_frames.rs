@@ -17,14 +17,14 @@
 //!
 //! Errors are [`DcdError`]s, wrapped in an [`IoError`] naming the file (and frame).
 
-use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::path::Path;
 
 use glam::{DMat3, DVec3, Vec3};
 
 use super::IoError;
-use super::native::{NativeFrames, NativeOpen};
+use super::native::NativeOpen;
 use super::positioned::Positioned;
+use super::positioned_frames::{Bytes, FrameDecoder, PositionedFrames};
 use super::prepare::Prepared;
 use super::reader_errors::DcdError;
 use super::unit_cell;
@@ -121,8 +121,7 @@ fn frame_size(stored: usize, has_cell: bool, four_d: bool) -> u64 {
 
 /// Opens the DCD file `path` (bytes at `prepared.open_path`) and indexes its frames.
 pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoError> {
-    let (bytes, total) = Positioned::open_file(path, &prepared.open_path)?;
-    open_bytes(path, bytes, total, Some(prepared))
+    open_bytes(path, Bytes::Local(prepared))
 }
 
 /// Opens the DCD file `path` whose `total` bytes `source` holds (a URL read through range
@@ -133,32 +132,33 @@ pub(crate) fn open_source(
     source: Box<dyn ByteSource>,
     total: u64,
 ) -> Result<NativeOpen, IoError> {
-    open_bytes(path, Positioned::Source(Mutex::new(source)), total, None)
+    open_bytes(path, Bytes::Remote { source, total })
 }
 
-/// Opens the DCD file `path` held in `bytes` (`total` bytes long) and indexes its frames.
-fn open_bytes(
-    path: &Path,
-    bytes: Positioned,
-    total: u64,
-    prepared: Option<Prepared>,
-) -> Result<NativeOpen, IoError> {
+/// Opens the DCD file `path` and indexes its frames.
+fn open_bytes(path: &Path, bytes: Bytes) -> Result<NativeOpen, IoError> {
+    let (bytes, total, prepared) = bytes.open(path)?;
     let layout = read_header(&bytes, total).map_err(|e| IoError::unreadable(path, e))?;
-    let mut reader = DcdFrames {
-        path: path.to_path_buf(),
-        bytes,
+    let (len, damage) = count_frames(&bytes, &layout, total);
+    let mut decoder = DcdDecoder {
         layout,
-        len: 0,
-        damage: None,
         fixed: Vec::new(),
         buffer: Vec::new(),
-        _prepared: prepared,
     };
-    reader.index(total)?;
-    Ok(NativeOpen {
-        topology: None,
-        frames: Box::new(reader),
-    })
+    if len > 0 && decoder.layout.free.is_some() {
+        decoder.fixed = decoder
+            .read(&bytes, 0)
+            .map_err(|reason| IoError::bad_frame(path, 0, reason))?
+            .positions;
+    }
+    PositionedFrames::open(
+        path,
+        (bytes, prepared),
+        len,
+        damage,
+        decoder,
+        DcdError::NoFrames,
+    )
 }
 
 /// Reads `len` bytes at `offset`, or says the file ends first.
@@ -276,93 +276,70 @@ fn read_header(file: &Positioned, total: u64) -> Result<Layout, DcdError> {
     Ok(layout)
 }
 
-/// An open DCD file.
-struct DcdFrames {
-    path: PathBuf,
-    /// The file's bytes (a file, or a URL read through range requests).
-    bytes: Positioned,
+/// Counts the frames `bytes` holds whole and checks every frame's record markers (over HTTP,
+/// each frame's when it is read): the count, and why the next frame cannot be read when the
+/// file holds more bytes.
+fn count_frames(bytes: &Positioned, layout: &Layout, total: u64) -> (usize, Option<DcdError>) {
+    let body = total.saturating_sub(layout.header_bytes);
+    let whole = if body < layout.first_bytes {
+        0
+    } else {
+        1 + ((body - layout.first_bytes) / layout.frame_bytes) as usize
+    };
+    let walk = if bytes.is_remote() { 0 } else { whole };
+    for index in 0..walk {
+        if let Err(reason) = check_markers(bytes, layout, index) {
+            return (index, Some(reason));
+        }
+    }
+    let end = layout.offset(whole);
+    if total > end {
+        let expected = if whole == 0 {
+            layout.first_bytes
+        } else {
+            layout.frame_bytes
+        };
+        let cut = DcdError::FrameCut {
+            have: total - end,
+            expected,
+            atoms: layout.stored(whole),
+        };
+        return (whole, Some(cut));
+    }
+    (whole, None)
+}
+
+/// Checks the Fortran record markers of frame `index` (which the file holds whole).
+fn check_markers(bytes: &Positioned, layout: &Layout, index: usize) -> Result<(), DcdError> {
+    let mut offset = layout.offset(index);
+    let mut marker = [0u8; 4];
+    for (record_bytes, what) in layout.records(index) {
+        for at in [offset, offset + 4 + record_bytes] {
+            bytes.read_exact_at(&mut marker, at)?;
+            let found = layout.int(&marker);
+            if found != record_bytes as i64 {
+                return Err(DcdError::RecordMarker {
+                    record: what,
+                    found,
+                    expected: record_bytes,
+                });
+            }
+        }
+        offset += 8 + record_bytes;
+    }
+    Ok(())
+}
+
+/// How a DCD file's frames are read: the layout its header gives.
+struct DcdDecoder {
     layout: Layout,
-    len: usize,
-    damage: Option<IoError>,
     /// Frame 0's positions (Å), for the fixed atoms of later frames; empty without fixed atoms.
     fixed: Vec<Vec3>,
     /// One frame's bytes.
     buffer: Vec<u8>,
-    /// Keeps a decompressed copy alive (none over HTTP).
-    _prepared: Option<Prepared>,
 }
 
-impl DcdFrames {
-    /// Counts the frames the file holds whole and checks every frame's record markers (over
-    /// HTTP, each frame's when it is read); the first cut or damaged frame is the damage.
-    fn index(&mut self, total: u64) -> Result<(), IoError> {
-        let layout = &self.layout;
-        let body = total.saturating_sub(layout.header_bytes);
-        let whole = if body < layout.first_bytes {
-            0
-        } else {
-            1 + ((body - layout.first_bytes) / layout.frame_bytes) as usize
-        };
-        let mut len = whole;
-        let mut damage = None;
-        let walk = if self.bytes.is_remote() { 0 } else { whole };
-        for index in 0..walk {
-            if let Err(reason) = self.check_markers(index) {
-                len = index;
-                damage = Some(reason);
-                break;
-            }
-        }
-        if damage.is_none() && len == whole {
-            let end = layout.offset(whole);
-            if total > end {
-                let expected = if whole == 0 {
-                    layout.first_bytes
-                } else {
-                    layout.frame_bytes
-                };
-                damage = Some(DcdError::FrameCut {
-                    have: total - end,
-                    expected,
-                    atoms: layout.stored(whole),
-                });
-            }
-        }
-        self.len = len;
-        self.damage = damage.map(|reason| IoError::bad_frame(&self.path, len, reason));
-        if len == 0 {
-            return Err(self
-                .damage
-                .clone()
-                .unwrap_or_else(|| IoError::unreadable(&self.path, DcdError::NoFrames)));
-        }
-        if self.layout.free.is_some() {
-            self.fixed = self.read_frame(0)?.positions;
-        }
-        Ok(())
-    }
-
-    /// Checks the Fortran record markers of frame `index` (which the file holds whole).
-    fn check_markers(&self, index: usize) -> Result<(), DcdError> {
-        let mut offset = self.layout.offset(index);
-        let mut marker = [0u8; 4];
-        for (bytes, what) in self.layout.records(index) {
-            for at in [offset, offset + 4 + bytes] {
-                self.bytes.read_exact_at(&mut marker, at)?;
-                let found = self.layout.int(&marker);
-                if found != bytes as i64 {
-                    return Err(DcdError::RecordMarker {
-                        record: what,
-                        found,
-                        expected: bytes,
-                    });
-                }
-            }
-            offset += 8 + bytes;
-        }
-        Ok(())
-    }
-
+impl DcdDecoder {
     /// The box of a frame from its cell record's six doubles.
     fn cell(&self, values: [f64; 6]) -> Result<Option<[Vec3; 3]>, DcdError> {
         if self.layout.charmm_version > 25 {
@@ -385,7 +362,7 @@ impl DcdFrames {
 }
 
 /// Checks the record markers of frame `index` in its bytes `frame` (what
-/// [`DcdFrames::check_markers`] checks in the file, for a frame read over HTTP).
+/// [`check_markers`] checks in the file, for a frame read over HTTP).
 fn check_markers_in(layout: &Layout, index: usize, frame: &[u8]) -> Result<(), DcdError> {
     let mut offset = 0usize;
     for (bytes, what) in layout.records(index) {
@@ -405,52 +382,25 @@ fn check_markers_in(layout: &Layout, index: usize, frame: &[u8]) -> Result<(), D
     Ok(())
 }
 
-impl NativeFrames for DcdFrames {
-    fn path(&self) -> &Path {
-        &self.path
-    }
+impl FrameDecoder for DcdDecoder {
+    const BASE: &'static str = "DCD";
+    type Error = DcdError;
 
-    fn base(&self) -> &'static str {
-        "DCD"
-    }
-
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    fn damage(&self) -> Option<&IoError> {
-        self.damage.as_ref()
-    }
-
-    fn is_remote(&self) -> bool {
-        self.bytes.is_remote()
-    }
-
-    fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
-        if index >= self.len {
-            return Err(IoError::FrameOutOfRange {
-                path: self.path.clone(),
-                frame: index,
-                len: self.len,
-            });
-        }
-        let bad = |reason: DcdError| IoError::bad_frame(&self.path, index, reason);
+    fn read(&mut self, bytes: &Positioned, index: usize) -> Result<Frame, DcdError> {
         let size = if index == 0 {
             self.layout.first_bytes
         } else {
             self.layout.frame_bytes
         } as usize;
         self.buffer.resize(size, 0);
-        self.bytes
-            .read_exact_at(&mut self.buffer, self.layout.offset(index))
-            .map_err(|e| bad(e.into()))?;
-        check_markers_in(&self.layout, index, &self.buffer).map_err(bad)?;
+        bytes.read_exact_at(&mut self.buffer, self.layout.offset(index))?;
+        check_markers_in(&self.layout, index, &self.buffer)?;
         let layout = &self.layout;
         let mut at = 0usize;
         let cell = if layout.has_cell {
             let values: [f64; 6] = std::array::from_fn(|k| layout.f64(&self.buffer[4 + 8 * k..]));
             at += 56;
-            self.cell(values).map_err(bad)?
+            self.cell(values)?
         } else {
             None
         };

@@ -63,6 +63,7 @@ mod netcdf;
 mod pdb_models;
 mod pdb_templates;
 mod positioned;
+mod positioned_frames;
 mod prepare;
 mod quiet;
 mod reader_errors;

@@ -18,16 +18,16 @@
 mod error;
 mod header;
 
-use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::path::Path;
 
 use glam::Vec3;
 
 use self::error::NetcdfError;
 use self::header::{Header, HeaderError, NcType, Value, Variable};
 use super::IoError;
-use super::native::{NativeFrames, NativeOpen};
+use super::native::NativeOpen;
 use super::positioned::Positioned;
+use super::positioned_frames::{Bytes, FrameDecoder, PositionedFrames};
 use super::prepare::Prepared;
 use super::unit_cell;
 use super::xdr_reader::ByteSource;
@@ -57,8 +57,7 @@ impl Slice {
 
 /// Opens the Amber NetCDF file `path` (bytes at `prepared.open_path`) and indexes its frames.
 pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoError> {
-    let (bytes, total) = Positioned::open_file(path, &prepared.open_path)?;
-    open_bytes(path, bytes, total, Some(prepared))
+    open_bytes(path, Bytes::Local(prepared))
 }
 
 /// Opens the Amber NetCDF file `path` whose `total` bytes `source` holds (a URL read through
@@ -69,39 +68,30 @@ pub(crate) fn open_source(
     source: Box<dyn ByteSource>,
     total: u64,
 ) -> Result<NativeOpen, IoError> {
-    open_bytes(path, Positioned::Source(Mutex::new(source)), total, None)
+    open_bytes(path, Bytes::Remote { source, total })
 }
 
-/// Opens the Amber NetCDF file `path` held in `file` (`total` bytes long) and indexes its
-/// frames.
-fn open_bytes(
-    path: &Path,
-    file: Positioned,
-    total: u64,
-    prepared: Option<Prepared>,
-) -> Result<NativeOpen, IoError> {
+/// Opens the Amber NetCDF file `path` and indexes its frames.
+fn open_bytes(path: &Path, bytes: Bytes) -> Result<NativeOpen, IoError> {
+    let (file, total, prepared) = bytes.open(path)?;
     let header = read_header(&file, total).map_err(|e| IoError::unreadable(path, e))?;
     let layout = Layout::new(&header, total).map_err(|e| match e {
         NetcdfError::FirstFrameCut { .. } => IoError::bad_frame(path, 0, e),
         e => IoError::unreadable(path, e),
     })?;
     let (len, damage) = layout.count_frames(header.records, total);
-    let damage = damage.map(|reason| IoError::bad_frame(path, len, reason));
-    if len == 0 {
-        return Err(damage.unwrap_or_else(|| IoError::unreadable(path, NetcdfError::NoFrames)));
-    }
-    Ok(NativeOpen {
-        topology: None,
-        frames: Box::new(NetcdfFrames {
-            path: path.to_path_buf(),
-            file,
-            layout,
-            len,
-            damage,
-            buffer: Vec::new(),
-            _prepared: prepared,
-        }),
-    })
+    let decoder = NetcdfDecoder {
+        layout,
+        buffer: Vec::new(),
+    };
+    PositionedFrames::open(
+        path,
+        (file, prepared),
+        len,
+        damage,
+        decoder,
+        NetcdfError::NoFrames,
+    )
 }
 
 /// Reads and parses the header, reading more of the file while it needs more.
@@ -357,24 +347,24 @@ impl Layout {
 }
 
 /// An open Amber NetCDF file.
-struct NetcdfFrames {
-    path: PathBuf,
-    /// The file's bytes (a file, or a URL read through range requests).
-    file: Positioned,
+/// How an Amber NetCDF file's frames are read: where each variable's slices lie.
+struct NetcdfDecoder {
     layout: Layout,
-    len: usize,
-    damage: Option<IoError>,
+    /// One slice's bytes.
     buffer: Vec<u8>,
-    /// Keeps a decompressed copy alive (none over HTTP).
-    _prepared: Option<Prepared>,
 }
 
-impl NetcdfFrames {
-    /// The values of `slice` in frame `index`, as f64 times its scale.
-    fn read_slice(&mut self, slice: Slice, index: usize) -> Result<Vec<f64>, NetcdfError> {
+impl NetcdfDecoder {
+    /// The values of `slice` in frame `index` of `file`, as f64 times its scale.
+    fn read_slice(
+        &mut self,
+        file: &Positioned,
+        slice: Slice,
+        index: usize,
+    ) -> Result<Vec<f64>, NetcdfError> {
         let offset = slice.begin + index as u64 * self.layout.record_bytes;
         self.buffer.resize(slice.bytes() as usize, 0);
-        self.file.read_exact_at(&mut self.buffer, offset)?;
+        file.read_exact_at(&mut self.buffer, offset)?;
         let scale = slice.scale;
         Ok(match slice.kind {
             NcType::Float => self
@@ -393,39 +383,13 @@ impl NetcdfFrames {
     }
 }
 
-impl NativeFrames for NetcdfFrames {
-    fn path(&self) -> &Path {
-        &self.path
-    }
+impl FrameDecoder for NetcdfDecoder {
+    const BASE: &'static str = "Amber NetCDF";
+    type Error = NetcdfError;
 
-    fn base(&self) -> &'static str {
-        "Amber NetCDF"
-    }
-
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    fn damage(&self) -> Option<&IoError> {
-        self.damage.as_ref()
-    }
-
-    fn is_remote(&self) -> bool {
-        self.file.is_remote()
-    }
-
-    fn read_frame(&mut self, index: usize) -> Result<Frame, IoError> {
-        if index >= self.len {
-            return Err(IoError::FrameOutOfRange {
-                path: self.path.clone(),
-                frame: index,
-                len: self.len,
-            });
-        }
-        let path = self.path.clone();
-        let bad = |reason: NetcdfError| IoError::bad_frame(&path, index, reason);
+    fn read(&mut self, file: &Positioned, index: usize) -> Result<Frame, NetcdfError> {
         let layout = self.layout.clone();
-        let values = self.read_slice(layout.coordinates, index).map_err(bad)?;
+        let values = self.read_slice(file, layout.coordinates, index)?;
         let positions: Vec<Vec3> = values
             .chunks_exact(3)
             .take(layout.atoms)
@@ -433,15 +397,15 @@ impl NativeFrames for NetcdfFrames {
             .collect();
         let cell = match layout.cell {
             Some((lengths, angles)) => {
-                let l = self.read_slice(lengths, index).map_err(bad)?;
-                let a = self.read_slice(angles, index).map_err(bad)?;
+                let l = self.read_slice(file, lengths, index)?;
+                let a = self.read_slice(file, angles, index)?;
                 unit_cell::from_lengths_angles([l[0], l[1], l[2]], [a[0], a[1], a[2]])
-                    .map_err(|reason| bad(NetcdfError::Cell(reason)))?
+                    .map_err(NetcdfError::Cell)?
             }
             None => None,
         };
         let time_ps = match layout.time {
-            Some(slice) => self.read_slice(slice, index).map_err(bad)?.first().copied(),
+            Some(slice) => self.read_slice(file, slice, index)?.first().copied(),
             None => None,
         };
         Ok(Frame {
