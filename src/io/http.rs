@@ -54,13 +54,14 @@ pub(crate) fn file_name(url: &str) -> &str {
     path.rsplit('/').next().unwrap_or(path)
 }
 
-/// The environment variable naming a PEM file of the certificates trusted for HTTPS in place
-/// of the built-in web roots (a self-hosted server's own certificate authority, as curl's
-/// `--cacert`).
+/// The environment variable naming a PEM file of certificates trusted for HTTPS beside the
+/// built-in web roots (a self-hosted server's own certificate authority; curl's `--cacert`
+/// would trust only the file, we keep the public roots so a public URL still opens in the
+/// same run).
 pub(crate) const CA_FILE_VAR: &str = "MDSURF_CA_FILE";
 
-/// The HTTP client: timeouts, statuses as replies, and the roots of [`CA_FILE_VAR`] when set
-/// (the reason, one line, when that file gives no certificate).
+/// The HTTP client: timeouts, statuses as replies, and the certificates of [`CA_FILE_VAR`]
+/// added to the web roots when set (the reason, one line, when that file gives none).
 fn agent() -> Result<Agent, String> {
     let mut config = Agent::config_builder()
         .timeout_connect(Some(CONNECT_TIMEOUT))
@@ -68,27 +69,37 @@ fn agent() -> Result<Agent, String> {
         .timeout_recv_body(Some(READ_TIMEOUT))
         .http_status_as_error(false);
     if let Some(file) = std::env::var_os(CA_FILE_VAR) {
-        let shown = Path::new(&file).display().to_string();
-        let pem = std::fs::read(&file).map_err(|e| format!("{CA_FILE_VAR}={shown}: {e}"))?;
-        let mut roots = Vec::new();
-        for item in ureq::tls::parse_pem(&pem) {
-            match item {
-                Ok(ureq::tls::PemItem::Certificate(cert)) => roots.push(cert),
-                Ok(_) => {}
-                Err(e) => return Err(format!("{CA_FILE_VAR}={shown}: {}", one_line(e))),
-            }
-        }
-        if roots.is_empty() {
-            return Err(format!(
-                "{CA_FILE_VAR}={shown}: no PEM certificate in the file"
-            ));
-        }
+        let roots = roots_with_ca_file(Path::new(&file))?;
         let tls = ureq::tls::TlsConfig::builder()
             .root_certs(ureq::tls::RootCerts::new_with_certs(&roots))
             .build();
         config = config.tls_config(tls);
     }
     Ok(config.build().into())
+}
+
+/// Mozilla's web roots followed by the certificates of the PEM file `file` (the reason, one
+/// line naming [`CA_FILE_VAR`] and the file, when it cannot be read or holds none).
+fn roots_with_ca_file(file: &Path) -> Result<Vec<ureq::tls::Certificate<'static>>, String> {
+    let shown = file.display();
+    let pem = std::fs::read(file).map_err(|e| format!("{CA_FILE_VAR}={shown}: {e}"))?;
+    let mut added = Vec::new();
+    for item in ureq::tls::parse_pem(&pem) {
+        match item {
+            Ok(ureq::tls::PemItem::Certificate(cert)) => added.push(cert),
+            Ok(_) => {}
+            Err(e) => return Err(format!("{CA_FILE_VAR}={shown}: {}", one_line(e))),
+        }
+    }
+    if added.is_empty() {
+        return Err(format!(
+            "{CA_FILE_VAR}={shown}: no PEM certificate in the file"
+        ));
+    }
+    let web = webpki_root_certs::TLS_SERVER_ROOT_CERTS
+        .iter()
+        .map(|cert| ureq::tls::Certificate::from_der(cert.as_ref()));
+    Ok(web.chain(added).collect())
 }
 
 /// One line from a client error (ureq's messages may wrap).
@@ -427,6 +438,25 @@ impl Seek for RangeSource {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ca_file_adds_its_certificates_to_the_web_roots() {
+        let made = rcgen::generate_simple_self_signed(vec!["127.0.0.1".to_string()]).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("ca.pem");
+        std::fs::write(&file, made.cert.pem()).unwrap();
+        let roots = roots_with_ca_file(&file).unwrap();
+        let web = webpki_root_certs::TLS_SERVER_ROOT_CERTS;
+        assert!(web.len() > 100, "{} web roots", web.len());
+        assert_eq!(roots.len(), web.len() + 1);
+        assert_eq!(roots[0].der(), web[0].as_ref());
+        assert_eq!(roots.last().unwrap().der(), made.cert.der().as_ref());
+
+        std::fs::write(&file, "not a certificate\n").unwrap();
+        let error = roots_with_ca_file(&file).unwrap_err();
+        assert!(error.starts_with("MDSURF_CA_FILE="), "{error}");
+        assert!(error.ends_with("no PEM certificate in the file"), "{error}");
+    }
 
     #[test]
     fn urls_are_recognised_and_named() {
