@@ -11,8 +11,8 @@
 use std::sync::Arc;
 
 use mdsurf::measure::{
-    self, CavityOptions, CavityTracker, ExposureTable, MeasureError, Side, lining_residues,
-    residue_label,
+    self, CavityOptions, CavityTracker, ExposureTable, MeasureError, ProbeOptions, Side,
+    lining_residues, residue_label,
 };
 use mdsurf::model::{Frame, RadiusOverrides};
 use mdsurf::scene::layer::Layer;
@@ -271,7 +271,8 @@ pub fn scene_residue_areas(
 type CavityRow = (u64, usize, f64, f64, [f64; 3], Vec<String>, Vec<u32>);
 
 /// Cavities of representation `rep` in each of `frames`, tracked over them (ids from 1):
-/// (frame, time ps, cavities) per frame.
+/// (frame, time ps, cavities) per frame. With `probe` (Å) the cavities are the probe's
+/// (`--cavity-probe`, Bondi radii) instead of the Gaussian surface's enclosed voids.
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 pub fn scene_cavities(
@@ -281,10 +282,16 @@ pub fn scene_cavities(
     frames: Vec<usize>,
     reader: Py<PyAny>,
     min_volume: f64,
+    probe: Option<f32>,
 ) -> PyResult<Vec<(usize, Option<f64>, Vec<CavityRow>)>> {
     if !(min_volume.is_finite() && min_volume >= 0.0) {
         return Err(PyValueError::new_err(format!(
             "min_volume_A3 must be a finite volume of 0 Å³ or more, got {min_volume}"
+        )));
+    }
+    if let Some(p) = probe.filter(|p| !(p.is_finite() && (0.1..=10.0).contains(p))) {
+        return Err(PyValueError::new_err(format!(
+            "probe_A must be a probe radius of 0.1 to 10 Å (1.4 for water), got {p}"
         )));
     }
     let core = &mut *core;
@@ -301,8 +308,24 @@ pub fn scene_cavities(
             let m = measured(core, index, &reader, &req)?;
             let err = |e| measure_err(&what, index, e);
             let params = m.layer.rep.vertices.effective(&m.layer.rep.params());
-            let found = measure::cavities(&m.layer.output.mesh, &m.atom_set(), &params, &options)
-                .map_err(err)?;
+            let found = match probe {
+                Some(probe) => {
+                    let probe_options = ProbeOptions {
+                        probe,
+                        min_volume,
+                        ..ProbeOptions::default()
+                    };
+                    let atoms = Some(&m.atoms[..]);
+                    measure::ses_probe_cavities(
+                        &core.topology,
+                        atoms,
+                        &m.atom_set(),
+                        &probe_options,
+                    )
+                }
+                None => measure::cavities(&m.layer.output.mesh, &m.atom_set(), &params, &options),
+            }
+            .map_err(err)?;
             let tracked = tracker.update(index, &found);
             let mut cavities = Vec::with_capacity(tracked.cavities.len());
             for t in &tracked.cavities {

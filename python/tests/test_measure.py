@@ -132,6 +132,28 @@ def test_cavities_equal_cli(cli, adk, tmp_path):
     assert counts.max() >= 2
 
 
+def test_probe_cavities_equal_cli(cli, adk, tmp_path):
+    gro, xtc = adk
+    run = run_cli(cli, tmp_path, gro, xtc, "--select", "protein", "--frames", "0:2",
+                  "--cavity-probe", "1.4", "--min-cavity-volume", "15", "--cavities", "cav.csv")
+    assert run.returncode == 0, run.stderr
+    rows = rows_of(tmp_path / "cav.csv")
+    assert len(rows) >= 4, "adenylate kinase has probe-sized cavities"
+    scene = mdsurf.Scene(universe(gro, xtc), select="protein")
+    cav = scene.cavities(frames=range(2), min_volume_A3=15, probe_A=1.4)
+    assert len(cav) == len(rows)
+    for k, row in enumerate(rows):
+        assert (cav.frame[k], cav.cavity_id[k]) == (int(row["frame"]), int(row["cavity_id"]))
+        assert close(cav.volume_A3[k], row["volume_A3"], 3), (cav.volume_A3[k], row)
+        assert close(cav.area_A2[k], row["area_A2"], 3), (cav.area_A2[k], row)
+        assert " ".join(cav.lining[k]) == row["lining"]
+    # The probe's voids hold at least one probe (4/3 pi 1.4^3 = 11.5 A^3, a little less on the
+    # grid); the Gaussian surface's do not need to.
+    assert np.all(cav.volume_A3 >= 15.0)
+    with pytest.raises(ValueError, match="probe_A must be a probe radius"):
+        scene.cavities(frames=[0], probe_A=0.0)
+
+
 @pytest.fixture(scope="module")
 def hpv(data):
     return mdsurf.Scene(universe(data / "1hpv.pdb"), select="protein")

@@ -57,6 +57,9 @@ pub enum ArgError {
     /// A volume (Å³) that is negative or not a number.
     #[error("'{0}': expected a volume in Å³, 0 or more")]
     Volume(String),
+    /// A probe radius (Å) out of range or not a number.
+    #[error("'{0}': expected a probe radius of 0.1 to 10 Å (1.4 for water)")]
+    Probe(String),
     /// An atom count that does not parse.
     #[error("bad atom count '{0}' (e.g. 1000000, 1e6, 950k, 2.37M)")]
     Count(String),

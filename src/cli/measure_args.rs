@@ -41,6 +41,12 @@ pub struct MeasureArgs {
     /// Smallest cavity reported, in Å³ (smaller voids are mostly gaps between a few atoms).
     #[arg(long, value_name = "A3", default_value_t = 1.0, value_parser = parse_volume)]
     pub min_cavity_volume: f64,
+    /// Find cavities as the solvent-excluded surface does instead of from the Gaussian
+    /// surface: voids where a probe of this radius in Å fits (1.4 for water) that it cannot
+    /// reach from outside, with Bondi's radii; volume and area of the probe-swept void (MSMS's
+    /// inner components). Finds pockets with a mouth narrower than the probe.
+    #[arg(long, value_name = "A", value_parser = parse_probe)]
+    pub cavity_probe: Option<f32>,
     /// Buried area between two selections, (area(A) + area(B) - area(A or B)) / 2, the three
     /// surfaces on one grid (CPU engine, the command's H, R, I and quality).
     #[arg(long, num_args = 2, value_names = ["SEL_A", "SEL_B"])]
@@ -86,6 +92,14 @@ fn parse_volume(s: &str) -> Result<f64, super::arg_error::ArgError> {
     }
 }
 
+/// A probe radius in Å: a finite number from 0.1 to 10.
+fn parse_probe(s: &str) -> Result<f32, super::arg_error::ArgError> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && (0.1..=10.0).contains(&v) => Ok(v),
+        _ => Err(super::arg_error::ArgError::Probe(s.to_string())),
+    }
+}
+
 /// The two sides of `--interface`, bound to the topology.
 struct Interface {
     sides: [Layer; 2],
@@ -120,6 +134,11 @@ impl Measurer {
         radii: RadiusSet,
         vertices: VertexMode,
     ) -> Result<Measurer> {
+        if args.cavity_probe.is_some() && !args.tracks_cavities() {
+            bail!(
+                "--cavity-probe says how cavities are found: add --cavities FILE.csv or --cavity-events FILE.csv"
+            );
+        }
         let interface = match args.interface.as_deref() {
             Some([a, b]) => {
                 let side = |name: &str, sel: &str| -> Result<Layer> {
@@ -232,7 +251,17 @@ impl Measurer {
                 min_volume: self.args.min_cavity_volume,
                 ..CavityOptions::default()
             };
-            let found = measure::cavities(&layer.output.mesh, &atoms, &params, &options)?;
+            let found = match self.args.cavity_probe {
+                Some(probe) => {
+                    let probe_options = measure::ProbeOptions {
+                        probe,
+                        min_volume: options.min_volume,
+                        ..measure::ProbeOptions::default()
+                    };
+                    measure::ses_probe_cavities(topology, atom_indices, &atoms, &probe_options)?
+                }
+                None => measure::cavities(&layer.output.mesh, &atoms, &params, &options)?,
+            };
             let tracked = self
                 .trackers
                 .entry(name.clone())

@@ -32,6 +32,9 @@
 //!   (positive), area, centroid of the enclosed region, and the atoms lining it: at some vertex
 //!   of the void's wall, the atom's Gaussian is at least half the largest Gaussian there
 //!   ([`CavityOptions::lining_fraction`]).
+//! - **Probe cavities** ([`probe_cavities`]): voids where a probe sphere fits but which it
+//!   cannot reach from outside (the SES's inner components), with Bondi's radii
+//!   ([`ses_probe_cavities`]); the same [`Cavity`] rows, so tracking and CSVs are shared.
 //! - **Tracking** ([`CavityTracker`]): a cavity keeps its id while its centroid and its previous
 //!   self's are within the larger of their bounding radii; births, deaths, merges and splits are
 //!   reported as [`CavityEvent`]s.
@@ -41,6 +44,7 @@ pub(crate) mod cavities;
 mod cells;
 pub(crate) mod csv;
 pub mod interface;
+pub(crate) mod probe_cavities;
 pub(crate) mod residues;
 pub(crate) mod tracking;
 
@@ -50,6 +54,7 @@ pub use csv::{AtomCsv, CavityCsv, CavityEventCsv, ResidueCsv, lining_residues};
 pub use interface::{
     CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
 };
+pub use probe_cavities::{ProbeOptions, probe_cavities, ses_probe_cavities, ses_radius};
 pub use residues::{ExposureTable, ResidueArea, residue_areas, residue_label};
 pub use tracking::{CavityEvent, CavityTracker, TrackUpdate, TrackedCavity};
 

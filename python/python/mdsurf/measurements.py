@@ -231,8 +231,8 @@ def interface(scene, a, b, frames, threshold):
     )
 
 
-def cavities(scene, rep, frames, min_volume):
-    rows = _mdsurf.scene_cavities(scene._core, rep, frames, scene._reader, min_volume)
+def cavities(scene, rep, frames, min_volume, probe=None):
+    rows = _mdsurf.scene_cavities(scene._core, rep, frames, scene._reader, min_volume, probe)
     flat = [(f, t, c) for f, t, cavs in rows for c in cavs]
     return Cavities(
         rep=rep,

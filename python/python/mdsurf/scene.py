@@ -489,13 +489,18 @@ class Scene:
         return _measure.interface(self, str(selection_a), str(selection_b),
                                   self._frames(frames), float(contact_threshold_A2))
 
-    def cavities(self, rep=None, frames=None, min_volume_A3=1.0):
+    def cavities(self, rep=None, frames=None, min_volume_A3=1.0, probe_A=None):
         """Enclosed cavities of representation ``rep`` in ``frames``, tracked over them (ids
         from 1, kept while a cavity overlaps its previous self): an
         :class:`mdsurf.measurements.Cavities` table with ``cavity_id``, ``volume_A3``, ``area_A2``,
         ``centroid_A`` and ``lining`` residues per cavity and frame (``--cavities``); voids
-        under ``min_volume_A3`` are left out (``--min-cavity-volume``)."""
-        return _measure.cavities(self, self._rep(rep), self._frames(frames), float(min_volume_A3))
+        under ``min_volume_A3`` are left out (``--min-cavity-volume``). With ``probe_A`` (1.4
+        for water) the cavities are those of a probe of that radius with Bondi's radii, as the
+        solvent-excluded surface has them (``--cavity-probe``), instead of the Gaussian
+        surface's enclosed voids."""
+        probe = None if probe_A is None else float(probe_A)
+        return _measure.cavities(self, self._rep(rep), self._frames(frames), float(min_volume_A3),
+                                 probe)
 
     def __repr__(self):
         return (

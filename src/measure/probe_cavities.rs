@@ -1,0 +1,542 @@
+//! Cavities as the solvent-excluded surface (SES) sees them: voids inside a structure where a
+//! probe sphere (1.4 Å for water) fits but which it cannot reach from outside. These are the
+//! inner components of an SES program such as MSMS (`-all_components`), and unlike the
+//! Gaussian surface's enclosed components ([`super::cavities()`]) they include pockets whose
+//! mouth is too narrow for the probe, such as an empty ligand pocket.
+//!
+//! The rule, on a grid of spacing `h` (Å):
+//! 1. A grid point is a free probe centre when it is at least `r_i + probe` from every atom `i`
+//!    (`r_i` the atom's radius; Bondi's radii from [`ses_radius`] for SES).
+//! 2. Free points connected (26 neighbours) to the grid's border are outside; every other
+//!    connected set of free points is one cavity.
+//! 3. The cavity's void is the union of probe balls at its free points: its wall is the
+//!    isosurface `probe - d(x) = 0` of the distance `d` to the nearest free point, made by
+//!    Marching Cubes on the same grid. Volume (Å³), area (Å²) and centroid come from that mesh
+//!    as for [`super::Component`]s.
+//! 4. An atom lines the cavity when a probe at one of its free points touches it (distance at
+//!    most `r_i + probe + h`).
+//!
+//! A void whose free centres fit between grid points (a probe that fits only just, about
+//! 11.5 Å³ of void) can be missed at a coarse `h`, and a pocket that opens to the outside only
+//! through a gap narrower than `h` is reported as a cavity.
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+use super::MeasureError;
+use super::cavities::{Cavity, components};
+use crate::model::Topology;
+use crate::surface::marching_cubes;
+use crate::surface::{AtomSet, DensityVolume, GridSpec, SurfaceError, available_memory_bytes};
+
+/// Bondi's van der Waals radius of `element` in Å (the radii SES areas are usually computed
+/// with, and MSMS was run with in `tests/data`), for the elements of biomolecules.
+pub fn ses_radius(element: &str) -> Option<f32> {
+    Some(match element {
+        "H" => 1.20,
+        "C" => 1.70,
+        "N" => 1.55,
+        "O" => 1.52,
+        "S" => 1.80,
+        "P" => 1.80,
+        "F" => 1.47,
+        "Cl" => 1.75,
+        "Se" => 1.90,
+        _ => return None,
+    })
+}
+
+/// The probe cavities of the atoms `atoms` (`atom_indices` into `topology`, or every atom when
+/// `None`) with Bondi's radius of each atom's element ([`ses_radius`]), the atom's own radius
+/// in `atoms` where Bondi gives none: what `mdsurf surface --cavity-probe` and Python's
+/// `Scene.cavities(probe_A=...)` compute.
+pub fn ses_probe_cavities(
+    topology: &Topology,
+    atom_indices: Option<&[u32]>,
+    atoms: &AtomSet<'_>,
+    options: &ProbeOptions,
+) -> Result<Vec<Cavity>, MeasureError> {
+    let mut radii = Vec::with_capacity(atoms.len());
+    for k in 0..atoms.len() {
+        let atom = atom_indices.map_or(Some(k), |ix| ix.get(k).map(|&a| a as usize));
+        let element = atom.and_then(|a| topology.elements.get(a));
+        let Some(element) = element else {
+            return Err(MeasureError::IndexOutOfRange {
+                what: "topology atom",
+                index: atom.unwrap_or(k),
+                len: topology.len(),
+            });
+        };
+        radii.push(ses_radius(element).unwrap_or(atoms.radii[k]));
+    }
+    let ses_atoms = AtomSet {
+        radii: &radii,
+        ..*atoms
+    };
+    probe_cavities(&ses_atoms, options)
+}
+
+/// Options of [`probe_cavities`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProbeOptions {
+    /// Probe radius in Å (1.4 for water).
+    pub probe: f32,
+    /// Grid spacing in Å (0.25 finds voids down to about one probe's volume).
+    pub spacing: f32,
+    /// Cavities smaller than this (Å³) are left out.
+    pub min_volume: f64,
+}
+
+impl Default for ProbeOptions {
+    fn default() -> Self {
+        ProbeOptions {
+            probe: 1.4,
+            spacing: 0.25,
+            min_volume: 0.0,
+        }
+    }
+}
+
+/// How far (Å) beyond the probe a free centre's ball may grow towards the atoms (see
+/// [`void_of`]).
+const CLEARANCE_CAP: f32 = 1.0;
+
+/// Marks of the grid points in [`probe_cavities`].
+const BLOCKED: u32 = u32::MAX;
+const OUTSIDE: u32 = u32::MAX - 1;
+const UNSEEN: u32 = 0;
+
+/// The probe-accessible cavities of `atoms` (radii: the SES radii of the atoms, Å), largest
+/// first, at least `options.min_volume` Å³ each. Fails on invalid atoms or options, or a grid
+/// larger than the memory available.
+pub fn probe_cavities(
+    atoms: &AtomSet<'_>,
+    options: &ProbeOptions,
+) -> Result<Vec<Cavity>, MeasureError> {
+    atoms.validate()?;
+    for (name, value, low) in [
+        ("probe radius", f64::from(options.probe), 0.1),
+        ("cavity grid spacing", f64::from(options.spacing), 0.05),
+        ("minimum cavity volume", options.min_volume, 0.0),
+    ] {
+        if !(value.is_finite() && value >= low) || (name != "minimum cavity volume" && value > 10.0)
+        {
+            return Err(MeasureError::InvalidOption { name, value });
+        }
+    }
+    if atoms.is_empty() {
+        return Err(SurfaceError::EmptySystem.into());
+    }
+    let grid = probe_grid(atoms, options)?;
+    let mut marks = free_centres(atoms, &grid, options.probe);
+    flood_outside(&grid, &mut marks);
+    let count = label_cavities(&grid, &mut marks);
+    let mut centres: Vec<Vec<Vec3>> = vec![Vec::new(); count as usize];
+    let [nx, ny, _] = grid.dims.map(|d| d as usize);
+    for (at, &mark) in marks.iter().enumerate() {
+        if (1..=count).contains(&mark) {
+            let (i, j, k) = (at % nx, (at / nx) % ny, at / (nx * ny));
+            centres[mark as usize - 1].push(grid.point(i as u32, j as u32, k as u32));
+        }
+    }
+    drop(marks);
+    let mut out = Vec::new();
+    for free in &centres {
+        let cavity = void_of(atoms, grid.spacing, free, options.probe)?;
+        if cavity.volume >= options.min_volume {
+            out.push(cavity);
+        }
+    }
+    out.sort_by(|a, b| b.volume.total_cmp(&a.volume));
+    Ok(out)
+}
+
+/// The grid over the atoms with a border of free points all round.
+fn probe_grid(atoms: &AtomSet<'_>, options: &ProbeOptions) -> Result<GridSpec, MeasureError> {
+    let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let (lo, hi) = atoms
+        .positions
+        .iter()
+        .fold(far, |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let max_radius = atoms.radii.iter().fold(0.0f32, |m, &r| m.max(r));
+    let h = options.spacing;
+    let pad = max_radius + 2.0 * options.probe + 2.0 * h;
+    let origin = lo - Vec3::splat(pad);
+    let extent = hi + Vec3::splat(pad) - origin;
+    let dims64 = extent.to_array().map(|e| (e / h).ceil() as u64 + 1);
+    // 4 bytes of marks and 4 of distance field per point, and a little for the meshes.
+    let points: u64 = dims64.iter().product();
+    let bytes_needed = points.saturating_mul(9);
+    let bytes_available = available_memory_bytes();
+    if dims64.iter().any(|&d| d > u32::MAX as u64 / 4) || bytes_needed > bytes_available {
+        return Err(SurfaceError::GridTooLarge {
+            dims: dims64,
+            bytes_needed,
+            bytes_available,
+        }
+        .into());
+    }
+    Ok(GridSpec {
+        origin,
+        spacing: h,
+        dims: dims64.map(|d| d as u32),
+    })
+}
+
+/// The index range `lo..=hi` of samples along one axis within `reach` Å of `x` (Å from the
+/// origin), clamped to `0..n`.
+fn reach_range(x: f32, reach: f32, h: f32, n: u32) -> (u32, u32) {
+    let lo = ((x - reach) / h).ceil().max(0.0) as u32;
+    let hi = (((x + reach) / h).floor().max(0.0) as u32).min(n - 1);
+    (lo, hi)
+}
+
+/// Marks every grid point: [`BLOCKED`] when a probe there overlaps an atom, else [`UNSEEN`].
+/// Parallel over z planes, each plane visiting the atoms whose reach crosses it.
+fn free_centres(atoms: &AtomSet<'_>, grid: &GridSpec, probe: f32) -> Vec<u32> {
+    let [nx, ny, nz] = grid.dims;
+    let h = grid.spacing;
+    let mut by_plane: Vec<Vec<u32>> = vec![Vec::new(); nz as usize];
+    for (a, (p, r)) in atoms.positions.iter().zip(atoms.radii).enumerate() {
+        let z = p.z - grid.origin.z;
+        let (k0, k1) = reach_range(z, r + probe, h, nz);
+        for k in k0..=k1 {
+            by_plane[k as usize].push(a as u32);
+        }
+    }
+    let plane = nx as usize * ny as usize;
+    let mut marks = vec![UNSEEN; plane * nz as usize];
+    marks
+        .par_chunks_mut(plane)
+        .zip(&by_plane)
+        .enumerate()
+        .for_each(|(k, (out, near))| {
+            let z = grid.origin.z + h * k as f32;
+            for &a in near {
+                let p = atoms.positions[a as usize] - grid.origin;
+                let reach = atoms.radii[a as usize] + probe;
+                let dz = p.z + grid.origin.z - z;
+                let left = reach * reach - dz * dz;
+                if left < 0.0 {
+                    continue;
+                }
+                let disc = left.sqrt();
+                let (j0, j1) = reach_range(p.y, disc, h, ny);
+                for j in j0..=j1 {
+                    let dy = p.y - h * j as f32;
+                    let row = left - dy * dy;
+                    if row < 0.0 {
+                        continue;
+                    }
+                    let (i0, i1) = reach_range(p.x, row.sqrt(), h, nx);
+                    for i in i0..=i1 {
+                        let dx = p.x - h * i as f32;
+                        // Strictly inside the reach: a probe touching an atom is free.
+                        if dx * dx < row {
+                            out[i as usize + nx as usize * j as usize] = BLOCKED;
+                        }
+                    }
+                }
+            }
+        });
+    marks
+}
+
+/// The 26 neighbours' offsets.
+fn neighbours() -> impl Iterator<Item = [i64; 3]> {
+    (-1..=1i64)
+        .flat_map(|z| (-1..=1i64).flat_map(move |y| (-1..=1i64).map(move |x| [x, y, z])))
+        .filter(|d| *d != [0, 0, 0])
+}
+
+/// Gives every [`UNSEEN`] point reached from `start` (26-connected) the mark `label`.
+fn fill(grid: &GridSpec, marks: &mut [u32], start: usize, label: u32) {
+    let [nx, ny, nz] = grid.dims.map(i64::from);
+    let steps: Vec<[i64; 3]> = neighbours().collect();
+    let mut stack = vec![start];
+    marks[start] = label;
+    while let Some(at) = stack.pop() {
+        let at = at as i64;
+        let (i, j, k) = (at % nx, (at / nx) % ny, at / (nx * ny));
+        for d in &steps {
+            let (a, b, c) = (i + d[0], j + d[1], k + d[2]);
+            if a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz {
+                continue;
+            }
+            let next = (a + nx * (b + ny * c)) as usize;
+            if marks[next] == UNSEEN {
+                marks[next] = label;
+                stack.push(next);
+            }
+        }
+    }
+}
+
+/// Marks the free points connected to the grid's border [`OUTSIDE`] (the border is free: the
+/// grid's padding is larger than any atom's reach).
+fn flood_outside(grid: &GridSpec, marks: &mut [u32]) {
+    let [nx, ny, nz] = grid.dims;
+    for k in [0, nz - 1] {
+        for j in 0..ny {
+            for i in 0..nx {
+                let at = grid.index(i, j, k);
+                if marks[at] == UNSEEN {
+                    fill(grid, marks, at, OUTSIDE);
+                }
+            }
+        }
+    }
+}
+
+/// Numbers the remaining free sets 1, 2, ...; returns how many there are.
+fn label_cavities(grid: &GridSpec, marks: &mut [u32]) -> u32 {
+    let mut count = 0;
+    for at in 0..marks.len() {
+        if marks[at] == UNSEEN {
+            count += 1;
+            fill(grid, marks, at, count);
+        }
+    }
+    count
+}
+
+/// The void of one cavity, the union of probe balls at its free points `centres` (Å, points of
+/// a grid of spacing `h`): its wall as a mesh, its measures and its lining atoms.
+fn void_of(
+    atoms: &AtomSet<'_>,
+    h: f32,
+    centres: &[Vec3],
+    probe: f32,
+) -> Result<Cavity, MeasureError> {
+    let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let (lo, hi) = centres
+        .iter()
+        .fold(far, |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    // The void's own grid: the same lattice, around its balls.
+    let pad = probe + CLEARANCE_CAP + 2.0 * h;
+    let grid = GridSpec {
+        origin: lo - Vec3::splat(pad),
+        spacing: h,
+        dims: ((hi - lo + Vec3::splat(2.0 * pad)) / h)
+            .round()
+            .to_array()
+            .map(|n| n as u32 + 1),
+    };
+    // Each free centre x stands for the ball of its clearance s(x) (distance to the nearest
+    // atom's surface, at least the probe): every point of that ball is within the probe of a
+    // free centre on the way to it, so the ball lies in the void, and it reaches the atoms the
+    // probe touches. s is capped (the cap only shrinks balls), which bounds the atoms to look at.
+    let cap = probe + CLEARANCE_CAP;
+    let max_radius = atoms.radii.iter().fold(0.0f32, |m, &r| m.max(r));
+    let near: Vec<(Vec3, f32)> = atoms
+        .positions
+        .iter()
+        .zip(atoms.radii)
+        .filter(|(p, _)| {
+            !(p.cmplt(lo - (cap + max_radius)) | p.cmpgt(hi + (cap + max_radius))).any()
+        })
+        .map(|(p, r)| (*p, *r))
+        .collect();
+    let clearance_at = |x: Vec3| near.iter().fold(cap, |m, (p, r)| m.min(p.distance(x) - r));
+    // The balls: each free centre with its clearance, and, from each centre near the edge of
+    // the free set, the last free point towards each blocked neighbour (bisected to within
+    // h/256), so the void does not stop up to a grid step short of the atoms.
+    let mut balls: Vec<(Vec3, f32)> = Vec::with_capacity(centres.len());
+    let edge = probe + h * 3f32.sqrt();
+    for &c in centres {
+        let clearance = clearance_at(c).max(probe);
+        balls.push((c, clearance));
+        if clearance >= edge {
+            continue;
+        }
+        for step in neighbours() {
+            let y = c + h * Vec3::new(step[0] as f32, step[1] as f32, step[2] as f32);
+            if clearance_at(y) >= probe {
+                continue;
+            }
+            let (mut free, mut blocked) = (0.0f32, 1.0f32);
+            for _ in 0..8 {
+                let mid = 0.5 * (free + blocked);
+                if clearance_at(c.lerp(y, mid)) >= probe {
+                    free = mid;
+                } else {
+                    blocked = mid;
+                }
+            }
+            if free > 0.0 {
+                balls.push((c.lerp(y, free), probe));
+            }
+        }
+    }
+    // max over balls of (radius - |y - centre|), where a ball reaches within 2h.
+    let mut field = vec![-2.0 * h; grid.voxel_count() as usize];
+    for &(c, clearance) in &balls {
+        let reach = clearance + 2.0 * h;
+        let local = c - grid.origin;
+        let (k0, k1) = reach_range(local.z, reach, h, grid.dims[2]);
+        let (j0, j1) = reach_range(local.y, reach, h, grid.dims[1]);
+        let (i0, i1) = reach_range(local.x, reach, h, grid.dims[0]);
+        for k in k0..=k1 {
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let d = grid.point(i, j, k).distance(c);
+                    let at = grid.index(i, j, k);
+                    field[at] = field[at].max(clearance - d);
+                }
+            }
+        }
+    }
+    let density = DensityVolume {
+        values: field,
+        colours: None,
+    };
+    let mesh = marching_cubes::extract(&grid, &density, 0.0);
+    let parts = components(&mesh)?;
+    let volume: f64 = parts.iter().map(|p| p.volume).sum();
+    let centroid = if volume > 0.0 {
+        parts.iter().map(|p| p.centroid * p.volume).sum::<DVec3>() / volume
+    } else {
+        centres.iter().map(|c| c.as_dvec3()).sum::<DVec3>() / centres.len() as f64
+    };
+    let radius = mesh
+        .positions
+        .iter()
+        .map(|p| p.as_dvec3().distance(centroid))
+        .fold(0.0, f64::max);
+    let mut lining: Vec<u32> = Vec::new();
+    for (a, (p, r)) in atoms.positions.iter().zip(atoms.radii).enumerate() {
+        let touch = r + probe + h;
+        if (p.cmplt(lo - touch) | p.cmpgt(hi + touch)).any() {
+            continue;
+        }
+        if centres
+            .iter()
+            .any(|c| c.distance_squared(*p) <= touch * touch)
+        {
+            lining.push(a as u32);
+        }
+    }
+    Ok(Cavity {
+        volume,
+        area: mesh.area(),
+        centroid,
+        radius,
+        vertex_count: mesh.positions.len(),
+        lining_atoms: lining,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` points spread evenly on a sphere of `radius` Å around the origin (Fibonacci).
+    fn sphere(n: usize, radius: f32) -> Vec<Vec3> {
+        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        (0..n)
+            .map(|k| {
+                let z = 1.0 - 2.0 * (k as f32 + 0.5) / n as f32;
+                let r = (1.0 - z * z).sqrt();
+                let phi = golden * k as f32;
+                radius * Vec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+            .collect()
+    }
+
+    /// A shell of 600 atoms of radius 1.5 Å on a sphere of 7 Å (about 1 Å apart), without
+    /// those whose distance from the z axis is under `hole` Å on the +z side.
+    fn shell_with_hole(hole: f32) -> Vec<Vec3> {
+        sphere(600, 7.0)
+            .into_iter()
+            .filter(|p| p.z < 0.0 || p.truncate().length() >= hole)
+            .collect()
+    }
+
+    fn found(positions: &[Vec3]) -> Vec<Cavity> {
+        let radii = vec![1.5; positions.len()];
+        let atoms = AtomSet {
+            positions,
+            radii: &radii,
+            colours: None,
+        };
+        probe_cavities(&atoms, &ProbeOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn a_closed_shell_holds_one_void_of_the_probe_swept_ball() {
+        let cavities = found(&shell_with_hole(0.0));
+        assert_eq!(cavities.len(), 1, "{cavities:?}");
+        let void = &cavities[0];
+        eprintln!("closed shell: {:.1} Å³, {:.1} Å²", void.volume, void.area);
+        // Free probe centres fill a ball of about 7 - 1.5 - 1.4 = 4.1 Å (4.16 between atoms),
+        // so the void is a ball of 5.5 to 5.56 Å: 697 to 720 Å³, 380 to 388 Å².
+        let (v_lo, v_hi) = (697.0 * 0.97, 720.0 * 1.02);
+        assert!(void.volume > v_lo && void.volume < v_hi, "{}", void.volume);
+        assert!(
+            void.area > 380.0 * 0.97 && void.area < 388.0 * 1.03,
+            "{}",
+            void.area
+        );
+        assert!(void.centroid.length() < 0.05, "{:?}", void.centroid);
+        assert_eq!(void.lining_atoms.len(), 600);
+    }
+
+    #[test]
+    fn a_mouth_narrower_than_the_probe_keeps_the_pocket_a_cavity() {
+        // A probe passes a ring of atoms of radius 1.5 Å when the ring's radius is above
+        // 1.5 + 1.4 = 2.9 Å.
+        let narrow = found(&shell_with_hole(2.3));
+        assert_eq!(narrow.len(), 1, "{narrow:?}");
+        assert!(narrow[0].volume > 600.0, "{}", narrow[0].volume);
+        let wide = found(&shell_with_hole(3.8));
+        assert!(wide.is_empty(), "{wide:?}");
+    }
+
+    #[test]
+    fn bad_options_and_no_atoms_are_errors() {
+        let positions = [Vec3::ZERO];
+        let radii = [1.5];
+        let atoms = AtomSet {
+            positions: &positions,
+            radii: &radii,
+            colours: None,
+        };
+        for options in [
+            ProbeOptions {
+                probe: 0.0,
+                ..ProbeOptions::default()
+            },
+            ProbeOptions {
+                spacing: f32::NAN,
+                ..ProbeOptions::default()
+            },
+            ProbeOptions {
+                min_volume: -1.0,
+                ..ProbeOptions::default()
+            },
+        ] {
+            assert!(matches!(
+                probe_cavities(&atoms, &options),
+                Err(MeasureError::InvalidOption { .. })
+            ));
+        }
+        assert!(
+            probe_cavities(&atoms, &ProbeOptions::default())
+                .unwrap()
+                .is_empty()
+        );
+        let none = AtomSet {
+            positions: &[],
+            radii: &[],
+            colours: None,
+        };
+        assert!(probe_cavities(&none, &ProbeOptions::default()).is_err());
+    }
+
+    #[test]
+    fn bondi_radii_for_the_elements_of_proteins() {
+        assert_eq!(ses_radius("C"), Some(1.70));
+        assert_eq!(ses_radius("O"), Some(1.52));
+        assert_eq!(ses_radius("Xx"), None);
+    }
+}
