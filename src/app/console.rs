@@ -73,8 +73,9 @@ pub enum RepEdit {
     Opacity(f32),
     /// Vertex placement.
     Vertices(VertexMode),
-    /// Cavities found and drawn (surfaces).
-    Cavities(bool),
+    /// Cavities found and drawn (surfaces): off, the surface's voids (`None`), or a probe's
+    /// of this radius in Å.
+    Cavities(bool, Option<f32>),
     /// Drawing style.
     Style(RepStyle),
     /// New selection.
@@ -168,7 +169,7 @@ pub const REP_WORDS: [&str; 14] = [
 ];
 
 const HELP: &str = "commands: rep add \"SEL\" STYLE [as NAME] | rep N|NAME color|spacing|radius-scale|isovalue|quality|opacity|vertices|cavities|style|select VALUE | rep N hide|show|delete | frame N | play | pause | fit [\"SEL\"] | view save|open FILE | screenshot FILE [WxH] | select \"SEL\" | imd pause|resume|detach | clear | help [rep]";
-const HELP_REP: &str = "rep add \"SEL\" surface|beads|spheres|sticks|ball-and-stick [as NAME]; rep N (1-based) or rep NAME, then: color SCHEME (element, chain, residue-type, residue-index, b-factor, exposure, single:#rrggbb), spacing Å, radius-scale R, isovalue I, quality low|medium|high|max, opacity 0..1, vertices interpolated|refined, cavities on|off, style STYLE, select \"SEL\", hide, show, delete";
+const HELP_REP: &str = "rep add \"SEL\" surface|beads|spheres|sticks|ball-and-stick [as NAME]; rep N (1-based) or rep NAME, then: color SCHEME (element, chain, residue-type, residue-index, b-factor, exposure, single:#rrggbb), spacing Å, radius-scale R, isovalue I, quality low|medium|high|max, opacity 0..1, vertices interpolated|refined, cavities on|off|probe Å (the voids a probe of that radius fits in, 1.4 for water), style STYLE, select \"SEL\", hide, show, delete";
 
 /// A word of the line and its 1-based column.
 #[derive(Debug, Clone, PartialEq)]
@@ -320,17 +321,23 @@ pub fn parse(line: &str) -> Result<Option<ConsoleCommand>, ConsoleError> {
                     "opacity" => RepEdit::Opacity(number(arg()?, "opacity")?),
                     "quality" => RepEdit::Quality(value(arg()?)?),
                     "vertices" => RepEdit::Vertices(value(arg()?)?),
-                    "cavities" => RepEdit::Cavities(value::<OnOff, _>(arg()?)?.0),
+                    "cavities" => match arg()?.text.as_str() {
+                        "probe" => {
+                            let radius = need(4, "a probe radius in Å (1.4 for water)")?;
+                            RepEdit::Cavities(true, Some(number(radius, "probe radius")?))
+                        }
+                        _ => RepEdit::Cavities(value::<OnOff, _>(arg()?)?.0, None),
+                    },
                     "style" => RepEdit::Style(value(arg()?)?),
                     "select" => RepEdit::Select(selection(arg()?)?),
                     other => {
                         return perr(verb.column, format!("unknown rep setting '{other}'"));
                     }
                 };
-                let n = if matches!(edit, RepEdit::Hide | RepEdit::Show | RepEdit::Delete) {
-                    3
-                } else {
-                    4
+                let n = match edit {
+                    RepEdit::Hide | RepEdit::Show | RepEdit::Delete => 3,
+                    RepEdit::Cavities(_, Some(_)) => 5,
+                    _ => 4,
                 };
                 max(n)?;
                 ConsoleCommand::Rep(rep, edit)
@@ -482,7 +489,10 @@ impl ConsoleCommand {
                     RepEdit::Quality(q) => rep.quality = *q,
                     RepEdit::Opacity(v) => rep.opacity = *v,
                     RepEdit::Vertices(v) => rep.vertices = *v,
-                    RepEdit::Cavities(on) => rep.cavities = *on,
+                    RepEdit::Cavities(on, probe) => {
+                        rep.cavities = *on;
+                        rep.cavity_probe = *probe;
+                    }
                     RepEdit::Style(s) => rep.style = *s,
                     RepEdit::Select(s) => rep.selection = s.clone(),
                 }

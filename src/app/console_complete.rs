@@ -35,7 +35,8 @@ pub fn complete(line: &str, rep_names: &[String]) -> Option<String> {
             .iter()
             .map(|s| s.to_string())
             .collect(),
-        ["rep", _, "cavities"] => vec!["on".into(), "off".into()],
+        ["rep", _, "cavities"] => vec!["on".into(), "off".into(), "probe".into()],
+        ["rep", _, "cavities", "probe"] => vec!["1.4".into()],
         ["view"] => vec!["save".into(), "open".into()],
         ["imd"] => vec!["pause".into(), "resume".into(), "detach".into()],
         ["help"] => vec!["rep".into()],

@@ -191,6 +191,7 @@ impl AppCore {
             || old.vertices != rep.vertices
             || old.radii != rep.radii
             || old.cavities != rep.cavities
+            || old.cavity_probe != rep.cavity_probe
             || old.visible != rep.visible;
         *old = rep;
         if recompute {

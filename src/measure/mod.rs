@@ -54,7 +54,10 @@ pub use csv::{AtomCsv, CavityCsv, CavityEventCsv, ResidueCsv, lining_residues};
 pub use interface::{
     CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
 };
-pub use probe_cavities::{ProbeOptions, probe_cavities, ses_probe_cavities, ses_radius};
+pub use probe_cavities::{
+    ProbeOptions, probe_cavities, probe_cavity_walls, ses_probe_cavities, ses_probe_cavity_walls,
+    ses_radius,
+};
 pub use residues::{ExposureTable, ResidueArea, residue_areas, residue_label};
 pub use tracking::{CavityEvent, CavityTracker, TrackUpdate, TrackedCavity};
 

@@ -27,7 +27,9 @@ use super::MeasureError;
 use super::cavities::{Cavity, components};
 use crate::model::Topology;
 use crate::surface::marching_cubes;
-use crate::surface::{AtomSet, DensityVolume, GridSpec, SurfaceError, available_memory_bytes};
+use crate::surface::{
+    AtomSet, DensityVolume, GridSpec, Mesh, SurfaceError, available_memory_bytes,
+};
 
 /// Bondi's van der Waals radius of `element` in Å (the radii SES areas are usually computed
 /// with, and MSMS was run with in `tests/data`), for the elements of biomolecules.
@@ -56,6 +58,18 @@ pub fn ses_probe_cavities(
     atoms: &AtomSet<'_>,
     options: &ProbeOptions,
 ) -> Result<Vec<Cavity>, MeasureError> {
+    let walls = ses_probe_cavity_walls(topology, atom_indices, atoms, options)?;
+    Ok(walls.into_iter().map(|(cavity, _)| cavity).collect())
+}
+
+/// [`ses_probe_cavities`] with each cavity's wall: a closed mesh around the void, triangles
+/// facing out of it (positions in Å), what the window draws.
+pub fn ses_probe_cavity_walls(
+    topology: &Topology,
+    atom_indices: Option<&[u32]>,
+    atoms: &AtomSet<'_>,
+    options: &ProbeOptions,
+) -> Result<Vec<(Cavity, Mesh)>, MeasureError> {
     let mut radii = Vec::with_capacity(atoms.len());
     for k in 0..atoms.len() {
         let atom = atom_indices.map_or(Some(k), |ix| ix.get(k).map(|&a| a as usize));
@@ -73,7 +87,7 @@ pub fn ses_probe_cavities(
         radii: &radii,
         ..*atoms
     };
-    probe_cavities(&ses_atoms, options)
+    probe_cavity_walls(&ses_atoms, options)
 }
 
 /// Options of [`probe_cavities`].
@@ -113,6 +127,15 @@ pub fn probe_cavities(
     atoms: &AtomSet<'_>,
     options: &ProbeOptions,
 ) -> Result<Vec<Cavity>, MeasureError> {
+    let walls = probe_cavity_walls(atoms, options)?;
+    Ok(walls.into_iter().map(|(cavity, _)| cavity).collect())
+}
+
+/// [`probe_cavities`] with each cavity's wall (see [`ses_probe_cavity_walls`]).
+pub fn probe_cavity_walls(
+    atoms: &AtomSet<'_>,
+    options: &ProbeOptions,
+) -> Result<Vec<(Cavity, Mesh)>, MeasureError> {
     atoms.validate()?;
     for (name, value, low) in [
         ("probe radius", f64::from(options.probe), 0.1),
@@ -142,12 +165,12 @@ pub fn probe_cavities(
     drop(marks);
     let mut out = Vec::new();
     for free in &centres {
-        let cavity = void_of(atoms, grid.spacing, free, options.probe)?;
+        let (cavity, wall) = void_of(atoms, grid.spacing, free, options.probe)?;
         if cavity.volume >= options.min_volume {
-            out.push(cavity);
+            out.push((cavity, wall));
         }
     }
-    out.sort_by(|a, b| b.volume.total_cmp(&a.volume));
+    out.sort_by(|a, b| b.0.volume.total_cmp(&a.0.volume));
     Ok(out)
 }
 
@@ -301,13 +324,13 @@ fn label_cavities(grid: &GridSpec, marks: &mut [u32]) -> u32 {
 }
 
 /// The void of one cavity, the union of probe balls at its free points `centres` (Å, points of
-/// a grid of spacing `h`): its wall as a mesh, its measures and its lining atoms.
+/// a grid of spacing `h`): its measures and lining atoms, and its wall as a mesh.
 fn void_of(
     atoms: &AtomSet<'_>,
     h: f32,
     centres: &[Vec3],
     probe: f32,
-) -> Result<Cavity, MeasureError> {
+) -> Result<(Cavity, Mesh), MeasureError> {
     let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     let (lo, hi) = centres
         .iter()
@@ -416,14 +439,15 @@ fn void_of(
             lining.push(a as u32);
         }
     }
-    Ok(Cavity {
+    let cavity = Cavity {
         volume,
         area: mesh.area(),
         centroid,
         radius,
         vertex_count: mesh.positions.len(),
         lining_atoms: lining,
-    })
+    };
+    Ok((cavity, mesh))
 }
 
 #[cfg(test)]

@@ -138,6 +138,9 @@ pub struct CavitySource {
     pub subset: Option<Vec<u32>>,
     /// True when the particles are residue beads (no lining residues then).
     pub beads: bool,
+    /// The representation's cavity probe (Å): the cavities are the probe's
+    /// ([`measure::probe_cavities`]), not the surface's voids.
+    pub probe: Option<f32>,
 }
 
 /// Finds the cavities of `mesh`, the surface of `atoms` computed under `params` (the parameters
@@ -149,20 +152,11 @@ pub fn find_cavities(
     atoms: &AtomSet<'_>,
     params: &SurfaceParams,
 ) -> Result<CavityLayer, MeasureError> {
+    if let Some(probe) = source.probe {
+        return find_probe_cavities(topology, source, atoms, probe);
+    }
     let cavities = measure::cavities(mesh, atoms, params, &cavity_options())?;
-    let lining = if source.beads {
-        vec![Vec::new(); cavities.len()]
-    } else {
-        cavities
-            .iter()
-            .map(|c| {
-                let mut labels =
-                    measure::lining_residues(topology, source.subset.as_deref(), &c.lining_atoms)?;
-                labels.truncate(MAX_LINING_LABELS);
-                Ok(labels)
-            })
-            .collect::<Result<_, MeasureError>>()?
-    };
+    let lining = lining_labels(topology, source, &cavities)?;
     let (mesh, wall_vertices) = if cavities.is_empty() {
         (Mesh::default(), Vec::new())
     } else {
@@ -174,6 +168,71 @@ pub fn find_cavities(
         lining,
         wall_vertices,
         mesh,
+    })
+}
+
+/// The cavities of a probe of radius `probe` Å among `atoms` (Bondi's radii for atoms, the
+/// particles' own for beads), their lining residues and their walls.
+fn find_probe_cavities(
+    topology: &Topology,
+    source: &CavitySource,
+    atoms: &AtomSet<'_>,
+    probe: f32,
+) -> Result<CavityLayer, MeasureError> {
+    let options = measure::ProbeOptions {
+        probe,
+        min_volume: MIN_CAVITY_VOLUME_A3,
+        ..measure::ProbeOptions::default()
+    };
+    let found = if source.beads {
+        measure::probe_cavity_walls(atoms, &options)?
+    } else {
+        measure::ses_probe_cavity_walls(topology, source.subset.as_deref(), atoms, &options)?
+    };
+    let mut out = Mesh::default();
+    let mut wall_vertices = Vec::with_capacity(found.len());
+    for (k, (_, wall)) in found.iter().enumerate() {
+        let start = out.positions.len();
+        let first = start as u32;
+        out.positions.extend_from_slice(&wall.positions);
+        out.normals.extend_from_slice(&wall.normals);
+        out.colours.extend(std::iter::repeat_n(
+            cavity_rgb(k as u64 + 1),
+            wall.positions.len(),
+        ));
+        out.indices.extend(wall.indices.iter().map(|i| i + first));
+        wall_vertices.push(start..out.positions.len());
+    }
+    let cavities: Vec<Cavity> = found.into_iter().map(|(cavity, _)| cavity).collect();
+    let lining = lining_labels(topology, source, &cavities)?;
+    Ok(CavityLayer {
+        ids: (1..=cavities.len() as u64).collect(),
+        cavities,
+        lining,
+        wall_vertices,
+        mesh: out,
+    })
+}
+
+/// Per cavity, the labels of its lining residues (at most [`MAX_LINING_LABELS`]; none for
+/// beads).
+fn lining_labels(
+    topology: &Topology,
+    source: &CavitySource,
+    cavities: &[Cavity],
+) -> Result<Vec<Vec<String>>, MeasureError> {
+    Ok(if source.beads {
+        vec![Vec::new(); cavities.len()]
+    } else {
+        cavities
+            .iter()
+            .map(|c| {
+                let mut labels =
+                    measure::lining_residues(topology, source.subset.as_deref(), &c.lining_atoms)?;
+                labels.truncate(MAX_LINING_LABELS);
+                Ok(labels)
+            })
+            .collect::<Result<_, MeasureError>>()?
     })
 }
 

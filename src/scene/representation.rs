@@ -137,6 +137,12 @@ pub struct Representation {
     /// own colour (see [`super::cavity_layer`]). Off by default (nothing is computed); state
     /// files written before it existed load as off.
     pub cavities: bool,
+    /// Surfaces, with `cavities` on: the cavities are those a probe of this radius (Å; 1.4 for
+    /// water) fits in but cannot reach, with Bondi's radii (`measure::probe_cavities`), instead
+    /// of the Gaussian surface's enclosed voids. `None` (the default; absent from state files
+    /// written before it existed): the surface's voids.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cavity_probe: Option<f32>,
     /// Drawn (and, for surfaces, computed) when true.
     pub visible: bool,
 }
@@ -157,6 +163,7 @@ impl Default for Representation {
             vertices: VertexMode::default(),
             radii: RadiusSet::default(),
             cavities: false,
+            cavity_probe: None,
             visible: true,
         }
     }
@@ -228,6 +235,15 @@ impl Representation {
             return Err(RepresentationError::Opacity {
                 name: name(),
                 opacity: self.opacity,
+            });
+        }
+        if let Some(probe) = self
+            .cavity_probe
+            .filter(|p| !(p.is_finite() && (0.1..=10.0).contains(p)))
+        {
+            return Err(RepresentationError::CavityProbe {
+                name: name(),
+                probe,
             });
         }
         Ok(())

@@ -37,6 +37,16 @@ pub enum RepresentationError {
         /// The opacity as given.
         opacity: f32,
     },
+    /// Its cavity probe radius is outside 0.1 to 10 Å.
+    #[error(
+        "representation '{name}': cavity probe {probe} Å is outside 0.1 to 10 Å (1.4 for water)"
+    )]
+    CavityProbe {
+        /// The representation's name.
+        name: String,
+        /// The probe radius as given (Å).
+        probe: f32,
+    },
 }
 
 /// A `[look]` value that cannot be used, naming its key.

@@ -17,6 +17,7 @@
 //! isovalue = 0.5
 //! quality = "medium"
 //! cavities = false  # surfaces: find and draw the enclosed cavities every frame
+//! cavity_probe = 1.4  # optional, with cavities: the voids a 1.4 Å probe fits in (SES)
 //! visible = true
 //!
 //! [camera]          # optional: without it the camera fits the scene
@@ -455,9 +456,19 @@ mod tests {
         let back = StateFile::parse(&text, "s.toml").expect("parse");
         assert_eq!(back, state);
         assert!(back.representations[0].cavities && !back.representations[1].cavities);
+        assert!(!text.contains("cavity_probe"), "{text}");
         let old = "version = 1\n[[representation]]\nname = \"p\"\nselection = \"all\"\n";
         let old = StateFile::parse(old, "old.toml").expect("an old file loads");
         assert!(!old.representations[0].cavities);
+        assert_eq!(old.representations[0].cavity_probe, None);
+        let mut probed = state.clone();
+        probed.representations[0].cavity_probe = Some(1.4);
+        let text = probed.to_toml();
+        assert!(text.contains("cavity_probe = 1.4"), "{text}");
+        assert_eq!(StateFile::parse(&text, "s.toml").expect("parse"), probed);
+        let bad = text.replace("cavity_probe = 1.4", "cavity_probe = 0.0");
+        let e = StateFile::parse(&bad, "s.toml").unwrap_err().to_string();
+        assert!(e.contains("cavity probe 0 Å is outside 0.1 to 10 Å"), "{e}");
     }
 
     #[test]

@@ -65,13 +65,19 @@ fn every_command_parses() {
     assert_eq!(ok("rep 2 spacing 1.5"), C::Rep(n(2), RepEdit::Spacing(1.5)));
     assert_eq!(
         ok("rep 2 cavities on"),
-        C::Rep(n(2), RepEdit::Cavities(true))
+        C::Rep(n(2), RepEdit::Cavities(true, None))
     );
     assert_eq!(
         ok("rep 2 cavities off"),
-        C::Rep(n(2), RepEdit::Cavities(false))
+        C::Rep(n(2), RepEdit::Cavities(false, None))
+    );
+    assert_eq!(
+        ok("rep 2 cavities probe 1.4"),
+        C::Rep(n(2), RepEdit::Cavities(true, Some(1.4)))
     );
     assert!(parse("rep 2 cavities maybe").is_err());
+    assert!(parse("rep 2 cavities probe").is_err());
+    assert!(parse("rep 2 cavities probe wide").is_err());
     assert_eq!(
         ok("rep 2 radius-scale 1.2"),
         C::Rep(n(2), RepEdit::RadiusScale(1.2))

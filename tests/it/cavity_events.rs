@@ -66,11 +66,20 @@ fn rep(opacity: f32) -> Representation {
 
 /// The one layer of the two shells' frame, computed on the CPU.
 fn shells_layer() -> Arc<LayerResult> {
+    shells_layer_with(None)
+}
+
+/// The one layer of the two shells' frame, with the cavities of a probe of `probe` Å when
+/// given, computed on the CPU.
+fn shells_layer_with(probe: Option<f32>) -> Arc<LayerResult> {
     let (top, frame) = two_shells();
     let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(CpuEngine::new())));
     let reps = [RepRequest {
         id: 1,
-        rep: rep(1.0),
+        rep: Representation {
+            cavity_probe: probe,
+            ..rep(1.0)
+        },
     }];
     let computed = engine
         .frame(&top, 0, &Arc::new(frame), &reps)
@@ -129,6 +138,50 @@ fn each_cavity_wall_is_in_its_ids_panel_colour() {
         assert_eq!(colours_of(&recoloured.mesh, range), [cavity_rgb(id)]);
     }
     assert_eq!(found.ids, [1, 2], "the engine's layer is left as it was");
+}
+
+/// With a cavity probe (`rep N cavities probe 1.4`) the layer holds the probe's cavities, the
+/// ones the library finds over the same atoms with Bondi's carbon radius (1.70 Å), larger than
+/// the Gaussian surface's voids, each wall in its id's colour around its cavity.
+#[test]
+fn a_cavity_probe_draws_the_probes_cavities() {
+    let probe_layer = shells_layer_with(Some(1.4));
+    let found = probe_layer.cavities.as_ref().expect("cavities found");
+    let (_, frame) = two_shells();
+    let radii = vec![1.70; frame.positions.len()];
+    let atoms = mdsurf::surface::AtomSet {
+        positions: &frame.positions,
+        radii: &radii,
+        colours: None,
+    };
+    let options = mdsurf::measure::ProbeOptions {
+        min_volume: 1.0,
+        ..Default::default()
+    };
+    let library = mdsurf::measure::probe_cavities(&atoms, &options).expect("probe cavities");
+    assert_eq!(found.cavities, library);
+    assert_eq!(found.cavities.len(), 2, "one void per shell");
+    let gaussian = shells_layer();
+    let voids = &gaussian.cavities.as_ref().expect("cavities").cavities;
+    for (k, range) in found.wall_vertices.iter().enumerate() {
+        assert!(found.cavities[k].volume > 2.0 * voids[k].volume, "{k}");
+        assert_eq!(
+            colours_of(&found.mesh, range.clone()),
+            [cavity_rgb(found.ids[k])]
+        );
+        let n = range.len() as f64;
+        let mean = found.mesh.positions[range.clone()]
+            .iter()
+            .fold(DVec3::ZERO, |s, p| s + p.as_dvec3())
+            / n;
+        let centroid = found.cavities[k].centroid;
+        assert!(mean.distance(centroid) < 0.5, "{mean} vs {centroid}");
+    }
+    assert_eq!(
+        found.lining[0].len(),
+        SHELL_ATOMS / 10,
+        "every residue of the shell"
+    );
 }
 
 /// Hue (degrees) and saturation (0..1) of an sRGB pixel.

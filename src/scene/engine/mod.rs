@@ -121,7 +121,7 @@ fn compute_key(rep: &Representation) -> impl PartialEq + '_ {
         rep.colour,
         rep.style
             .is_surface()
-            .then(|| (rep.params(), rep.vertices, rep.cavities)),
+            .then(|| (rep.params(), rep.vertices, rep.cavities, rep.cavity_probe)),
     )
 }
 
@@ -454,6 +454,7 @@ impl SceneEngine {
                 CavitySource {
                     subset: lf.particles.subset().map(<[u32]>::to_vec),
                     beads: lf.particles.is_beads(),
+                    probe: rep.cavity_probe,
                 }
             });
         result.particles.positions = lf.positions;
