@@ -225,7 +225,10 @@ pub fn id_colour(id: u64) -> egui::Color32 {
 /// Lining residues shown per cavity in the list.
 const LINING_SHOWN: usize = 3;
 
-/// Draws the Cavities section for the selected representation; returns the switch's command.
+/// The probe radius (Å) of the panel's probe switch: a water molecule.
+const WATER_PROBE_A: f32 = 1.4;
+
+/// Draws the Cavities section for the selected representation; returns the switches' commands.
 pub fn cavity_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
     let mut out = Vec::new();
     egui::CollapsingHeader::new("Cavities")
@@ -253,6 +256,20 @@ pub fn cavity_ui(ui: &mut egui::Ui, core: &AppCore) -> Vec<Command> {
             }
             if !rep.cavities {
                 return;
+            }
+            let mut probe = rep.cavity_probe.is_some();
+            if ui
+                .checkbox(&mut probe, "as a 1.4 Å probe finds them")
+                .on_hover_text(
+                    "The voids a water-sized probe fits in but cannot reach from outside, with \
+                     Bondi radii, as MSMS finds them (pockets with a narrow mouth included); \
+                     off: the enclosed voids of this surface",
+                )
+                .changed()
+            {
+                let mut edited = rep.clone();
+                edited.cavity_probe = probe.then_some(WATER_PROBE_A);
+                out.push(Command::UpdateRep(core.selected, Box::new(edited)));
             }
             let id = core.rep_ids.get(core.selected).copied();
             let Some(tracks) = id.and_then(|id| core.cavity_tracks.of(id)) else {

@@ -267,4 +267,16 @@ fn cavity_panel_lists_the_tracked_void() {
     assert_eq!(tracks.frame(), Some(1));
     assert_eq!(tracks.volumes.len(), 1);
     assert_eq!(tracks.volumes[&1].keys().copied().collect::<Vec<_>>(), [1]);
+    // The probe switch: the same void as a 1.4 Å probe sees it, larger than the surface's.
+    let surface_void = tracks.current[0].cavity.volume;
+    h.get_by_label("as a 1.4 Å probe finds them").click();
+    h.run();
+    assert_eq!(h.state().reps[0].cavity_probe, Some(1.4));
+    assert!(h.state_mut().wait_idle(WAIT));
+    assert!(h.state().error.is_none(), "{:?}", h.state().error);
+    h.run();
+    let tracks = h.state().cavity_tracks.of(id).expect("tracks");
+    assert_eq!(tracks.current.len(), 1);
+    let probe_void = tracks.current[0].cavity.volume;
+    assert!(probe_void > surface_void, "{probe_void} vs {surface_void}");
 }
