@@ -18,6 +18,7 @@ use indicatif::{HumanBytes, ProgressBar, ProgressStyle};
 use ureq::Agent;
 
 use super::IoError;
+use super::http_prefetch::{Prefetcher, prefetch_frames};
 use super::xdr_error::RemoteFailure;
 
 /// The cache's unit: bytes fetched and kept together, aligned to multiples of this (4 KiB).
@@ -29,7 +30,8 @@ pub(crate) const CACHE_BYTES: u64 = 64 * 1024 * 1024;
 /// the first block already cached (the next frame's header, after the walk).
 pub(crate) const READ_AHEAD_BYTES: u64 = 256 * 1024;
 /// While the headers are walked (no read-ahead set), a fetch that starts less than this many
-/// bytes (12 KiB) after the previous fetch's end also fetches [`READ_AHEAD_BYTES`] past it:
+/// bytes (12 KiB) after the previous fetch's end also fetches [`READ_AHEAD_BYTES`] past it
+/// (frames further apart are prefetched, `super::http_prefetch`):
 /// frames that small (a small system's XTC frames are a few kB) are walked in a request per
 /// 256 KiB instead of one per frame, for at most 4 times the bytes of fetching each header's
 /// block. Frames further apart are fetched header by header: where the next header lies is
@@ -214,6 +216,8 @@ pub(crate) struct RangeSource {
     read_ahead: u64,
     /// The block after the last one fetched (where a forward walk's next fetch would start).
     fetched_to: u64,
+    /// The frame headers fetched ahead while the headers are walked.
+    prefetch: Prefetcher,
 }
 
 impl RangeSource {
@@ -263,11 +267,10 @@ impl RangeSource {
             clock: 0,
             read_ahead: 0,
             fetched_to: 1,
+            prefetch: Prefetcher::new(prefetch_frames()),
         };
         let first = BLOCK_BYTES.min(size);
-        let bytes = source
-            .body(reply, 0, first)
-            .map_err(|e| fail(e.to_string()))?;
+        let bytes = body(reply, 0, first).map_err(|e| fail(e.to_string()))?;
         source.store(0, bytes);
         Ok(source)
     }
@@ -283,49 +286,9 @@ impl RangeSource {
         self.read_ahead = bytes;
     }
 
-    /// The body of `reply`, which must hold bytes `start..end`.
-    fn body(
-        &mut self,
-        mut reply: ureq::http::Response<ureq::Body>,
-        start: u64,
-        end: u64,
-    ) -> io::Result<Vec<u8>> {
-        let want = end - start;
-        let mut bytes = Vec::with_capacity(want as usize);
-        let read = reply
-            .body_mut()
-            .as_reader()
-            .take(want)
-            .read_to_end(&mut bytes);
-        if let Err(e) = read {
-            return Err(failure(
-                start,
-                end,
-                format!("the connection dropped ({})", one_line(e)),
-            ));
-        }
-        if (bytes.len() as u64) < want {
-            return Err(failure(
-                start,
-                end,
-                format!("the connection dropped after {} bytes", bytes.len()),
-            ));
-        }
-        Ok(bytes)
-    }
-
     /// Fetches bytes `start..end` (block aligned, or ending at the file's end) in one request.
-    fn fetch(&mut self, start: u64, end: u64) -> io::Result<Vec<u8>> {
-        let reply = self
-            .agent
-            .get(&self.url)
-            .header("Range", format!("bytes={start}-{}", end - 1))
-            .call()
-            .map_err(|e| failure(start, end, one_line(e)))?;
-        if reply.status().as_u16() != 206 {
-            return Err(failure(start, end, status_line(reply.status())));
-        }
-        self.body(reply, start, end)
+    fn fetch(&self, start: u64, end: u64) -> io::Result<Vec<u8>> {
+        fetch_range(&self.agent, &self.url, start, end)
     }
 
     /// Keeps `bytes` (starting at block `first`) as cached blocks, dropping the least recently
@@ -374,7 +337,46 @@ impl RangeSource {
         let bytes = self.fetch(start * BLOCK_BYTES, end_byte)?;
         self.store(start, bytes);
         self.fetched_to = end + 1;
+        if self.read_ahead == 0 && !walking_small_frames {
+            self.prefetch_headers(self.position);
+        }
         Ok(())
+    }
+
+    /// After a walk's fetch for a read at byte `start` (a frame header): fetches, in
+    /// parallel, the windows where the next headers should lie when the walk's stride is
+    /// steady ([`Prefetcher::plan`]), and keeps them. Failed prefetches are ignored (the
+    /// walk's own fetch reports the error).
+    fn prefetch_headers(&mut self, start: u64) {
+        let windows = self.prefetch.plan(start, self.size);
+        if windows.is_empty() {
+            return;
+        }
+        let fetched: Vec<(u64, io::Result<Vec<u8>>)> = std::thread::scope(|scope| {
+            let jobs: Vec<_> = windows
+                .iter()
+                .map(|&(first, end)| {
+                    let (agent, url) = (self.agent.clone(), self.url.as_str());
+                    (
+                        first,
+                        scope.spawn(move || fetch_range(&agent, url, first, end)),
+                    )
+                })
+                .collect();
+            jobs.into_iter()
+                .map(|(first, job)| {
+                    let bytes = job
+                        .join()
+                        .unwrap_or_else(|_| Err(io::Error::other("a prefetch thread panicked")));
+                    (first, bytes)
+                })
+                .collect()
+        });
+        for (first, bytes) in fetched {
+            if let Ok(bytes) = bytes {
+                self.prefetch.keep(first, bytes);
+            }
+        }
     }
 
     /// Marks block `index` as just used and returns its bytes.
@@ -389,6 +391,45 @@ impl RangeSource {
     }
 }
 
+/// Fetches bytes `start..end` of `url` in one ranged GET.
+fn fetch_range(agent: &Agent, url: &str, start: u64, end: u64) -> io::Result<Vec<u8>> {
+    let reply = agent
+        .get(url)
+        .header("Range", format!("bytes={start}-{}", end - 1))
+        .call()
+        .map_err(|e| failure(start, end, one_line(e)))?;
+    if reply.status().as_u16() != 206 {
+        return Err(failure(start, end, status_line(reply.status())));
+    }
+    body(reply, start, end)
+}
+
+/// The body of `reply`, which must hold bytes `start..end`.
+fn body(mut reply: ureq::http::Response<ureq::Body>, start: u64, end: u64) -> io::Result<Vec<u8>> {
+    let want = end - start;
+    let mut bytes = Vec::with_capacity(want as usize);
+    let read = reply
+        .body_mut()
+        .as_reader()
+        .take(want)
+        .read_to_end(&mut bytes);
+    if let Err(e) = read {
+        return Err(failure(
+            start,
+            end,
+            format!("the connection dropped ({})", one_line(e)),
+        ));
+    }
+    if (bytes.len() as u64) < want {
+        return Err(failure(
+            start,
+            end,
+            format!("the connection dropped after {} bytes", bytes.len()),
+        ));
+    }
+    Ok(bytes)
+}
+
 impl Read for RangeSource {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         if self.position >= self.size || buf.is_empty() {
@@ -398,6 +439,10 @@ impl Read for RangeSource {
         let want = (buf.len() as u64)
             .min(self.size - self.position)
             .min(CACHE_BYTES / 2);
+        if self.read_ahead == 0 && self.prefetch.read(self.position, &mut buf[..want as usize]) {
+            self.position += want;
+            return Ok(want as usize);
+        }
         let first = self.position / BLOCK_BYTES;
         let last = (self.position + want - 1) / BLOCK_BYTES;
         self.ensure(first, last)?;
@@ -480,6 +525,7 @@ mod tests {
             clock: 0,
             read_ahead: 0,
             fetched_to: 0,
+            prefetch: Prefetcher::new(0),
         };
         let block = |k: u64| vec![k as u8; BLOCK_BYTES as usize];
         for k in 0..blocks_cached {

@@ -51,6 +51,8 @@ mod frame_checks;
 mod gro;
 #[cfg(feature = "app")]
 mod http;
+#[cfg(feature = "app")]
+mod http_prefetch;
 pub(crate) mod imd;
 mod lammps;
 mod lammps_header;

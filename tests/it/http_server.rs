@@ -24,10 +24,27 @@ pub enum Mode {
     NoRanges,
     /// Ranges honoured, but the connection drops once this many XTC bytes have been sent.
     DropAfter(u64),
+    /// Ranges honoured, each reply held back this many milliseconds (a distant server), so
+    /// that requests sent together are in flight together.
+    Slow(u64),
 }
 
-/// Per file (its path, `/name`): requests answered and body bytes sent.
-type Counts = Arc<Mutex<HashMap<String, (u64, u64)>>>;
+/// What the server saw of one file.
+#[derive(Debug, Clone, Copy, Default)]
+struct FileCounts {
+    /// Requests answered.
+    requests: u64,
+    /// Body bytes sent.
+    served: u64,
+    /// Requests being answered now.
+    in_flight: u64,
+    /// Requests that arrived while none other of the file was in flight: the rounds a
+    /// client took (a client that sends one request after the other has one per request).
+    rounds: u64,
+}
+
+/// Per file (its path, `/name`).
+type Counts = Arc<Mutex<HashMap<String, FileCounts>>>;
 
 /// A running test server.
 pub struct Server {
@@ -107,17 +124,23 @@ impl Server {
 
     /// Body bytes sent of the file `name` so far.
     pub fn served(&self, name: &str) -> u64 {
-        self.counts(name).1
+        self.counts(name).served
     }
 
     /// Requests answered for the file `name` so far (redirects not counted).
     pub fn requests(&self, name: &str) -> u64 {
-        self.counts(name).0
+        self.counts(name).requests
     }
 
-    fn counts(&self, name: &str) -> (u64, u64) {
+    /// Rounds of requests for the file `name` so far: requests that found none other of it in
+    /// flight (meaningful with [`Mode::Slow`], where replies overlap when sent together).
+    pub fn rounds(&self, name: &str) -> u64 {
+        self.counts(name).rounds
+    }
+
+    fn counts(&self, name: &str) -> FileCounts {
         let counts = self.counts.lock().unwrap();
-        counts.get(&format!("/{name}")).copied().unwrap_or((0, 0))
+        counts.get(&format!("/{name}")).copied().unwrap_or_default()
     }
 }
 
@@ -126,7 +149,7 @@ fn answer_plain(
     mut stream: TcpStream,
     files: &[(String, Vec<u8>)],
     mode: Mode,
-    counts: &Mutex<HashMap<String, (u64, u64)>>,
+    counts: &Mutex<HashMap<String, FileCounts>>,
 ) -> std::io::Result<()> {
     answer(&mut stream, files, mode, counts)?;
     stream.shutdown(std::net::Shutdown::Both)
@@ -137,7 +160,7 @@ fn answer_tls(
     stream: TcpStream,
     config: Arc<rustls::ServerConfig>,
     files: &[(String, Vec<u8>)],
-    counts: &Mutex<HashMap<String, (u64, u64)>>,
+    counts: &Mutex<HashMap<String, FileCounts>>,
 ) -> std::io::Result<()> {
     let connection = rustls::ServerConnection::new(config).map_err(std::io::Error::other)?;
     let mut tls = rustls::StreamOwned::new(connection, stream);
@@ -151,7 +174,7 @@ fn answer<S: Read + Write>(
     stream: &mut S,
     files: &[(String, Vec<u8>)],
     mode: Mode,
-    counts: &Mutex<HashMap<String, (u64, u64)>>,
+    counts: &Mutex<HashMap<String, FileCounts>>,
 ) -> std::io::Result<()> {
     // A request has no body: nothing is buffered past its blank line.
     let mut reader = BufReader::new(&mut *stream);
@@ -187,6 +210,31 @@ fn answer<S: Read + Write>(
         let head = "HTTP/1.1 404 Not Found\r\nContent-Length: 0\r\nConnection: close\r\n\r\n";
         return stream.write_all(head.as_bytes());
     };
+    {
+        let mut counts = counts.lock().unwrap();
+        let file = counts.entry(target.clone()).or_default();
+        if file.in_flight == 0 {
+            file.rounds += 1;
+        }
+        file.in_flight += 1;
+    }
+    let answered = reply(stream, bytes, &target, range, mode, counts);
+    counts.lock().unwrap().entry(target).or_default().in_flight -= 1;
+    answered
+}
+
+/// Sends `bytes` (the file at `target`), or the asked-for `range` of it, as `mode` says.
+fn reply<S: Write>(
+    stream: &mut S,
+    bytes: &[u8],
+    target: &str,
+    range: Option<(u64, u64)>,
+    mode: Mode,
+    counts: &Mutex<HashMap<String, FileCounts>>,
+) -> std::io::Result<()> {
+    if let Mode::Slow(ms) = mode {
+        std::thread::sleep(std::time::Duration::from_millis(ms));
+    }
     let total = bytes.len() as u64;
     let (status, body, extra) = match range {
         Some((a, b)) if mode != Mode::NoRanges && a < total => {
@@ -198,7 +246,7 @@ fn answer<S: Read + Write>(
                 extra,
             )
         }
-        _ => ("200 OK", &bytes[..], String::new()),
+        _ => ("200 OK", bytes, String::new()),
     };
     let head = format!(
         "HTTP/1.1 {status}\r\nContent-Length: {}\r\nAccept-Ranges: {}\r\n{extra}Connection: close\r\n\r\n",
@@ -213,13 +261,13 @@ fn answer<S: Read + Write>(
     let mut body = body;
     {
         let mut counts = counts.lock().unwrap();
-        let (requests, served) = counts.entry(target.clone()).or_default();
+        let file = counts.entry(target.to_string()).or_default();
         if let (true, Mode::DropAfter(limit)) = (target.ends_with(".xtc"), mode) {
-            let allowed = limit.saturating_sub(*served).min(body.len() as u64) as usize;
+            let allowed = limit.saturating_sub(file.served).min(body.len() as u64) as usize;
             body = &body[..allowed];
         }
-        *requests += 1;
-        *served += body.len() as u64;
+        file.requests += 1;
+        file.served += body.len() as u64;
     }
     stream.write_all(body)?;
     stream.flush()
