@@ -11,12 +11,11 @@
 use std::path::PathBuf;
 
 use super::command::OnOff;
+pub use super::console_command::{ConsoleCommand, ImdVerb, RepEdit, RepRef};
 use super::state::{AppCore, Command};
 use super::timeline::TimelineCmd;
-use crate::model::ColorScheme;
-use crate::scene::representation::{RepStyle, Representation};
+use crate::scene::representation::Representation;
 use crate::selection::Selection;
-use crate::surface::{Quality, VertexMode};
 
 /// A one-line console error.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -45,94 +44,6 @@ fn perr<T>(column: usize, message: impl Into<String>) -> Result<T, ConsoleError>
         column,
         message: message.into(),
     })
-}
-
-/// Which representation: 1-based number or name.
-#[derive(Debug, Clone, PartialEq)]
-pub enum RepRef {
-    /// 1-based position in the list.
-    Number(usize),
-    /// Name shown in the panel.
-    Name(String),
-}
-
-/// A change to one representation.
-#[derive(Debug, Clone, PartialEq)]
-pub enum RepEdit {
-    /// Colour scheme.
-    Color(ColorScheme),
-    /// Grid spacing in Å.
-    Spacing(f32),
-    /// Radius scale R.
-    RadiusScale(f32),
-    /// Isovalue I.
-    Isovalue(f32),
-    /// Gaussian cutoff.
-    Quality(Quality),
-    /// Opacity 0..1.
-    Opacity(f32),
-    /// Vertex placement.
-    Vertices(VertexMode),
-    /// Cavities found and drawn (surfaces): off, the surface's voids (`None`), or a probe's
-    /// of this radius in Å.
-    Cavities(bool, Option<f32>),
-    /// Drawing style.
-    Style(RepStyle),
-    /// New selection.
-    Select(String),
-    /// Hide.
-    Hide,
-    /// Show.
-    Show,
-    /// Delete.
-    Delete,
-}
-
-/// One console command.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ConsoleCommand {
-    /// `rep add "SEL" STYLE [as NAME]`.
-    RepAdd {
-        /// Selection text.
-        selection: String,
-        /// Style.
-        style: RepStyle,
-        /// Name (default `rep N`).
-        name: Option<String>,
-    },
-    /// `rep N EDIT …`.
-    Rep(RepRef, RepEdit),
-    /// `frame N` (0-based, as `--frame`).
-    Frame(usize),
-    /// `play`.
-    Play,
-    /// `pause`.
-    Pause,
-    /// `fit` or `fit "SEL"`.
-    Fit(Option<String>),
-    /// `view save FILE`.
-    ViewSave(PathBuf),
-    /// `view open FILE`.
-    ViewOpen(PathBuf),
-    /// `screenshot FILE [WxH]`.
-    Screenshot(PathBuf, Option<[u32; 2]>),
-    /// `select "SEL"`: prints the number of atoms in the current frame.
-    Select(String),
-    /// `imd pause|resume|detach`: the running simulation (`--imd`).
-    Imd(ImdVerb),
-    /// `help [TOPIC]`.
-    Help(Option<String>),
-}
-
-/// What `imd` asks of the running simulation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ImdVerb {
-    /// `imd pause`.
-    Pause,
-    /// `imd resume`.
-    Resume,
-    /// `imd detach`: the simulation goes on, no more frames come.
-    Detach,
 }
 
 /// The first words of commands (Tab completion, `help`).
@@ -490,8 +401,7 @@ impl ConsoleCommand {
                     RepEdit::Opacity(v) => rep.opacity = *v,
                     RepEdit::Vertices(v) => rep.vertices = *v,
                     RepEdit::Cavities(on, probe) => {
-                        rep.cavities = *on;
-                        rep.cavity_probe = *probe;
+                        (rep.cavities, rep.cavity_probe) = (*on, *probe)
                     }
                     RepEdit::Style(s) => rep.style = *s,
                     RepEdit::Select(s) => rep.selection = s.clone(),

@@ -7,6 +7,7 @@
 pub mod cavity_panel;
 pub(crate) mod command;
 pub mod console;
+mod console_command;
 pub(crate) mod console_complete;
 pub(crate) mod console_ui;
 pub mod device_loss;
