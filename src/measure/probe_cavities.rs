@@ -454,68 +454,6 @@ fn void_of(
 mod tests {
     use super::*;
 
-    /// `n` points spread evenly on a sphere of `radius` Å around the origin (Fibonacci).
-    fn sphere(n: usize, radius: f32) -> Vec<Vec3> {
-        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-        (0..n)
-            .map(|k| {
-                let z = 1.0 - 2.0 * (k as f32 + 0.5) / n as f32;
-                let r = (1.0 - z * z).sqrt();
-                let phi = golden * k as f32;
-                radius * Vec3::new(r * phi.cos(), r * phi.sin(), z)
-            })
-            .collect()
-    }
-
-    /// A shell of 600 atoms of radius 1.5 Å on a sphere of 7 Å (about 1 Å apart), without
-    /// those whose distance from the z axis is under `hole` Å on the +z side.
-    fn shell_with_hole(hole: f32) -> Vec<Vec3> {
-        sphere(600, 7.0)
-            .into_iter()
-            .filter(|p| p.z < 0.0 || p.truncate().length() >= hole)
-            .collect()
-    }
-
-    fn found(positions: &[Vec3]) -> Vec<Cavity> {
-        let radii = vec![1.5; positions.len()];
-        let atoms = AtomSet {
-            positions,
-            radii: &radii,
-            colours: None,
-        };
-        probe_cavities(&atoms, &ProbeOptions::default()).unwrap()
-    }
-
-    #[test]
-    fn a_closed_shell_holds_one_void_of_the_probe_swept_ball() {
-        let cavities = found(&shell_with_hole(0.0));
-        assert_eq!(cavities.len(), 1, "{cavities:?}");
-        let void = &cavities[0];
-        eprintln!("closed shell: {:.1} Å³, {:.1} Å²", void.volume, void.area);
-        // Free probe centres fill a ball of about 7 - 1.5 - 1.4 = 4.1 Å (4.16 between atoms),
-        // so the void is a ball of 5.5 to 5.56 Å: 697 to 720 Å³, 380 to 388 Å².
-        let (v_lo, v_hi) = (697.0 * 0.97, 720.0 * 1.02);
-        assert!(void.volume > v_lo && void.volume < v_hi, "{}", void.volume);
-        assert!(
-            void.area > 380.0 * 0.97 && void.area < 388.0 * 1.03,
-            "{}",
-            void.area
-        );
-        assert!(void.centroid.length() < 0.05, "{:?}", void.centroid);
-        assert_eq!(void.lining_atoms.len(), 600);
-    }
-
-    #[test]
-    fn a_mouth_narrower_than_the_probe_keeps_the_pocket_a_cavity() {
-        // A probe passes a ring of atoms of radius 1.5 Å when the ring's radius is above
-        // 1.5 + 1.4 = 2.9 Å.
-        let narrow = found(&shell_with_hole(2.3));
-        assert_eq!(narrow.len(), 1, "{narrow:?}");
-        assert!(narrow[0].volume > 600.0, "{}", narrow[0].volume);
-        let wide = found(&shell_with_hole(3.8));
-        assert!(wide.is_empty(), "{wide:?}");
-    }
-
     #[test]
     fn bad_options_and_no_atoms_are_errors() {
         let positions = [Vec3::ZERO];

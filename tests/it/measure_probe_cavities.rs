@@ -1,9 +1,12 @@
 //! Probe cavities (`mdsurf surface --cavity-probe 1.4 --cavities FILE`,
 //! `src/measure/probe_cavities.rs`) against MSMS 2.6.1's inner components on the same atoms and
 //! radii (Bondi, probe 1.4 Å; `tests/data/msms_cavities.csv` from `scripts/measure_reference.py`).
-//! The numbers are in docs/measure.md ("Cavities the probe finds").
+//! The numbers are in docs/measure.md ("Cavities the probe finds"). Also synthetic shells of
+//! atoms whose void is known.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
+use mdsurf::measure::{Cavity, ProbeOptions, probe_cavities};
+use mdsurf::surface::AtomSet;
 
 use crate::cli_common::{Csv, data, mdsurf};
 use crate::data_support::DATA;
@@ -38,8 +41,9 @@ fn msms(protein: &str) -> (String, String, Vec<Void>) {
     (rows[0][1].clone(), rows[0][2].clone(), voids)
 }
 
-/// mdsurf's probe cavities of `selection` in `file`, through the command line.
-fn mdsurf_voids(file: &str, selection: &str) -> Vec<Void> {
+/// The `--cavities` table of `mdsurf surface FILE --select SELECTION --cavity-probe 1.4`
+/// (cavities of at least `min_volume` Å³).
+fn probe_csv(file: &str, selection: &str, min_volume: &str) -> Csv {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = data(file);
     let run = mdsurf(
@@ -54,14 +58,19 @@ fn mdsurf_voids(file: &str, selection: &str) -> Vec<Void> {
             "--cavity-probe",
             "1.4",
             "--min-cavity-volume",
-            "0",
+            min_volume,
             "--cavities",
             "c.csv",
             "-q",
         ],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
-    let csv = Csv::read(&dir.path().join("c.csv"));
+    Csv::read(&dir.path().join("c.csv"))
+}
+
+/// mdsurf's probe cavities of `selection` in `file`, through the command line.
+fn mdsurf_voids(file: &str, selection: &str) -> Vec<Void> {
+    let csv = probe_csv(file, selection, "0");
     let (v, a) = (csv.col("volume_A3"), csv.col("area_A2"));
     let (x, y, z) = (csv.col("cx"), csv.col("cy"), csv.col("cz"));
     (0..v.len())
@@ -142,32 +151,60 @@ fn measure_probe_cavities_find_every_msms_cavity_over_20_a3() {
 /// leaves them open.
 #[test]
 fn measure_probe_cavities_find_1a28s_empty_steroid_pockets() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let path = data("1a28.pdb.gz");
-    let run = mdsurf(
-        dir.path(),
-        &[
-            "surface",
-            &path,
-            "--select",
-            "protein",
-            "--backend",
-            "cpu",
-            "--cavity-probe",
-            "1.4",
-            "--min-cavity-volume",
-            "300",
-            "--cavities",
-            "c.csv",
-            "-q",
-        ],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let csv = Csv::read(&dir.path().join("c.csv"));
+    let csv = probe_csv("1a28.pdb.gz", "protein", "300");
     assert_eq!(csv.col("volume_A3").len(), 2, "two pockets");
     for lining in csv.text_col("lining") {
         for residue in ["GLN725", "MET756", "LEU797", "CYS891"] {
             assert!(lining.contains(residue), "{residue} not in {lining}");
         }
     }
+}
+
+/// A shell of 600 atoms of radius 1.5 Å on a sphere of 7 Å (about 1 Å apart), without
+/// those whose distance from the z axis is under `hole` Å on the +z side.
+fn shell_with_hole(hole: f32) -> Vec<Vec3> {
+    crate::measure_cavities::shell(600, 7.0, Vec3::ZERO)
+        .into_iter()
+        .filter(|p| p.z < 0.0 || p.truncate().length() >= hole)
+        .collect()
+}
+
+fn found(positions: &[Vec3]) -> Vec<Cavity> {
+    let radii = vec![1.5; positions.len()];
+    let atoms = AtomSet {
+        positions,
+        radii: &radii,
+        colours: None,
+    };
+    probe_cavities(&atoms, &ProbeOptions::default()).expect("probe cavities")
+}
+
+#[test]
+fn a_closed_shell_holds_one_void_of_the_probe_swept_ball() {
+    let cavities = found(&shell_with_hole(0.0));
+    assert_eq!(cavities.len(), 1, "{cavities:?}");
+    let void = &cavities[0];
+    eprintln!("closed shell: {:.1} Å³, {:.1} Å²", void.volume, void.area);
+    // Free probe centres fill a ball of about 7 - 1.5 - 1.4 = 4.1 Å (4.16 between atoms),
+    // so the void is a ball of 5.5 to 5.56 Å: 697 to 720 Å³, 380 to 388 Å².
+    let (v_lo, v_hi) = (697.0 * 0.97, 720.0 * 1.02);
+    assert!(void.volume > v_lo && void.volume < v_hi, "{}", void.volume);
+    assert!(
+        void.area > 380.0 * 0.97 && void.area < 388.0 * 1.03,
+        "{}",
+        void.area
+    );
+    assert!(void.centroid.length() < 0.05, "{:?}", void.centroid);
+    assert_eq!(void.lining_atoms.len(), 600);
+}
+
+#[test]
+fn a_mouth_narrower_than_the_probe_keeps_the_pocket_a_cavity() {
+    // A probe passes a ring of atoms of radius 1.5 Å when the ring's radius is above
+    // 1.5 + 1.4 = 2.9 Å.
+    let narrow = found(&shell_with_hole(2.3));
+    assert_eq!(narrow.len(), 1, "{narrow:?}");
+    assert!(narrow[0].volume > 600.0, "{}", narrow[0].volume);
+    let wide = found(&shell_with_hole(3.8));
+    assert!(wide.is_empty(), "{wide:?}");
 }
