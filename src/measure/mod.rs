@@ -92,6 +92,22 @@ pub enum MeasureError {
     /// The engine measured the surface without keeping its mesh.
     #[error("the surface was measured without keeping its mesh; per-atom areas need the mesh")]
     NoMesh,
+    /// The probe cavities' grid would not fit in memory.
+    #[error(
+        "the cavity probe's {}x{}x{} grid at {spacing} Å needs {:.1} GB but only {:.1} GB is \
+         available; select fewer atoms (the grid covers the selection's box)",
+        dims[0], dims[1], dims[2], *bytes_needed as f64 / 1e9, *bytes_available as f64 / 1e9
+    )]
+    ProbeGridTooLarge {
+        /// Grid points along x, y, z.
+        dims: [u64; 3],
+        /// Grid spacing in Å.
+        spacing: f32,
+        /// Bytes the grid would need.
+        bytes_needed: u64,
+        /// Bytes available.
+        bytes_available: u64,
+    },
     /// A threshold or option was not a finite non-negative number.
     #[error("{name} must be a finite non-negative number, got {value}")]
     InvalidOption {

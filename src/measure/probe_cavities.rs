@@ -192,12 +192,12 @@ fn probe_grid(atoms: &AtomSet<'_>, options: &ProbeOptions) -> Result<GridSpec, M
     let bytes_needed = points.saturating_mul(9);
     let bytes_available = available_memory_bytes();
     if dims64.iter().any(|&d| d > u32::MAX as u64 / 4) || bytes_needed > bytes_available {
-        return Err(SurfaceError::GridTooLarge {
+        return Err(MeasureError::ProbeGridTooLarge {
             dims: dims64,
+            spacing: h,
             bytes_needed,
             bytes_available,
-        }
-        .into());
+        });
     }
     Ok(GridSpec {
         origin,
@@ -493,6 +493,27 @@ mod tests {
             colours: None,
         };
         assert!(probe_cavities(&none, &ProbeOptions::default()).is_err());
+    }
+
+    #[test]
+    fn a_grid_larger_than_memory_is_an_error_naming_the_grid() {
+        let positions = [Vec3::ZERO, Vec3::splat(5_000.0)];
+        let radii = [1.5, 1.5];
+        let atoms = AtomSet {
+            positions: &positions,
+            radii: &radii,
+            colours: None,
+        };
+        let error = probe_cavities(&atoms, &ProbeOptions::default()).unwrap_err();
+        assert!(
+            matches!(error, MeasureError::ProbeGridTooLarge { .. }),
+            "{error:?}"
+        );
+        let text = error.to_string();
+        assert!(
+            text.contains("grid at 0.25 Å needs") && text.contains("select fewer atoms"),
+            "{text}"
+        );
     }
 
     #[test]
