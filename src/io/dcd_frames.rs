@@ -11,7 +11,7 @@
 //! or their cosines when all three are within ±1), or, for CHARMM versions above 25, the
 //! symmetric box matrix `[A, B, C; B, D, E; C, E, F]` packed as `A, B, D, C, E, F`.
 //!
-//! A DCD file read over HTTP ([`open_source`]) is indexed from its header and size alone (fixed
+//! A DCD file read over HTTP ([`Bytes::Remote`]) is indexed from its header and size alone (fixed
 //! frame sizes: nothing past the header is read when it opens); its frames' record markers are
 //! checked when each frame is read.
 //!
@@ -25,10 +25,8 @@ use super::IoError;
 use super::native::NativeOpen;
 use super::positioned::Positioned;
 use super::positioned_frames::{Bytes, FrameDecoder, PositionedFrames};
-use super::prepare::Prepared;
 use super::reader_errors::DcdError;
 use super::unit_cell;
-use super::xdr_reader::ByteSource;
 use crate::model::Frame;
 
 /// Picoseconds per AKMA time unit (CHARMM and NAMD write DCD time steps in AKMA units).
@@ -119,24 +117,9 @@ fn frame_size(stored: usize, has_cell: bool, four_d: bool) -> u64 {
     (if has_cell { 56 } else { 0 }) + record * if four_d { 4 } else { 3 }
 }
 
-/// Opens the DCD file `path` (bytes at `prepared.open_path`) and indexes its frames.
-pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoError> {
-    open_bytes(path, Bytes::Local(prepared))
-}
-
-/// Opens the DCD file `path` whose `total` bytes `source` holds (a URL read through range
-/// requests): only the header is read here.
-#[cfg_attr(not(feature = "app"), allow(dead_code))]
-pub(crate) fn open_source(
-    path: &Path,
-    source: Box<dyn ByteSource>,
-    total: u64,
-) -> Result<NativeOpen, IoError> {
-    open_bytes(path, Bytes::Remote { source, total })
-}
-
-/// Opens the DCD file `path` and indexes its frames.
-fn open_bytes(path: &Path, bytes: Bytes) -> Result<NativeOpen, IoError> {
+/// Opens the DCD file `path` (a local file, or a URL read through range requests: then only
+/// the header is read here) and indexes its frames.
+pub(crate) fn open(path: &Path, bytes: Bytes) -> Result<NativeOpen, IoError> {
     let (bytes, total, prepared) = bytes.open(path)?;
     let layout = read_header(&bytes, total).map_err(|e| IoError::unreadable(path, e))?;
     let (len, damage) = count_frames(&bytes, &layout, total);

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use super::IoError;
 use super::format::FileFormat;
+use super::positioned_frames::Bytes;
 use super::prepare::Prepared;
 use super::{dcd_frames, gro, lammps, netcdf};
 use crate::model::{Frame, Topology};
@@ -60,8 +61,8 @@ pub(crate) fn opener(format: &FileFormat) -> Option<Opener> {
         return None;
     }
     match format.base {
-        "DCD" => Some(dcd_frames::open),
-        "Amber NetCDF" => Some(netcdf::open),
+        "DCD" => Some(|path, prepared| dcd_frames::open(path, Bytes::Local(prepared))),
+        "Amber NetCDF" => Some(|path, prepared| netcdf::open(path, Bytes::Local(prepared))),
         "GRO" => Some(gro::open),
         "LAMMPS" => Some(lammps::open),
         _ => None,

@@ -32,6 +32,7 @@ pub(crate) enum Bytes {
     /// the reader keeps alive).
     Local(Prepared),
     /// `total` bytes read through range requests from a URL.
+    #[cfg_attr(not(feature = "app"), allow(dead_code))]
     Remote {
         source: Box<dyn ByteSource>,
         total: u64,

@@ -10,7 +10,7 @@
 //! time), nanometre coordinates are scaled by 10 (chemfiles uses 10⁴), and `Conventions` may
 //! list AMBER among others.
 //!
-//! Over HTTP ([`open_source`]) only the header is read when the file opens (record variables
+//! Over HTTP ([`Bytes::Remote`]) only the header is read when the file opens (record variables
 //! lie at computed offsets), then the slices of each frame read.
 //!
 //! Errors are [`NetcdfError`]s, wrapped in an [`IoError`] naming the file (and frame).
@@ -28,9 +28,7 @@ use super::IoError;
 use super::native::NativeOpen;
 use super::positioned::Positioned;
 use super::positioned_frames::{Bytes, FrameDecoder, PositionedFrames};
-use super::prepare::Prepared;
 use super::unit_cell;
-use super::xdr_reader::ByteSource;
 use crate::model::Frame;
 
 /// Headers are read in pieces of this many bytes, growing until they parse.
@@ -55,24 +53,9 @@ impl Slice {
     }
 }
 
-/// Opens the Amber NetCDF file `path` (bytes at `prepared.open_path`) and indexes its frames.
-pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoError> {
-    open_bytes(path, Bytes::Local(prepared))
-}
-
-/// Opens the Amber NetCDF file `path` whose `total` bytes `source` holds (a URL read through
-/// range requests): only the header is read here.
-#[cfg_attr(not(feature = "app"), allow(dead_code))]
-pub(crate) fn open_source(
-    path: &Path,
-    source: Box<dyn ByteSource>,
-    total: u64,
-) -> Result<NativeOpen, IoError> {
-    open_bytes(path, Bytes::Remote { source, total })
-}
-
-/// Opens the Amber NetCDF file `path` and indexes its frames.
-fn open_bytes(path: &Path, bytes: Bytes) -> Result<NativeOpen, IoError> {
+/// Opens the Amber NetCDF file `path` (a local file, or a URL read through range requests:
+/// then only the header is read here) and indexes its frames.
+pub(crate) fn open(path: &Path, bytes: Bytes) -> Result<NativeOpen, IoError> {
     let (file, total, prepared) = bytes.open(path)?;
     let header = read_header(&file, total).map_err(|e| IoError::unreadable(path, e))?;
     let layout = Layout::new(&header, total).map_err(|e| match e {

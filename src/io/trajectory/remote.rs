@@ -17,6 +17,7 @@ use super::frame_source::FrameSource;
 use super::{Damage, Readers, Trajectory, check_walk_atoms, open_with};
 use crate::io::format::{FileFormat, detect_name};
 use crate::io::http::{self, READ_AHEAD_BYTES, RangeSource};
+use crate::io::positioned_frames::Bytes;
 use crate::io::xdr_reader::{XdrKind, XdrReader};
 use crate::io::{IoError, dcd_frames, netcdf, xdr};
 
@@ -128,10 +129,14 @@ pub(super) fn open_frames(
             source.set_read_ahead(READ_AHEAD_BYTES);
             let size = source.size();
             let open = match base {
-                "DCD" => dcd_frames::open_source,
-                _ => netcdf::open_source,
+                "DCD" => dcd_frames::open,
+                _ => netcdf::open,
             };
-            let opened = open(path, Box::new(source), size)?;
+            let bytes = Bytes::Remote {
+                source: Box::new(source),
+                total: size,
+            };
+            let opened = open(path, bytes)?;
             return Ok((FrameSource::Native(opened.frames), None));
         }
     };
