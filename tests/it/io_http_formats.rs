@@ -196,9 +196,9 @@ fn redirects_are_followed_with_their_ranges() {
     );
 }
 
-#[test]
-fn the_header_walk_of_102_xtc_frames_takes_few_requests() {
-    // md_1u19.xtc twice: 102 frames of about 21 kB.
+/// A server of `md_1u19.gro` and `twice.xtc` (md_1u19.xtc twice: 102 frames of about 21 kB),
+/// and the bytes of `twice.xtc`.
+fn serve_md_twice(mode: Mode) -> (Server, Vec<u8>) {
     let xtc = std::fs::read(data("md_1u19.xtc")).unwrap();
     let twice = [xtc.clone(), xtc].concat();
     let gro = std::fs::read(data("md_1u19.gro")).unwrap();
@@ -206,7 +206,12 @@ fn the_header_walk_of_102_xtc_frames_takes_few_requests() {
         ("md_1u19.gro".to_string(), gro),
         ("twice.xtc".to_string(), twice.clone()),
     ];
-    let server = Server::serve(Mode::Ranges, files);
+    (Server::serve(mode, files), twice)
+}
+
+#[test]
+fn the_header_walk_of_102_xtc_frames_takes_few_requests() {
+    let (server, twice) = serve_md_twice(Mode::Ranges);
     let dir = tempfile::tempdir().unwrap();
     let run = surface(
         dir.path(),
@@ -238,16 +243,9 @@ fn the_header_walk_of_102_xtc_frames_takes_few_requests() {
 /// frame. (Elapsed times are printed, not checked.)
 #[test]
 fn the_header_walk_of_large_xtc_frames_prefetches_headers_in_parallel() {
-    let xtc = std::fs::read(data("md_1u19.xtc")).unwrap();
-    let twice = [xtc.clone(), xtc].concat();
-    let gro = std::fs::read(data("md_1u19.gro")).unwrap();
     let mut rows = Vec::new();
     for prefetch in ["16", "0"] {
-        let files = vec![
-            ("md_1u19.gro".to_string(), gro.clone()),
-            ("twice.xtc".to_string(), twice.clone()),
-        ];
-        let server = Server::serve(Mode::Slow(20), files);
+        let (server, _) = serve_md_twice(Mode::Slow(20));
         let dir = tempfile::tempdir().unwrap();
         let (top, traj) = (server.url("md_1u19.gro"), server.url("twice.xtc"));
         let started = std::time::Instant::now();
