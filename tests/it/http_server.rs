@@ -36,7 +36,7 @@ struct FileCounts {
     requests: u64,
     /// Body bytes sent.
     served: u64,
-    /// Requests being answered now.
+    /// Requests being answered now (arrived, reply not yet started).
     in_flight: u64,
     /// Requests that arrived while none other of the file was in flight: the rounds a
     /// client took (a client that sends one request after the other has one per request).
@@ -218,9 +218,7 @@ fn answer<S: Read + Write>(
         }
         file.in_flight += 1;
     }
-    let answered = reply(stream, bytes, &target, range, mode, counts);
-    counts.lock().unwrap().entry(target).or_default().in_flight -= 1;
-    answered
+    reply(stream, bytes, &target, range, mode, counts)
 }
 
 /// Sends `bytes` (the file at `target`), or the asked-for `range` of it, as `mode` says.
@@ -235,6 +233,14 @@ fn reply<S: Write>(
     if let Mode::Slow(ms) = mode {
         std::thread::sleep(std::time::Duration::from_millis(ms));
     }
+    // The request stops being in flight before its first byte leaves: a client that waits for
+    // each reply cannot send its next request while this one still counts.
+    counts
+        .lock()
+        .unwrap()
+        .entry(target.to_string())
+        .or_default()
+        .in_flight -= 1;
     let total = bytes.len() as u64;
     let (status, body, extra) = match range {
         Some((a, b)) if mode != Mode::NoRanges && a < total => {
