@@ -356,8 +356,11 @@ type InterfaceRow = (usize, Option<f64>, f64, f64, f64, f64, Vec<ContactRow>);
 
 /// The buried area between selections `a` and `b` in each of `frames`, as `--interface A B`:
 /// the three surfaces on the union's grid, CPU engine, the scene's parameters; contact residues
-/// lose more than `threshold` Å².
+/// lose more than `threshold` Å². With `probe` (Å) the surfaces are that probe's
+/// solvent-excluded surfaces with Bondi's radii (`--interface-probe`).
 #[pyfunction]
+#[pyo3(signature = (core, a, b, frames, reader, threshold, probe=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn scene_interface(
     py: Python<'_>,
     mut core: PyRefMut<'_, SceneCore>,
@@ -366,10 +369,16 @@ pub fn scene_interface(
     frames: Vec<usize>,
     reader: Py<PyAny>,
     threshold: f64,
+    probe: Option<f32>,
 ) -> PyResult<Vec<InterfaceRow>> {
     if !(threshold.is_finite() && threshold >= 0.0) {
         return Err(PyValueError::new_err(format!(
             "contact_threshold_A2 must be a finite area of 0 Å² or more, got {threshold}"
+        )));
+    }
+    if let Some(p) = probe.filter(|p| !(p.is_finite() && (0.1..=10.0).contains(p))) {
+        return Err(PyValueError::new_err(format!(
+            "probe_A must be a probe radius of 0.1 to 10 Å (1.4 for water), got {p}"
         )));
     }
     let core = &mut *core;
@@ -403,8 +412,19 @@ pub fn scene_interface(
             let fa = la.frame(&core.topology, &frame).map_err(layer_err)?;
             let fb = lb.frame(&core.topology, &frame).map_err(layer_err)?;
             let err = |e| measure_err("interface", index, e);
-            let result = measure::interface(&mut engine, &fa.atom_set(), &fb.atom_set(), &params)
-                .map_err(err)?;
+            let result = match probe {
+                Some(probe) => measure::ses_probe_interface(
+                    &core.topology,
+                    (Some(&ia), &fa.atom_set()),
+                    (Some(&ib), &fb.atom_set()),
+                    &ProbeOptions {
+                        probe,
+                        ..ProbeOptions::default()
+                    },
+                ),
+                None => measure::interface(&mut engine, &fa.atom_set(), &fb.atom_set(), &params),
+            }
+            .map_err(err)?;
             let contacts =
                 measure::contact_residues(&core.topology, Some(&ia), Some(&ib), &result, threshold)
                     .map_err(err)?

@@ -108,6 +108,24 @@ def test_interface_equals_cli(cli, data, tmp_path):
     assert len(got.contacts_b_residues[0]) == len(got.contacts_b[0]) > 10
 
 
+def test_probe_interface_equals_cli(cli, data, tmp_path):
+    pdb = data / "1hpv.pdb"
+    a, b = "protein and chain A", "protein and chain B"
+    run = run_cli(cli, tmp_path, pdb, "--select", "protein", "--interface", a, b,
+                  "--interface-csv", "i.csv", "--interface-probe", "1.4")
+    assert run.returncode == 0, run.stderr
+    (row,) = rows_of(tmp_path / "i.csv")
+    scene = mdsurf.Scene(universe(pdb), select="protein")
+    got = scene.interface(a, b, probe_A=1.4)
+    for name in ["area_a_A2", "area_b_A2", "area_ab_A2", "buried_A2"]:
+        assert close(getattr(got, name)[0], row[name], 4), (name, getattr(got, name), row)
+    assert " ".join(got.contacts_a[0]) == row["contacts_a"]
+    # MSMS buries 1,193.0 Å² (tests/data/msms_interface.csv); the Gaussian default differs.
+    assert abs(got.buried_A2[0] / 1193.0 - 1) < 0.05
+    with pytest.raises(ValueError, match="probe_A must be a probe radius"):
+        scene.interface(a, b, probe_A=0.0)
+
+
 def test_cavities_equal_cli(cli, adk, tmp_path):
     gro, xtc = adk
     run = run_cli(cli, tmp_path, gro, xtc, "--select", "protein", "--frames", "0:4",

@@ -56,6 +56,11 @@ pub struct MeasureArgs {
     /// buried area is printed per frame.
     #[arg(long, value_name = "FILE.csv", requires = "interface")]
     pub interface_csv: Option<PathBuf>,
+    /// Measure the interface on the solvent-excluded surface a probe of this radius in Å leaves
+    /// (1.4 for water; Bondi's radii, a 0.25 Å grid) instead of on the Gaussian surface: the
+    /// buried SES area MSMS, FreeSASA-style tools and PISA-like analyses report.
+    #[arg(long, value_name = "A", value_parser = parse_probe, requires = "interface")]
+    pub interface_probe: Option<f32>,
 }
 
 impl MeasureArgs {
@@ -105,6 +110,8 @@ struct Interface {
     sides: [Layer; 2],
     engine: CpuEngine,
     params: SurfaceParams,
+    /// `--interface-probe`: the probe radius (Å) of the SES the interface is measured on.
+    probe: Option<f32>,
     rows: String,
 }
 
@@ -157,6 +164,7 @@ impl Measurer {
                     sides: [side("A", a)?, side("B", b)?],
                     engine: CpuEngine::new().with_vertices(vertices),
                     params: *params,
+                    probe: args.interface_probe,
                     rows: String::new(),
                 })
             }
@@ -315,12 +323,23 @@ impl Interface {
             bail!("a side matches no atom in this frame");
         }
         let (ia, ib) = (a.atoms(frame), b.atoms(frame));
-        let result = measure::interface(
-            &mut self.engine,
-            &fa.atom_set(),
-            &fb.atom_set(),
-            &self.params,
-        )?;
+        let result = match self.probe {
+            Some(probe) => measure::ses_probe_interface(
+                topology,
+                (Some(&ia), &fa.atom_set()),
+                (Some(&ib), &fb.atom_set()),
+                &measure::ProbeOptions {
+                    probe,
+                    ..measure::ProbeOptions::default()
+                },
+            )?,
+            None => measure::interface(
+                &mut self.engine,
+                &fa.atom_set(),
+                &fb.atom_set(),
+                &self.params,
+            )?,
+        };
         let contacts = measure::contact_residues(
             topology,
             Some(&ia),

@@ -45,6 +45,7 @@ mod cells;
 pub(crate) mod csv;
 pub mod interface;
 pub(crate) mod probe_cavities;
+pub(crate) mod probe_surface;
 pub(crate) mod residues;
 pub(crate) mod tracking;
 
@@ -58,6 +59,7 @@ pub use probe_cavities::{
     ProbeOptions, probe_cavities, probe_cavity_walls, ses_probe_cavities, ses_probe_cavity_walls,
     ses_radius,
 };
+pub use probe_surface::{ProbeSurface, probe_interface, probe_surface, ses_probe_interface};
 pub use residues::{ExposureTable, ResidueArea, residue_areas, residue_label};
 pub use tracking::{CavityEvent, CavityTracker, TrackUpdate, TrackedCavity};
 

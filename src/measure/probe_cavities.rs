@@ -70,6 +70,21 @@ pub fn ses_probe_cavity_walls(
     atoms: &AtomSet<'_>,
     options: &ProbeOptions,
 ) -> Result<Vec<(Cavity, Mesh)>, MeasureError> {
+    let radii = ses_radii(topology, atom_indices, atoms)?;
+    let ses_atoms = AtomSet {
+        radii: &radii,
+        ..*atoms
+    };
+    probe_cavity_walls(&ses_atoms, options)
+}
+
+/// Bondi's radius of each atom of `atoms` (`atom_indices` into `topology`, or every atom when
+/// `None`), the set's own radius where Bondi gives none (Å).
+pub(super) fn ses_radii(
+    topology: &Topology,
+    atom_indices: Option<&[u32]>,
+    atoms: &AtomSet<'_>,
+) -> Result<Vec<f32>, MeasureError> {
     let mut radii = Vec::with_capacity(atoms.len());
     for k in 0..atoms.len() {
         let atom = atom_indices.map_or(Some(k), |ix| ix.get(k).map(|&a| a as usize));
@@ -83,11 +98,7 @@ pub fn ses_probe_cavity_walls(
         };
         radii.push(ses_radius(element).unwrap_or(atoms.radii[k]));
     }
-    let ses_atoms = AtomSet {
-        radii: &radii,
-        ..*atoms
-    };
-    probe_cavity_walls(&ses_atoms, options)
+    Ok(radii)
 }
 
 /// Options of [`probe_cavities`].
@@ -117,7 +128,7 @@ const CLEARANCE_CAP: f32 = 1.0;
 
 /// Marks of the grid points in [`probe_cavities`].
 const BLOCKED: u32 = u32::MAX;
-const OUTSIDE: u32 = u32::MAX - 1;
+pub(super) const OUTSIDE: u32 = u32::MAX - 1;
 const UNSEEN: u32 = 0;
 
 /// The probe-accessible cavities of `atoms` (radii: the SES radii of the atoms, Å), largest
@@ -136,20 +147,7 @@ pub fn probe_cavity_walls(
     atoms: &AtomSet<'_>,
     options: &ProbeOptions,
 ) -> Result<Vec<(Cavity, Mesh)>, MeasureError> {
-    atoms.validate()?;
-    for (name, value, low) in [
-        ("probe radius", f64::from(options.probe), 0.1),
-        ("cavity grid spacing", f64::from(options.spacing), 0.05),
-        ("minimum cavity volume", options.min_volume, 0.0),
-    ] {
-        if !(value.is_finite() && value >= low) || (name != "minimum cavity volume" && value > 10.0)
-        {
-            return Err(MeasureError::InvalidOption { name, value });
-        }
-    }
-    if atoms.is_empty() {
-        return Err(SurfaceError::EmptySystem.into());
-    }
+    check_probe_options(atoms, options)?;
     let grid = probe_grid(atoms, options)?;
     let mut marks = free_centres(atoms, &grid, options.probe);
     flood_outside(&grid, &mut marks);
@@ -174,8 +172,34 @@ pub fn probe_cavity_walls(
     Ok(out)
 }
 
+/// Checks the atoms and the options' ranges (probe 0.1 to 10 Å, spacing 0.05 to 10 Å, minimum
+/// volume not negative); an empty set is an error.
+pub(super) fn check_probe_options(
+    atoms: &AtomSet<'_>,
+    options: &ProbeOptions,
+) -> Result<(), MeasureError> {
+    atoms.validate()?;
+    for (name, value, low) in [
+        ("probe radius", f64::from(options.probe), 0.1),
+        ("cavity grid spacing", f64::from(options.spacing), 0.05),
+        ("minimum cavity volume", options.min_volume, 0.0),
+    ] {
+        if !(value.is_finite() && value >= low) || (name != "minimum cavity volume" && value > 10.0)
+        {
+            return Err(MeasureError::InvalidOption { name, value });
+        }
+    }
+    if atoms.is_empty() {
+        return Err(SurfaceError::EmptySystem.into());
+    }
+    Ok(())
+}
+
 /// The grid over the atoms with a border of free points all round.
-fn probe_grid(atoms: &AtomSet<'_>, options: &ProbeOptions) -> Result<GridSpec, MeasureError> {
+pub(super) fn probe_grid(
+    atoms: &AtomSet<'_>,
+    options: &ProbeOptions,
+) -> Result<GridSpec, MeasureError> {
     let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     let (lo, hi) = atoms
         .positions
@@ -208,7 +232,7 @@ fn probe_grid(atoms: &AtomSet<'_>, options: &ProbeOptions) -> Result<GridSpec, M
 
 /// The index range `lo..=hi` of samples along one axis within `reach` Å of `x` (Å from the
 /// origin), clamped to `0..n`.
-fn reach_range(x: f32, reach: f32, h: f32, n: u32) -> (u32, u32) {
+pub(super) fn reach_range(x: f32, reach: f32, h: f32, n: u32) -> (u32, u32) {
     let lo = ((x - reach) / h).ceil().max(0.0) as u32;
     let hi = (((x + reach) / h).floor().max(0.0) as u32).min(n - 1);
     (lo, hi)
@@ -216,7 +240,7 @@ fn reach_range(x: f32, reach: f32, h: f32, n: u32) -> (u32, u32) {
 
 /// Marks every grid point: [`BLOCKED`] when a probe there overlaps an atom, else [`UNSEEN`].
 /// Parallel over z planes, each plane visiting the atoms whose reach crosses it.
-fn free_centres(atoms: &AtomSet<'_>, grid: &GridSpec, probe: f32) -> Vec<u32> {
+pub(super) fn free_centres(atoms: &AtomSet<'_>, grid: &GridSpec, probe: f32) -> Vec<u32> {
     let [nx, ny, nz] = grid.dims;
     let h = grid.spacing;
     let mut by_plane: Vec<Vec<u32>> = vec![Vec::new(); nz as usize];
@@ -272,21 +296,17 @@ fn neighbours() -> impl Iterator<Item = [i64; 3]> {
         .filter(|d| *d != [0, 0, 0])
 }
 
-/// Gives every [`UNSEEN`] point reached from `start` (26-connected) the mark `label`.
-fn fill(grid: &GridSpec, marks: &mut [u32], start: usize, label: u32) {
-    let [nx, ny, nz] = grid.dims.map(i64::from);
-    let steps: Vec<[i64; 3]> = neighbours().collect();
-    let mut stack = vec![start];
-    marks[start] = label;
+/// Gives every [`UNSEEN`] point reached from the points of `stack` (26-connected; already
+/// marked) the mark `label`. Every point on the grid's border must already be marked, so that
+/// the points reached are inside the border and all their neighbours lie on the grid.
+fn fill(grid: &GridSpec, marks: &mut [u32], mut stack: Vec<usize>, label: u32) {
+    let [nx, ny, _] = grid.dims.map(|d| d as isize);
+    let steps: Vec<isize> = neighbours()
+        .map(|d| d[0] as isize + nx * (d[1] as isize + ny * d[2] as isize))
+        .collect();
     while let Some(at) = stack.pop() {
-        let at = at as i64;
-        let (i, j, k) = (at % nx, (at / nx) % ny, at / (nx * ny));
-        for d in &steps {
-            let (a, b, c) = (i + d[0], j + d[1], k + d[2]);
-            if a < 0 || b < 0 || c < 0 || a >= nx || b >= ny || c >= nz {
-                continue;
-            }
-            let next = (a + nx * (b + ny * c)) as usize;
+        for &step in &steps {
+            let next = (at as isize + step) as usize;
             if marks[next] == UNSEEN {
                 marks[next] = label;
                 stack.push(next);
@@ -296,19 +316,41 @@ fn fill(grid: &GridSpec, marks: &mut [u32], start: usize, label: u32) {
 }
 
 /// Marks the free points connected to the grid's border [`OUTSIDE`] (the border is free: the
-/// grid's padding is larger than any atom's reach).
-fn flood_outside(grid: &GridSpec, marks: &mut [u32]) {
+/// grid's padding is larger than any atom's reach). The border is marked first and the fill
+/// starts from the free points next to it.
+pub(super) fn flood_outside(grid: &GridSpec, marks: &mut [u32]) {
     let [nx, ny, nz] = grid.dims;
-    for k in [0, nz - 1] {
+    let on_border = |i: u32, j: u32, k: u32| {
+        i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1
+    };
+    let next_to_border = |i: u32, j: u32, k: u32| {
+        !on_border(i, j, k)
+            && (i == 1 || j == 1 || k == 1 || i == nx - 2 || j == ny - 2 || k == nz - 2)
+    };
+    let mut stack = Vec::new();
+    for k in 0..nz {
         for j in 0..ny {
-            for i in 0..nx {
+            // Whole rows inside the shell hold only two border points and two next to it.
+            let inner = k > 1 && j > 1 && k < nz - 2 && j < ny - 2;
+            let columns: Vec<u32> = if inner {
+                vec![0, 1, nx - 2, nx - 1]
+            } else {
+                (0..nx).collect()
+            };
+            for i in columns {
                 let at = grid.index(i, j, k);
-                if marks[at] == UNSEEN {
-                    fill(grid, marks, at, OUTSIDE);
+                if on_border(i, j, k) {
+                    if marks[at] == UNSEEN {
+                        marks[at] = OUTSIDE;
+                    }
+                } else if next_to_border(i, j, k) && marks[at] == UNSEEN {
+                    marks[at] = OUTSIDE;
+                    stack.push(at);
                 }
             }
         }
     }
+    fill(grid, marks, stack, OUTSIDE);
 }
 
 /// Numbers the remaining free sets 1, 2, ...; returns how many there are.
@@ -317,7 +359,8 @@ fn label_cavities(grid: &GridSpec, marks: &mut [u32]) -> u32 {
     for at in 0..marks.len() {
         if marks[at] == UNSEEN {
             count += 1;
-            fill(grid, marks, at, count);
+            marks[at] = count;
+            fill(grid, marks, vec![at], count);
         }
     }
     count

@@ -5,7 +5,9 @@
 //! what they mean are in docs/measure.md ("Against MSMS").
 
 use glam::{DVec3, Vec3};
-use mdsurf::measure::{Cavity, CavityOptions, cavities, interface};
+use mdsurf::measure::{
+    Cavity, CavityOptions, ProbeOptions, cavities, interface, ses_probe_interface,
+};
 use mdsurf::surface::{AtomSet, CpuEngine, Preset, SurfaceEngine, SurfaceParams, VertexMode};
 
 use crate::cli_common::{Csv, mdsurf};
@@ -300,4 +302,96 @@ fn measure_msms_cavities_of_mdsurf_mostly_msms_cavities() {
             ours.len()
         );
     }
+}
+
+/// MSMS's buried SES area of `complex` and mdsurf's on the probe's SES (Bondi radii, a 1.4 Å
+/// probe: `--interface-probe 1.4`), with mdsurf's deviation in %.
+fn probe_buried_against_msms(complex: &str) -> (f64, f64, f64) {
+    let row = interface_row(complex);
+    let (top, ia, a, ra) = selected_atoms(&row[1], &row[2], None);
+    let (_, ib, b, rb) = selected_atoms(&row[1], &row[3], None);
+    let options = ProbeOptions::default();
+    let started = std::time::Instant::now();
+    let r = ses_probe_interface(
+        &top,
+        (Some(&ia), &set(&a, &ra)),
+        (Some(&ib), &set(&b, &rb)),
+        &options,
+    )
+    .expect("probe interface");
+    let msms = num(&row[10]);
+    let dev = 100.0 * (r.buried / msms - 1.0);
+    eprintln!(
+        "{complex} probe: buried {:.1} Å² (A {:.1}, B {:.1}, A+B {:.1}) vs MSMS {msms:.1} Å² \
+         (A {}, B {}, A+B {}): {dev:+.2} % in {:.1} s",
+        r.buried,
+        r.area_a,
+        r.area_b,
+        r.area_complex,
+        row[7],
+        row[8],
+        row[9],
+        started.elapsed().as_secs_f64()
+    );
+    (msms, r.buried, dev)
+}
+
+/// On the probe's own SES the three interfaces, large and small, bury what MSMS's do to
+/// within the issue's 5 %.
+#[test]
+fn measure_msms_probe_buried_area_within_5_percent() {
+    for complex in ["1hpv", "7ddo", "1a28"] {
+        let (msms, ours, dev) = probe_buried_against_msms(complex);
+        assert!(
+            dev.abs() <= 5.0,
+            "{complex}: {ours:.1} against {msms:.1} ({dev:+.2} %)"
+        );
+    }
+}
+
+/// `mdsurf surface --interface A B --interface-probe 1.4` writes the library's probe interface
+/// (1hpv within 5 % of MSMS) with its contact residues; a probe radius out of range or the
+/// flag without `--interface` is refused in one line.
+#[test]
+fn measure_msms_cli_interface_probe_is_the_librarys() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let pdb = crate::cli_common::data("1hpv.pdb");
+    let args = |probe: &'static str| {
+        vec![
+            "surface",
+            pdb.as_str(),
+            "--select",
+            "protein",
+            "--backend",
+            "cpu",
+            "--interface",
+            "protein and chain A",
+            "protein and chain B",
+            "--interface-csv",
+            "i.csv",
+            "--interface-probe",
+            probe,
+        ]
+    };
+    let run = mdsurf(dir.path(), &args("1.4"));
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let csv = Csv::read(&dir.path().join("i.csv"));
+    let (msms, library, _) = probe_buried_against_msms("1hpv");
+    let cli = csv.col("buried_A2")[0];
+    assert!(
+        (cli - library).abs() <= 1e-3 * library,
+        "{cli} vs {library}"
+    );
+    assert!((cli / msms - 1.0).abs() <= 0.05, "{cli} vs MSMS {msms}");
+    let contacts = csv.text_col("contacts_a")[0].clone();
+    assert!(contacts.split(' ').count() > 10, "{contacts}");
+    for bad in ["0", "11", "nan"] {
+        let run = mdsurf(dir.path(), &args(bad));
+        assert_eq!(run.code, 2, "{bad}: {}", run.stderr);
+        assert!(run.stderr.contains("--interface-probe"), "{}", run.stderr);
+        assert_eq!(run.stderr.trim().lines().count(), 1, "{}", run.stderr);
+    }
+    let run = mdsurf(dir.path(), &["surface", &pdb, "--interface-probe", "1.4"]);
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(run.stderr.contains("--interface"), "{}", run.stderr);
 }

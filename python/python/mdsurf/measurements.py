@@ -200,8 +200,8 @@ def residue_areas(scene, rep, frames):
     )
 
 
-def interface(scene, a, b, frames, threshold):
-    rows = _mdsurf.scene_interface(scene._core, a, b, frames, scene._reader, threshold)
+def interface(scene, a, b, frames, threshold, probe=None):
+    rows = _mdsurf.scene_interface(scene._core, a, b, frames, scene._reader, threshold, probe)
 
     def side(s):
         picked = [[c for c in r[6] if c[0] == s] for r in rows]

@@ -479,15 +479,19 @@ class Scene:
         first frame of ``frames``, as the command line takes them from its first frame."""
         return _measure.residue_areas(self, self._rep(rep), self._frames(frames))
 
-    def interface(self, selection_a, selection_b, frames=None, contact_threshold_A2=1.0):
+    def interface(self, selection_a, selection_b, frames=None, contact_threshold_A2=1.0,
+                  probe_A=None):
         """Buried area between two selections (mdsurf's language) in ``frames``, as
         ``--interface A B``: (area(A) + area(B) - area(A and B)) / 2 in Å², the three surfaces
         on one grid with the scene's H, R, I and quality (CPU engine), and the residues losing
-        more than ``contact_threshold_A2``: an :class:`mdsurf.measurements.InterfaceAreas`. A
+        more than ``contact_threshold_A2``: an :class:`mdsurf.measurements.InterfaceAreas`. With
+        ``probe_A`` (1.4 for water) the surfaces are the solvent-excluded surfaces of a probe of
+        that radius with Bondi's radii, as MSMS computes them (``--interface-probe``). A
         selection that does not parse or matches no atom in a frame raises ``ValueError``
         naming it."""
+        probe = None if probe_A is None else float(probe_A)
         return _measure.interface(self, str(selection_a), str(selection_b),
-                                  self._frames(frames), float(contact_threshold_A2))
+                                  self._frames(frames), float(contact_threshold_A2), probe)
 
     def cavities(self, rep=None, frames=None, min_volume_A3=1.0, probe_A=None):
         """Enclosed cavities of representation ``rep`` in ``frames``, tracked over them (ids
