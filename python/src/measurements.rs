@@ -15,10 +15,9 @@ use mdsurf::measure::{
     lining_residues, residue_label,
 };
 use mdsurf::model::{Frame, RadiusOverrides};
-use mdsurf::scene::layer::Layer;
+use mdsurf::scene::interface::{Interface, InterfaceError};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, RepRequest};
-use mdsurf::selection::Selection;
 use mdsurf::surface::{AtomSet, CpuEngine};
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
@@ -382,67 +381,52 @@ pub fn scene_interface(
         )));
     }
     let core = &mut *core;
-    let params = core.params;
-    let side = |name: &str, sel: &str| -> PyResult<Layer> {
-        Selection::parse(sel)
-            .map_err(|e| PyValueError::new_err(format!("interface: selection '{sel}': {e}")))?;
-        let mut rep = Representation::new(name, sel, RepStyle::Surface);
-        rep.set_params(&params);
-        rep.validate()
-            .map_err(|e| PyValueError::new_err(format!("interface: {e}")))?;
-        Layer::new(rep, &core.topology, &RadiusOverrides::default())
-            .map_err(|e| PyValueError::new_err(format!("interface: {e}")))
-    };
-    let mut sides = [side("A", a)?, side("B", b)?];
+    let mut base = Representation::new("interface", "all", RepStyle::Surface);
+    base.set_params(&core.params);
+    base.vertices = mdsurf::surface::SurfaceEngine::vertices(&CpuEngine::new());
+    let mut sides = Interface::new(
+        &core.topology,
+        [a, b],
+        &base,
+        &RadiusOverrides::default(),
+        probe,
+    )
+    .map_err(|e| PyValueError::new_err(format!("interface: {e}")))?;
     in_pool(py, || {
-        let mut engine = CpuEngine::new();
         let mut rows = Vec::with_capacity(frames.len());
         for &index in &frames {
             let frame = core.read(index, &reader)?;
-            let [la, lb] = &mut sides;
-            let (ia, ib) = (la.atoms(&frame), lb.atoms(&frame));
-            for (sel, atoms) in [(a, &ia), (b, &ib)] {
-                if atoms.is_empty() {
-                    return Err(PyValueError::new_err(format!(
-                        "interface: selection '{sel}' matches no atom in frame {index}"
-                    )));
-                }
-            }
-            let layer_err = |e| PyValueError::new_err(format!("frame {index}: interface: {e}"));
-            let fa = la.frame(&core.topology, &frame).map_err(layer_err)?;
-            let fb = lb.frame(&core.topology, &frame).map_err(layer_err)?;
+            sides
+                .check_sides(&frame)
+                .map_err(|e| PyValueError::new_err(format!("interface: {e} in frame {index}")))?;
             let err = |e| measure_err("interface", index, e);
-            let result = match probe {
-                Some(probe) => measure::ses_probe_interface(
-                    &core.topology,
-                    (Some(&ia), &fa.atom_set()),
-                    (Some(&ib), &fb.atom_set()),
-                    &ProbeOptions {
-                        probe,
-                        ..ProbeOptions::default()
-                    },
-                ),
-                None => measure::interface(&mut engine, &fa.atom_set(), &fb.atom_set(), &params),
-            }
-            .map_err(err)?;
-            let contacts =
-                measure::contact_residues(&core.topology, Some(&ia), Some(&ib), &result, threshold)
-                    .map_err(err)?
-                    .into_iter()
-                    .map(|c| {
-                        let side = u8::from(c.side == Side::B);
-                        let alone = c.residue.area;
-                        let label = c.residue.label();
-                        (
-                            side,
-                            c.residue.residue,
-                            label,
-                            alone,
-                            c.area_complex,
-                            c.buried,
-                        )
-                    })
-                    .collect();
+            let measured =
+                sides
+                    .measure(&core.topology, &frame, threshold)
+                    .map_err(|e| match e {
+                        InterfaceError::Measure(e) => err(e),
+                        other => {
+                            PyValueError::new_err(format!("frame {index}: interface: {other}"))
+                        }
+                    })?;
+            let result = measured.result;
+            let contacts = measured
+                .contacts
+                .into_iter()
+                .map(|c| {
+                    let side = u8::from(c.side == Side::B);
+                    let alone = c.residue.area;
+                    let label = c.residue.label();
+                    (
+                        side,
+                        c.residue.residue,
+                        label,
+                        alone,
+                        c.area_complex,
+                        c.buried,
+                    )
+                })
+                .collect();
             rows.push((
                 index,
                 frame.time_ps,

@@ -13,6 +13,7 @@ pub(crate) mod console_ui;
 pub mod device_loss;
 pub mod export;
 pub mod headless_script;
+pub mod interface_panel;
 pub mod keys;
 pub mod membrane_view;
 pub mod offscreen;

@@ -56,6 +56,8 @@ pub struct Viewer {
     device: Option<(DeviceWatch, ReopenSlot)>,
     /// Per-frame transformations of the frames loaded, and the Trajectory section's draft.
     transforms: super::trajectory_panel::TransformDraft,
+    /// The Interface section's selections, switches and measured frames.
+    interface: super::interface_panel::InterfaceDraft,
     /// True while the keyboard shortcut list is shown.
     shortcuts_shown: bool,
     /// The console under the viewport.
@@ -92,6 +94,7 @@ impl Viewer {
             files: None,
             device: None,
             transforms: Default::default(),
+            interface: Default::default(),
             shortcuts_shown: false,
             console: Default::default(),
             keeps_settings: false,
@@ -470,6 +473,8 @@ impl eframe::App for Viewer {
                     cmds.extend(look_ui(ui, &self.core));
                     ui.separator();
                     cmds.extend(super::cavity_panel::cavity_ui(ui, &self.core));
+                    ui.separator();
+                    super::interface_panel::interface_ui(ui, &self.core, &mut self.interface);
                     ui.separator();
                     if super::trajectory_panel::trajectory_ui(ui, &mut self.transforms) {
                         self.reload_transformed(ui.ctx());

@@ -14,7 +14,7 @@ use mdsurf::measure::{
     ResidueCsv, Side,
 };
 use mdsurf::model::{Frame, RadiusOverrides, Topology};
-use mdsurf::scene::layer::Layer;
+use mdsurf::scene::interface::{Interface as SceneInterface, InterfaceFrame};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, SceneEngine, SceneFrame};
 use mdsurf::surface::{AtomSet, CpuEngine, RadiusSet, SurfaceParams, VertexMode};
@@ -105,13 +105,9 @@ fn parse_probe(s: &str) -> Result<f32, super::arg_error::ArgError> {
     }
 }
 
-/// The two sides of `--interface`, bound to the topology.
+/// The two sides of `--interface`, bound to the topology, and the CSV rows so far.
 struct Interface {
-    sides: [Layer; 2],
-    engine: CpuEngine,
-    params: SurfaceParams,
-    /// `--interface-probe`: the probe radius (Å) of the SES the interface is measured on.
-    probe: Option<f32>,
+    sides: SceneInterface,
     rows: String,
 }
 
@@ -148,23 +144,23 @@ impl Measurer {
         }
         let interface = match args.interface.as_deref() {
             Some([a, b]) => {
-                let side = |name: &str, sel: &str| -> Result<Layer> {
-                    let mut rep = Representation::new(name, sel, RepStyle::Surface);
-                    rep.set_params(params);
-                    rep.radii = radii;
-                    rep.validate().map_err(|e| anyhow!("--interface: {e}"))?;
-                    let layer = Layer::new(rep, topology, radius_overrides)
-                        .map_err(|e| anyhow!("--interface: {e}"))?;
-                    if layer.atoms(first).is_empty() {
-                        bail!("--interface: selection '{sel}' matches no atom");
-                    }
-                    Ok(layer)
-                };
+                let mut base = Representation::new("interface", "all", RepStyle::Surface);
+                base.set_params(params);
+                base.radii = radii;
+                base.vertices = vertices;
+                let sides = SceneInterface::new(
+                    topology,
+                    [a, b],
+                    &base,
+                    radius_overrides,
+                    args.interface_probe,
+                )
+                .map_err(|e| anyhow!("--interface: {e}"))?;
+                sides
+                    .check_sides(first)
+                    .map_err(|e| anyhow!("--interface: {e}"))?;
                 Some(Interface {
-                    sides: [side("A", a)?, side("B", b)?],
-                    engine: CpuEngine::new().with_vertices(vertices),
-                    params: *params,
-                    probe: args.interface_probe,
+                    sides,
                     rows: String::new(),
                 })
             }
@@ -317,36 +313,9 @@ impl Interface {
         time_ps: Option<f64>,
         index: usize,
     ) -> Result<String> {
-        let [a, b] = &mut self.sides;
-        let (fa, fb) = (a.frame(topology, frame)?, b.frame(topology, frame)?);
-        if fa.positions.is_empty() || fb.positions.is_empty() {
-            bail!("a side matches no atom in this frame");
-        }
-        let (ia, ib) = (a.atoms(frame), b.atoms(frame));
-        let result = match self.probe {
-            Some(probe) => measure::ses_probe_interface(
-                topology,
-                (Some(&ia), &fa.atom_set()),
-                (Some(&ib), &fb.atom_set()),
-                &measure::ProbeOptions {
-                    probe,
-                    ..measure::ProbeOptions::default()
-                },
-            )?,
-            None => measure::interface(
-                &mut self.engine,
-                &fa.atom_set(),
-                &fb.atom_set(),
-                &self.params,
-            )?,
-        };
-        let contacts = measure::contact_residues(
-            topology,
-            Some(&ia),
-            Some(&ib),
-            &result,
-            measure::CONTACT_THRESHOLD,
-        )?;
+        let InterfaceFrame { result, contacts } =
+            self.sides
+                .measure(topology, frame, measure::CONTACT_THRESHOLD)?;
         let side = |s: Side| -> String {
             let labels: Vec<String> = contacts
                 .iter()

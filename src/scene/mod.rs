@@ -11,6 +11,7 @@ pub mod defaults;
 pub(crate) mod engine;
 pub(crate) mod exposure;
 pub(crate) mod frame;
+pub mod interface;
 pub mod layer;
 pub mod movie;
 pub mod representation;

@@ -1,0 +1,253 @@
+//! The window's Interface section: the area two selections bury against each other
+//! ([`crate::scene::interface`], what `mdsurf surface --interface` computes), measured in the
+//! background for each frame shown while it is switched on, with the shown frame's readout, its
+//! contact residues and the buried area against frame. The surfaces take the selected
+//! representation's parameters, or, with the probe switch, the 1.4 Å probe's solvent-excluded
+//! surface (`--interface-probe 1.4`, MSMS's buried SES area). Changing a selection, the switch or
+//! the file starts the table again.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, TryRecvError, channel};
+use std::time::Duration;
+
+use crate::measure::{CONTACT_THRESHOLD, Side};
+use crate::scene::interface::Interface;
+
+use super::state::AppCore;
+
+/// The probe radius (Å) of the probe switch: water.
+pub const WATER_PROBE: f32 = 1.4;
+
+/// One measured frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InterfaceRow {
+    /// Area of A alone, B alone, both together, and buried (Å²).
+    pub area_a: f64,
+    /// Area of B alone (Å²).
+    pub area_b: f64,
+    /// Area of A and B together (Å²).
+    pub area_ab: f64,
+    /// `(area_a + area_b - area_ab) / 2` (Å²).
+    pub buried: f64,
+    /// Contact residues of A, then of B (`A:LEU23`).
+    pub contacts: [Vec<String>; 2],
+}
+
+/// What the section holds between frames.
+pub struct InterfaceDraft {
+    /// The first selection.
+    pub selection_a: String,
+    /// The second selection.
+    pub selection_b: String,
+    /// True: on the water probe's SES; false: on the Gaussian surface.
+    pub probe: bool,
+    /// True while frames are measured.
+    pub on: bool,
+    /// The measured frames.
+    pub rows: BTreeMap<usize, InterfaceRow>,
+    /// The last failure, one line (measuring stops until a setting changes).
+    pub error: Option<String>,
+    /// The settings and file the rows belong to.
+    measured_for: Option<(String, String, bool, usize)>,
+    /// The frame being measured and where its result comes.
+    job: Option<(usize, Receiver<Result<InterfaceRow, String>>)>,
+}
+
+impl Default for InterfaceDraft {
+    fn default() -> Self {
+        InterfaceDraft {
+            selection_a: "chain A".into(),
+            selection_b: "chain B".into(),
+            probe: false,
+            on: false,
+            rows: BTreeMap::new(),
+            error: None,
+            measured_for: None,
+            job: None,
+        }
+    }
+}
+
+impl InterfaceDraft {
+    /// True while a frame is being measured.
+    pub fn busy(&self) -> bool {
+        self.job.is_some()
+    }
+
+    /// Takes a finished job's result, forgets the rows when the settings or the file changed,
+    /// and starts measuring the shown frame when it has no row yet.
+    fn advance(&mut self, core: &AppCore) {
+        if let Some((frame, receiver)) = &self.job {
+            match receiver.try_recv() {
+                Ok(Ok(row)) => {
+                    self.rows.insert(*frame, row);
+                    self.job = None;
+                }
+                Ok(Err(line)) => {
+                    self.error = Some(line);
+                    self.job = None;
+                }
+                Err(TryRecvError::Empty) => return,
+                Err(TryRecvError::Disconnected) => {
+                    self.error = Some(format!("frame {frame}: the measurement stopped"));
+                    self.job = None;
+                }
+            }
+        }
+        let Some(source) = core.source.clone() else {
+            return;
+        };
+        let key = (
+            self.selection_a.trim().to_string(),
+            self.selection_b.trim().to_string(),
+            self.probe,
+            Arc::as_ptr(&source) as *const () as usize,
+        );
+        if self.measured_for.as_ref() != Some(&key) {
+            self.rows.clear();
+            self.error = None;
+            self.measured_for = Some(key);
+        }
+        let frame = core.timeline.current;
+        if !self.on || self.error.is_some() || self.rows.contains_key(&frame) {
+            return;
+        }
+        let base = core
+            .reps
+            .get(core.selected)
+            .cloned()
+            .unwrap_or_else(|| core.base.clone());
+        let overrides = core.radius_overrides.clone();
+        let (a, b) = (self.selection_a.clone(), self.selection_b.clone());
+        let probe = self.probe.then_some(WATER_PROBE);
+        let (sender, receiver) = channel();
+        std::thread::spawn(move || {
+            let measured = (|| {
+                let topology = source.topology();
+                let mut sides = Interface::new(topology, [&a, &b], &base, &overrides, probe)
+                    .map_err(|e| e.to_string())?;
+                let data = source.read_frame(frame).map_err(|e| e.to_string())?;
+                let m = sides
+                    .measure(topology, &data, CONTACT_THRESHOLD)
+                    .map_err(|e| format!("frame {frame}: {e}"))?;
+                let labels = |side: Side| -> Vec<String> {
+                    m.contacts
+                        .iter()
+                        .filter(|c| c.side == side)
+                        .map(|c| c.residue.label())
+                        .collect()
+                };
+                Ok(InterfaceRow {
+                    area_a: m.result.area_a,
+                    area_b: m.result.area_b,
+                    area_ab: m.result.area_complex,
+                    buried: m.result.buried,
+                    contacts: [labels(Side::A), labels(Side::B)],
+                })
+            })();
+            let _ = sender.send(measured);
+        });
+        self.job = Some((frame, receiver));
+    }
+
+    /// Waits up to `timeout` for the running measurement (for tests and scripts); true when
+    /// none is left running.
+    pub fn wait(&mut self, core: &AppCore, timeout: Duration) -> bool {
+        let until = std::time::Instant::now() + timeout;
+        self.advance(core);
+        while self.busy() && std::time::Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(20));
+            self.advance(core);
+        }
+        !self.busy()
+    }
+}
+
+/// The Interface section.
+pub fn interface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut InterfaceDraft) {
+    ui.heading("Interface");
+    ui.checkbox(&mut draft.on, "Measure the buried area");
+    egui::Grid::new("interface_sides").show(ui, |ui| {
+        for (name, text) in [("A", &mut draft.selection_a), ("B", &mut draft.selection_b)] {
+            let label = ui.label(name);
+            ui.add(egui::TextEdit::singleline(text).desired_width(220.0))
+                .labelled_by(label.id);
+            ui.end_row();
+        }
+    });
+    ui.checkbox(
+        &mut draft.probe,
+        format!("on the {WATER_PROBE} Å probe's surface (as MSMS)"),
+    );
+    draft.advance(core);
+    if let Some(line) = &draft.error {
+        ui.colored_label(ui.visuals().error_fg_color, line);
+    }
+    if let Some((frame, _)) = &draft.job {
+        ui.horizontal(|ui| {
+            ui.spinner();
+            ui.label(format!("measuring frame {frame}…"));
+        });
+        ui.ctx().request_repaint_after(Duration::from_millis(100));
+    }
+    let current = core.timeline.current;
+    if let Some(row) = draft.rows.get(&current) {
+        ui.label(format!(
+            "frame {current}: buried {:.1} Å² (A {:.1}, B {:.1}, together {:.1} Å²)",
+            row.buried, row.area_a, row.area_b, row.area_ab
+        ));
+        for (name, contacts) in ["A", "B"].iter().zip(&row.contacts) {
+            let shown: Vec<&str> = contacts.iter().take(12).map(String::as_str).collect();
+            let more = contacts.len().saturating_sub(shown.len());
+            let tail = if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            };
+            ui.label(format!(
+                "{} contact residues of {name}: {}{tail}",
+                contacts.len(),
+                shown.join(" ")
+            ));
+        }
+    }
+    if !draft.rows.is_empty() {
+        buried_plot(ui, &draft.rows, current, core.timeline.len);
+    }
+}
+
+/// The buried area (Å²) against frame, the shown frame marked.
+fn buried_plot(
+    ui: &mut egui::Ui,
+    rows: &BTreeMap<usize, InterfaceRow>,
+    current: usize,
+    frames: usize,
+) {
+    let colour = egui::Color32::from_rgb(120, 200, 120);
+    let (painter, rect, x_of) =
+        super::plot::frame_axes(ui, ui.available_width(), 80.0, current, frames);
+    let (lo, hi) = rows.values().fold((f64::MAX, f64::MIN), |(lo, hi), r| {
+        (lo.min(r.buried), hi.max(r.buried))
+    });
+    let span = (hi - lo).max(hi.abs() * 1e-6).max(1e-9);
+    let points: Vec<egui::Pos2> = rows
+        .iter()
+        .map(|(&f, r)| {
+            let y = rect.bottom() - 6.0 - (rect.height() - 12.0) * ((r.buried - lo) / span) as f32;
+            egui::pos2(x_of(f), y)
+        })
+        .collect();
+    if points.len() == 1 {
+        painter.circle_filled(points[0], 2.5, colour);
+    } else {
+        painter.add(egui::Shape::line(points, (1.5, colour)));
+    }
+    painter.text(
+        rect.left_top() + egui::vec2(4.0, 2.0),
+        egui::Align2::LEFT_TOP,
+        format!("buried {lo:.0} … {hi:.0} Å²"),
+        egui::FontId::monospace(10.0),
+        colour,
+    );
+}

@@ -1,0 +1,128 @@
+//! The buried area between two selections, frame by frame: what `mdsurf surface --interface`,
+//! the window's Interface section and Python share. Each side is a [`Layer`] (a selection
+//! bound to the topology, with the radii and surface parameters of a representation), and a
+//! frame is measured on the Gaussian surface ([`measure::interface`], CPU engine) or, with a
+//! probe radius, on the probe's solvent-excluded surface ([`measure::ses_probe_interface`]).
+
+use crate::measure::{self, ContactResidue, InterfaceResult, MeasureError, ProbeOptions};
+use crate::model::{Frame, RadiusOverrides, Topology};
+use crate::surface::{CpuEngine, SurfaceParams};
+
+use super::layer::{Layer, LayerError};
+use super::representation::{RepStyle, Representation, RepresentationError};
+
+/// Why an interface could not be set up or measured.
+#[derive(Debug, thiserror::Error)]
+pub enum InterfaceError {
+    /// A side's selection or parameters are invalid.
+    #[error(transparent)]
+    Representation(#[from] RepresentationError),
+    /// A side's selection does not fit the frame.
+    #[error(transparent)]
+    Side(#[from] LayerError),
+    /// A side's selection picks no atom.
+    #[error("selection '{selection}' matches no atom")]
+    NoAtoms {
+        /// The selection text.
+        selection: String,
+    },
+    /// The surfaces could not be measured.
+    #[error(transparent)]
+    Measure(#[from] MeasureError),
+}
+
+/// One frame's interface.
+#[derive(Debug, Clone)]
+pub struct InterfaceFrame {
+    /// Areas alone, together and buried (Å²), per atom too.
+    pub result: InterfaceResult,
+    /// Residues losing more than the threshold asked for, those of A first.
+    pub contacts: Vec<ContactResidue>,
+}
+
+/// Two selections to measure the interface of.
+pub struct Interface {
+    sides: [Layer; 2],
+    engine: CpuEngine,
+    params: SurfaceParams,
+    probe: Option<f32>,
+}
+
+impl Interface {
+    /// Binds `selection_a` and `selection_b` to `topology` as surface layers starting from
+    /// `base` (its parameters, radius set and vertex mode), with `overrides`. With `probe`
+    /// (Å) frames are measured on that probe's SES with Bondi's radii instead.
+    pub fn new(
+        topology: &Topology,
+        [selection_a, selection_b]: [&str; 2],
+        base: &Representation,
+        overrides: &RadiusOverrides,
+        probe: Option<f32>,
+    ) -> Result<Interface, InterfaceError> {
+        let side = |name: &str, selection: &str| -> Result<Layer, InterfaceError> {
+            let mut rep = Representation::new(name, selection, RepStyle::Surface);
+            rep.set_params(&base.params());
+            rep.radii = base.radii;
+            rep.vertices = base.vertices;
+            rep.validate()?;
+            Ok(Layer::new(rep, topology, overrides)?)
+        };
+        Ok(Interface {
+            sides: [side("side A", selection_a)?, side("side B", selection_b)?],
+            engine: CpuEngine::new().with_vertices(base.vertices),
+            params: base.params(),
+            probe,
+        })
+    }
+
+    /// The two selections' texts.
+    pub fn selections(&self) -> [&str; 2] {
+        self.sides.each_ref().map(|s| s.rep().selection.as_str())
+    }
+
+    /// Fails when a side picks no atom of `frame` (the error names its selection).
+    pub fn check_sides(&self, frame: &Frame) -> Result<(), InterfaceError> {
+        for side in &self.sides {
+            if side.atoms(frame).is_empty() {
+                return Err(InterfaceError::NoAtoms {
+                    selection: side.rep().selection.clone(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The interface in `frame`, with the residues that lose more than `threshold` Å²
+    /// ([`measure::CONTACT_THRESHOLD`] by default).
+    pub fn measure(
+        &mut self,
+        topology: &Topology,
+        frame: &Frame,
+        threshold: f64,
+    ) -> Result<InterfaceFrame, InterfaceError> {
+        self.check_sides(frame)?;
+        let [a, b] = &mut self.sides;
+        let (ia, ib) = (a.atoms(frame), b.atoms(frame));
+        let (fa, fb) = (a.frame(topology, frame)?, b.frame(topology, frame)?);
+        let result = match self.probe {
+            Some(probe) => measure::ses_probe_interface(
+                topology,
+                (Some(&ia), &fa.atom_set()),
+                (Some(&ib), &fb.atom_set()),
+                &ProbeOptions {
+                    probe,
+                    ..ProbeOptions::default()
+                },
+            )?,
+            None => measure::interface(
+                &mut self.engine,
+                &fa.atom_set(),
+                &fb.atom_set(),
+                &self.params,
+            )?,
+        };
+        let contacts =
+            measure::contact_residues(topology, Some(&ia), Some(&ib), &result, threshold)?;
+        Ok(InterfaceFrame { result, contacts })
+    }
+}
