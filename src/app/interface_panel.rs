@@ -166,16 +166,22 @@ impl InterfaceDraft {
 
 /// The Interface section.
 pub fn interface_ui(ui: &mut egui::Ui, core: &AppCore, draft: &mut InterfaceDraft) {
-    ui.heading("Interface");
+    egui::CollapsingHeader::new("Interface")
+        .default_open(true)
+        .show(ui, |ui| interface_body(ui, core, draft));
+}
+
+/// The section's switches, readout and plot.
+fn interface_body(ui: &mut egui::Ui, core: &AppCore, draft: &mut InterfaceDraft) {
     ui.checkbox(&mut draft.on, "Measure the buried area");
-    egui::Grid::new("interface_sides").show(ui, |ui| {
-        for (name, text) in [("A", &mut draft.selection_a), ("B", &mut draft.selection_b)] {
+    for (name, text) in [("A", &mut draft.selection_a), ("B", &mut draft.selection_b)] {
+        ui.horizontal(|ui| {
             let label = ui.label(name);
-            ui.add(egui::TextEdit::singleline(text).desired_width(220.0))
+            let width = ui.available_width();
+            ui.add(egui::TextEdit::singleline(text).desired_width(width))
                 .labelled_by(label.id);
-            ui.end_row();
-        }
-    });
+        });
+    }
     ui.checkbox(
         &mut draft.probe,
         format!("on the {WATER_PROBE} Å probe's surface (as MSMS)"),
