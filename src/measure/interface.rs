@@ -50,8 +50,7 @@ pub fn interface(
     a.validate()?;
     b.validate()?;
     params.validate()?;
-    let positions: Vec<Vec3> = a.positions.iter().chain(b.positions).copied().collect();
-    let radii: Vec<f32> = a.radii.iter().chain(b.radii).copied().collect();
+    let (positions, radii) = union_of(a, b);
     let union = AtomSet {
         positions: &positions,
         radii: &radii,
@@ -92,6 +91,13 @@ pub fn interface(
         atoms_a_complex,
         atoms_b_complex,
     })
+}
+
+/// The positions (Å) and radii (Å) of `a`'s atoms followed by `b`'s: the complex.
+pub(super) fn union_of(a: &AtomSet<'_>, b: &AtomSet<'_>) -> (Vec<Vec3>, Vec<f32>) {
+    let positions = a.positions.iter().chain(b.positions).copied().collect();
+    let radii = a.radii.iter().chain(b.radii).copied().collect();
+    (positions, radii)
 }
 
 /// Which group of an interface a residue belongs to.

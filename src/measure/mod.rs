@@ -43,6 +43,7 @@ pub(crate) mod areas;
 pub(crate) mod cavities;
 mod cells;
 pub(crate) mod csv;
+mod grid_balls;
 pub mod interface;
 pub(crate) mod probe_cavities;
 pub(crate) mod probe_surface;
@@ -117,5 +118,17 @@ pub enum MeasureError {
         name: &'static str,
         /// Its value.
         value: f64,
+    },
+    /// An option was not a finite number within its range.
+    #[error("{name} must be a number from {low} to {high}, got {value}")]
+    OptionOutOfRange {
+        /// Which option, with its unit.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The least value allowed.
+        low: f64,
+        /// The largest value allowed.
+        high: f64,
     },
 }

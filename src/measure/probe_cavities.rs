@@ -21,10 +21,10 @@
 //! through a gap narrower than `h` is reported as a cavity.
 
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
 use super::MeasureError;
 use super::cavities::{Cavity, components};
+use super::grid_balls::{draw_balls, reach_range};
 use crate::model::Topology;
 use crate::surface::marching_cubes;
 use crate::surface::{
@@ -179,15 +179,25 @@ pub(super) fn check_probe_options(
     options: &ProbeOptions,
 ) -> Result<(), MeasureError> {
     atoms.validate()?;
-    for (name, value, low) in [
-        ("probe radius", f64::from(options.probe), 0.1),
-        ("cavity grid spacing", f64::from(options.spacing), 0.05),
-        ("minimum cavity volume", options.min_volume, 0.0),
+    for (name, value, low, high) in [
+        ("probe radius (Å)", options.probe, 0.1, 10.0),
+        ("probe grid spacing (Å)", options.spacing, 0.05, 10.0),
     ] {
-        if !(value.is_finite() && value >= low) || (name != "minimum cavity volume" && value > 10.0)
-        {
-            return Err(MeasureError::InvalidOption { name, value });
+        let value = f64::from(value);
+        if !(value.is_finite() && (low..=high).contains(&value)) {
+            return Err(MeasureError::OptionOutOfRange {
+                name,
+                value,
+                low,
+                high,
+            });
         }
+    }
+    if !(options.min_volume.is_finite() && options.min_volume >= 0.0) {
+        return Err(MeasureError::InvalidOption {
+            name: "minimum cavity volume",
+            value: options.min_volume,
+        });
     }
     if atoms.is_empty() {
         return Err(SurfaceError::EmptySystem.into());
@@ -230,62 +240,21 @@ pub(super) fn probe_grid(
     })
 }
 
-/// The index range `lo..=hi` of samples along one axis within `reach` Å of `x` (Å from the
-/// origin), clamped to `0..n`.
-pub(super) fn reach_range(x: f32, reach: f32, h: f32, n: u32) -> (u32, u32) {
-    let lo = ((x - reach) / h).ceil().max(0.0) as u32;
-    let hi = (((x + reach) / h).floor().max(0.0) as u32).min(n - 1);
-    (lo, hi)
-}
-
 /// Marks every grid point: [`BLOCKED`] when a probe there overlaps an atom, else [`UNSEEN`].
-/// Parallel over z planes, each plane visiting the atoms whose reach crosses it.
 pub(super) fn free_centres(atoms: &AtomSet<'_>, grid: &GridSpec, probe: f32) -> Vec<u32> {
-    let [nx, ny, nz] = grid.dims;
-    let h = grid.spacing;
-    let mut by_plane: Vec<Vec<u32>> = vec![Vec::new(); nz as usize];
-    for (a, (p, r)) in atoms.positions.iter().zip(atoms.radii).enumerate() {
-        let z = p.z - grid.origin.z;
-        let (k0, k1) = reach_range(z, r + probe, h, nz);
-        for k in k0..=k1 {
-            by_plane[k as usize].push(a as u32);
-        }
-    }
-    let plane = nx as usize * ny as usize;
-    let mut marks = vec![UNSEEN; plane * nz as usize];
-    marks
-        .par_chunks_mut(plane)
-        .zip(&by_plane)
-        .enumerate()
-        .for_each(|(k, (out, near))| {
-            let z = grid.origin.z + h * k as f32;
-            for &a in near {
-                let p = atoms.positions[a as usize] - grid.origin;
-                let reach = atoms.radii[a as usize] + probe;
-                let dz = p.z + grid.origin.z - z;
-                let left = reach * reach - dz * dz;
-                if left < 0.0 {
-                    continue;
-                }
-                let disc = left.sqrt();
-                let (j0, j1) = reach_range(p.y, disc, h, ny);
-                for j in j0..=j1 {
-                    let dy = p.y - h * j as f32;
-                    let row = left - dy * dy;
-                    if row < 0.0 {
-                        continue;
-                    }
-                    let (i0, i1) = reach_range(p.x, row.sqrt(), h, nx);
-                    for i in i0..=i1 {
-                        let dx = p.x - h * i as f32;
-                        // Strictly inside the reach: a probe touching an atom is free.
-                        if dx * dx < row {
-                            out[i as usize + nx as usize * j as usize] = BLOCKED;
-                        }
-                    }
-                }
+    let mut marks = vec![UNSEEN; grid.voxel_count() as usize];
+    draw_balls(
+        grid,
+        &mut marks,
+        atoms.positions,
+        |a| atoms.radii[a] + probe,
+        |mark, at| {
+            // Strictly inside the reach: a probe touching an atom is free.
+            if at.dx * at.dx < at.left {
+                *mark = BLOCKED;
             }
-        });
+        },
+    );
     marks
 }
 
@@ -506,24 +475,38 @@ mod tests {
             radii: &radii,
             colours: None,
         };
-        for options in [
-            ProbeOptions {
-                probe: 0.0,
-                ..ProbeOptions::default()
-            },
-            ProbeOptions {
-                spacing: f32::NAN,
-                ..ProbeOptions::default()
-            },
-            ProbeOptions {
-                min_volume: -1.0,
-                ..ProbeOptions::default()
-            },
+        for (options, message) in [
+            (
+                ProbeOptions {
+                    probe: 0.0,
+                    ..ProbeOptions::default()
+                },
+                "probe radius (Å) must be a number from 0.1 to 10, got 0",
+            ),
+            (
+                ProbeOptions {
+                    spacing: f32::NAN,
+                    ..ProbeOptions::default()
+                },
+                "probe grid spacing (Å) must be a number from 0.05 to 10, got NaN",
+            ),
+            (
+                ProbeOptions {
+                    spacing: 20.0,
+                    ..ProbeOptions::default()
+                },
+                "probe grid spacing (Å) must be a number from 0.05 to 10, got 20",
+            ),
+            (
+                ProbeOptions {
+                    min_volume: -1.0,
+                    ..ProbeOptions::default()
+                },
+                "minimum cavity volume must be a finite non-negative number, got -1",
+            ),
         ] {
-            assert!(matches!(
-                probe_cavities(&atoms, &options),
-                Err(MeasureError::InvalidOption { .. })
-            ));
+            let error = probe_cavities(&atoms, &options).unwrap_err();
+            assert_eq!(error.to_string(), message);
         }
         assert!(
             probe_cavities(&atoms, &ProbeOptions::default())

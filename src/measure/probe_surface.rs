@@ -25,10 +25,10 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::MeasureError;
-use super::interface::InterfaceResult;
+use super::grid_balls::draw_balls;
+use super::interface::{InterfaceResult, union_of};
 use super::probe_cavities::{
-    OUTSIDE, ProbeOptions, check_probe_options, flood_outside, free_centres, probe_grid,
-    reach_range, ses_radii,
+    OUTSIDE, ProbeOptions, check_probe_options, flood_outside, free_centres, probe_grid, ses_radii,
 };
 use crate::model::Topology;
 use crate::model::cells::CellList;
@@ -72,8 +72,7 @@ pub fn probe_interface(
 ) -> Result<InterfaceResult, MeasureError> {
     check_probe_options(a, options)?;
     check_probe_options(b, options)?;
-    let positions: Vec<Vec3> = a.positions.iter().chain(b.positions).copied().collect();
-    let radii: Vec<f32> = a.radii.iter().chain(b.radii).copied().collect();
+    let (positions, radii) = union_of(a, b);
     let union = AtomSet {
         positions: &positions,
         radii: &radii,
@@ -254,59 +253,29 @@ fn first_contact(atoms: &AtomSet<'_>, cells: &CellList, start: Vec3, dir: Vec3, 
 /// `probe + h`: `d` changes by at most `h` along a grid edge, so every edge the isosurface
 /// crosses has its true values), `-probe` at the outside's.
 fn excluded_field(grid: &GridSpec, marks: &[u32], samples: &[Vec3], probe: f32) -> Vec<f32> {
-    let [nx, ny, nz] = grid.dims;
-    let h = grid.spacing;
-    let reach = probe + h;
-    let mut by_plane: Vec<Vec<u32>> = vec![Vec::new(); nz as usize];
-    for (s, p) in samples.iter().enumerate() {
-        let (k0, k1) = reach_range(p.z - grid.origin.z, reach, h, nz);
-        for k in k0..=k1 {
-            by_plane[k as usize].push(s as u32);
-        }
-    }
-    let plane = nx as usize * ny as usize;
-    let mut field = vec![reach; plane * nz as usize];
-    field
-        .par_chunks_mut(plane)
-        .zip(&by_plane)
-        .enumerate()
-        .for_each(|(k, (out, near))| {
-            let z = grid.origin.z + h * k as f32;
-            for &s in near {
-                let p = samples[s as usize] - grid.origin;
-                let dz = p.z + grid.origin.z - z;
-                let left = reach * reach - dz * dz;
-                if left < 0.0 {
-                    continue;
-                }
-                let (j0, j1) = reach_range(p.y, left.sqrt(), h, ny);
-                for j in j0..=j1 {
-                    let dy = p.y - h * j as f32;
-                    let row_left = left - dy * dy;
-                    if row_left < 0.0 {
-                        continue;
-                    }
-                    let (i0, i1) = reach_range(p.x, row_left.sqrt(), h, nx);
-                    let row = &mut out[nx as usize * j as usize..][..nx as usize];
-                    for i in i0..=i1 {
-                        let dx = p.x - h * i as f32;
-                        let d2 = dx * dx + dy * dy + dz * dz;
-                        let cell = &mut row[i as usize];
-                        if d2 < *cell * *cell {
-                            *cell = d2.sqrt();
-                        }
-                    }
-                }
+    let reach = probe + grid.spacing;
+    // Squared distances while drawing: the square root is taken once per point after.
+    let mut field = vec![reach * reach; grid.voxel_count() as usize];
+    draw_balls(
+        grid,
+        &mut field,
+        samples,
+        |_| reach,
+        |nearest, at| {
+            // A compare and select (not `f32::min`, which orders NaN) vectorises.
+            let d2 = at.dx * at.dx + at.yz2;
+            if d2 < *nearest {
+                *nearest = d2;
             }
-            let offset = k * plane;
-            for (at, value) in out.iter_mut().enumerate() {
-                *value = if marks[offset + at] == OUTSIDE {
-                    -probe
-                } else {
-                    *value - probe
-                };
-            }
-        });
+        },
+    );
+    field.par_iter_mut().zip(marks).for_each(|(value, &mark)| {
+        *value = if mark == OUTSIDE {
+            -probe
+        } else {
+            value.sqrt() - probe
+        };
+    });
     field
 }
 

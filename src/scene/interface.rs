@@ -8,7 +8,7 @@ use crate::measure::{self, ContactResidue, InterfaceResult, MeasureError, ProbeO
 use crate::model::{Frame, RadiusOverrides, Topology};
 use crate::surface::{CpuEngine, SurfaceParams};
 
-use super::layer::{Layer, LayerError};
+use super::layer::{Layer, LayerError, LayerFrame};
 use super::representation::{RepStyle, Representation, RepresentationError};
 
 /// Why an interface could not be set up or measured.
@@ -84,9 +84,7 @@ impl Interface {
     pub fn check_sides(&self, frame: &Frame) -> Result<(), InterfaceError> {
         for side in &self.sides {
             if side.atoms(frame).is_empty() {
-                return Err(InterfaceError::NoAtoms {
-                    selection: side.rep().selection.clone(),
-                });
+                return Err(no_atoms(side));
             }
         }
         Ok(())
@@ -100,10 +98,9 @@ impl Interface {
         frame: &Frame,
         threshold: f64,
     ) -> Result<InterfaceFrame, InterfaceError> {
-        self.check_sides(frame)?;
         let [a, b] = &mut self.sides;
-        let (ia, ib) = (a.atoms(frame), b.atoms(frame));
         let (fa, fb) = (a.frame(topology, frame)?, b.frame(topology, frame)?);
+        let (ia, ib) = (atoms_of(&fa, a)?, atoms_of(&fb, b)?);
         let result = match self.probe {
             Some(probe) => measure::ses_probe_interface(
                 topology,
@@ -125,4 +122,24 @@ impl Interface {
             measure::contact_residues(topology, Some(&ia), Some(&ib), &result, threshold)?;
         Ok(InterfaceFrame { result, contacts })
     }
+}
+
+/// The error of a side whose selection picks no atom.
+fn no_atoms(side: &Layer) -> InterfaceError {
+    InterfaceError::NoAtoms {
+        selection: side.rep().selection.clone(),
+    }
+}
+
+/// The topology indices of the atoms a side's frame holds (its selection's, evaluated once by
+/// [`Layer::frame`]); fails when there are none.
+fn atoms_of(frame: &LayerFrame, side: &Layer) -> Result<Vec<u32>, InterfaceError> {
+    let particles = &frame.particles;
+    if particles.is_empty() {
+        return Err(no_atoms(side));
+    }
+    Ok(match particles.subset() {
+        Some(atoms) => atoms.to_vec(),
+        None => (0..particles.len() as u32).collect(),
+    })
 }
