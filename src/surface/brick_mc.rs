@@ -19,7 +19,8 @@ use rayon::prelude::*;
 use super::analytic::AnalyticField;
 use super::bricks::{BRICK, BrickVolume};
 use super::marching_cubes::{
-    FOREIGN, McScratch, SlabMesh, VertexData, edge_refs, push_cell_triangles, word,
+    FOREIGN, McScratch, SlabMesh, VertexData, crossed_edges_in_row, edge_refs, push_cell_triangles,
+    word,
 };
 use super::mc_vertex::{edge_geometry_refined, edge_position};
 use super::tables::McTables;
@@ -242,51 +243,18 @@ impl Ctx<'_> {
             };
         }
         let colours = self.vol.layer_colours(k / BRICK);
-        let mut add = |i: usize, j: usize, axis: usize, count: &mut u32| {
-            map[(j * nx + i) * 3 + axis] = *count;
-            *count += 1;
+        let mut add = |[i, j]: [usize; 2], p: usize, axis: usize| {
+            map[p * 3 + axis] = count;
+            count += 1;
             if let Some(m) = emit.as_deref_mut() {
                 self.emit_vertex([i, j, k], axis, m, colours, cursor);
             }
         };
         for j in 0..ny {
-            let r = j * nx;
             for &bi in self.row(k, j) {
                 let i0 = bi as usize * BRICK;
                 let i1 = (i0 + BRICK).min(nx);
-                if i0 + 9 <= nx
-                    && j + 1 < ny
-                    && let Some(u) = up
-                {
-                    // Interior brick row: the crossed edges of its 8 points as bits (byte
-                    // `n` for point `i0 + n`, bit 0/1/2 for its x/y/z edge), visited in
-                    // increasing order: point by point, x then y then z, as below.
-                    let w = word(a, r + i0);
-                    let x = w ^ word(a, r + i0 + 1);
-                    let y = w ^ word(a, r + nx + i0);
-                    let z = w ^ word(u, r + i0);
-                    let mut bits = x | y << 1 | z << 2;
-                    while bits != 0 {
-                        let b = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        add(i0 + b / 8, j, b % 8, &mut count);
-                    }
-                    continue;
-                }
-                for i in i0..i1 {
-                    let p = r + i;
-                    let f = a[p];
-                    let crossed = [
-                        i + 1 < nx && a[p + 1] != f,
-                        j + 1 < ny && a[p + nx] != f,
-                        up.is_some_and(|u| u[p] != f),
-                    ];
-                    for (axis, &c) in crossed.iter().enumerate() {
-                        if c {
-                            add(i, j, axis, &mut count);
-                        }
-                    }
-                }
+                crossed_edges_in_row([nx, ny], j, i0..i1, a, up, &mut add);
             }
         }
     }

@@ -261,63 +261,94 @@ impl PlaneSource for Ctx<'_> {
     ) {
         let [nx, ny, _] = self.grid.dims.map(|d| d as usize);
         let mut count = emit.as_ref().map_or(0, |m| m.positions.len()) as u32;
-        for j in 0..ny {
-            let r = j * nx;
-            let mut i = 0;
-            while i < nx {
-                // Skip eight points at once when none of their x, y or z edges is crossed.
-                if i + 9 <= nx
-                    && j + 1 < ny
-                    && let Some(u) = up
-                {
-                    let w = word(a, r + i);
-                    let x = w ^ word(a, r + i + 1);
-                    let y = w ^ word(a, r + nx + i);
-                    let z = w ^ word(u, r + i);
-                    if x | y | z == 0 {
-                        i += 8;
-                        continue;
-                    }
-                }
-                let p = r + i;
-                let f = a[p];
-                let crossed = [
-                    i + 1 < nx && a[p + 1] != f,
-                    j + 1 < ny && a[p + nx] != f,
-                    up.is_some_and(|u| u[p] != f),
-                ];
-                for (axis, &c) in crossed.iter().enumerate() {
-                    if !c {
-                        continue;
-                    }
-                    map[p * 3 + axis] = count;
-                    count += 1;
-                    if let Some(m) = emit.as_deref_mut() {
-                        if self.data == VertexData::PositionsOnly && self.field.is_none() {
-                            let v = &self.density.values;
-                            let at = k * nx * ny + p;
-                            let (va, vb) = (v[at], v[at + [1, nx, nx * ny][axis]]);
-                            let (position, _) =
-                                edge_position(self.grid, va, vb, self.iso, [i, j, k], axis);
-                            m.positions.push(position);
-                            continue;
-                        }
-                        let vert = edge_vertex_refined(
-                            self.grid,
-                            self.density,
-                            self.iso,
-                            [i, j, k],
-                            axis,
-                            self.field,
-                        );
-                        m.positions.push(vert.position);
-                        m.normals.push(vert.normal);
-                        m.colours.push(vert.colour);
-                    }
-                }
-                i += 1;
+        crossed_edges([nx, ny], a, up, |[i, j], p, axis| {
+            map[p * 3 + axis] = count;
+            count += 1;
+            let Some(m) = emit.as_deref_mut() else {
+                return;
+            };
+            if self.data == VertexData::PositionsOnly && self.field.is_none() {
+                let v = &self.density.values;
+                let at = k * nx * ny + p;
+                let (va, vb) = (v[at], v[at + [1, nx, nx * ny][axis]]);
+                let (position, _) = edge_position(self.grid, va, vb, self.iso, [i, j, k], axis);
+                m.positions.push(position);
+                return;
+            }
+            let vert = edge_vertex_refined(
+                self.grid,
+                self.density,
+                self.iso,
+                [i, j, k],
+                axis,
+                self.field,
+            );
+            m.positions.push(vert.position);
+            m.normals.push(vert.normal);
+            m.colours.push(vert.colour);
+        });
+    }
+}
+
+/// Calls `visit([i, j], p, axis)` for each grid edge starting on a plane of `nx` by `ny` points
+/// (inside flags `a`, those of the plane above in `up` unless it is the top plane) whose two
+/// ends differ, in order of point `p = i + nx j` and then axis (0 x, 1 y, 2 z).
+pub(super) fn crossed_edges(
+    [nx, ny]: [usize; 2],
+    a: &[u8],
+    up: Option<&[u8]>,
+    mut visit: impl FnMut([usize; 2], usize, usize),
+) {
+    for j in 0..ny {
+        crossed_edges_in_row([nx, ny], j, 0..nx, a, up, &mut visit);
+    }
+}
+
+/// [`crossed_edges`] for the points `i` in `range` of row `j` only.
+pub(super) fn crossed_edges_in_row(
+    [nx, ny]: [usize; 2],
+    j: usize,
+    range: std::ops::Range<usize>,
+    a: &[u8],
+    up: Option<&[u8]>,
+    mut visit: impl FnMut([usize; 2], usize, usize),
+) {
+    let r = j * nx;
+    let mut i = range.start;
+    while i < range.end {
+        if i + 9 <= nx
+            && i + 8 <= range.end
+            && j + 1 < ny
+            && let Some(u) = up
+        {
+            // Eight points at once: their crossed edges as bits (byte `n` for point `i + n`,
+            // bit 0/1/2 for its x/y/z edge), visited in increasing order, as point by point.
+            let w = word(a, r + i);
+            let x = w ^ word(a, r + i + 1);
+            let y = w ^ word(a, r + nx + i);
+            let z = w ^ word(u, r + i);
+            let mut bits = x | y << 1 | z << 2;
+            while bits != 0 {
+                let b = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                visit([i + b / 8, j], r + i + b / 8, b % 8);
+            }
+            i += 8;
+            continue;
+        }
+        let p = r + i;
+        let f = a[p];
+        let crossed = [
+            i + 1 < nx && a[p + 1] != f,
+            j + 1 < ny && a[p + nx] != f,
+            up.is_some_and(|u| u[p] != f),
+        ];
+        for (axis, &c) in crossed.iter().enumerate() {
+            if c {
+                visit([i, j], p, axis);
             }
         }
+        i += 1;
     }
 }
 

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use super::density::PeriodicGrid;
 use crate::surface::DensityVolume;
 use crate::surface::Mesh;
-use crate::surface::marching_cubes::{PlaneSource, SlabMesh, march_slab, merge, word};
+use crate::surface::marching_cubes::{PlaneSource, SlabMesh, crossed_edges, march_slab, merge};
 use crate::surface::mc_vertex::{edge_t, interpolated_normal, lerp_colour};
 use crate::surface::tables::McTables;
 
@@ -154,46 +154,15 @@ impl PlaneSource for Ctx<'_> {
     ) {
         let [nx, ny, _] = self.points;
         let mut count = emit.as_ref().map_or(0, |m| m.positions.len()) as u32;
-        for j in 0..ny {
-            let r = j * nx;
-            let mut i = 0;
-            while i < nx {
-                if i + 9 <= nx
-                    && j + 1 < ny
-                    && let Some(u) = up
-                {
-                    let w = word(a, r + i);
-                    let x = w ^ word(a, r + i + 1);
-                    let y = w ^ word(a, r + nx + i);
-                    let z = w ^ word(u, r + i);
-                    if x | y | z == 0 {
-                        i += 8;
-                        continue;
-                    }
-                }
-                let p = r + i;
-                let f = a[p];
-                let crossed = [
-                    i + 1 < nx && a[p + 1] != f,
-                    j + 1 < ny && a[p + nx] != f,
-                    up.is_some_and(|u| u[p] != f),
-                ];
-                for (axis, &c) in crossed.iter().enumerate() {
-                    if !c {
-                        continue;
-                    }
-                    map[p * 3 + axis] = count;
-                    count += 1;
-                    if let Some(m) = emit.as_deref_mut() {
-                        let v =
-                            periodic_edge_vertex(self.grid, self.vol, self.iso, [i, j, k], axis);
-                        m.positions.push(v.position);
-                        m.normals.push(v.normal);
-                        m.colours.push(v.colour);
-                    }
-                }
-                i += 1;
+        crossed_edges([nx, ny], a, up, |[i, j], p, axis| {
+            map[p * 3 + axis] = count;
+            count += 1;
+            if let Some(m) = emit.as_deref_mut() {
+                let v = periodic_edge_vertex(self.grid, self.vol, self.iso, [i, j, k], axis);
+                m.positions.push(v.position);
+                m.normals.push(v.normal);
+                m.colours.push(v.colour);
             }
-        }
+        });
     }
 }
