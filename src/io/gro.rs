@@ -16,7 +16,6 @@
 //! A damaged or cut frame is a [`GroError`] naming the line, wrapped in an [`IoError`] naming
 //! the file and frame.
 
-use std::fs::File;
 use std::path::Path;
 
 use super::IoError;
@@ -25,9 +24,7 @@ use super::fast::{TypeTable, cols, columns_text, empty_topology, parse_f64, pars
 use super::native::NativeOpen;
 use super::prepare::Prepared;
 use super::reader_errors::GroError;
-use super::text_scan::{
-    FrameSpan, LineScanner, SpanFrames, cell_rows, index_spans, lines, mark_cut_stream, read_span,
-};
+use super::text_scan::{FrameSpan, LineScanner, cell_rows, lines, open_spans};
 use crate::model::{Frame, Labels, Topology};
 
 /// Width of a coordinate field as `gmx` writes it by default (`%8.3f`).
@@ -39,55 +36,24 @@ const FIRST_FIELD: usize = 20;
 /// Opens the GRO file `path` (its bytes in `prepared`): indexes its frames, reads frame 0 and
 /// its topology.
 pub(crate) fn open(path: &Path, prepared: Prepared) -> Result<NativeOpen, IoError> {
-    let (mut spans, mut damage) = index(path, &prepared.open_path)?;
-    mark_cut_stream(path, &prepared, &mut spans, &mut damage);
-    let mut file = File::open(&prepared.open_path).map_err(|e| IoError::NotFound {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    let (topology, cached) = match spans.first() {
-        Some(&span) => {
-            let bytes = read_span(&mut file, path, 0, span)?;
-            let (frame, atoms) =
-                parse_frame(&bytes, span.line, true).map_err(|m| IoError::bad_frame(path, 0, m))?;
-            (Some(topology(&atoms)), Some(Frame { index: 0, ..frame }))
-        }
-        None => (None, None),
-    };
-    if let (None, None) = (&topology, &damage) {
-        return Err(IoError::Empty {
-            path: path.to_path_buf(),
-            what: "no frames",
-        });
-    }
-    Ok(NativeOpen {
-        topology,
-        frames: Box::new(SpanFrames {
-            base: "GRO",
-            path: path.to_path_buf(),
-            file,
-            spans,
-            damage,
-            cached,
-            parse: parse_span,
-            _prepared: prepared,
-        }),
-    })
+    open_spans(
+        path,
+        prepared,
+        "GRO",
+        index_frame,
+        |bytes, line| {
+            parse_frame(bytes, line, true).map(|(frame, atoms)| (frame, Some(topology(&atoms))))
+        },
+        parse_span,
+    )
 }
 
-/// One frame's positions, box and time for [`SpanFrames`] (no topology).
+/// One frame's positions, box and time for [`super::text_scan::SpanFrames`] (no topology).
 fn parse_span(
     bytes: &[u8],
     first_line: u64,
 ) -> Result<Frame, Box<dyn std::error::Error + Send + Sync>> {
     Ok(parse_frame(bytes, first_line, false)?.0)
-}
-
-/// Finds every frame of `file` (`path` in messages): their spans, and the error of the first
-/// frame that is cut or damaged (the frames before it are whole). Only the atom count, the
-/// length of each atom line and the box line are checked here; numbers are parsed on reading.
-fn index(path: &Path, file: &Path) -> Result<(Vec<FrameSpan>, Option<IoError>), IoError> {
-    index_spans(path, file, index_frame)
 }
 
 /// Walks over the next frame: its span, `None` at the end of the file, or why the frame is cut

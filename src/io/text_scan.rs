@@ -12,9 +12,9 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::IoError;
-use super::native::NativeFrames;
+use super::native::{NativeFrames, NativeOpen};
 use super::prepare::Prepared;
-use crate::model::Frame;
+use crate::model::{Frame, Topology};
 
 /// The UTF-8 byte-order mark some editors put at the start of a text file.
 const BOM: &[u8] = b"\xEF\xBB\xBF";
@@ -229,6 +229,54 @@ impl NativeFrames for SpanFrames {
         self.cached = Some(frame.clone());
         Ok(frame)
     }
+}
+
+/// Opens the text trajectory `path` (its bytes in `prepared`) in the format `base`: indexes its
+/// frames with `next_frame` (as [`index_spans`]), reads frame 0 with `first` (the frame and the
+/// topology it holds, if any; its error is one line) and hands out the rest through `parse`.
+/// A file with neither a whole frame nor a damaged one is empty.
+pub(crate) fn open_spans<E: std::fmt::Display, F: std::fmt::Display>(
+    path: &Path,
+    prepared: Prepared,
+    base: &'static str,
+    next_frame: impl FnMut(&mut LineScanner) -> std::io::Result<Result<Option<FrameSpan>, E>>,
+    first: impl FnOnce(&[u8], u64) -> Result<(Frame, Option<Topology>), F>,
+    parse: ParseSpan,
+) -> Result<NativeOpen, IoError> {
+    let (mut spans, mut damage) = index_spans(path, &prepared.open_path, next_frame)?;
+    mark_cut_stream(path, &prepared, &mut spans, &mut damage);
+    let mut file = File::open(&prepared.open_path).map_err(|e| IoError::NotFound {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    let (topology, cached) = match spans.first() {
+        Some(&span) => {
+            let bytes = read_span(&mut file, path, 0, span)?;
+            let (frame, topology) =
+                first(&bytes, span.line).map_err(|m| IoError::bad_frame(path, 0, m))?;
+            (topology, Some(Frame { index: 0, ..frame }))
+        }
+        None => (None, None),
+    };
+    if let (None, None) = (&topology, &damage) {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+            what: "no frames",
+        });
+    }
+    Ok(NativeOpen {
+        topology,
+        frames: Box::new(SpanFrames {
+            base,
+            path: path.to_path_buf(),
+            file,
+            spans,
+            damage,
+            cached,
+            parse,
+            _prepared: prepared,
+        }),
+    })
 }
 
 /// Finds every frame of `file` (`path` in messages) with `next_frame`, which walks over one
