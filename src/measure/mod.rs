@@ -44,6 +44,7 @@ pub(crate) mod cavities;
 mod cells;
 pub(crate) mod csv;
 mod grid_balls;
+mod grid_flood;
 pub mod interface;
 pub(crate) mod probe_cavities;
 pub(crate) mod probe_surface;

@@ -25,6 +25,7 @@ use glam::{DVec3, Vec3};
 use super::MeasureError;
 use super::cavities::{Cavity, components};
 use super::grid_balls::{draw_balls, reach_range};
+use super::grid_flood::{BLOCKED, UNSEEN, flood_outside, label_cavities, neighbours};
 use crate::model::Topology;
 use crate::surface::marching_cubes;
 use crate::surface::{
@@ -125,11 +126,6 @@ impl Default for ProbeOptions {
 /// How far (Å) beyond the probe a free centre's ball may grow towards the atoms (see
 /// [`void_of`]).
 const CLEARANCE_CAP: f32 = 1.0;
-
-/// Marks of the grid points in [`probe_cavities`].
-const BLOCKED: u32 = u32::MAX;
-pub(super) const OUTSIDE: u32 = u32::MAX - 1;
-const UNSEEN: u32 = 0;
 
 /// The probe-accessible cavities of `atoms` (radii: the SES radii of the atoms, Å), largest
 /// first, at least `options.min_volume` Å³ each. Fails on invalid atoms or options, or a grid
@@ -256,83 +252,6 @@ pub(super) fn free_centres(atoms: &AtomSet<'_>, grid: &GridSpec, probe: f32) -> 
         },
     );
     marks
-}
-
-/// The 26 neighbours' offsets.
-fn neighbours() -> impl Iterator<Item = [i64; 3]> {
-    (-1..=1i64)
-        .flat_map(|z| (-1..=1i64).flat_map(move |y| (-1..=1i64).map(move |x| [x, y, z])))
-        .filter(|d| *d != [0, 0, 0])
-}
-
-/// Gives every [`UNSEEN`] point reached from the points of `stack` (26-connected; already
-/// marked) the mark `label`. Every point on the grid's border must already be marked, so that
-/// the points reached are inside the border and all their neighbours lie on the grid.
-fn fill(grid: &GridSpec, marks: &mut [u32], mut stack: Vec<usize>, label: u32) {
-    let [nx, ny, _] = grid.dims.map(|d| d as isize);
-    let steps: Vec<isize> = neighbours()
-        .map(|d| d[0] as isize + nx * (d[1] as isize + ny * d[2] as isize))
-        .collect();
-    while let Some(at) = stack.pop() {
-        for &step in &steps {
-            let next = (at as isize + step) as usize;
-            if marks[next] == UNSEEN {
-                marks[next] = label;
-                stack.push(next);
-            }
-        }
-    }
-}
-
-/// Marks the free points connected to the grid's border [`OUTSIDE`] (the border is free: the
-/// grid's padding is larger than any atom's reach). The border is marked first and the fill
-/// starts from the free points next to it.
-pub(super) fn flood_outside(grid: &GridSpec, marks: &mut [u32]) {
-    let [nx, ny, nz] = grid.dims;
-    let on_border = |i: u32, j: u32, k: u32| {
-        i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1
-    };
-    let next_to_border = |i: u32, j: u32, k: u32| {
-        !on_border(i, j, k)
-            && (i == 1 || j == 1 || k == 1 || i == nx - 2 || j == ny - 2 || k == nz - 2)
-    };
-    let mut stack = Vec::new();
-    for k in 0..nz {
-        for j in 0..ny {
-            // Whole rows inside the shell hold only two border points and two next to it.
-            let inner = k > 1 && j > 1 && k < nz - 2 && j < ny - 2;
-            let columns: Vec<u32> = if inner {
-                vec![0, 1, nx - 2, nx - 1]
-            } else {
-                (0..nx).collect()
-            };
-            for i in columns {
-                let at = grid.index(i, j, k);
-                if on_border(i, j, k) {
-                    if marks[at] == UNSEEN {
-                        marks[at] = OUTSIDE;
-                    }
-                } else if next_to_border(i, j, k) && marks[at] == UNSEEN {
-                    marks[at] = OUTSIDE;
-                    stack.push(at);
-                }
-            }
-        }
-    }
-    fill(grid, marks, stack, OUTSIDE);
-}
-
-/// Numbers the remaining free sets 1, 2, ...; returns how many there are.
-fn label_cavities(grid: &GridSpec, marks: &mut [u32]) -> u32 {
-    let mut count = 0;
-    for at in 0..marks.len() {
-        if marks[at] == UNSEEN {
-            count += 1;
-            marks[at] = count;
-            fill(grid, marks, vec![at], count);
-        }
-    }
-    count
 }
 
 /// The void of one cavity, the union of probe balls at its free points `centres` (Å, points of

@@ -26,9 +26,10 @@ use rayon::prelude::*;
 
 use super::MeasureError;
 use super::grid_balls::draw_balls;
+use super::grid_flood::{OUTSIDE, flood_outside};
 use super::interface::{InterfaceResult, union_of};
 use super::probe_cavities::{
-    OUTSIDE, ProbeOptions, check_probe_options, flood_outside, free_centres, probe_grid, ses_radii,
+    ProbeOptions, check_probe_options, free_centres, probe_grid, ses_radii,
 };
 use crate::model::Topology;
 use crate::model::cells::CellList;
