@@ -359,11 +359,7 @@ fn volume_plot_ui(ui: &mut egui::Ui, tracks: &RepTracks, current: usize, frames:
             .iter()
             .map(|(&f, &v)| egui::pos2(x_of(f), y_of(v)))
             .collect();
-        if pts.len() == 1 {
-            painter.circle_filled(pts[0], 2.5, colour);
-        } else {
-            painter.add(egui::Shape::line(pts, (1.5, colour)));
-        }
+        super::plot::draw_series(&painter, pts, colour);
     }
     painter.text(
         rect.left_top() + egui::vec2(4.0, 2.0),

@@ -239,16 +239,9 @@ fn buried_plot(
     let span = (hi - lo).max(hi.abs() * 1e-6).max(1e-9);
     let points: Vec<egui::Pos2> = rows
         .iter()
-        .map(|(&f, r)| {
-            let y = rect.bottom() - 6.0 - (rect.height() - 12.0) * ((r.buried - lo) / span) as f32;
-            egui::pos2(x_of(f), y)
-        })
+        .map(|(&f, r)| egui::pos2(x_of(f), super::plot::y_between(rect, r.buried, lo, span)))
         .collect();
-    if points.len() == 1 {
-        painter.circle_filled(points[0], 2.5, colour);
-    } else {
-        painter.add(egui::Shape::line(points, (1.5, colour)));
-    }
+    super::plot::draw_series(&painter, points, colour);
     painter.text(
         rect.left_top() + egui::vec2(4.0, 2.0),
         egui::Align2::LEFT_TOP,

@@ -144,16 +144,9 @@ pub fn plot_ui(
         let span = (hi - lo).max(hi.abs() * 1e-6).max(1e-9);
         let pts: Vec<egui::Pos2> = vals
             .iter()
-            .map(|&(f, v)| {
-                let y = rect.bottom() - 6.0 - (rect.height() - 12.0) * ((v - lo) / span) as f32;
-                egui::pos2(x_of(f), y)
-            })
+            .map(|&(f, v)| egui::pos2(x_of(f), y_between(rect, v, lo, span)))
             .collect();
-        if pts.len() == 1 {
-            painter.circle_filled(pts[0], 2.5, colour);
-        } else {
-            painter.add(egui::Shape::line(pts, (1.5, colour)));
-        }
+        draw_series(&painter, pts, colour);
         if !vals.is_empty() {
             let text = format!("{rep}: {lo:.0} … {hi:.0}");
             let row = (line / 2) as f32 * 12.0;
@@ -176,6 +169,21 @@ pub fn plot_ui(
 
 const AREA: egui::Color32 = egui::Color32::from_rgb(90, 170, 255);
 const VOLUME: egui::Color32 = egui::Color32::from_rgb(255, 160, 60);
+
+/// The y (px) of `value` in `rect` when values `lo` to `lo + span` fill its height, 6 px kept
+/// free at the top and bottom.
+pub(crate) fn y_between(rect: egui::Rect, value: f64, lo: f64, span: f64) -> f32 {
+    rect.bottom() - 6.0 - (rect.height() - 12.0) * ((value - lo) / span) as f32
+}
+
+/// Draws one series of a plot (screen positions): a dot when it has one point, else a line.
+pub(crate) fn draw_series(painter: &egui::Painter, points: Vec<egui::Pos2>, colour: egui::Color32) {
+    if points.len() == 1 {
+        painter.circle_filled(points[0], 2.5, colour);
+    } else {
+        painter.add(egui::Shape::line(points, (1.5, colour)));
+    }
+}
 
 /// The frame of a plot over frames: `height` px tall and `width` px wide, the background
 /// filled and the `current` frame of `frames` marked by a vertical line. Returns the painter,
