@@ -47,6 +47,7 @@ mod grid_balls;
 mod grid_flood;
 pub mod interface;
 pub(crate) mod probe_cavities;
+mod probe_small_voids;
 pub(crate) mod probe_surface;
 pub(crate) mod residues;
 pub(crate) mod tracking;

@@ -16,9 +16,10 @@
 //! 4. An atom lines the cavity when a probe at one of its free points touches it (distance at
 //!    most `r_i + probe + h`).
 //!
-//! A void whose free centres fit between grid points (a probe that fits only just, about
-//! 11.5 Å³ of void) can be missed at a coarse `h`, and a pocket that opens to the outside only
-//! through a gap narrower than `h` is reported as a cavity.
+//! A void whose free centres all fit between grid points (a probe that fits only just, about
+//! 11.5 Å³ of void) is found by a finer search around the grid's near-free points
+//! ([`super::probe_small_voids`]). A pocket that opens to the outside only through a gap
+//! narrower than `h` is reported as a cavity.
 
 use glam::{DVec3, Vec3};
 
@@ -26,6 +27,7 @@ use super::MeasureError;
 use super::cavities::{Cavity, components};
 use super::grid_balls::{draw_balls, reach_range};
 use super::grid_flood::{BLOCKED, UNSEEN, flood_outside, label_cavities, neighbours};
+use super::probe_small_voids::voids_between_grid_points;
 use crate::model::Topology;
 use crate::surface::marching_cubes;
 use crate::surface::{
@@ -156,6 +158,12 @@ pub fn probe_cavity_walls(
             centres[mark as usize - 1].push(grid.point(i as u32, j as u32, k as u32));
         }
     }
+    centres.extend(voids_between_grid_points(
+        atoms,
+        &grid,
+        &marks,
+        options.probe,
+    ));
     drop(marks);
     let mut out = Vec::new();
     for free in &centres {
@@ -217,9 +225,10 @@ pub(super) fn probe_grid(
     let origin = lo - Vec3::splat(pad);
     let extent = hi + Vec3::splat(pad) - origin;
     let dims64 = extent.to_array().map(|e| (e / h).ceil() as u64 + 1);
-    // 4 bytes of marks and 4 of distance field per point, and a little for the meshes.
+    // 4 bytes of marks, 4 of distance field and 1 of depth (the search between grid points)
+    // per point, and a little for the meshes.
     let points: u64 = dims64.iter().product();
-    let bytes_needed = points.saturating_mul(9);
+    let bytes_needed = points.saturating_mul(10);
     let bytes_available = available_memory_bytes();
     if dims64.iter().any(|&d| d > u32::MAX as u64 / 4) || bytes_needed > bytes_available {
         return Err(MeasureError::ProbeGridTooLarge {
