@@ -68,8 +68,11 @@ pub struct ScriptSetup<'a> {
     pub engine: Engine,
     /// The trajectory.
     pub source: Arc<dyn FrameSource>,
-    /// A state to start from (`--state`), else the default representations.
+    /// A state to start from (`--state`), else `reps`.
     pub start: Option<StateFile>,
+    /// The representations to start from without a state (the command line's choice), else
+    /// the default representations of the files.
+    pub reps: Option<Vec<Representation>>,
     /// The representation new `rep add` lines copy (surface parameters, colours: the
     /// command-line flags).
     pub base: Representation,
@@ -93,6 +96,7 @@ pub fn run_script(
         engine,
         source,
         start,
+        reps,
         base,
         render,
         size,
@@ -100,6 +104,10 @@ pub fn run_script(
     let mut core = AppCore::new(Worker::spawn_engine(engine, Box::new(|| {})));
     core.base = base;
     core.render = render;
+    if let Some(reps) = reps {
+        core.set_reps(reps);
+        core.keep_reps_on_load = true;
+    }
     core.set_source(source);
     let mut view = ViewRenderer::new(gpu.device.clone(), gpu.queue.clone());
     let at = |line: usize| {

@@ -10,8 +10,8 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use mdsurf::app::membrane_view::orient_to_layer;
 use mdsurf::render::{
-    AtomStyle, Camera, GpuScene, HeadlessGpu, Projection, RenderSettings, Renderer,
-    bounding_sphere, render_to_rgba, write_png,
+    Camera, GpuScene, HeadlessGpu, Projection, RenderSettings, Renderer, bounding_sphere,
+    render_to_rgba, write_png,
 };
 use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 
@@ -21,7 +21,7 @@ use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::cavity_layer::MovieCavityIds;
 use mdsurf::scene::movie::Shot;
-use mdsurf::scene::representation::{RepStyle, Representation};
+use mdsurf::scene::representation::Representation;
 use mdsurf::scene::state_file::{CameraState, StateFile};
 use mdsurf::scene::{LayerResult, SceneBackend, SceneEngine, SceneFrame};
 
@@ -97,23 +97,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             .apply(&mut settings)
             .map_err(|e| anyhow!("{e}"))?;
     } else {
-        // The look flags that are per representation apply to the first one (the selection,
-        // or the default macromolecule surface); --atoms adds atoms of the same selection.
-        if let Some(main) = choice.reps.first_mut() {
-            main.opacity = args.opacity;
-        }
-        if args.atoms != AtomStyle::Hidden {
-            let selection = args.scene.select.clone().unwrap_or_else(|| "all".into());
-            let style = match args.atoms {
-                AtomStyle::Spheres => RepStyle::Spheres,
-                AtomStyle::Sticks => RepStyle::Sticks,
-                _ => RepStyle::BallAndStick,
-            };
-            choice.reps.push(Representation {
-                colour: options.colours,
-                ..Representation::new("atoms", &selection, style)
-            });
-        }
+        super::render_script::apply_rep_flags(&args, &mut choice.reps, &options);
     }
     args.params
         .apply_vertices(&mut choice.reps, choice.state.is_some());

@@ -7,16 +7,20 @@
 use std::path::Path;
 
 use anyhow::{Result, anyhow, bail};
+use glam::Vec3;
 use mdsurf::app::headless_script::{ScriptSetup, run_script};
 use mdsurf::app::source::open_files_with;
 use mdsurf::app::worker::Engine;
 use mdsurf::gpu::{Picked, pick_engine};
+use mdsurf::model::{Frame, ParticleOptions};
+use mdsurf::render::AtomStyle;
 use mdsurf::render::HeadlessGpu;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
 use mdsurf::surface::CpuEngine;
 
 use super::common::Backend;
+
 use super::render_args::RenderArgs;
 
 /// Runs the script at `path` on the files of `args` (starting from `state`, the `--state`
@@ -52,11 +56,37 @@ pub(crate) fn run(
     base.radii = args.params.radius_set();
     base.colour = particles.colours;
     base.vertices = args.params.vertex_mode();
+    // Without a state file the script starts from the representations the flags choose, as a
+    // render without a script would show them (--select, --opacity, --atoms, --beads).
+    let reps = match &state {
+        Some(_) => None,
+        None => {
+            let topology = source.topology();
+            // Static selections only: the default classes need no coordinates.
+            let placeholder = Frame {
+                positions: vec![Vec3::ZERO; topology.len()],
+                ..Frame::default()
+            };
+            let radii = (&params, args.params.radius_set());
+            let mut choice = args.scene.representations(
+                None,
+                topology,
+                &placeholder,
+                radii,
+                &particles,
+                true,
+            )?;
+            args.params.apply_vertices(&mut choice.reps, false);
+            apply_rep_flags(args, &mut choice.reps, &particles);
+            Some(choice.reps)
+        }
+    };
     let setup = ScriptSetup {
         gpu: &gpu.context,
         engine,
         source,
         start: state,
+        reps,
         base,
         render: look,
         size: args.size,
@@ -70,4 +100,29 @@ pub(crate) fn run(
     let mut left = run_script(setup, path, &lines, &mut print)?;
     left.trajectory.set_transforms(&transforms);
     Ok(left)
+}
+
+/// The look flags that are per representation, on representations chosen by the flags (not
+/// by a state file): `--opacity` applies to the first one (the selection, or the default
+/// macromolecule surface), and `--atoms` adds atoms of the same selection.
+pub(crate) fn apply_rep_flags(
+    args: &RenderArgs,
+    reps: &mut Vec<Representation>,
+    options: &ParticleOptions,
+) {
+    if let Some(main) = reps.first_mut() {
+        main.opacity = args.opacity;
+    }
+    if args.atoms != AtomStyle::Hidden {
+        let selection = args.scene.select.clone().unwrap_or_else(|| "all".into());
+        let style = match args.atoms {
+            AtomStyle::Spheres => RepStyle::Spheres,
+            AtomStyle::Sticks => RepStyle::Sticks,
+            _ => RepStyle::BallAndStick,
+        };
+        reps.push(Representation {
+            colour: options.colours,
+            ..Representation::new("atoms", &selection, style)
+        });
+    }
 }

@@ -148,3 +148,47 @@ fn a_bad_line_names_the_script_and_line_and_writes_no_output() {
     );
     assert!(!dir.path().join("out.png").exists());
 }
+
+/// Without a state file, a script starts from the representations the flags choose, as a
+/// render without a script shows them: `--select`, `--opacity` and `--atoms` hold.
+#[test]
+fn a_script_starts_from_the_representations_of_the_flags() {
+    if !have_gpu() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.txt"), "frame 2\n").unwrap();
+    let (top, traj) = (data("adk_open.pdb"), data("adk_dims.dcd"));
+    let files = [top.as_str(), traj.as_str()];
+    let common = ["--backend", "cpu", "--size", "160x120"];
+    let flags = [
+        "--select",
+        "protein and resid 1:80",
+        "--opacity",
+        "0.4",
+        "--atoms",
+        "sticks",
+    ];
+    let render = |extra: &[&str], out: &str| {
+        let run = mdsurf(
+            dir.path(),
+            &[&["render"], &files[..], extra, &["-o", out], &common[..]].concat(),
+        );
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        RgbaImage::read_png(&dir.path().join(out)).expect(out)
+    };
+    let scripted = render(
+        &[&flags[..], &["--script", "s.txt"]].concat(),
+        "scripted.png",
+    );
+    let plain = render(&[&flags[..], &["--frame", "2"]].concat(), "plain.png");
+    assert!(
+        scripted.close_to(&plain),
+        "the script lost the flags' representations"
+    );
+    let defaults = render(&["--script", "s.txt"], "defaults.png");
+    assert!(
+        !scripted.close_to(&defaults),
+        "--select, --opacity and --atoms changed nothing"
+    );
+}
