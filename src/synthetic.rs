@@ -296,6 +296,20 @@ impl SplitMix64 {
     }
 }
 
+/// `count` points spread evenly on a sphere of `radius` Å around `centre` (a Fibonacci spiral
+/// about the z axis): the atoms of the hollow shells the cavity tests measure.
+pub fn sphere_points(count: usize, radius: f32, centre: Vec3) -> Vec<Vec3> {
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..count)
+        .map(|k| {
+            let z = 1.0 - 2.0 * (k as f32 + 0.5) / count as f32;
+            let ring = (1.0 - z * z).sqrt();
+            let phi = golden * k as f32;
+            centre + radius * Vec3::new(ring * phi.cos(), ring * phi.sin(), z)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -265,19 +265,7 @@ mod tests {
     use super::*;
     use crate::measure::grid_flood::{flood_outside, label_cavities};
     use crate::measure::probe_cavities::{ProbeOptions, free_centres, probe_grid};
-
-    /// Points spread evenly on a sphere of `radius` Å around `centre` (a Fibonacci spiral).
-    fn sphere(count: usize, radius: f32, centre: Vec3) -> Vec<Vec3> {
-        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-        (0..count)
-            .map(|k| {
-                let z = 1.0 - 2.0 * (k as f32 + 0.5) / count as f32;
-                let ring = (1.0 - z * z).sqrt();
-                let angle = golden * k as f32;
-                centre + radius * Vec3::new(ring * angle.cos(), ring * angle.sin(), z)
-            })
-            .collect()
-    }
+    use crate::synthetic::sphere_points as sphere;
 
     #[test]
     fn a_void_smaller_than_the_grid_step_is_found_between_grid_points() {

@@ -10,15 +10,7 @@ use mdsurf::surface::{AtomSet, CpuEngine, SurfaceEngine, SurfaceParams};
 
 /// `n` points spread evenly on a sphere of radius `radius` (Å) around `centre` (Fibonacci).
 pub(crate) fn shell(n: usize, radius: f32, centre: Vec3) -> Vec<Vec3> {
-    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    (0..n)
-        .map(|k| {
-            let z = 1.0 - 2.0 * (k as f32 + 0.5) / n as f32;
-            let r = (1.0 - z * z).sqrt();
-            let phi = golden * k as f32;
-            centre + radius * Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        })
-        .collect()
+    mdsurf::synthetic::sphere_points(n, radius, centre)
 }
 
 /// The shell's atoms: 600 of radius 1.5 Å on a sphere of 7 Å (about 1 Å apart, so their
