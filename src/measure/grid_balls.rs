@@ -35,7 +35,9 @@ pub(super) struct Offset {
 
 /// Calls `visit(value, offset)` for every grid point within `reach(b)` Å (bounds included) of
 /// the centre of every ball `b` of `centres` (Å), `values` holding one value per grid point
-/// (x fastest, then y, then z). Parallel over z planes.
+/// (x fastest, then y, then z). Parallel over z planes. Points of the ball's rows beyond it
+/// (up to its bounding box along x) are visited too, with `dx * dx > left`: `visit` tests
+/// `dx * dx < left`, or compares the squared distance with one no larger than the reach's.
 pub(super) fn draw_balls<T: Send>(
     grid: &GridSpec,
     values: &mut [T],
@@ -68,6 +70,11 @@ pub(super) fn draw_balls<T: Send>(
                     continue;
                 }
                 let (j0, j1) = reach_range(p.y, in_plane.sqrt(), h, ny);
+                // Every row spans the ball's whole width in x: `visit` tells the points
+                // inside from the rest, and no row needs its own square root and bounds
+                // (faster, measured on the probe interface of 1a28, though more points are
+                // visited).
+                let (i0, i1) = reach_range(p.x, reach, h, nx);
                 for j in j0..=j1 {
                     let dy = p.y - h * j as f32;
                     let left = in_plane - dy * dy;
@@ -75,11 +82,10 @@ pub(super) fn draw_balls<T: Send>(
                         continue;
                     }
                     let yz2 = dy * dy + dz * dz;
-                    let (i0, i1) = reach_range(p.x, left.sqrt(), h, nx);
                     let row = &mut out[nx as usize * j as usize..][..nx as usize];
                     // A slice and a counted loop, so that simple visits vectorise.
                     for (n, value) in row[i0 as usize..=i1 as usize].iter_mut().enumerate() {
-                        let dx = p.x - h * (i0 + n as u32) as f32;
+                        let dx = p.x - h * (i0 as i32 + n as i32) as f32;
                         visit(value, Offset { dx, left, yz2 });
                     }
                 }
