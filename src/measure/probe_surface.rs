@@ -185,38 +185,49 @@ fn sas_samples(
     cells: &CellList,
     probe: f32,
 ) -> Vec<Vec3> {
-    let [nx, ny, nz] = grid.dims;
+    let [nx, ny, nz] = grid.dims.map(|d| d as usize);
     let h = grid.spacing;
     let axes = [
-        [1i64, 0, 0],
-        [-1, 0, 0],
-        [0, 1, 0],
-        [0, -1, 0],
-        [0, 0, 1],
-        [0, 0, -1],
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
     ];
-    let per_plane: Vec<Vec<Vec3>> = (0..nz)
+    // The grid's border and the points next to it are outside (its padding is wider than any
+    // atom's reach), so edges to blocked points start inside them and every neighbour exists.
+    let row_of = |j: usize, k: usize| &marks[nx * (j + ny * k)..][..nx];
+    let per_plane: Vec<Vec<Vec3>> = (1..nz.saturating_sub(1))
         .into_par_iter()
         .map(|k| {
             let mut out = Vec::new();
-            for j in 0..ny {
-                for i in 0..nx {
-                    if marks[grid.index(i, j, k)] != OUTSIDE {
+            for j in 1..ny - 1 {
+                let row = row_of(j, k);
+                let (below, above) = (row_of(j - 1, k), row_of(j + 1, k));
+                let (back, front) = (row_of(j, k - 1), row_of(j, k + 1));
+                for i in 1..nx - 1 {
+                    if row[i] != OUTSIDE {
                         continue;
                     }
-                    let start = grid.point(i, j, k);
-                    for step in &axes {
-                        let (a, b, c) =
-                            (i as i64 + step[0], j as i64 + step[1], k as i64 + step[2]);
-                        if a < 0 || b < 0 || c < 0 || a >= nx as i64 || b >= ny as i64 {
+                    // The neighbour along each of `axes`.
+                    let next = [
+                        row[i + 1],
+                        row[i - 1],
+                        above[i],
+                        below[i],
+                        front[i],
+                        back[i],
+                    ];
+                    if next.iter().all(|&m| m == OUTSIDE) {
+                        continue;
+                    }
+                    let start = grid.point(i as u32, j as u32, k as u32);
+                    for (axis, &mark) in axes.iter().zip(&next) {
+                        if mark == OUTSIDE {
                             continue;
                         }
-                        if c >= nz as i64
-                            || marks[grid.index(a as u32, b as u32, c as u32)] == OUTSIDE
-                        {
-                            continue;
-                        }
-                        let dir = h * Vec3::new(step[0] as f32, step[1] as f32, step[2] as f32);
+                        let dir = h * *axis;
                         let t = first_contact(atoms, cells, start, dir, probe);
                         out.push(start + t * dir);
                     }
