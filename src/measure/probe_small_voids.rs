@@ -53,9 +53,7 @@ pub(super) fn voids_between_grid_points(
         atoms.positions,
         |a| (atoms.radii[a] + probe - margin).max(0.0),
         |mark, at| {
-            if at.dx * at.dx < at.left {
-                *mark = true;
-            }
+            *mark |= at.dx * at.dx < at.left;
         },
     );
     let clearance = Clearance::new(atoms, probe);

@@ -274,11 +274,10 @@ fn excluded_field(grid: &GridSpec, marks: &[u32], samples: &[Vec3], probe: f32) 
         samples,
         |_| reach,
         |nearest, at| {
-            // A compare and select (not `f32::min`, which orders NaN) vectorises.
+            // A compare and select (not `f32::min`, which orders NaN) stored every time (not
+            // only when smaller, which compiles to a branch per lane) vectorises.
             let d2 = at.dx * at.dx + at.yz2;
-            if d2 < *nearest {
-                *nearest = d2;
-            }
+            *nearest = if d2 < *nearest { d2 } else { *nearest };
         },
     );
     field.par_iter_mut().zip(marks).for_each(|(value, &mark)| {
