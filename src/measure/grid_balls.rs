@@ -31,6 +31,8 @@ pub(super) struct Offset {
     pub left: f32,
     /// `dy * dy + dz * dz`, so that the squared distance is `dx * dx + yz2`.
     pub yz2: f32,
+    /// The ball (its index in the centres).
+    pub ball: usize,
 }
 
 /// Calls `visit(value, offset)` for every grid point within `reach(b)` Å (bounds included) of
@@ -86,7 +88,16 @@ pub(super) fn draw_balls<T: Send>(
                     // A slice and a counted loop, so that simple visits vectorise.
                     for (n, value) in row[i0 as usize..=i1 as usize].iter_mut().enumerate() {
                         let dx = p.x - h * (i0 as i32 + n as i32) as f32;
-                        visit(value, Offset { dx, left, yz2 });
+                        let ball = b as usize;
+                        visit(
+                            value,
+                            Offset {
+                                dx,
+                                left,
+                                yz2,
+                                ball,
+                            },
+                        );
                     }
                 }
             }

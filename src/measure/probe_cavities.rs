@@ -25,7 +25,7 @@ use glam::{DVec3, Vec3};
 
 use super::MeasureError;
 use super::cavities::{Cavity, components};
-use super::grid_balls::{draw_balls, reach_range};
+use super::grid_balls::draw_balls;
 use super::grid_flood::{BLOCKED, UNSEEN, flood_outside, label_cavities, neighbours};
 use super::probe_small_voids::voids_between_grid_points;
 use crate::model::Topology;
@@ -336,22 +336,18 @@ fn void_of(
     }
     // max over balls of (radius - |y - centre|), where a ball reaches within 2h.
     let mut field = vec![-2.0 * h; grid.voxel_count() as usize];
-    for &(c, clearance) in &balls {
-        let reach = clearance + 2.0 * h;
-        let local = c - grid.origin;
-        let (k0, k1) = reach_range(local.z, reach, h, grid.dims[2]);
-        let (j0, j1) = reach_range(local.y, reach, h, grid.dims[1]);
-        let (i0, i1) = reach_range(local.x, reach, h, grid.dims[0]);
-        for k in k0..=k1 {
-            for j in j0..=j1 {
-                for i in i0..=i1 {
-                    let d = grid.point(i, j, k).distance(c);
-                    let at = grid.index(i, j, k);
-                    field[at] = field[at].max(clearance - d);
-                }
-            }
-        }
-    }
+    let centres_of_balls: Vec<Vec3> = balls.iter().map(|&(c, _)| c).collect();
+    draw_balls(
+        &grid,
+        &mut field,
+        &centres_of_balls,
+        |b| balls[b].1 + 2.0 * h,
+        |value, at| {
+            let inside = balls[at.ball].1 - (at.dx * at.dx + at.yz2).sqrt();
+            // Stored every time (a compare and select), so that the row's loop vectorises.
+            *value = if inside > *value { inside } else { *value };
+        },
+    );
     let density = DensityVolume {
         values: field,
         colours: None,
