@@ -151,11 +151,9 @@ pub fn probe_cavity_walls(
     flood_outside(&grid, &mut marks);
     let count = label_cavities(&grid, &mut marks);
     let mut centres: Vec<Vec<Vec3>> = vec![Vec::new(); count as usize];
-    let [nx, ny, _] = grid.dims.map(|d| d as usize);
     for (at, &mark) in marks.iter().enumerate() {
         if (1..=count).contains(&mark) {
-            let (i, j, k) = (at % nx, (at / nx) % ny, at / (nx * ny));
-            centres[mark as usize - 1].push(grid.point(i as u32, j as u32, k as u32));
+            centres[mark as usize - 1].push(grid.point_at(at));
         }
     }
     centres.extend(voids_between_grid_points(

@@ -24,6 +24,7 @@ use std::collections::{HashMap, HashSet};
 
 use super::grid_balls::draw_balls;
 use super::grid_flood::{BLOCKED, neighbours};
+use super::probe_surface::near_atoms;
 use crate::model::cells::CellList;
 use crate::surface::{AtomSet, GridSpec};
 
@@ -105,23 +106,23 @@ fn lattice(origin: Vec3, step: f32, p: [i32; 3]) -> Vec3 {
 
 /// The clearance `c(x)` of the module's doc (Å), from the atoms within `max r_i + probe` of
 /// `x`: exact where it is negative, and at least 0 (its sign right) where it is not.
-struct Clearance {
+struct Clearance<'a> {
+    atoms: AtomSet<'a>,
     cells: CellList,
-    radii: Vec<f32>,
     probe: f32,
     reach: f32,
 }
 
-impl Clearance {
-    fn new(atoms: &AtomSet<'_>, probe: f32) -> Clearance {
+impl<'a> Clearance<'a> {
+    fn new(atoms: &AtomSet<'a>, probe: f32) -> Clearance<'a> {
         let max_radius = atoms.radii.iter().fold(0.0f32, |m, &r| m.max(r));
         let reach = max_radius + probe;
         let items: Vec<(u32, Vec3)> = (0..atoms.len())
             .map(|a| (a as u32, atoms.positions[a]))
             .collect();
         Clearance {
+            atoms: *atoms,
             cells: CellList::covering(&items, reach, 1),
-            radii: atoms.radii.to_vec(),
             probe,
             reach,
         }
@@ -129,34 +130,26 @@ impl Clearance {
 
     /// `c(x)` in Å (at most `max r_i`: every atom farther than the reach counts as there).
     fn at(&self, x: Vec3) -> f32 {
-        let home = self.cells.cell_of(x);
         let mut nearest = self.reach;
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let (points, ids) = self.cells.cell(home + IVec3::new(dx, dy, dz));
-                    for (p, &id) in points.iter().zip(ids) {
-                        nearest = nearest.min(p.distance(x) - self.radii[id as usize]);
-                    }
-                }
-            }
-        }
+        near_atoms(&self.atoms, &self.cells, x, |_, centre, radius| {
+            nearest = nearest.min(centre.distance(x) - radius);
+        });
         nearest - self.probe
     }
 }
 
 /// Step 1 of the module's doc: the seeds (point in Å, clearance), from the blocked points
 /// that are not `deep`.
-fn seeds(grid: &GridSpec, marks: &[u32], deep: &[bool], clearance: &Clearance) -> Vec<(Vec3, f32)> {
+fn seeds(
+    grid: &GridSpec,
+    marks: &[u32],
+    deep: &[bool],
+    clearance: &Clearance<'_>,
+) -> Vec<(Vec3, f32)> {
     let [nx, ny, _] = grid.dims.map(|d| d as isize);
     let steps: Vec<isize> = neighbours()
         .map(|[x, y, z]| x as isize + nx * (y as isize + ny * z as isize))
         .collect();
-    let point = |at: usize| {
-        let (nx, ny) = (nx as usize, ny as usize);
-        let (i, j, k) = (at % nx, (at / nx) % ny, at / (nx * ny));
-        grid.point(i as u32, j as u32, k as u32)
-    };
     // Blocked points lie inside the grid's free border, so their neighbours exist.
     let candidates: Vec<usize> = (0..marks.len())
         .into_par_iter()
@@ -170,7 +163,7 @@ fn seeds(grid: &GridSpec, marks: &[u32], deep: &[bool], clearance: &Clearance) -
         .collect();
     let values: HashMap<usize, f32> = candidates
         .par_iter()
-        .map(|&at| (at, clearance.at(point(at))))
+        .map(|&at| (at, clearance.at(grid.point_at(at))))
         .collect();
     candidates
         .iter()
@@ -181,14 +174,20 @@ fn seeds(grid: &GridSpec, marks: &[u32], deep: &[bool], clearance: &Clearance) -
                 values.get(&next).is_none_or(|&other| other <= c)
             })
         })
-        .map(|&at| (point(at), values[&at]))
+        .map(|&at| (grid.point_at(at), values[&at]))
         .collect()
 }
 
 /// A local maximum of the clearance from `start` (point, value): moves to the best of the 26
 /// neighbours `step` Å away while that raises the clearance, else halves the step, until it is
 /// under 0.001 Å; stays in the box `lo..=hi`.
-fn climb(start: (Vec3, f32), step: f32, lo: Vec3, hi: Vec3, clearance: &Clearance) -> (Vec3, f32) {
+fn climb(
+    start: (Vec3, f32),
+    step: f32,
+    lo: Vec3,
+    hi: Vec3,
+    clearance: &Clearance<'_>,
+) -> (Vec3, f32) {
     let directions: Vec<Vec3> = neighbours()
         .map(|[x, y, z]| Vec3::new(x as f32, y as f32, z as f32))
         .collect();
@@ -217,7 +216,7 @@ fn flood(
     step: f32,
     grid: &GridSpec,
     marks: &[u32],
-    clearance: &Clearance,
+    clearance: &Clearance<'_>,
 ) -> Option<Vec<[i32; 3]>> {
     let [nx, ny, nz] = grid.dims;
     // A free grid point one lattice diagonal or less from a flooded point joins them.

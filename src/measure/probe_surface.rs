@@ -156,8 +156,9 @@ fn surface_on(atoms: &AtomSet<'_>, grid: &GridSpec, probe: f32) -> ProbeSurface 
     }
 }
 
-/// Calls `visit` with each atom (index, centre, radius in Å) in the 27 cells around `p`.
-fn near_atoms(
+/// Calls `visit` with each atom (index, centre, radius in Å) in the 27 cells around `p`
+/// (`cells` of `atoms`, at least `max r_i + probe` wide: every atom within that of `p`).
+pub(super) fn near_atoms(
     atoms: &AtomSet<'_>,
     cells: &CellList,
     p: Vec3,

@@ -97,6 +97,13 @@ impl GridSpec {
     pub fn point(&self, i: u32, j: u32, k: u32) -> Vec3 {
         self.origin + self.spacing * Vec3::new(i as f32, j as f32, k as f32)
     }
+
+    /// Position in Å of the sample at linear index `at` (the inverse of [`GridSpec::index`]).
+    pub fn point_at(&self, at: usize) -> Vec3 {
+        let [nx, ny, _] = self.dims.map(|d| d as usize);
+        let (i, j, k) = (at % nx, (at / nx) % ny, at / (nx * ny));
+        self.point(i as u32, j as u32, k as u32)
+    }
 }
 
 /// Bytes the CPU engine needs for a grid of `dims` samples: 4 per sample for the f32 density,
