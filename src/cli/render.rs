@@ -33,6 +33,10 @@ use super::render_output::output_paths;
 use super::scene_args::bind_scene;
 use super::transform_args::{FrameReader, host_scene};
 
+/// Said after "no GPU adapter": what a machine without a GPU needs to render.
+pub(super) const SOFTWARE_ADAPTER: &str =
+    "a software one is enough: Mesa's lavapipe, Debian's and Ubuntu's mesa-vulkan-drivers";
+
 /// Runs `mdsurf render`.
 pub fn run(args: RenderArgs) -> Result<()> {
     let params = args.params.params()?;
@@ -101,8 +105,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     args.params
         .apply_vertices(&mut choice.reps, choice.state.is_some());
-    let gpu = HeadlessGpu::new()
-        .context("rendering needs a wgpu adapter (a software one such as lavapipe is enough)")?;
+    let gpu = HeadlessGpu::new().map_err(|e| anyhow!("{e} ({SOFTWARE_ADAPTER})"))?;
     let renderer = Renderer::new(&gpu.device);
     // The GPU engine computes on the render device and its buffers are drawn in place, as in
     // the window; otherwise the mesh comes back to the host and is uploaded (the CPU engine,

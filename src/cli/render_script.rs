@@ -38,8 +38,12 @@ pub(crate) fn run(
     let transforms = args.transforms.options(state.as_ref());
     let source = open_files_with(&args.input.top, args.input.traj.as_deref(), &transforms)
         .map_err(|e| anyhow!(e))?;
-    let gpu = HeadlessGpu::new()
-        .map_err(|e| anyhow!("--script needs a wgpu adapter for its pictures: {e}"))?;
+    let gpu = HeadlessGpu::new().map_err(|e| {
+        anyhow!(
+            "--script draws pictures: {e} ({})",
+            super::render::SOFTWARE_ADAPTER
+        )
+    })?;
     let cpu = || Engine::Host(Box::new(CpuEngine::new()));
     let engine = match args.backend {
         Backend::Cpu => cpu(),

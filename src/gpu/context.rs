@@ -70,6 +70,28 @@ struct ObjectCounter {
     query_sets: AtomicU64,
 }
 
+/// What in wgpu's "no adapter" message says why: its list of backends without those the
+/// instance did not ask for or that this build does not have ("No suitable graphics adapter
+/// found; noop not requested, vulkan drivers/libraries could not be loaded, metal support not
+/// compiled in, ..." gives "vulkan drivers/libraries could not be loaded"). A message of
+/// another form is kept whole.
+fn adapter_failure(message: &str) -> String {
+    let Some((_, backends)) = message.split_once("; ") else {
+        return message.to_string();
+    };
+    let reasons: Vec<&str> = backends
+        .split(", ")
+        .filter(|reason| {
+            !reason.ends_with(" not requested") && !reason.ends_with(" support not compiled in")
+        })
+        .collect();
+    if reasons.is_empty() {
+        message.to_string()
+    } else {
+        reasons.join(", ")
+    }
+}
+
 impl GpuContext {
     /// Opens the best adapter without a window, requesting its full storage-buffer, buffer-size,
     /// workgroup and texture-size limits and timestamp queries when supported. The only place
@@ -85,8 +107,15 @@ impl GpuContext {
         // thread while another thread compiled a Vulkan pipeline. `WGPU_BACKEND` still chooses.
         let adapter = match Self::headless_adapter(wgpu::Backends::PRIMARY).await {
             Ok(adapter) => adapter,
-            Err(_) if std::env::var_os("WGPU_BACKEND").is_none() => {
-                Self::headless_adapter(wgpu::Backends::SECONDARY).await?
+            Err(GpuError::NoAdapter(primary)) if std::env::var_os("WGPU_BACKEND").is_none() => {
+                match Self::headless_adapter(wgpu::Backends::SECONDARY).await {
+                    Ok(adapter) => adapter,
+                    // Both tries' reasons: the second alone would say "vulkan not requested".
+                    Err(GpuError::NoAdapter(secondary)) => {
+                        return Err(GpuError::NoAdapter(format!("{primary}; {secondary}")));
+                    }
+                    Err(e) => return Err(e),
+                }
             }
             Err(e) => return Err(e),
         };
@@ -136,7 +165,7 @@ impl GpuContext {
                 apply_limit_buckets: false,
             })
             .await
-            .map_err(|e| GpuError::NoAdapter(e.to_string()))
+            .map_err(|e| GpuError::NoAdapter(adapter_failure(&e.to_string())))
     }
 
     /// The limits mdsurf asks for: the adapter's own maxima for what bounds problem size and
@@ -303,4 +332,40 @@ fn one_line(s: &str) -> String {
 /// True when the environment variable `REQUIRE_GPU` is set to `1` (CI).
 pub fn gpu_required() -> bool {
     std::env::var("REQUIRE_GPU").is_ok_and(|v| v == "1")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::adapter_failure;
+
+    /// wgpu 30's messages on machines without a Vulkan loader or libEGL (Ubuntu 16.04), for
+    /// the try of the primary backends, of Vulkan alone (`WGPU_BACKEND=vulkan`) and of OpenGL:
+    /// only the backends that were tried and that this build has remain.
+    #[test]
+    fn an_adapter_failure_keeps_the_backends_that_were_tried() {
+        let primary = "No suitable graphics adapter found; noop not requested, vulkan \
+            drivers/libraries could not be loaded, metal support not compiled in, dx12 support \
+            not compiled in, gl not requested, webgpu support not compiled in";
+        assert_eq!(
+            adapter_failure(primary),
+            "vulkan drivers/libraries could not be loaded"
+        );
+        let vulkan = "No suitable graphics adapter found; noop not requested, vulkan \
+            drivers/libraries could not be loaded, metal not requested, dx12 not requested, gl \
+            not requested, webgpu not requested";
+        assert_eq!(
+            adapter_failure(vulkan),
+            "vulkan drivers/libraries could not be loaded"
+        );
+        let gl = "No suitable graphics adapter found; noop not requested, vulkan not requested, \
+            metal not requested, dx12 not requested, gl drivers/libraries could not be loaded, \
+            webgpu not requested";
+        assert_eq!(
+            adapter_failure(gl),
+            "gl drivers/libraries could not be loaded"
+        );
+        assert_eq!(adapter_failure("lost"), "lost");
+        let none_tried = "No suitable graphics adapter found; vulkan not requested";
+        assert_eq!(adapter_failure(none_tried), none_tried);
+    }
 }

@@ -3,7 +3,7 @@
 //! engine's buffers in place on the device that computed them.
 
 use super::RenderError;
-use crate::gpu::GpuContext;
+use crate::gpu::{GpuContext, GpuError};
 
 /// A device and its queue, with a line describing the adapter.
 #[derive(Debug)]
@@ -21,8 +21,10 @@ pub struct HeadlessGpu {
 impl HeadlessGpu {
     /// Opens the best available adapter with its own limits (so large screenshots fit).
     pub fn new() -> Result<HeadlessGpu, RenderError> {
-        let context =
-            GpuContext::new_headless().map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+        let context = GpuContext::new_headless().map_err(|e| match e {
+            GpuError::NoAdapter(reason) => RenderError::NoAdapter(reason),
+            other => RenderError::NoAdapter(other.to_string()),
+        })?;
         Ok(HeadlessGpu {
             device: context.device.clone(),
             queue: context.queue.clone(),
