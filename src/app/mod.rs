@@ -87,6 +87,12 @@ pub enum ViewError {
         "cannot open a window: {0}; use `mdsurf render TOP [TRAJ] -o out.png` to make pictures without a display"
     )]
     NoDisplay(String),
+    /// No GPU adapter at all, not even a software one: the window (and `render`) need one.
+    #[error("cannot open a window: no GPU adapter: {reason} ({hint})", hint = crate::gpu::SOFTWARE_ADAPTER)]
+    NoAdapter {
+        /// What each backend that was tried said.
+        reason: String,
+    },
     /// The scripted run failed.
     #[error("scripted run failed: {0}")]
     Script(String),
@@ -313,7 +319,19 @@ fn run_window(
             Ok(Box::new(viewer))
         }),
     )
-    .map_err(|e| ViewError::NoDisplay(e.to_string()));
+    .map_err(window_failure);
     keep.clean_up();
     result
+}
+
+/// Why eframe could not open the window. A wgpu failure ("failed to create surface for any
+/// enabled backend") with no adapter anywhere is said as such, with the reason each backend
+/// gave, rather than as a display problem.
+fn window_failure(error: eframe::Error) -> ViewError {
+    if matches!(error, eframe::Error::Wgpu(_))
+        && let Err(crate::gpu::GpuError::NoAdapter(reason)) = crate::gpu::GpuContext::new_headless()
+    {
+        return ViewError::NoAdapter { reason };
+    }
+    ViewError::NoDisplay(error.to_string())
 }

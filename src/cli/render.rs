@@ -17,7 +17,7 @@ use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 
 use mdsurf::export::video::{Mp4Movie, check_even_size, is_mp4};
 use mdsurf::export::{StatsRow, StatsWriter};
-use mdsurf::gpu::{GpuEngine, Picked, pick_engine};
+use mdsurf::gpu::{GpuEngine, Picked, SOFTWARE_ADAPTER, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
 use mdsurf::scene::cavity_layer::MovieCavityIds;
 use mdsurf::scene::movie::Shot;
@@ -32,10 +32,6 @@ pub use super::render_args::{RenderArgs, StereoArgs};
 use super::render_output::output_paths;
 use super::scene_args::bind_scene;
 use super::transform_args::{FrameReader, host_scene};
-
-/// Said after "no GPU adapter": what a machine without a GPU needs to render.
-pub(super) const SOFTWARE_ADAPTER: &str =
-    "a software one is enough: Mesa's lavapipe, Debian's and Ubuntu's mesa-vulkan-drivers";
 
 /// Runs `mdsurf render`.
 pub fn run(args: RenderArgs) -> Result<()> {

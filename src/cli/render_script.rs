@@ -41,7 +41,7 @@ pub(crate) fn run(
     let gpu = HeadlessGpu::new().map_err(|e| {
         anyhow!(
             "--script draws pictures: {e} ({})",
-            super::render::SOFTWARE_ADAPTER
+            mdsurf::gpu::SOFTWARE_ADAPTER
         )
     })?;
     let cpu = || Engine::Host(Box::new(CpuEngine::new()));

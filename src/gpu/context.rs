@@ -70,25 +70,33 @@ struct ObjectCounter {
     query_sets: AtomicU64,
 }
 
+/// Said after "no GPU adapter" where a picture is needed (`render`, the window): what a machine
+/// without a GPU needs.
+pub const SOFTWARE_ADAPTER: &str =
+    "a software one is enough: Mesa's lavapipe, Debian's and Ubuntu's mesa-vulkan-drivers";
+
 /// What in wgpu's "no adapter" message says why: its list of backends without those the
-/// instance did not ask for or that this build does not have ("No suitable graphics adapter
-/// found; noop not requested, vulkan drivers/libraries could not be loaded, metal support not
-/// compiled in, ..." gives "vulkan drivers/libraries could not be loaded"). A message of
-/// another form is kept whole.
+/// instance did not ask for and, when others remain, those this build does not have ("No
+/// suitable graphics adapter found; noop not requested, vulkan drivers/libraries could not be
+/// loaded, metal support not compiled in, ..." gives "vulkan drivers/libraries could not be
+/// loaded"). A message of another form is kept whole.
 fn adapter_failure(message: &str) -> String {
     let Some((_, backends)) = message.split_once("; ") else {
         return message.to_string();
     };
-    let reasons: Vec<&str> = backends
+    let tried: Vec<&str> = backends
         .split(", ")
-        .filter(|reason| {
-            !reason.ends_with(" not requested") && !reason.ends_with(" support not compiled in")
-        })
+        .filter(|reason| !reason.ends_with(" not requested"))
         .collect();
-    if reasons.is_empty() {
-        message.to_string()
-    } else {
-        reasons.join(", ")
+    let built: Vec<&str> = tried
+        .iter()
+        .copied()
+        .filter(|reason| !reason.ends_with(" support not compiled in"))
+        .collect();
+    match (built.is_empty(), tried.is_empty()) {
+        (false, _) => built.join(", "),
+        (true, false) => tried.join(", "),
+        (true, true) => message.to_string(),
     }
 }
 
@@ -365,6 +373,11 @@ mod tests {
             "gl drivers/libraries could not be loaded"
         );
         assert_eq!(adapter_failure("lost"), "lost");
+        // `WGPU_BACKEND=metal` on Linux: only a backend this build lacks was asked for.
+        let metal = "No suitable graphics adapter found; noop not requested, vulkan not \
+            requested, metal support not compiled in, dx12 not requested, gl not requested, \
+            webgpu not requested";
+        assert_eq!(adapter_failure(metal), "metal support not compiled in");
         let none_tried = "No suitable graphics adapter found; vulkan not requested";
         assert_eq!(adapter_failure(none_tried), none_tried);
     }

@@ -41,7 +41,7 @@ pub(crate) mod timing;
 pub mod tolerance;
 pub(crate) mod types;
 
-pub use context::{GpuContext, GpuObjects, gpu_required};
+pub use context::{GpuContext, GpuObjects, SOFTWARE_ADAPTER, gpu_required};
 pub use density::DensityGather;
 pub use engine::{Changes, EngineOptions, FrameInfo, GpuEngine};
 pub use factory::{Backend, Picked, pick_engine};

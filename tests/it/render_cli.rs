@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 
 use mdsurf::render::RgbaImage;
 
-use crate::cli_common::have_gpu;
+use crate::cli_common::{data, have_gpu};
 
 fn demo(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -133,6 +133,44 @@ fn window_without_display_suggests_render() {
         err.contains("mdsurf render") && err.lines().count() == 1,
         "{err}"
     );
+}
+
+/// No adapter at all (`WGPU_BACKEND` names the one backend this Linux build lacks, as a machine
+/// without a Vulkan loader or libEGL has none): `render` and the window each say so in one line
+/// with what each backend said and what to install, and neither sends the user to the other.
+/// The window's message before: "WGPU error: Failed to create surface for any enabled backend:
+/// {}; use `mdsurf render ...`", render's: "... vulkan not requested, ...".
+#[test]
+fn no_adapter_at_all_is_said_with_what_to_install() {
+    let pdb = data("1hpv.pdb");
+    let out = std::env::temp_dir().join(format!("mdsurf-no-adapter-{}.png", std::process::id()));
+    let render = Command::new(env!("CARGO_BIN_EXE_mdsurf"))
+        .env("WGPU_BACKEND", "metal")
+        .args(["render", pdb.as_str(), "-o", out.to_str().unwrap()])
+        .output()
+        .expect("run mdsurf render");
+    let (_guard, mut xvfb) = crate::xvfb_support::xvfb_run();
+    let window = xvfb
+        .env("WGPU_BACKEND", "metal")
+        .args([env!("CARGO_BIN_EXE_mdsurf"), pdb.as_str(), "--quit"])
+        .output()
+        .expect("run xvfb-run mdsurf");
+    for (what, r) in [("render", &render), ("window", &window)] {
+        assert_eq!(r.status.code(), Some(2), "{what}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(err.lines().count(), 1, "{what}: {err}");
+        for part in [
+            "no GPU adapter",
+            "metal support not compiled in",
+            "mesa-vulkan-drivers",
+        ] {
+            assert!(err.contains(part), "{what}: {part} missing from {err}");
+        }
+        for wrong in ["not requested", "mdsurf render", "Failed to create surface"] {
+            assert!(!err.contains(wrong), "{what}: {wrong} in {err}");
+        }
+    }
+    assert!(!out.exists(), "render wrote {}", out.display());
 }
 
 /// The extent (width, height) in pixels of what differs from the top-left (background) pixel.
