@@ -32,7 +32,7 @@ pub(crate) fn output_paths(pattern: &Path, frames: &[usize]) -> Result<Vec<PathB
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if !is_png {
         bail!(
-            "-o {}: render writes PNG images; give the output a .png name",
+            "-o {}: render writes PNG images or an MP4 movie; give the output a .png or .mp4 name",
             pattern.display()
         );
     }
@@ -73,7 +73,10 @@ mod tests {
             output_path(Path::new("d/f_{frame:04}_{image}.png"), 7, 2),
             Path::new("d/f_0007_00002.png")
         );
-        assert!(output_paths(Path::new("x.jpg"), &[0]).is_err());
+        let jpg = output_paths(Path::new("x.jpg"), &[0])
+            .unwrap_err()
+            .to_string();
+        assert!(jpg.contains(".png or .mp4"), "{jpg}");
         assert!(output_paths(Path::new("x_{frame}.png"), &[3, 3]).is_err());
         assert!(output_paths(Path::new("x_{image}.png"), &[3, 3]).is_ok());
     }
