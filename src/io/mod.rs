@@ -38,6 +38,7 @@ mod contained;
 #[cfg(not(feature = "chemfiles"))]
 #[path = "without_chemfiles.rs"]
 mod contained;
+mod copy_room;
 mod dcd;
 mod dcd_frames;
 mod decoders;

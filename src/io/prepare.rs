@@ -14,7 +14,9 @@
 //!   files), into a
 //!   temporary plain file (chemfiles' bzip2 reader spins forever on a truncated stream). A stream
 //!   that ends early keeps what decompressed: the frames before the cut stay readable and the
-//!   last, cut frame is reported as damage.
+//!   last, cut frame is reported as damage. A copy that would outgrow the room of its folder
+//!   ([`super::copy_room`]: the disk's free space, or on a tmpfs half the memory budget) stops
+//!   there in the same way, its message saying so.
 //! - mmCIF files (only on the reference path, [`super::open_via_chemfiles`]: [`super::open`]
 //!   reads them with [`super::mmcif`]) get a residue number for every atom outside a polymer
 //!   sequence ([`super::cif_residues`]): chemfiles made all the waters of a chain one residue,
@@ -28,6 +30,7 @@ use std::fs::File;
 use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
+use super::copy_room::copy_room;
 use super::decoders::decoder;
 use super::format::FileFormat;
 use super::line_ends::{CrToLf, has_lone_cr, lone_cr_to_lf};
@@ -308,6 +311,8 @@ fn decompress(
 ) -> Result<Prepared, IoError> {
     let mut input = decoder(open(path)?, compression);
     let (temp, copy) = temp_file(path, format.base)?;
+    let room = copy_room(temp.path().parent().unwrap_or(temp.path()));
+    let mut written = 0u64;
     let mut output = BufWriter::new(create(path, &copy)?);
     let mut cleaner = text.map(Cleaner::new);
     let mut buffer = vec![0u8; CHUNK];
@@ -340,7 +345,16 @@ fn decompress(
             }
             None => &buffer[..n],
         };
-        output.write_all(bytes).map_err(|e| write_failed(path, e))?;
+        // A copy stops at its room, as a cut stream does (the frame it cuts is reported).
+        let fits = room.bytes.saturating_sub(written).min(bytes.len() as u64) as usize;
+        output
+            .write_all(&bytes[..fits])
+            .map_err(|e| write_failed(path, e))?;
+        written += fits as u64;
+        if fits < bytes.len() {
+            truncated = Some(room.reason(written));
+            break;
+        }
     }
     if let Some(c) = cleaner.as_mut() {
         cleaned.clear();

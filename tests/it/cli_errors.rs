@@ -324,6 +324,68 @@ fn an_address_space_limit_is_a_memory_budget_not_a_crash() {
     assert!(!dir.path().join("s.csv").exists());
 }
 
+/// A decompressed copy stops at the room of its folder (a disk's free space less a reserve, on
+/// a tmpfs half the memory budget; here the `test-hooks` build's `MDSURF_TEST_COPY_ROOM`): the
+/// frames that fit are processed and written, and one line names the frame it cut, the room and
+/// what to do. Before, the copy grew until TMPDIR was full (or, on a tmpfs under Slurm's
+/// `--mem`, until the job was killed with every frame lost).
+#[test]
+fn a_decompressed_copy_stops_at_the_room_of_its_folder() {
+    use std::io::Read;
+    let dump = data("spce_all_coords.lammpstrj.bz2");
+    let mut text = Vec::new();
+    bzip2::read::BzDecoder::new(fs::File::open(&dump).unwrap())
+        .read_to_end(&mut text)
+        .unwrap();
+    let room = 2_000_000usize;
+    // The frames wholly inside the room: those whose next frame starts within it.
+    let marker = b"ITEM: TIMESTEP";
+    let starts: Vec<usize> = (0..text.len() - marker.len())
+        .filter(|&i| text[i..].starts_with(marker))
+        .collect();
+    let whole = starts.iter().skip(1).filter(|&&s| s <= room).count();
+    assert!(
+        whole >= 1 && whole + 1 < starts.len(),
+        "{whole} of {}",
+        starts.len()
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mdsurf"))
+        .env("MDSURF_TEST_COPY_ROOM", room.to_string())
+        .env("TMPDIR", dir.path())
+        .args([
+            "surface",
+            &dump,
+            "--backend",
+            "cpu",
+            "--stats",
+            "s.csv",
+            "-q",
+        ])
+        .current_dir(dir.path())
+        .output()
+        .expect("run mdsurf");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    for part in [
+        "spce_all_coords.lammpstrj.bz2",
+        &format!("frame {whole}:"),
+        "room",
+        "TMPDIR",
+    ] {
+        assert!(stderr.contains(part), "{part} missing from {stderr}");
+    }
+    let csv = Csv::read(&dir.path().join("s.csv"));
+    assert_eq!(csv.rows.len(), whole, "{stderr}");
+    let left: Vec<_> = fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .filter(|n| n.to_string_lossy().starts_with("mdsurf-read-"))
+        .collect();
+    assert!(left.is_empty(), "temporary copies left: {left:?}");
+}
+
 #[test]
 fn ctrl_c_keeps_the_frames_done_and_leaves_no_temporary_file() {
     use std::io::{BufRead, BufReader};
