@@ -177,7 +177,10 @@ impl GpuContext {
     }
 
     /// The limits mdsurf asks for: the adapter's own maxima for what bounds problem size and
-    /// picture size (`using_resolution`), the WebGPU defaults elsewhere.
+    /// picture size (`using_resolution`), the WebGPU defaults elsewhere, each no better than
+    /// the adapter has (Mesa 21.2's lavapipe, Ubuntu 20.04's, offers 2 colour attachments
+    /// where the defaults ask for 8, and a request for 8 failed the whole device; the renderer
+    /// draws into at most 2).
     pub fn wanted_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
         wgpu::Limits {
             max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
@@ -190,6 +193,7 @@ impl GpuContext {
             max_color_attachment_bytes_per_sample: adapter.max_color_attachment_bytes_per_sample,
             ..wgpu::Limits::default().using_resolution(adapter.clone())
         }
+        .or_worse_values_from(adapter)
     }
 
     /// Names the adapter the device came from (`llvmpipe (Vulkan)`) and notes whether it is a
@@ -344,7 +348,33 @@ pub fn gpu_required() -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::adapter_failure;
+    use super::{GpuContext, adapter_failure};
+
+    /// An adapter below the WebGPU defaults (Mesa 21.2's lavapipe: 2 colour attachments) gets
+    /// a request it can grant; one above them gets its own maxima where mdsurf wants them.
+    #[test]
+    fn wanted_limits_never_exceed_the_adapter() {
+        let old_lavapipe = wgpu::Limits {
+            max_color_attachments: 2,
+            max_storage_buffers_per_shader_stage: 8,
+            ..wgpu::Limits::default()
+        };
+        let wanted = GpuContext::wanted_limits(&old_lavapipe);
+        assert_eq!(wanted.max_color_attachments, 2);
+        assert_eq!(wanted.max_storage_buffers_per_shader_stage, 8);
+        assert!(wanted.check_limits(&old_lavapipe));
+        let large = wgpu::Limits {
+            max_buffer_size: 1 << 40,
+            max_texture_dimension_2d: 32768,
+            max_storage_buffers_per_shader_stage: 64,
+            ..wgpu::Limits::default()
+        };
+        let wanted = GpuContext::wanted_limits(&large);
+        assert_eq!(wanted.max_buffer_size, 1 << 40);
+        assert_eq!(wanted.max_texture_dimension_2d, 32768);
+        assert_eq!(wanted.max_storage_buffers_per_shader_stage, 16);
+        assert!(wanted.check_limits(&large));
+    }
 
     /// wgpu 30's messages on machines without a Vulkan loader or libEGL (Ubuntu 16.04), for
     /// the try of the primary backends, of Vulkan alone (`WGPU_BACKEND=vulkan`) and of OpenGL:
