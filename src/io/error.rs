@@ -14,6 +14,15 @@ pub enum IoError {
         /// What the operating system said.
         reason: String,
     },
+    /// The path is a folder, a pipe or a device, not a file (mdsurf reads its files more than
+    /// once: it indexes the frames, then reads those shown).
+    #[error("{}: {what}, not a file; give the path of a structure or trajectory file", path.display())]
+    NotAFile {
+        /// The path given.
+        path: PathBuf,
+        /// What it is: "a folder", "a pipe (such as `<(zcat file)`)", "a device or socket".
+        what: &'static str,
+    },
     /// The file name does not say which format it is in.
     #[error(
         "{}: unknown file format '{ext}' (known: pdb, ent, cif, mmcif, gro, xtc, trr, dcd, lammpstrj, lammpsdump, xyz, tng, nc, ncdf; optionally .gz/.bz2/.xz)",
@@ -162,6 +171,7 @@ impl IoError {
             | IoError::NonFiniteCoordinate { path, .. }
             | IoError::AbsurdCoordinate { path, .. }
             | IoError::Empty { path, .. }
+            | IoError::NotAFile { path, .. }
             | IoError::NeedsTopology { path } => rename(path),
             IoError::AtomCountMismatch {
                 topology,

@@ -118,7 +118,8 @@ pub(crate) fn detect_name(path: &Path) -> Result<FileFormat, IoError> {
     })
 }
 
-/// Fails with [`IoError::NotFound`] unless `path` is a regular file we may open.
+/// Fails with [`IoError::NotFound`] unless `path` exists and we may open it, with
+/// [`IoError::NotAFile`] when it is not a regular file, with [`IoError::Empty`] when it is empty.
 fn check_readable(path: &Path) -> Result<(), IoError> {
     let not_found = |reason: String| IoError::NotFound {
         path: path.to_path_buf(),
@@ -126,7 +127,19 @@ fn check_readable(path: &Path) -> Result<(), IoError> {
     };
     let meta = std::fs::metadata(path).map_err(|e| not_found(e.to_string()))?;
     if !meta.is_file() {
-        return Err(not_found("not a regular file".to_string()));
+        use std::os::unix::fs::FileTypeExt;
+        let kind = meta.file_type();
+        let what = if kind.is_dir() {
+            "a folder"
+        } else if kind.is_fifo() {
+            "a pipe (such as `<(zcat FILE)`; mdsurf reads .gz, .bz2 and .xz files itself)"
+        } else {
+            "a device or socket"
+        };
+        return Err(IoError::NotAFile {
+            path: path.to_path_buf(),
+            what,
+        });
     }
     std::fs::File::open(path).map_err(|e| not_found(e.to_string()))?;
     if meta.len() == 0 {

@@ -34,10 +34,17 @@ fn missing_directory_empty_and_unknown() {
         open_err(&missing, None, &["nope.pdb"]),
         IoError::NotFound { .. }
     ));
-    assert!(matches!(
-        open_err(dir.path(), None, &[]),
-        IoError::NotFound { .. }
-    ));
+    // A folder, and a pipe as `mdsurf <(zcat x.pdb.gz)` gives: said as such, not "not found".
+    let folder = open_err(dir.path(), None, &[]);
+    assert!(
+        matches!(folder, IoError::NotAFile { what, .. } if what == "a folder"),
+        "{folder}"
+    );
+    let pipe = dir.path().join("pipe.pdb");
+    let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo");
+    let piped = open_err(&pipe, None, &["pipe.pdb", "a pipe", "zcat"]);
+    assert!(matches!(piped, IoError::NotAFile { .. }), "{piped}");
     let empty = dir.path().join("empty.gro");
     std::fs::write(&empty, "").expect("write");
     assert!(matches!(
