@@ -68,6 +68,8 @@ struct ObjectCounter {
     bind_groups: AtomicU64,
     textures: AtomicU64,
     query_sets: AtomicU64,
+    /// The most storage buffers one compute layout made so far binds.
+    widest_storage_layout: AtomicU64,
 }
 
 /// Said after "no GPU adapter" where a picture is needed (`render`, the window): what a machine
@@ -229,6 +231,17 @@ impl GpuContext {
             textures: c.textures.load(Ordering::Relaxed),
             query_sets: c.query_sets.load(Ordering::Relaxed),
         }
+    }
+
+    /// Notes a compute layout that binds `storage` storage buffers.
+    pub(crate) fn note_storage_layout(&self, storage: u32) {
+        (self.counter.widest_storage_layout).fetch_max(u64::from(storage), Ordering::Relaxed);
+    }
+
+    /// The most storage buffers one compute layout made through this context binds: what the
+    /// device's `max_storage_buffers_per_shader_stage` must allow.
+    pub fn widest_storage_layout(&self) -> u32 {
+        self.counter.widest_storage_layout.load(Ordering::Relaxed) as u32
     }
 
     fn count(n: &AtomicU64) {

@@ -44,6 +44,11 @@ impl Layout {
                 }
             })
             .collect();
+        let storage = slots
+            .iter()
+            .filter(|s| matches!(s.kind, Kind::Read | Kind::ReadWrite))
+            .count();
+        ctx.note_storage_layout(storage as u32);
         let bgl = ctx
             .device
             .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

@@ -61,6 +61,17 @@ pub enum GpuError {
     /// Reading results back failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),
+    /// The adapter binds too few storage buffers per compute stage for the engine (Mesa 21.2's
+    /// lavapipe allows 3).
+    #[error(
+        "the GPU engine binds {needed} storage buffers in one compute stage; this adapter allows {allowed}"
+    )]
+    TooFewStorageBuffers {
+        /// What the engine's widest compute layout binds.
+        needed: u32,
+        /// What the device allows.
+        allowed: u32,
+    },
     /// A problem is too large for this device even when split into slabs.
     #[error("{what} needs {needed} bytes but the device allows {limit}")]
     TooLarge {

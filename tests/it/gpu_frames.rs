@@ -269,6 +269,43 @@ fn runs_on_a_device_with_webgpu_default_limits() {
     );
 }
 
+/// A device below the engine's widest layout (Mesa 21.2's lavapipe, Ubuntu 20.04's, allows 3
+/// storage buffers per stage): the engine says so in one line with both numbers, instead of
+/// wgpu's validation error for the first layout that did not fit. With the default limits the
+/// widest layout fits (the test above runs frames there).
+#[test]
+fn a_device_with_too_few_storage_buffers_is_refused_in_plain_words() {
+    let Some(ctx) =
+        mdsurf::gpu::GpuContext::headless_or_skip().expect("REQUIRE_GPU=1 but no adapter")
+    else {
+        return;
+    };
+    let limits = wgpu::Limits {
+        max_storage_buffers_per_shader_stage: 3,
+        ..wgpu::Limits::default().using_resolution(ctx.limits.clone())
+    };
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let adapter =
+        pollster::block_on(instance.request_adapter(&Default::default())).expect("adapter");
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .expect("device with 3 storage buffers per stage");
+    let err = GpuEngine::try_from_device(device, queue).expect_err("3 storage buffers are too few");
+    let text = err.to_string();
+    assert!(
+        matches!(
+            err,
+            mdsurf::gpu::GpuError::TooFewStorageBuffers { needed, allowed: 3 }
+                if needed > 3 && needed <= wgpu::Limits::default().max_storage_buffers_per_shader_stage
+        ),
+        "{text}"
+    );
+    assert!(!text.contains("Validation"), "{text}");
+}
+
 #[test]
 fn a_failed_frame_does_not_leave_stale_atoms_behind() {
     let Some(mut engine) = engine() else { return };

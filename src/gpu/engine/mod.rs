@@ -152,7 +152,12 @@ impl GpuEngine {
             measure_only: false,
             ctx,
         };
-        (engine, scope_error.or(table_error))
+        // Said before the validation error such a device gives for the first wider layout.
+        let needed = engine.ctx.widest_storage_layout();
+        let allowed = engine.ctx.limits.max_storage_buffers_per_shader_stage;
+        let too_few =
+            (allowed < needed).then_some(GpuError::TooFewStorageBuffers { needed, allowed });
+        (engine, too_few.or(scope_error).or(table_error))
     }
 
     /// The device context.
