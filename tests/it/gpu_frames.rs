@@ -237,26 +237,31 @@ fn same_surface_whatever_the_path_or_atom_order() {
     assert!(rev.mesh == first.mesh, "atom order changed the mesh");
 }
 
-#[test]
-fn runs_on_a_device_with_webgpu_default_limits() {
-    // The viewer shares eframe's device, which may have only the WebGPU default limits
-    // (8 storage buffers per stage, 128 MiB bindings): every pipeline must still build.
-    let Some(ctx) =
-        mdsurf::gpu::GpuContext::headless_or_skip().expect("REQUIRE_GPU=1 but no adapter")
-    else {
-        return;
-    };
-    let adapter_limits = ctx.limits.clone();
-    let limits = wgpu::Limits::default().using_resolution(adapter_limits);
+/// A device on the test adapter with the WebGPU default limits (the adapter's texture and
+/// buffer sizes) as `adjust` changes them; `None` (test skipped) only without `REQUIRE_GPU=1`.
+fn device_with(
+    adjust: impl Fn(wgpu::Limits) -> wgpu::Limits,
+) -> Option<(wgpu::Device, wgpu::Queue)> {
+    let ctx = mdsurf::gpu::GpuContext::headless_or_skip().expect("REQUIRE_GPU=1 but no adapter")?;
+    let limits = adjust(wgpu::Limits::default().using_resolution(ctx.limits.clone()));
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let adapter =
         pollster::block_on(instance.request_adapter(&Default::default())).expect("adapter");
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+    let device = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         required_limits: limits,
         ..Default::default()
-    }))
-    .expect("device with default limits");
+    }));
+    Some(device.expect("device with the asked-for limits"))
+}
+
+#[test]
+fn runs_on_a_device_with_webgpu_default_limits() {
+    // The viewer shares eframe's device, which may have only the WebGPU default limits
+    // (8 storage buffers per stage, 128 MiB bindings): every pipeline must still build.
+    let Some((device, queue)) = device_with(|limits| limits) else {
+        return;
+    };
     let mut engine = GpuEngine::try_from_device(device, queue).expect("engine on default limits");
     compare(
         &mut engine,
@@ -275,24 +280,12 @@ fn runs_on_a_device_with_webgpu_default_limits() {
 /// widest layout fits (the test above runs frames there).
 #[test]
 fn a_device_with_too_few_storage_buffers_is_refused_in_plain_words() {
-    let Some(ctx) =
-        mdsurf::gpu::GpuContext::headless_or_skip().expect("REQUIRE_GPU=1 but no adapter")
-    else {
+    let Some((device, queue)) = device_with(|limits| wgpu::Limits {
+        max_storage_buffers_per_shader_stage: 3,
+        ..limits
+    }) else {
         return;
     };
-    let limits = wgpu::Limits {
-        max_storage_buffers_per_shader_stage: 3,
-        ..wgpu::Limits::default().using_resolution(ctx.limits.clone())
-    };
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter =
-        pollster::block_on(instance.request_adapter(&Default::default())).expect("adapter");
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_limits: limits,
-        ..Default::default()
-    }))
-    .expect("device with 3 storage buffers per stage");
     let err = GpuEngine::try_from_device(device, queue).expect_err("3 storage buffers are too few");
     let text = err.to_string();
     assert!(
