@@ -12,6 +12,7 @@ use std::time::Instant;
 use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 use mdsurf::export::write_atomic;
+use mdsurf::measure;
 use mdsurf::model::Particles;
 use mdsurf::surface::{CpuEngine, RadiusSet, StageTimings, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
@@ -63,6 +64,9 @@ pub struct BenchResult {
     pub stages: StageTimings,
     /// Median wall time of `compute` (all stages plus any readback), ms.
     pub compute_wall_ms: f64,
+    /// Median time of the area per atom and per residue on the frame's mesh (`--per-residue`),
+    /// ms; not part of `compute_wall_ms`.
+    pub per_residue_ms: Option<f64>,
     /// Frames per second including reading.
     pub fps: f64,
     /// GPU memory held by the engine's buffers in bytes (GPU engine only).
@@ -109,6 +113,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         }
     }
     let cases = build_cases(&args, params)?;
+    let beads = |case: &Case| matches!(&case.source, Source::Real(sys) if sys.particles.is_beads());
+    if args.per_residue && cases.iter().any(beads) {
+        bail!("--per-residue measures atoms, and these particles are coarse-grained beads");
+    }
     let mut results = Vec::new();
     let mut refine_notes = Vec::new();
     for case in cases {
@@ -145,6 +153,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 results.push(r);
                 results.push(base);
                 continue;
+            }
+            if let Some(ms) = r.per_residue_ms {
+                refine_notes.push(format!(
+                    "{label} on {name}: per-residue areas cost {ms:.2} ms per frame, {:.0} % of \
+                     the frame's compute ({:.2} ms)",
+                    100.0 * ms / r.compute_wall_ms.max(1e-9),
+                    r.compute_wall_ms
+                ));
             }
             let sparse_ms = dense_too.then_some(r.compute_wall_ms);
             results.push(r);
@@ -320,6 +336,7 @@ fn time_case(
 ) -> Result<BenchResult> {
     let mut positions: Vec<Vec3> = Vec::new();
     let (mut reads, mut walls, mut computes) = (Vec::new(), Vec::new(), Vec::new());
+    let mut per_residue = Vec::new();
     let mut stages: Vec<StageTimings> = Vec::new();
     // Only the last frame's grid and triangle count are kept: holding its mesh while the next
     // frame computes would double the peak memory that the table reports.
@@ -348,7 +365,7 @@ fn time_case(
             Source::Real(sys) if !gpu_exposure => sys.particles.frame_radii(&positions),
             _ => None,
         };
-        let atoms = match source {
+        let atoms = match &*source {
             Source::Real(sys) => {
                 let mut set = sys.particles.atom_set(&positions);
                 if let Some(r) = &frame_radii {
@@ -372,6 +389,21 @@ fn time_case(
         }
         let output = engine.engine().compute(&atoms, params)?;
         let compute_ms = ms_since(t1);
+        let wall_ms = ms_since(t0);
+        // What `surface --per-residue` adds to the frame (file cases; synthetic ones have no
+        // residues).
+        let per_residue_ms = match &*source {
+            Source::Real(sys) if args.per_residue => {
+                let t2 = Instant::now();
+                let effective = engine.engine().vertices().effective(params);
+                let areas = measure::atom_areas_of(&output, &atoms, &effective)?;
+                let topology = sys.trajectory.topology();
+                let residues = measure::residue_areas(topology, sys.particles.subset(), &areas)?;
+                std::hint::black_box(residues);
+                Some(ms_since(t2))
+            }
+            _ => None,
+        };
         (last_dims, last_triangles) = (output.grid.dims, output.triangle_count());
         if i == 0 {
             objects_after_first = gpu_objects(engine);
@@ -379,7 +411,8 @@ fn time_case(
         if i >= args.warmup as usize {
             reads.push(read_ms);
             computes.push(compute_ms);
-            walls.push(ms_since(t0));
+            per_residue.extend(per_residue_ms);
+            walls.push(wall_ms);
             stages.push(output.timings);
         }
     }
@@ -402,6 +435,7 @@ fn time_case(
             mc_ms: med(&|s| s.mc_ms),
         },
         compute_wall_ms: median(computes),
+        per_residue_ms: (!per_residue.is_empty()).then(|| median(per_residue)),
         fps: 1e3 / wall.max(1e-9),
         peak_rss: peak_rss_bytes(),
         bricks: match engine {

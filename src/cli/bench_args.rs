@@ -59,6 +59,11 @@ pub struct BenchArgs {
     /// Compute surfaces without per-atom colours (the paper timed with colours).
     #[arg(long)]
     pub no_color: bool,
+    /// Also time what `surface --per-residue` adds to each frame (area per atom, then per
+    /// residue, on the frame's mesh; the file's case, not synthetic ones): the `per_residue_ms` column
+    /// and a line with its share of the frame's compute.
+    #[arg(long)]
+    pub per_residue: bool,
     /// Also write the table as CSV.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,

@@ -2,13 +2,15 @@
 //! frames per second and peak memory, as aligned text for the terminal and as CSV.
 //! `exposure_ms` is the GPU's pass of the SES preset's exposure radii (`--preset ses`,
 //! [`mdsurf::gpu::exposure`]); the CPU engine's counts are host work before it, in no column.
+//! `per_residue_ms` (`--per-residue`) is the median time of the area per atom and per residue
+//! on the frame's mesh, after `compute_ms` and not in it.
 //! `bricks_active_%` is "-" on the GPU engine: it marches every brick some atom reaches
 //! (`bricks_occupied_%`) and does not count the bricks the surface crosses.
 
 use super::bench::BenchResult;
 
 /// Column headers, in order (text and CSV share them).
-pub const COLUMNS: [&str; 19] = [
+pub const COLUMNS: [&str; 20] = [
     "case",
     "backend",
     "atoms",
@@ -22,6 +24,7 @@ pub const COLUMNS: [&str; 19] = [
     "density_ms",
     "mc_ms",
     "compute_ms",
+    "per_residue_ms",
     "frames_per_s",
     "peak_rss_MB",
     "gpu_MB",
@@ -57,6 +60,9 @@ impl Table {
                     format!("{:.2}", s.density_ms),
                     format!("{:.2}", s.mc_ms),
                     format!("{:.2}", r.compute_wall_ms),
+                    r.per_residue_ms
+                        .map(|ms| format!("{ms:.2}"))
+                        .unwrap_or_else(|| "-".into()),
                     format!("{:.2}", r.fps),
                     r.peak_rss
                         .map(|b| format!("{:.0}", b as f64 / 1e6))

@@ -1,10 +1,12 @@
 //! Area per atom: each triangle's area goes one third to each vertex, each vertex's share to the
 //! atoms in proportion to their Gaussians there (see [`super`] for the rule).
 
+use glam::Vec3;
 use rayon::prelude::*;
 
 use super::MeasureError;
 use super::cells::{Batch, CellList, nearest};
+use crate::model::cells::sort_by_cell;
 use crate::surface::{AtomSet, Mesh, SurfaceOutput, SurfaceParams};
 
 /// Area in Å² of each triangle-vertex share: `vertex_areas[v]` is a third of the area of every
@@ -18,16 +20,107 @@ pub fn vertex_areas(mesh: &Mesh) -> Result<Vec<f64>, MeasureError> {
             len: n,
         });
     }
+    // Each triangle's third in parallel, then added to its vertices in triangle order (the
+    // sums do not depend on the thread count).
+    let thirds: Vec<f64> = mesh
+        .indices
+        .par_chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+            0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length() / 3.0
+        })
+        .collect();
     let mut shares = vec![0.0f64; n];
-    for t in mesh.indices.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
-        let third = 0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length() / 3.0;
+    for (t, third) in mesh.indices.chunks_exact(3).zip(thirds) {
         for &i in t {
             shares[i as usize] += third;
         }
     }
     Ok(shares)
 }
+
+/// The smallest box (Å, lower and upper corner) holding `points` (not empty).
+fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+    points.fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    )
+}
+
+/// The vertices of one cell of [`atom_areas`]: indices into `mesh`, with their area shares.
+struct CellVertices<'a> {
+    order: &'a [u32],
+    mesh: &'a Mesh,
+    shares: &'a [f64],
+}
+
+/// Appends to `out` the (atom, area) pairs of the vertices of one cell: each vertex's share
+/// split in proportion to the Gaussians reaching it (the nearest atom's when none does).
+fn weigh_cell(
+    cells: &CellList,
+    group: &CellVertices<'_>,
+    atoms: &AtomSet<'_>,
+    batch: &mut Batch,
+    here: &mut Vec<(u32, f32)>,
+    out: &mut Vec<(u32, f64)>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        unsafe { weigh_cell_avx2(cells, group, atoms, batch, here, out) };
+        return;
+    }
+    weigh_cell_body(cells, group, atoms, batch, here, out);
+}
+
+/// [`weigh_cell`] compiled for AVX2 (8-wide distance tests); the same operations in the same
+/// order (Rust never fuses a multiply and an add), so the same bits as the portable build.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn weigh_cell_avx2(
+    cells: &CellList,
+    group: &CellVertices<'_>,
+    atoms: &AtomSet<'_>,
+    batch: &mut Batch,
+    here: &mut Vec<(u32, f32)>,
+    out: &mut Vec<(u32, f64)>,
+) {
+    weigh_cell_body(cells, group, atoms, batch, here, out);
+}
+
+/// The body of [`weigh_cell`], inlined into each instruction-set variant.
+#[inline(always)]
+fn weigh_cell_body(
+    cells: &CellList,
+    group: &CellVertices<'_>,
+    atoms: &AtomSet<'_>,
+    batch: &mut Batch,
+    here: &mut Vec<(u32, f32)>,
+    out: &mut Vec<(u32, f64)>,
+) {
+    let position = |v: u32| group.mesh.positions[v as usize];
+    let (lo, hi) = bounds(group.order.iter().map(|&v| position(v)));
+    cells.gather(lo, hi, batch);
+    for &v in group.order {
+        let (p, share) = (position(v), group.shares[v as usize]);
+        here.clear();
+        let mut total = 0.0f64;
+        batch.for_each_gaussian(p, |atom, w| {
+            here.push((atom, w));
+            total += f64::from(w);
+        });
+        if total > 0.0 {
+            let scale = share / total;
+            out.extend(here.iter().map(|&(a, w)| (a, f64::from(w) * scale)));
+        } else {
+            out.push((nearest(atoms.positions, p), share));
+        }
+    }
+}
+
+/// Cells of vertices handed to one task of [`atom_areas`]: a fixed number, so that the order
+/// of the per-atom sums, and so the result, does not depend on the thread count.
+const CELLS_PER_TASK: usize = 64;
 
 /// Area in Å² of `mesh` that belongs to each atom of `atoms` (one entry per atom, f64), by the
 /// rule of [`super`]: `params` must be the ones the surface was computed with (with refined
@@ -44,47 +137,44 @@ pub fn atom_areas(
     atoms.validate()?;
     let shares = vertex_areas(mesh)?;
     let cells = CellList::new(atoms, params);
-    // Vertices grouped by cell (in cell order, then vertex order), so that each group gathers
-    // its candidate atoms once; per group the (atom, area) pairs, summed in group order at the
-    // end, so the result does not depend on the thread count.
-    let keys: Vec<u32> = mesh
+    // Vertices with a share sorted by cell (ascending within a cell), so that each cell
+    // gathers its candidate atoms once; the vertices off the cells' grid (no atom reaches
+    // them) come last, in vertex order.
+    let keys: Vec<usize> = mesh
         .positions
         .par_iter()
-        .map(|p| cells.key(*p).unwrap_or(u32::MAX))
+        .zip(&shares)
+        .map(|(p, &share)| match cells.key(*p) {
+            Some(key) if share != 0.0 => key as usize,
+            _ => usize::MAX,
+        })
         .collect();
-    let mut order: Vec<u32> = (0..mesh.positions.len() as u32)
-        .filter(|&v| shares[v as usize] != 0.0)
+    let (starts, order) = sort_by_cell(&keys, cells.len());
+    let occupied: Vec<u32> = (0..cells.len() as u32)
+        .filter(|&c| starts[c as usize] < starts[c as usize + 1])
         .collect();
-    order.par_sort_unstable_by_key(|&v| (keys[v as usize], v));
-    let groups: Vec<&[u32]> = order
-        .chunk_by(|&a, &b| keys[a as usize] == keys[b as usize])
+    let off_grid: Vec<u32> = (0..keys.len() as u32)
+        .filter(|&v| keys[v as usize] == usize::MAX && shares[v as usize] != 0.0)
         .collect();
-    let pairs: Vec<Vec<(u32, f64)>> = groups
-        .par_iter()
+    // Per task the (atom, area) pairs of its vertices, summed in task order at the end.
+    let pairs: Vec<Vec<(u32, f64)>> = occupied
+        .par_chunks(CELLS_PER_TASK)
         .map_init(
             || (Batch::default(), Vec::<(u32, f32)>::with_capacity(32)),
-            |(batch, here), group| {
-                let mut out = Vec::with_capacity(group.len() * 8);
-                let key = keys[group[0] as usize];
-                if key != u32::MAX {
-                    cells.gather(key, batch);
-                }
-                for &v in *group {
-                    let (p, share) = (mesh.positions[v as usize], shares[v as usize]);
-                    here.clear();
-                    let mut total = 0.0f64;
-                    if key != u32::MAX {
-                        batch.for_each_gaussian(p, |atom, w| {
-                            here.push((atom, w));
-                            total += f64::from(w);
-                        });
-                    }
-                    if total > 0.0 {
-                        let scale = share / total;
-                        out.extend(here.iter().map(|&(a, w)| (a, f64::from(w) * scale)));
-                    } else {
-                        out.push((nearest(atoms.positions, p), share));
-                    }
+            |(batch, here), task| {
+                let vertices: u32 = task
+                    .iter()
+                    .map(|&c| starts[c as usize + 1] - starts[c as usize])
+                    .sum();
+                let mut out = Vec::with_capacity(vertices as usize * 8);
+                for &cell in task {
+                    let (s, e) = (starts[cell as usize], starts[cell as usize + 1]);
+                    let group = CellVertices {
+                        order: &order[s as usize..e as usize],
+                        mesh,
+                        shares: &shares,
+                    };
+                    weigh_cell(&cells, &group, atoms, batch, here, &mut out);
                 }
                 out
             },
@@ -93,6 +183,10 @@ pub fn atom_areas(
     let mut areas = vec![0.0f64; atoms.len()];
     for (atom, area) in pairs.iter().flatten() {
         areas[*atom as usize] += area;
+    }
+    for v in off_grid {
+        let p = mesh.positions[v as usize];
+        areas[nearest(atoms.positions, p) as usize] += shares[v as usize];
     }
     Ok(areas)
 }

@@ -1,34 +1,40 @@
 //! A cell list over atoms for the per-vertex question of [`super`]: which atoms' Gaussians
 //! reach a point, and with what weight (binned by the crate's counting sort,
-//! [`crate::model::cells::sort_by_cell`]; the atoms' Gaussian terms kept beside them). Cells are half the longest cutoff wide and the grid
-//! reaches one cutoff beyond the atoms; atoms are stored sorted by cell, x fastest, coordinates
-//! in separate arrays, so the cells of a row along x are one contiguous run. Points are either
-//! asked about one at a time ([`CellList::for_each_gaussian`], rows beyond the cutoff skipped)
-//! or by cell: [`CellList::gather`] collects once the atoms that reach a cell's box and
-//! [`Batch::for_each_gaussian`] tests each point of the cell against them.
+//! [`crate::model::cells::sort_by_cell`]; the atoms' Gaussian terms kept beside them). Cells are
+//! half the longest cutoff long along x and one cutoff along y and z, and the grid reaches one
+//! cutoff beyond the atoms; atoms are stored sorted by cell, x fastest, so the cells of a row
+//! along x are one contiguous run (tall cells make fewer rows to visit per question). Points
+//! are either asked about one at a time ([`CellList::for_each_gaussian`], rows beyond the
+//! cutoff skipped) or in groups: points are grouped by cubes one cutoff wide
+//! ([`CellList::key`]), [`CellList::gather`] collects once the atoms that reach the box of a
+//! group's points and [`Batch::for_each_gaussian`] tests each point against them.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::model::cells::sort_by_cell;
 use crate::surface::{AtomSet, SurfaceParams};
 
-/// Atoms sorted into cubic cells.
+/// Atoms sorted into cells, and the cubic cells points are grouped by.
 pub(crate) struct CellList {
     origin: Vec3,
-    cell: f32,
+    /// Cell edges along x, y and z (Å).
+    cell: Vec3,
+    /// Edge (Å) of the cubic cells points are grouped by ([`CellList::key`]), from `origin`.
+    group: f32,
+    /// Group cells along each axis.
+    group_dims: [i64; 3],
     /// The longest cutoff `q alpha` in Å.
     reach: f32,
     dims: [i64; 3],
     /// Start of each cell's run in the sorted arrays (one more entry than cells).
     starts: Vec<u32>,
-    /// Sorted atoms: index into the atom set, coordinates, `1 / (2 alpha^2)`, squared cutoff
-    /// `(q alpha)^2`.
+    /// Sorted atoms: index into the atom set, and `1 / (2 alpha^2)` (Å⁻²).
     index: Vec<u32>,
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
     inv_two_alpha2: Vec<f32>,
-    cutoff2: Vec<f32>,
+    /// The sorted atoms' coordinates (Å) and squared cutoff `(q alpha)^2` (Å²) side by side,
+    /// `[x, y, z, cutoff2]`.
+    packed: Vec<[f32; 4]>,
 }
 
 impl CellList {
@@ -46,37 +52,54 @@ impl CellList {
         let reach = widest * q;
         let (lo, hi) = (lo - reach, hi + reach);
         let extent = (hi - lo).max(Vec3::splat(1e-3));
-        // Cells half as wide as the longest cutoff, and not many more cells than atoms.
-        let mut cell = (reach / 2.0).max(1e-3);
-        let count = |cell: f32| {
+        let count = |cell: Vec3| {
             let d = (extent / cell).floor() + 1.0;
             (d.x as f64) * (d.y as f64) * (d.z as f64)
         };
+        // Cells half the longest cutoff along x and one cutoff along y and z (fewer rows per
+        // gather), points grouped by cubes of one cutoff; not many more cells than atoms.
+        let mut cell = (reach * Vec3::new(0.5, 1.0, 1.0)).max(Vec3::splat(1e-3));
         while count(cell) > (8 * n + 512) as f64 {
             cell *= 1.25;
         }
+        let mut group = reach.max(1e-3);
+        while count(Vec3::splat(group)) > (8 * n + 512) as f64 {
+            group *= 1.25;
+        }
         let d = (extent / cell).floor() + 1.0;
         let dims = [d.x as i64, d.y as i64, d.z as i64];
+        let g = (extent / group).floor() + 1.0;
+        let group_dims = [g.x as i64, g.y as i64, g.z as i64];
         let cell_of = |p: Vec3| {
-            let c = ((p - lo) / cell).floor();
+            let c = (p - lo) / cell;
+            // Truncation, not the floor: equal after the clamp, and no call to `floorf` on
+            // targets without SSE4.1.
             let clamp = |v: f32, d: i64| (v as i64).clamp(0, d - 1);
             (clamp(c.x, dims[0]) + dims[0] * (clamp(c.y, dims[1]) + dims[1] * clamp(c.z, dims[2])))
                 as usize
         };
         let cells = (dims[0] * dims[1] * dims[2]) as usize;
-        let of: Vec<usize> = atoms.positions.iter().map(|p| cell_of(*p)).collect();
+        let of: Vec<usize> = atoms.positions.par_iter().map(|p| cell_of(*p)).collect();
         let (starts, index) = sort_by_cell(&of, cells);
-        let pick = |f: &dyn Fn(usize) -> f32| index.iter().map(|&i| f(i as usize)).collect();
+        let packed = index
+            .par_iter()
+            .map(|&i| {
+                let (p, a) = (atoms.positions[i as usize], alpha(i as usize));
+                [p.x, p.y, p.z, (q * a).powi(2)]
+            })
+            .collect();
         CellList {
+            group,
+            group_dims,
+            packed,
             origin: lo,
             cell,
             reach,
             dims,
-            x: pick(&|i| atoms.positions[i].x),
-            y: pick(&|i| atoms.positions[i].y),
-            z: pick(&|i| atoms.positions[i].z),
-            inv_two_alpha2: pick(&|i| 1.0 / (2.0 * alpha(i) * alpha(i))),
-            cutoff2: pick(&|i| (q * alpha(i)).powi(2)),
+            inv_two_alpha2: index
+                .par_iter()
+                .map(|&i| 1.0 / (2.0 * alpha(i as usize) * alpha(i as usize)))
+                .collect(),
             starts,
             index,
         }
@@ -97,8 +120,8 @@ impl CellList {
         }
         // Distance from `v` to the slab [start, start + cell) of cell `c` along axis `k`.
         let gap = |v: f32, k: usize, c: i64| {
-            let start = self.origin[k] + c as f32 * self.cell;
-            (start - v).max(v - start - self.cell).max(0.0)
+            let start = self.origin[k] + c as f32 * self.cell[k];
+            (start - v).max(v - start - self.cell[k]).max(0.0)
         };
         let reach2 = self.reach * self.reach;
         for z in zs..=ze {
@@ -127,13 +150,12 @@ impl CellList {
             let mut s = start;
             while s < end {
                 let n = BATCH.min(end - s);
-                let (x, y, z) = (&self.x[s..s + n], &self.y[s..s + n], &self.z[s..s + n]);
-                for k in 0..n {
-                    d2[k] = (x[k] - p.x).powi(2) + (y[k] - p.y).powi(2) + (z[k] - p.z).powi(2);
+                let atoms = &self.packed[s..s + n];
+                for (d2, [x, y, z, _]) in d2.iter_mut().zip(atoms) {
+                    *d2 = (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2);
                 }
-                let cut = &self.cutoff2[s..s + n];
                 for k in 0..n {
-                    if d2[k] < cut[k] {
+                    if d2[k] < atoms[k][3] {
                         visit(
                             self.index[s + k],
                             (-d2[k] * self.inv_two_alpha2[s + k]).exp(),
@@ -147,63 +169,96 @@ impl CellList {
 }
 
 impl CellList {
+    /// Number of cells (keys run from 0 to this, exclusive).
+    pub(crate) fn len(&self) -> usize {
+        (self.group_dims[0] * self.group_dims[1] * self.group_dims[2]) as usize
+    }
+
     /// The cell holding `p`, or `None` when `p` is off the grid (no atom reaches it).
     pub(crate) fn key(&self, p: Vec3) -> Option<u32> {
-        let c = ((p - self.origin) / self.cell).floor();
+        let c = (p - self.origin) / self.group;
         let c = [c.x, c.y, c.z];
-        if (0..3).any(|k| !(c[k] >= 0.0 && (c[k] as i64) < self.dims[k])) {
+        let dims = self.group_dims;
+        // Truncation is the floor on the non-negative values kept (and needs no call to
+        // `floorf` on targets without SSE4.1).
+        if (0..3).any(|k| !(c[k] >= 0.0 && (c[k] as i64) < dims[k])) {
             return None;
         }
         let [x, y, z] = c.map(|v| v as i64);
-        Some((x + self.dims[0] * (y + self.dims[1] * z)) as u32)
+        Some((x + dims[0] * (y + dims[1] * z)) as u32)
     }
 
-    /// Fills `out` with the atoms whose cutoff sphere reaches cell `key`'s box (a key from
-    /// [`CellList::key`]), for the points of that cell.
-    pub(crate) fn gather(&self, key: u32, out: &mut Batch) {
-        out.clear();
-        let key = key as i64;
-        let c = [
-            key % self.dims[0],
-            (key / self.dims[0]) % self.dims[1],
-            key / (self.dims[0] * self.dims[1]),
-        ];
-        let box_lo = self.origin + self.cell * Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
-        let box_hi = box_lo + self.cell;
-        let k = (self.reach / self.cell).ceil() as i64;
-        let range = |a: usize| ((c[a] - k).max(0), (c[a] + k).min(self.dims[a] - 1));
-        let ((xs, xe), (ys, ye), (zs, ze)) = (range(0), range(1), range(2));
-        let gap = |d: i64| ((d.abs() - 1).max(0) as f32) * self.cell;
+    /// Fills `out` with the atoms whose cutoff sphere reaches the box `lo..hi` (Å; the bounds
+    /// of the points asked about next, for example the vertices of one cell), in sorted order.
+    #[inline(always)]
+    pub(crate) fn gather(&self, lo: Vec3, hi: Vec3, out: &mut Batch) {
+        // The cells from `lo - reach` to `hi + reach` along `axis` (truncation is the floor
+        // on the values clamped at 0).
+        let cell_of = |v: f32, axis: usize| {
+            (((v - self.origin[axis]) / self.cell[axis]).max(0.0) as i64).min(self.dims[axis] - 1)
+        };
+        let span = |axis: usize| {
+            (
+                cell_of(lo[axis] - self.reach, axis),
+                cell_of(hi[axis] + self.reach, axis),
+            )
+        };
+        let ((ys, ye), (zs, ze)) = (span(1), span(2));
+        // Distance (Å) along `axis` from the box to cell `c`'s slab.
+        let gap = |c: i64, axis: usize| {
+            let start = self.origin[axis] + c as f32 * self.cell[axis];
+            (start - hi[axis])
+                .max(lo[axis] - start - self.cell[axis])
+                .max(0.0)
+        };
         let reach2 = self.reach * self.reach;
+        // First the sorted positions of the atoms that reach the box: every atom of a row is
+        // written and the count advances past those that reach (no branch per atom).
+        let mut n = 0;
         for z in zs..=ze {
+            let gz2 = gap(z, 2).powi(2);
             for y in ys..=ye {
-                if gap(y - c[1]).powi(2) + gap(z - c[2]).powi(2) >= reach2 {
+                let left2 = reach2 - gap(y, 1).powi(2) - gz2;
+                if left2 <= 0.0 {
                     continue;
                 }
+                // The cells of this row that the longest cutoff still reaches along x.
+                let left = left2.sqrt();
+                let (xs, xe) = (cell_of(lo.x - left, 0), cell_of(hi.x + left, 0));
                 let row = self.dims[0] * (y + self.dims[1] * z);
                 let start = self.starts[(row + xs) as usize] as usize;
                 let end = self.starts[(row + xe + 1) as usize] as usize;
-                for s in start..end {
-                    let a = Vec3::new(self.x[s], self.y[s], self.z[s]);
-                    let d = (box_lo - a).max(a - box_hi).max(Vec3::ZERO);
-                    if d.length_squared() < self.cutoff2[s] {
-                        out.index.push(self.index[s]);
-                        out.x.push(a.x);
-                        out.y.push(a.y);
-                        out.z.push(a.z);
-                        out.inv_two_alpha2.push(self.inv_two_alpha2[s]);
-                        out.cutoff2.push(self.cutoff2[s]);
-                    }
+                out.grow(n + end - start);
+                for (s, a) in self.packed[start..end].iter().enumerate() {
+                    let [x, y, z, cut2] = *a;
+                    let dx = (lo.x - x).max(x - hi.x).max(0.0);
+                    let dy = (lo.y - y).max(y - hi.y).max(0.0);
+                    let dz = (lo.z - z).max(z - hi.z).max(0.0);
+                    out.hits[n] = (start + s) as u32;
+                    n += usize::from(dx * dx + dy * dy + dz * dz < cut2);
                 }
             }
         }
-        out.d2.resize(out.index.len(), 0.0);
+        // Then their values, in that order.
+        out.len = n;
+        for k in 0..n {
+            let s = out.hits[k] as usize;
+            let [x, y, z, cut2] = self.packed[s];
+            out.index[k] = self.index[s];
+            out.x[k] = x;
+            out.y[k] = y;
+            out.z[k] = z;
+            out.cutoff2[k] = cut2;
+            out.inv_two_alpha2[k] = self.inv_two_alpha2[s];
+        }
     }
 }
 
-/// The atoms that may reach the points of one cell ([`CellList::gather`]), in separate arrays.
+/// The atoms that may reach the points of one cell ([`CellList::gather`]), in separate arrays:
+/// the first `len` entries of each; the arrays only grow, and are scratch past `len`.
 #[derive(Default)]
 pub(crate) struct Batch {
+    len: usize,
     index: Vec<u32>,
     x: Vec<f32>,
     y: Vec<f32>,
@@ -211,38 +266,49 @@ pub(crate) struct Batch {
     inv_two_alpha2: Vec<f32>,
     cutoff2: Vec<f32>,
     d2: Vec<f32>,
+    /// Positions in the arrays above of the atoms that reach the current point.
+    hits: Vec<u32>,
 }
 
 impl Batch {
-    fn clear(&mut self) {
+    /// Makes every array at least `room` long.
+    fn grow(&mut self, room: usize) {
+        if self.index.len() >= room {
+            return;
+        }
         for v in [
             &mut self.x,
             &mut self.y,
             &mut self.z,
             &mut self.inv_two_alpha2,
             &mut self.cutoff2,
+            &mut self.d2,
         ] {
-            v.clear();
+            v.resize(room, 0.0);
         }
-        self.index.clear();
+        self.index.resize(room, 0);
+        self.hits.resize(room, 0);
     }
 
     /// Calls `visit(atom, weight)` for every gathered atom whose Gaussian reaches `p` (a point
     /// of the gathered cell), with the Gaussian's value there. The distances are computed in
-    /// one loop the compiler vectorises, then filtered.
+    /// one loop the compiler vectorises, the reaching atoms picked without a branch per atom.
+    #[inline(always)]
     pub(crate) fn for_each_gaussian(&mut self, p: Vec3, mut visit: impl FnMut(u32, f32)) {
-        let n = self.index.len();
+        let n = self.len;
         let (x, y, z, d2) = (&self.x[..n], &self.y[..n], &self.z[..n], &mut self.d2[..n]);
         for k in 0..n {
             d2[k] = (x[k] - p.x).powi(2) + (y[k] - p.y).powi(2) + (z[k] - p.z).powi(2);
         }
-        let hits = d2
-            .iter()
-            .zip(&self.cutoff2[..n])
-            .enumerate()
-            .filter(|(_, (d, c))| d < c);
-        for (k, (&d, _)) in hits {
-            visit(self.index[k], (-d * self.inv_two_alpha2[k]).exp());
+        let (cut, hits) = (&self.cutoff2[..n], &mut self.hits[..n]);
+        let mut m = 0;
+        for k in 0..n {
+            hits[m] = k as u32;
+            m += usize::from(d2[k] < cut[k]);
+        }
+        for &k in &hits[..m] {
+            let k = k as usize;
+            visit(self.index[k], (-d2[k] * self.inv_two_alpha2[k]).exp());
         }
     }
 }

@@ -104,16 +104,25 @@ pub fn residue_areas(
     atom_areas: &[f64],
 ) -> Result<Vec<ResidueArea>, MeasureError> {
     let indices = topology_atoms(topology, atom_indices, atom_areas.len(), "atom areas")?;
-    let mut by_residue: BTreeMap<u32, ResidueArea> = BTreeMap::new();
+    // Each residue's place in `found` (u32::MAX until one of its atoms is seen), then the
+    // residues sorted into topology order (stable: they usually come in order already).
+    let mut slot = vec![u32::MAX; topology.residue_count()];
+    let mut found: Vec<ResidueArea> = Vec::new();
     for (&atom, &area) in indices.iter().zip(atom_areas) {
         let atom = atom as usize;
-        let r = by_residue
-            .entry(topology.residue_index[atom])
-            .or_insert_with(|| describe(topology, atom));
+        let residue = topology.residue_index[atom] as usize;
+        if slot[residue] == u32::MAX {
+            slot[residue] = found.len() as u32;
+            found.push(describe(topology, atom));
+        }
+        let r = &mut found[slot[residue] as usize];
         r.atoms += 1;
         r.area += area;
     }
-    Ok(by_residue.into_values().collect())
+    if !found.is_sorted_by_key(|r| r.residue) {
+        found.sort_by_key(|r| r.residue);
+    }
+    Ok(found)
 }
 
 /// The largest area (Å²) a residue of each name has alone, the denominator of exposure.

@@ -87,6 +87,66 @@ fn bench_on_a_given_file_and_a_synthetic_system() {
 }
 
 #[test]
+fn bench_times_per_residue_areas_on_the_file_case_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pdb, dcd) = (data("adk_open.pdb"), data("adk_dims.dcd"));
+    let mut args = vec![
+        "bench",
+        &*pdb,
+        &*dcd,
+        "--synthetic",
+        "12k",
+        "--backend",
+        "cpu",
+        "--repeats",
+        "2",
+        "--spacing",
+        "2",
+        "--per-residue",
+        "--csv",
+        "b.csv",
+    ];
+    let run = mdsurf(dir.path(), &args);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let csv = Csv::read(&dir.path().join("b.csv"));
+    let k = csv
+        .columns
+        .iter()
+        .position(|c| c == "per_residue_ms")
+        .unwrap();
+    let ms: f64 = csv.rows[0][k].parse().unwrap();
+    assert!(ms > 0.0, "{:?}", csv.rows[0]);
+    // A synthetic system has no residues: not timed.
+    assert_eq!(csv.rows[1][k], "-");
+    let line = run
+        .stdout
+        .lines()
+        .find(|l| l.contains("per-residue areas cost"))
+        .unwrap_or_else(|| panic!("no per-residue line: {}", run.stdout));
+    assert!(line.starts_with("adk_dims.dcd on cpu"), "{line}");
+    assert!(line.contains("% of the frame's compute"), "{line}");
+
+    // Without the flag the column is there and empty; beads are refused in one line.
+    args.retain(|a| *a != "--per-residue");
+    let csv = bench_csv(dir.path(), &args[1..args.len() - 2]);
+    assert_eq!(csv.rows[0][k], "-");
+    let run = mdsurf(
+        dir.path(),
+        &[
+            "bench",
+            &*pdb,
+            "--backend",
+            "cpu",
+            "--beads",
+            "--per-residue",
+        ],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(run.stderr.contains("beads"), "{}", run.stderr);
+    assert_eq!(run.stderr.trim().lines().count(), 1, "{}", run.stderr);
+}
+
+#[test]
 fn bench_rejects_bad_counts_with_one_line() {
     let dir = tempfile::tempdir().unwrap();
     for bad in ["0", "lots", "-5"] {

@@ -111,6 +111,24 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     assert!(close(total, out.area, 1e-9));
     assert_eq!(residues[0].label(), "A:PRO1");
     assert_eq!(residues[99].label(), "B:PRO1");
+    // Atoms given in any order give the same residues, in topology order.
+    let (rev_idx, rev_areas): (Vec<u32>, Vec<f64>) =
+        idx.iter().zip(&areas).rev().map(|(&i, &a)| (i, a)).unzip();
+    let reversed = residue_areas(&top, Some(&rev_idx), &rev_areas).expect("residues");
+    assert_eq!(reversed.len(), residues.len());
+    for (r, s) in reversed.iter().zip(&residues) {
+        assert_eq!(
+            (r.residue, r.atoms, r.label()),
+            (s.residue, s.atoms, s.label())
+        );
+        assert!(
+            close(r.area, s.area, 1e-12),
+            "{} {} {}",
+            r.label(),
+            r.area,
+            s.area
+        );
+    }
     // Wrong lengths and indices are errors, not panics.
     assert!(residue_areas(&top, Some(&idx), &areas[1..]).is_err());
     assert!(residue_areas(&top, Some(&[u32::MAX]), &[1.0]).is_err());
