@@ -47,62 +47,53 @@ fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
     )
 }
 
-/// The vertices of one cell of [`atom_areas`]: indices into `mesh`, with their area shares.
-struct CellVertices<'a> {
+/// The vertices of one cell of [`atom_areas`] (indices into `mesh`, with their area shares),
+/// and the atoms and cell list they are weighed against.
+struct CellWork<'a> {
     order: &'a [u32],
     mesh: &'a Mesh,
     shares: &'a [f64],
+    cells: &'a CellList,
+    atoms: &'a AtomSet<'a>,
+}
+
+/// What [`weigh_cell`] reuses from cell to cell: the gathered atoms, and one vertex's
+/// (atom, Gaussian) pairs.
+#[derive(Default)]
+struct Scratch {
+    batch: Batch,
+    here: Vec<(u32, f32)>,
 }
 
 /// Appends to `out` the (atom, area) pairs of the vertices of one cell: each vertex's share
 /// split in proportion to the Gaussians reaching it (the nearest atom's when none does).
-fn weigh_cell(
-    cells: &CellList,
-    group: &CellVertices<'_>,
-    atoms: &AtomSet<'_>,
-    batch: &mut Batch,
-    here: &mut Vec<(u32, f32)>,
-    out: &mut Vec<(u32, f64)>,
-) {
+fn weigh_cell(work: &CellWork<'_>, scratch: &mut Scratch, out: &mut Vec<(u32, f64)>) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        unsafe { weigh_cell_avx2(cells, group, atoms, batch, here, out) };
+        unsafe { weigh_cell_avx2(work, scratch, out) };
         return;
     }
-    weigh_cell_body(cells, group, atoms, batch, here, out);
+    weigh_cell_body(work, scratch, out);
 }
 
 /// [`weigh_cell`] compiled for AVX2 (8-wide distance tests); the same operations in the same
 /// order (Rust never fuses a multiply and an add), so the same bits as the portable build.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn weigh_cell_avx2(
-    cells: &CellList,
-    group: &CellVertices<'_>,
-    atoms: &AtomSet<'_>,
-    batch: &mut Batch,
-    here: &mut Vec<(u32, f32)>,
-    out: &mut Vec<(u32, f64)>,
-) {
-    weigh_cell_body(cells, group, atoms, batch, here, out);
+fn weigh_cell_avx2(work: &CellWork<'_>, scratch: &mut Scratch, out: &mut Vec<(u32, f64)>) {
+    weigh_cell_body(work, scratch, out);
 }
 
 /// The body of [`weigh_cell`], inlined into each instruction-set variant.
 #[inline(always)]
-fn weigh_cell_body(
-    cells: &CellList,
-    group: &CellVertices<'_>,
-    atoms: &AtomSet<'_>,
-    batch: &mut Batch,
-    here: &mut Vec<(u32, f32)>,
-    out: &mut Vec<(u32, f64)>,
-) {
-    let position = |v: u32| group.mesh.positions[v as usize];
-    let (lo, hi) = bounds(group.order.iter().map(|&v| position(v)));
-    cells.gather(lo, hi, batch);
-    for &v in group.order {
-        let (p, share) = (position(v), group.shares[v as usize]);
+fn weigh_cell_body(work: &CellWork<'_>, scratch: &mut Scratch, out: &mut Vec<(u32, f64)>) {
+    let Scratch { batch, here } = scratch;
+    let position = |v: u32| work.mesh.positions[v as usize];
+    let (lo, hi) = bounds(work.order.iter().map(|&v| position(v)));
+    work.cells.gather(lo, hi, batch);
+    for &v in work.order {
+        let (p, share) = (position(v), work.shares[v as usize]);
         here.clear();
         let mut total = 0.0f64;
         batch.for_each_gaussian(p, |atom, w| {
@@ -113,7 +104,7 @@ fn weigh_cell_body(
             let scale = share / total;
             out.extend(here.iter().map(|&(a, w)| (a, f64::from(w) * scale)));
         } else {
-            out.push((nearest(atoms.positions, p), share));
+            out.push((nearest(work.atoms.positions, p), share));
         }
     }
 }
@@ -159,26 +150,25 @@ pub fn atom_areas(
     // Per task the (atom, area) pairs of its vertices, summed in task order at the end.
     let pairs: Vec<Vec<(u32, f64)>> = occupied
         .par_chunks(CELLS_PER_TASK)
-        .map_init(
-            || (Batch::default(), Vec::<(u32, f32)>::with_capacity(32)),
-            |(batch, here), task| {
-                let vertices: u32 = task
-                    .iter()
-                    .map(|&c| starts[c as usize + 1] - starts[c as usize])
-                    .sum();
-                let mut out = Vec::with_capacity(vertices as usize * 8);
-                for &cell in task {
-                    let (s, e) = (starts[cell as usize], starts[cell as usize + 1]);
-                    let group = CellVertices {
-                        order: &order[s as usize..e as usize],
-                        mesh,
-                        shares: &shares,
-                    };
-                    weigh_cell(&cells, &group, atoms, batch, here, &mut out);
-                }
-                out
-            },
-        )
+        .map_init(Scratch::default, |scratch, task| {
+            let vertices: u32 = task
+                .iter()
+                .map(|&c| starts[c as usize + 1] - starts[c as usize])
+                .sum();
+            let mut out = Vec::with_capacity(vertices as usize * 8);
+            for &cell in task {
+                let (s, e) = (starts[cell as usize], starts[cell as usize + 1]);
+                let work = CellWork {
+                    order: &order[s as usize..e as usize],
+                    mesh,
+                    shares: &shares,
+                    cells: &cells,
+                    atoms,
+                };
+                weigh_cell(&work, scratch, &mut out);
+            }
+            out
+        })
         .collect();
     let mut areas = vec![0.0f64; atoms.len()];
     for (atom, area) in pairs.iter().flatten() {

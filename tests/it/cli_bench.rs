@@ -59,13 +59,12 @@ fn bench_on_the_demo_reports_stage_medians() {
     assert!(csv.col("triangles")[0] > 10_000.0);
 }
 
-#[test]
-fn bench_on_a_given_file_and_a_synthetic_system() {
-    let dir = tempfile::tempdir().unwrap();
-    let (pdb, dcd) = (data("adk_open.pdb"), data("adk_dims.dcd"));
-    let args = [
-        &*pdb,
-        &dcd,
+/// `bench` on adk (`pdb`, `dcd`) and a synthetic system of 12,000 atoms tiled from it, on the
+/// CPU engine, 2 repeats at H = 2 Å.
+fn adk_and_synthetic<'a>(pdb: &'a str, dcd: &'a str) -> Vec<&'a str> {
+    vec![
+        pdb,
+        dcd,
         "--synthetic",
         "12k",
         "--backend",
@@ -74,8 +73,14 @@ fn bench_on_a_given_file_and_a_synthetic_system() {
         "2",
         "--spacing",
         "2",
-    ];
-    let csv = bench_csv(dir.path(), &args);
+    ]
+}
+
+#[test]
+fn bench_on_a_given_file_and_a_synthetic_system() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pdb, dcd) = (data("adk_open.pdb"), data("adk_dims.dcd"));
+    let csv = bench_csv(dir.path(), &adk_and_synthetic(&pdb, &dcd));
     assert_eq!(csv.rows.len(), 2, "{:?}", csv.rows);
     assert_eq!(csv.rows[0][0], "adk_dims.dcd");
     assert!(csv.rows[1][0].starts_with("synthetic 12000"));
@@ -90,22 +95,9 @@ fn bench_on_a_given_file_and_a_synthetic_system() {
 fn bench_times_per_residue_areas_on_the_file_case_only() {
     let dir = tempfile::tempdir().unwrap();
     let (pdb, dcd) = (data("adk_open.pdb"), data("adk_dims.dcd"));
-    let mut args = vec![
-        "bench",
-        &*pdb,
-        &*dcd,
-        "--synthetic",
-        "12k",
-        "--backend",
-        "cpu",
-        "--repeats",
-        "2",
-        "--spacing",
-        "2",
-        "--per-residue",
-        "--csv",
-        "b.csv",
-    ];
+    let mut args = vec!["bench"];
+    args.extend(adk_and_synthetic(&pdb, &dcd));
+    args.extend(["--per-residue", "--csv", "b.csv"]);
     let run = mdsurf(dir.path(), &args);
     assert_eq!(run.code, 0, "{}", run.stderr);
     let csv = Csv::read(&dir.path().join("b.csv"));
@@ -127,8 +119,7 @@ fn bench_times_per_residue_areas_on_the_file_case_only() {
     assert!(line.contains("% of the frame's compute"), "{line}");
 
     // Without the flag the column is there and empty; beads are refused in one line.
-    args.retain(|a| *a != "--per-residue");
-    let csv = bench_csv(dir.path(), &args[1..args.len() - 2]);
+    let csv = bench_csv(dir.path(), &adk_and_synthetic(&pdb, &dcd));
     assert_eq!(csv.rows[0][k], "-");
     let run = mdsurf(
         dir.path(),
