@@ -122,6 +122,20 @@ impl Mdrun {
         Mdrun(child)
     }
 
+    /// Panics with the exit status and the end of `md.log` (in `dir`, the run's folder) when
+    /// the run has stopped: `what` says why it should not have.
+    pub(crate) fn assert_running(&mut self, dir: &Path, what: &str) {
+        if let Some(status) = self.0.try_wait().unwrap() {
+            let log = std::fs::read_to_string(dir.join("md.log")).unwrap_or_default();
+            let tail: Vec<&str> = log.lines().rev().take(20).collect();
+            let tail: Vec<&str> = tail.into_iter().rev().collect();
+            panic!(
+                "{what}: gmx mdrun ended ({status}); md.log ends:\n{}",
+                tail.join("\n")
+            );
+        }
+    }
+
     /// Waits for the run to end by itself.
     fn wait(mut self) {
         let status = self.0.wait().unwrap();

@@ -32,7 +32,7 @@ fn grow(core: &mut AppCore, more: usize, start: Instant) {
 #[test]
 fn the_console_pauses_resumes_and_detaches_from_a_running_simulation() {
     let LiveViewer {
-        dir: _dir,
+        dir,
         mut engine,
         source,
         mut core,
@@ -94,10 +94,7 @@ fn the_console_pauses_resumes_and_detaches_from_a_running_simulation() {
     );
     let last = source.read_frame(received - 1).unwrap();
     assert_eq!(last.positions.len(), source.topology().len());
-    assert!(
-        engine.0.try_wait().unwrap().is_none(),
-        "the simulation stopped when we detached"
-    );
+    engine.assert_running(dir.path(), "the simulation stopped when we detached");
 }
 
 /// The Simulation section: shown for a running simulation, its Pause button pauses GROMACS (no
@@ -106,7 +103,7 @@ fn the_console_pauses_resumes_and_detaches_from_a_running_simulation() {
 #[test]
 fn the_simulation_buttons_pause_resume_and_detach() {
     let LiveViewer {
-        dir: _dir,
+        dir,
         mut engine,
         mut core,
         ..
@@ -159,8 +156,5 @@ fn the_simulation_buttons_pause_resume_and_detach() {
         harness.query_by_label("Detach").is_none(),
         "the section stays after a detach"
     );
-    assert!(
-        engine.0.try_wait().unwrap().is_none(),
-        "the simulation stopped when we detached"
-    );
+    engine.assert_running(dir.path(), "the simulation stopped when we detached");
 }
