@@ -117,6 +117,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if args.per_residue && cases.iter().any(beads) {
         bail!("--per-residue measures atoms, and these particles are coarse-grained beads");
     }
+    if args.per_residue && !cases.iter().any(|c| matches!(c.source, Source::Real(_))) {
+        bail!(
+            "--per-residue needs a file's residues: give TOP [TRAJ] (synthetic systems have none)"
+        );
+    }
     let mut results = Vec::new();
     let mut refine_notes = Vec::new();
     for case in cases {

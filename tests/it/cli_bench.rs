@@ -135,6 +135,25 @@ fn bench_times_per_residue_areas_on_the_file_case_only() {
     assert_eq!(run.code, 2, "{}", run.stderr);
     assert!(run.stderr.contains("beads"), "{}", run.stderr);
     assert_eq!(run.stderr.trim().lines().count(), 1, "{}", run.stderr);
+    // Only synthetic systems: nothing to time, said in one line.
+    let run = mdsurf(
+        dir.path(),
+        &[
+            "bench",
+            "--synthetic",
+            "5k",
+            "--backend",
+            "cpu",
+            "--per-residue",
+        ],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("needs a file's residues"),
+        "{}",
+        run.stderr
+    );
+    assert_eq!(run.stderr.trim().lines().count(), 1, "{}", run.stderr);
 }
 
 #[test]
