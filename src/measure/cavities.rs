@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 
 use super::MeasureError;
-use super::cells::{CellList, nearest};
+use super::cells::{Batch, CellList, nearest};
 use crate::surface::{AtomSet, Mesh, SurfaceParams};
 
 /// One connected component of a mesh (triangles sharing vertices).
@@ -224,6 +224,7 @@ pub fn cavities(
         }
     }
     let mut out = Vec::new();
+    let mut batch = Batch::default();
     for (c, _) in voids.iter().zip(&enclosed).filter(|(_, e)| **e) {
         let mut lining = Vec::new();
         let mut here: Vec<(u32, f32)> = Vec::new();
@@ -232,7 +233,8 @@ pub fn cavities(
             let p: Vec3 = mesh.positions[v as usize];
             radius = radius.max(p.as_dvec3().distance(c.centroid));
             here.clear();
-            cells.for_each_gaussian(p, |a, w| here.push((a, w)));
+            cells.gather(p, p, &mut batch);
+            batch.for_each_gaussian(p, |a, w| here.push((a, w)));
             let largest = here.iter().fold(0.0f32, |m, &(_, w)| m.max(w));
             if largest > 0.0 {
                 let floor = options.lining_fraction * largest;

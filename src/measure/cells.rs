@@ -3,17 +3,24 @@
 //! [`crate::model::cells::sort_by_cell`]; the atoms' Gaussian terms kept beside them). Cells are
 //! half the longest cutoff long along x and one cutoff along y and z, and the grid reaches one
 //! cutoff beyond the atoms; atoms are stored sorted by cell, x fastest, so the cells of a row
-//! along x are one contiguous run (tall cells make fewer rows to visit per question). Points
-//! are either asked about one at a time ([`CellList::for_each_gaussian`], rows beyond the
-//! cutoff skipped) or in groups: points are grouped by cubes one cutoff wide
-//! ([`CellList::key`]), [`CellList::gather`] collects once the atoms that reach the box of a
-//! group's points and [`Batch::for_each_gaussian`] tests each point against them.
+//! along x are one contiguous run (tall cells make fewer rows to visit per question). Points are
+//! asked about in groups: points are grouped by cubes one cutoff wide ([`CellList::key`]),
+//! [`CellList::gather`] collects once the atoms that reach the box of a group's points (of one
+//! point, for a single question) and [`Batch::for_each_gaussian`] tests each point against them.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::model::cells::sort_by_cell;
 use crate::surface::{AtomSet, SurfaceParams};
+
+/// The cell (0 to `cells - 1`) holding coordinate `v` (Å) along an axis whose cells start at
+/// `origin` and are `edge` Å long; coordinates past either end get the end cell. Truncation is
+/// the floor on the values kept (and needs no call to `floorf` on targets without SSE4.1); NaN
+/// gives cell 0.
+fn clamped_cell(v: f32, origin: f32, edge: f32, cells: i64) -> i64 {
+    (((v - origin) / edge).max(0.0) as i64).min(cells - 1)
+}
 
 /// Atoms sorted into cells, and the cubic cells points are grouped by.
 pub(crate) struct CellList {
@@ -71,12 +78,8 @@ impl CellList {
         let g = (extent / group).floor() + 1.0;
         let group_dims = [g.x as i64, g.y as i64, g.z as i64];
         let cell_of = |p: Vec3| {
-            let c = (p - lo) / cell;
-            // Truncation, not the floor: equal after the clamp, and no call to `floorf` on
-            // targets without SSE4.1.
-            let clamp = |v: f32, d: i64| (v as i64).clamp(0, d - 1);
-            (clamp(c.x, dims[0]) + dims[0] * (clamp(c.y, dims[1]) + dims[1] * clamp(c.z, dims[2])))
-                as usize
+            let c = |k: usize| clamped_cell(p[k], lo[k], cell[k], dims[k]);
+            (c(0) + dims[0] * (c(1) + dims[1] * c(2))) as usize
         };
         let cells = (dims[0] * dims[1] * dims[2]) as usize;
         let of: Vec<usize> = atoms.positions.par_iter().map(|p| cell_of(*p)).collect();
@@ -105,76 +108,12 @@ impl CellList {
         }
     }
 
-    /// Calls `visit(run start, run end)` for the runs of sorted atoms that may lie within the
-    /// longest cutoff of `p`.
-    fn runs(&self, p: Vec3, mut visit: impl FnMut(usize, usize)) {
-        let lo = ((p - self.reach - self.origin) / self.cell).floor();
-        let hi = ((p + self.reach - self.origin) / self.cell).floor();
-        let range = |k: usize| {
-            let d = self.dims[k] - 1;
-            ((lo[k] as i64).max(0), (hi[k] as i64).min(d))
-        };
-        let ((xs, xe), (ys, ye), (zs, ze)) = (range(0), range(1), range(2));
-        if xs > xe {
-            return;
-        }
-        // Distance from `v` to the slab [start, start + cell) of cell `c` along axis `k`.
-        let gap = |v: f32, k: usize, c: i64| {
-            let start = self.origin[k] + c as f32 * self.cell[k];
-            (start - v).max(v - start - self.cell[k]).max(0.0)
-        };
-        let reach2 = self.reach * self.reach;
-        for z in zs..=ze {
-            let gz = gap(p.z, 2, z);
-            for y in ys..=ye {
-                let gy = gap(p.y, 1, y);
-                if gy * gy + gz * gz >= reach2 {
-                    continue;
-                }
-                let row = self.dims[0] * (y + self.dims[1] * z);
-                let start = self.starts[(row + xs) as usize] as usize;
-                let end = self.starts[(row + xe + 1) as usize] as usize;
-                if start < end {
-                    visit(start, end);
-                }
-            }
-        }
-    }
-
-    /// Calls `visit(atom, weight)` for every atom whose Gaussian reaches `p` (within its
-    /// cutoff), with the Gaussian's value there.
-    pub(crate) fn for_each_gaussian(&self, p: Vec3, mut visit: impl FnMut(u32, f32)) {
-        const BATCH: usize = 32;
-        let mut d2 = [0.0f32; BATCH];
-        self.runs(p, |start, end| {
-            let mut s = start;
-            while s < end {
-                let n = BATCH.min(end - s);
-                let atoms = &self.packed[s..s + n];
-                for (d2, [x, y, z, _]) in d2.iter_mut().zip(atoms) {
-                    *d2 = (x - p.x).powi(2) + (y - p.y).powi(2) + (z - p.z).powi(2);
-                }
-                for k in 0..n {
-                    if d2[k] < atoms[k][3] {
-                        visit(
-                            self.index[s + k],
-                            (-d2[k] * self.inv_two_alpha2[s + k]).exp(),
-                        );
-                    }
-                }
-                s += n;
-            }
-        });
-    }
-}
-
-impl CellList {
-    /// Number of cells (keys run from 0 to this, exclusive).
+    /// Number of point groups (keys run from 0 to this, exclusive).
     pub(crate) fn len(&self) -> usize {
         (self.group_dims[0] * self.group_dims[1] * self.group_dims[2]) as usize
     }
 
-    /// The cell holding `p`, or `None` when `p` is off the grid (no atom reaches it).
+    /// The group cell holding `p`, or `None` when `p` is off the grid (no atom reaches it).
     pub(crate) fn key(&self, p: Vec3) -> Option<u32> {
         let c = (p - self.origin) / self.group;
         let c = [c.x, c.y, c.z];
@@ -192,10 +131,9 @@ impl CellList {
     /// of the points asked about next, for example the vertices of one cell), in sorted order.
     #[inline(always)]
     pub(crate) fn gather(&self, lo: Vec3, hi: Vec3, out: &mut Batch) {
-        // The cells from `lo - reach` to `hi + reach` along `axis` (truncation is the floor
-        // on the values clamped at 0).
+        // The cells from `lo - reach` to `hi + reach` along `axis`.
         let cell_of = |v: f32, axis: usize| {
-            (((v - self.origin[axis]) / self.cell[axis]).max(0.0) as i64).min(self.dims[axis] - 1)
+            clamped_cell(v, self.origin[axis], self.cell[axis], self.dims[axis])
         };
         let span = |axis: usize| {
             (
