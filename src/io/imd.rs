@@ -328,9 +328,21 @@ pub(crate) fn toggle_pause_on(socket: &TcpStream) -> Result<(), ImdError> {
 }
 
 /// Detaches from the engine through `socket` (a handle from [`ImdClient::socket`]; the
-/// simulation goes on) and closes it, which ends any wait of the client for a message.
+/// simulation goes on): sends the disconnect message and closes our sending half only. The
+/// engine closes the connection when it reads the message, at its next step; a frame it was
+/// already sending still arrives, and the receiver must read it (and drop it) until the engine
+/// closes. Closing our receiving half as well would make the kernel answer that frame with a
+/// reset, and an engine that writes again to a reset connection may die of it: GROMACS 2022
+/// writes with `write()` and keeps the default SIGPIPE, so a detach that raced a frame killed
+/// the simulation.
 pub(crate) fn leave(socket: &TcpStream) {
     let _ = send_header(socket, MessageType::Disconnect, 0);
+    let _ = socket.shutdown(std::net::Shutdown::Write);
+}
+
+/// Closes both halves of `socket`, which ends any wait of the client for a message at once:
+/// only for an engine that did not close the connection after [`leave`] (see there why).
+pub(crate) fn cut(socket: &TcpStream) {
     let _ = socket.shutdown(std::net::Shutdown::Both);
 }
 

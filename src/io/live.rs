@@ -12,8 +12,13 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+/// How long dropping a live source waits for the engine to close the connection after the
+/// disconnect message (it does so at its next step; see [`leave`] for why we wait) before
+/// closing it anyway.
+const LEAVE_WAIT: Duration = Duration::from_secs(10);
+
 use super::IoError;
-use super::imd::{ImdClient, ImdError, leave};
+use super::imd::{ImdClient, ImdError, cut, leave};
 use super::native::NativeFrames;
 use glam::Vec3;
 
@@ -84,8 +89,11 @@ struct Received {
     count: usize,
     /// Set when the connection ended, with why.
     ended: Option<ImdError>,
-    /// Set by the reader side to make the thread stop.
+    /// Set by the reader side to make the thread stop (it reads on, dropping what comes, until
+    /// the engine closes the connection).
     stop: bool,
+    /// Set by the thread when it has returned: the engine closed the connection, or it failed.
+    finished: bool,
 }
 
 struct Shared {
@@ -267,16 +275,15 @@ struct Expected {
 }
 
 /// The receiving thread: every step into the ring (of `ring_frames` frames) until the
-/// connection ends or the reader side stops it.
+/// connection ends. After a detach or a stop the steps still on their way are read and dropped
+/// until the engine closes the connection (see [`leave`]).
 fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, shared: &Shared) {
     let mut first_step = None;
     loop {
         let result = client.next_step(expected.atoms);
         let mut received = shared.lock();
-        if received.stop {
-            return;
-        }
         match result {
+            Ok(_) if received.stop || received.ended.is_some() => {}
             Ok(step) => {
                 let index = received.count;
                 let step_number = step.energies.map(|e| i64::from(e.step));
@@ -302,6 +309,7 @@ fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, share
             Err(error) => {
                 // A detach already said why the stream ends.
                 received.ended.get_or_insert(error);
+                received.finished = true;
                 shared.arrived.notify_all();
                 return;
             }
@@ -380,14 +388,130 @@ impl NativeFrames for LiveFrames {
 
 impl Drop for LiveFrames {
     fn drop(&mut self) {
-        self.shared.lock().stop = true;
-        // Tell the engine we leave (it goes on running); closing the socket ends the thread's
-        // wait for the next message.
+        let detached = {
+            let mut received = self.shared.lock();
+            received.stop = true;
+            received.ended.is_some()
+        };
         if let Some(socket) = &self.socket {
-            leave(socket);
+            // Tell the engine we leave (it goes on running), unless a detach or its own close
+            // did already, and let the thread read on until the engine closes the connection.
+            if !detached {
+                leave(socket);
+            }
+            let received = self.shared.lock();
+            let (received, _) = self
+                .shared
+                .arrived
+                .wait_timeout_while(received, LEAVE_WAIT, |r| !r.finished)
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            if !received.finished {
+                cut(socket);
+            }
         }
         if let Some(thread) = self.thread.take() {
             let _ = thread.join();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::imd::IMD_VERSION;
+    use std::io::{Read, Write};
+    use std::net::TcpListener;
+
+    /// One step of `atoms` atoms at `step` as an x86 engine writes it (bodies little-endian):
+    /// the energy record, then the coordinates.
+    fn step_message(step: i32, atoms: i32) -> Vec<u8> {
+        let mut bytes = 1i32.to_be_bytes().to_vec();
+        bytes.extend(1i32.to_be_bytes());
+        bytes.extend(step.to_le_bytes());
+        bytes.extend([0u8; 36]);
+        bytes.extend(2i32.to_be_bytes());
+        bytes.extend(atoms.to_be_bytes());
+        for i in 0..atoms * 3 {
+            bytes.extend((i as f32).to_le_bytes());
+        }
+        bytes
+    }
+
+    /// A fake engine on a local port, as GROMACS behaves around a detach: it sends one step,
+    /// waits for the client's next message, and when that is the disconnect, sends the steps
+    /// it was already computing (`late`, 100 ms apart) before it reads the message and closes.
+    /// Returns the address and what each late write did.
+    fn engine_mid_step(late: i32) -> (String, JoinHandle<Vec<String>>) {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let address = listener.local_addr().unwrap().to_string();
+        let handle = std::thread::spawn(move || {
+            let (mut socket, _) = listener.accept().unwrap();
+            let mut hello = 4i32.to_be_bytes().to_vec();
+            hello.extend(IMD_VERSION.to_le_bytes());
+            socket.write_all(&hello).unwrap();
+            let mut header = [0u8; 8];
+            socket.read_exact(&mut header).unwrap();
+            socket.write_all(&step_message(0, 2)).unwrap();
+            socket.read_exact(&mut header).unwrap();
+            assert_eq!(header, [0u8; 8], "the next message is the disconnect");
+            (1..=late)
+                .map(|step| {
+                    std::thread::sleep(Duration::from_millis(100));
+                    match socket.write_all(&step_message(step, 2)) {
+                        Ok(()) => "written".to_string(),
+                        Err(e) => e.to_string(),
+                    }
+                })
+                .collect()
+        });
+        (address, handle)
+    }
+
+    fn connect(address: &str) -> LiveFrames {
+        let mut options = LiveOptions::new(address);
+        options.connect_timeout = Duration::from_secs(5);
+        options.frame_timeout = Duration::from_secs(20);
+        let start = Frame {
+            index: 0,
+            time_ps: None,
+            positions: vec![Vec3::ZERO; 2],
+            cell: None,
+        };
+        LiveFrames::connect(&options, 2, &start).unwrap()
+    }
+
+    /// A detach must not reset the connection while the engine still sends: GROMACS writes
+    /// with SIGPIPE at its default, so its second write to a reset connection kills the run
+    /// (this failed with both halves shut at the detach: "Broken pipe").
+    #[test]
+    fn a_detach_reads_the_steps_on_their_way_and_keeps_only_those_before_it() {
+        let (address, engine) = engine_mid_step(3);
+        let mut live = connect(&address);
+        assert_eq!(
+            live.read_frame(0).unwrap().positions[1],
+            Vec3::new(3.0, 4.0, 5.0)
+        );
+        live.count().control(LiveAction::Detach).unwrap();
+        let writes = engine.join().unwrap();
+        assert_eq!(writes, vec!["written"; 3], "late writes of the engine");
+        match live.read_frame(1).unwrap_err() {
+            IoError::LiveEnded { frames, reason, .. } => {
+                assert_eq!(frames, 1);
+                assert!(reason.contains("detached"), "{reason}");
+            }
+            other => panic!("{other}"),
+        }
+        assert_eq!(live.count().received(), 1);
+    }
+
+    /// Dropping a live source (the end of `surface --imd --frames :N`, a closed window) leaves
+    /// the engine the same way.
+    #[test]
+    fn dropping_a_live_source_lets_the_engine_finish_its_writes() {
+        let (address, engine) = engine_mid_step(3);
+        let mut live = connect(&address);
+        live.read_frame(0).unwrap();
+        drop(live);
+        assert_eq!(engine.join().unwrap(), vec!["written"; 3]);
     }
 }

@@ -109,6 +109,8 @@ pub(crate) struct Mdrun(pub(crate) Child);
 
 impl Mdrun {
     pub(crate) fn start(dir: &Path, port: u16) -> Mdrun {
+        // Its messages (unbuffered, unlike md.log) go to mdrun.err, for assert_running.
+        let messages = std::fs::File::create(dir.join("mdrun.err")).unwrap();
         let child = Command::new("gmx")
             .args([
                 "mdrun", "-s", "md.tpr", "-deffnm", "md", "-nt", "1", "-imdwait",
@@ -116,21 +118,21 @@ impl Mdrun {
             .args(["-imdport", &port.to_string()])
             .current_dir(dir)
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(messages)
             .spawn()
             .expect("cannot start gmx mdrun");
         Mdrun(child)
     }
 
-    /// Panics with the exit status and the end of `md.log` (in `dir`, the run's folder) when
-    /// the run has stopped: `what` says why it should not have.
+    /// Panics with the exit status and the end of its messages (`mdrun.err` in `dir`, the
+    /// run's folder) when the run has stopped: `what` says why it should not have.
     pub(crate) fn assert_running(&mut self, dir: &Path, what: &str) {
         if let Some(status) = self.0.try_wait().unwrap() {
-            let log = std::fs::read_to_string(dir.join("md.log")).unwrap_or_default();
-            let tail: Vec<&str> = log.lines().rev().take(20).collect();
+            let log = std::fs::read_to_string(dir.join("mdrun.err")).unwrap_or_default();
+            let tail: Vec<&str> = log.lines().rev().take(12).collect();
             let tail: Vec<&str> = tail.into_iter().rev().collect();
             panic!(
-                "{what}: gmx mdrun ended ({status}); md.log ends:\n{}",
+                "{what}: gmx mdrun ended ({status}); its last messages:\n{}",
                 tail.join("\n")
             );
         }
