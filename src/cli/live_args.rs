@@ -9,7 +9,7 @@ use mdsurf::io::{FollowOptions, IoError, LiveOptions, LiveSource};
 /// Frames from a simulation running now, over IMD (GROMACS `mdrun -imdport`, NAMD, LAMMPS).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct LiveArgs {
-    /// Take the frames from the simulation listening at HOST:PORT (IMD version 2), frame i being
+    /// Take the frames from the simulation listening at HOST:PORT (IMD version 2 or 3), frame i being
     /// the i-th step it sends, instead of from TRAJ. TOP must hold the atoms the engine sends
     /// (GROMACS: IMD-group = System). Without --frames the run goes on until the simulation ends.
     #[arg(long, value_name = "HOST:PORT")]
@@ -19,7 +19,8 @@ pub struct LiveArgs {
           value_parser = clap::value_parser!(u32).range(1..))]
     pub imd_every: Option<u32>,
     /// With --imd: the simulation's time step in ps, so that frames get times (step x time
-    /// step); IMD version 2 sends steps, not times.
+    /// step); IMD version 2 sends steps, not times (version 3 engines' own times are used
+    /// without it).
     #[arg(long, value_name = "PS", requires = "imd", value_parser = parse_timestep)]
     pub imd_timestep: Option<f64>,
     /// With --imd: seconds to wait for the simulation to accept the connection.
@@ -74,6 +75,48 @@ impl LiveArgs {
         options.timestep_ps = self.imd_timestep;
         options.connect_timeout = Duration::from_secs(self.imd_wait);
         Ok(Some(LiveSource::Imd(options)))
+    }
+}
+
+/// The frames a command's loop skipped because a running simulation sent them faster than they
+/// were read (they left the ring of frames kept before being read).
+#[derive(Default)]
+pub struct OverrunSkips {
+    /// Frames skipped so far.
+    frames: usize,
+}
+
+impl OverrunSkips {
+    /// When `error` says frames were lost that way: counts them, says so in one line the first
+    /// time (unless `quiet`), and returns the oldest frame still held, where the loop goes on.
+    pub fn skip(&mut self, error: &anyhow::Error, quiet: bool) -> Option<usize> {
+        let IoError::LiveOverrun {
+            path,
+            frame,
+            oldest,
+            ..
+        } = error.downcast_ref::<IoError>()?
+        else {
+            return None;
+        };
+        if self.frames == 0 && !quiet {
+            eprintln!(
+                "{}: frames {frame} to {} skipped: the simulation sends frames faster than they \
+                 are measured (--imd-every N asks for one frame in N steps; later skips are \
+                 counted at the end)",
+                path.display(),
+                oldest - 1
+            );
+        }
+        self.frames += oldest - frame;
+        Some(*oldest)
+    }
+
+    /// Says in one line how many frames were skipped in all, if any.
+    pub fn finish(&self, quiet: bool) {
+        if self.frames > 0 && !quiet {
+            eprintln!("{} frames of the simulation skipped in all", self.frames);
+        }
     }
 }
 

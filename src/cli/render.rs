@@ -161,11 +161,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let started = Instant::now();
     let mut images = 0usize;
     let mut cavity_ids = MovieCavityIds::default();
+    // Frames before this one left a running simulation's ring unread (skipped).
+    let (mut resume_at, mut skips) = (0usize, super::live_args::OverrunSkips::default());
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;
         }
-        if i > 0 && i < block.start {
+        if (i > 0 && i < block.start) || f < resume_at {
             continue;
         }
         if interrupted() {
@@ -189,6 +191,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
         } else {
             match reader.read_frame(f) {
                 Ok(frame) => Arc::new(frame),
+                Err(e) if let Some(oldest) = skips.skip(&e, args.quiet) => {
+                    resume_at = oldest;
+                    continue;
+                }
                 // The end of a running simulation ends the movie; it is not a failure.
                 Err(e) => match super::live_args::end_of_stream(&e) {
                     Some(end) => {
@@ -289,6 +295,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         });
     }
     progress.finish();
+    skips.finish(args.quiet);
     if let Some(stats) = stats {
         stats.finish()?;
     }

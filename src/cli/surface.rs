@@ -20,7 +20,7 @@ use mdsurf::surface::SurfaceParams;
 
 use super::chunk::{ChunkSpec, check_chunk_count};
 use super::interrupt::{catch_interrupts, interrupted};
-use super::live_args::{LiveArgs, end_of_stream};
+use super::live_args::{LiveArgs, OverrunSkips, end_of_stream};
 use super::measure_args::{MeasureArgs, Measurer};
 
 use super::common::{
@@ -271,8 +271,13 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let t_all = Instant::now();
     let mut failure = None;
     let mut ok_frames = 0usize;
+    // Frames before this one left a running simulation's ring unread (skipped).
+    let (mut resume_at, mut skips) = (0usize, OverrunSkips::default());
     catch_interrupts();
     for &index in &frames {
+        if index < resume_at {
+            continue;
+        }
         if interrupted() {
             failure = Some(anyhow!(
                 "interrupted by a signal before frame {index} of {}",
@@ -315,6 +320,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
                 }
                 progress.advance();
             }
+            Err(err) if let Some(oldest) = skips.skip(&err, args.quiet) => resume_at = oldest,
             Err(err) => {
                 // The end of a running simulation is the end of the run, not a failure.
                 match end_of_stream(&err).filter(|_| ok_frames > 0) {
@@ -327,6 +333,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         }
     }
     progress.finish();
+    skips.finish(args.quiet);
 
     // Keep what the good frames produced; a run where no frame succeeded changes no file (a
     // chunk with an empty block writes its empty part, so the merge knows it ran).

@@ -63,6 +63,23 @@ pub enum IoError {
         /// Why it ended (one line).
         reason: String,
     },
+    /// Frames of a running simulation that arrived faster than they were read and left the
+    /// ring of frames kept before being read: the oldest frame still held is `oldest`.
+    #[error(
+        "{}: frame {frame} is no longer held: the simulation sends frames faster than they are \
+         read (frames {oldest} on are held, the last {kept})",
+        path.display()
+    )]
+    LiveOverrun {
+        /// `imd://HOST:PORT`.
+        path: PathBuf,
+        /// The frame asked for.
+        frame: usize,
+        /// The oldest frame still held.
+        oldest: usize,
+        /// Frames kept.
+        kept: usize,
+    },
     /// A frame index past the end of the trajectory was asked for.
     #[error("{}: frame {frame} does not exist (the trajectory has {len} frames)", path.display())]
     FrameOutOfRange {
@@ -167,6 +184,7 @@ impl IoError {
                 requote(text);
             }
             IoError::UnknownFormat { path, .. }
+            | IoError::LiveOverrun { path, .. }
             | IoError::FrameOutOfRange { path, .. }
             | IoError::NonFiniteCoordinate { path, .. }
             | IoError::AbsurdCoordinate { path, .. }

@@ -61,7 +61,9 @@ pub struct LiveOptions {
     /// How long to wait for the next frame before giving up on the engine.
     pub frame_timeout: Duration,
     /// The simulation's time step in ps: with it, a frame's time is its step (from the energy
-    /// record the engine sends before the coordinates) times this. IMD version 2 sends no time.
+    /// record the engine sends before the coordinates) times this. IMD version 2 sends no time;
+    /// without this, a version 3 engine's time record is taken as ps (GROMACS; LAMMPS sends its
+    /// own units, fs with `units real`).
     pub timestep_ps: Option<f64>,
 }
 
@@ -101,6 +103,10 @@ struct Shared {
     arrived: Condvar,
     /// A handle on the socket for pause and detach ([`LiveProgress::control`]).
     control: Mutex<Option<std::net::TcpStream>>,
+    /// The session's IMD version (2 or 3).
+    version: i32,
+    /// True while we have the simulation paused.
+    paused: std::sync::atomic::AtomicBool,
 }
 
 impl Shared {
@@ -129,10 +135,10 @@ pub(crate) trait LiveProgress: Send + Sync {
     }
 }
 
-/// What the viewer can ask of a running simulation (IMD version 2).
+/// What the viewer can ask of a running simulation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LiveAction {
-    /// Pause the simulation, or resume it when paused (IMD version 2 has one message for both).
+    /// Pause the simulation, or resume it when paused.
     TogglePause,
     /// Leave the simulation running and stop receiving its frames (those received stay).
     Detach,
@@ -182,7 +188,12 @@ impl LiveProgress for Shared {
             _ => return Err(LiveControlError::Ended),
         };
         match action {
-            LiveAction::TogglePause => super::imd::toggle_pause_on(socket)?,
+            LiveAction::TogglePause => {
+                use std::sync::atomic::Ordering::SeqCst;
+                let pause = !self.paused.load(SeqCst);
+                super::imd::pause_on(socket, self.version, pause)?;
+                self.paused.store(pause, SeqCst);
+            }
             LiveAction::Detach => {
                 // Marked first, so the receiver's end of stream reads as the detach it is.
                 self.lock().ended = Some(ImdError::Detached);
@@ -210,7 +221,8 @@ pub(crate) struct LiveFrames {
 
 impl LiveFrames {
     /// Connects to the engine (see [`ImdClient::connect`]) and starts receiving frames of
-    /// `atoms` atoms. IMD version 2 sends neither box nor time: every frame gets the box of
+    /// `atoms` atoms. A version 3 engine may send each frame's box and time, which the frame
+    /// then gets. IMD version 2 sends neither box nor time: every frame gets the box of
     /// `start`, the structure the run started from (exact at constant volume; under pressure
     /// coupling the box breathes and this is the starting one), and with a time step, the time
     /// of `start` plus the steps since the first frame (engines number steps differently:
@@ -236,6 +248,8 @@ impl LiveFrames {
             received: Mutex::new(Received::default()),
             arrived: Condvar::new(),
             control: Mutex::new(client.socket().ok()),
+            version: client.version(),
+            paused: Default::default(),
         });
         let ring_frames = options.ring_frames.max(1);
         let expected = Expected {
@@ -286,19 +300,22 @@ fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, share
             Ok(_) if received.stop || received.ended.is_some() => {}
             Ok(step) => {
                 let index = received.count;
-                let step_number = step.energies.map(|e| i64::from(e.step));
+                let step_number =
+                    (step.time.map(|t| t.step)).or(step.energies.map(|e| i64::from(e.step)));
                 let first = *first_step.get_or_insert(step_number);
-                let time_ps = match (step_number, first, expected.timestep_ps) {
-                    (Some(now), Some(first), Some(dt)) => {
+                // A given time step wins over the engine's time (LAMMPS sends its own units).
+                let time_ps = match (step_number, first, expected.timestep_ps, step.time) {
+                    (Some(now), Some(first), Some(dt), _) => {
                         Some(expected.start_ps + (now - first) as f64 * dt)
                     }
+                    (.., Some(time)) => Some(time.time),
                     _ => None,
                 };
                 received.ring.push_back(Frame {
                     index,
                     time_ps,
                     positions: step.positions,
-                    cell: expected.cell,
+                    cell: step.cell.or(expected.cell),
                 });
                 while received.ring.len() > ring_frames {
                     received.ring.pop_front();
@@ -346,15 +363,12 @@ impl NativeFrames for LiveFrames {
         loop {
             let oldest = received.count - received.ring.len();
             if index < oldest {
-                return Err(IoError::bad_frame(
-                    &self.path,
-                    index,
-                    format!(
-                        "no longer held (frames {oldest} to {} are; the last {} are kept)",
-                        received.count - 1,
-                        self.ring_frames
-                    ),
-                ));
+                return Err(IoError::LiveOverrun {
+                    path: self.path.clone(),
+                    frame: index,
+                    oldest,
+                    kept: self.ring_frames,
+                });
             }
             if index < received.count {
                 return Ok(received.ring[index - oldest].clone());
@@ -418,7 +432,7 @@ impl Drop for LiveFrames {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::imd::IMD_VERSION;
+    use crate::io::imd::IMD_VERSIONS;
     use std::io::{Read, Write};
     use std::net::TcpListener;
 
@@ -447,7 +461,7 @@ mod tests {
         let handle = std::thread::spawn(move || {
             let (mut socket, _) = listener.accept().unwrap();
             let mut hello = 4i32.to_be_bytes().to_vec();
-            hello.extend(IMD_VERSION.to_le_bytes());
+            hello.extend(IMD_VERSIONS[0].to_le_bytes());
             socket.write_all(&hello).unwrap();
             let mut header = [0u8; 8];
             socket.read_exact(&mut header).unwrap();
@@ -468,16 +482,46 @@ mod tests {
     }
 
     fn connect(address: &str) -> LiveFrames {
+        connect_with(address, 2, None)
+    }
+
+    /// A live source of `atoms` atoms on the engine at `address`, with `timestep_ps`.
+    fn connect_with(address: &str, atoms: usize, timestep_ps: Option<f64>) -> LiveFrames {
         let mut options = LiveOptions::new(address);
         options.connect_timeout = Duration::from_secs(5);
         options.frame_timeout = Duration::from_secs(20);
+        options.timestep_ps = timestep_ps;
         let start = Frame {
             index: 0,
-            time_ps: None,
-            positions: vec![Vec3::ZERO; 2],
+            time_ps: Some(10.0),
+            positions: vec![Vec3::ZERO; atoms],
             cell: None,
         };
-        LiveFrames::connect(&options, 2, &start).unwrap()
+        LiveFrames::connect(&options, atoms, &start).unwrap()
+    }
+
+    /// A version 3 engine's box and time go to the frames; a time step given wins over the
+    /// engine's time (LAMMPS sends its own units: fs here).
+    #[test]
+    fn version_3_frames_take_the_engines_box_and_time() {
+        use crate::io::imd::tests::{argon_start, lammps_v3_session, replaying_engine};
+        let atoms = argon_start().len();
+        for (timestep_ps, times) in [
+            (None, [2.0, 4.0, 6.0]),
+            (Some(0.002), [10.0, 10.002, 10.004]),
+        ] {
+            let (address, _engine) = replaying_engine(lammps_v3_session());
+            let mut live = connect_with(&address, atoms, timestep_ps);
+            for (i, want) in times.into_iter().enumerate() {
+                let frame = live.read_frame(i).unwrap();
+                let time = frame.time_ps.unwrap();
+                assert!(
+                    (time - want).abs() < 1e-9,
+                    "frame {i}: {time} ps, not {want}"
+                );
+                assert_eq!(frame.cell.unwrap()[2], Vec3::new(0.0, 0.0, 21.04));
+            }
+        }
     }
 
     /// A detach must not reset the connection while the engine still sends: GROMACS writes

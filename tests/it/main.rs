@@ -64,6 +64,7 @@ mod io_valid_files;
 mod io_xdr;
 mod live_follow;
 mod live_imd;
+mod live_imd_v3;
 mod live_imd_viewer;
 mod measure_areas;
 mod measure_cavities;

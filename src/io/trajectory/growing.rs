@@ -15,7 +15,8 @@ use crate::io::live::{LiveAction, LiveControlError, LiveFrames, LiveOptions, Liv
 /// `i`-th step the engine sent, read waits for it, and [`Trajectory::len`] is
 /// [`LIVE_FRAMES_UNBOUNDED`](super::LIVE_FRAMES_UNBOUNDED) (the run's end shows as [`IoError::LiveEnded`]). The engine must
 /// send the coordinates of every atom of `top` (GROMACS: `IMD-group = System`). IMD version 2
-/// sends no box or time: frames carry the box of `top`, and times counted from its time.
+/// sends no box or time: frames carry the box of `top`, and times counted from its time
+/// (version 3 engines may send both, which the frames then carry).
 pub fn open_live(top: &Path, options: &LiveOptions) -> Result<Trajectory, IoError> {
     let structure = open(top, None)?;
     let start = structure.read_frame(0)?;

@@ -1,14 +1,21 @@
-//! The Interactive Molecular Dynamics (IMD) protocol, version 2, as GROMACS, NAMD and LAMMPS
-//! speak it: a client that connects to a running simulation, receives its coordinates (Å) and
-//! energy records frame by frame, and can pause it, change how often it sends, detach or stop it.
+//! The Interactive Molecular Dynamics (IMD) protocol, versions 2 (GROMACS up to 2024, NAMD,
+//! LAMMPS) and 3 (GROMACS 2025): a client that connects to a running simulation, receives its
+//! coordinates (Å), box and time frame by frame, and can pause it, change how often it sends,
+//! detach or stop it.
 //!
 //! Every message is an 8-byte header (type and length, 32-bit big-endian integers) and a body.
 //! The engine opens with a handshake whose length field is the protocol version written in the
 //! engine's own byte order: read big-endian it is 2 on a big-endian engine, and 2 << 24 on a
 //! little-endian one. The bodies (energy records, coordinates) come in that same engine order.
-//! The client answers `GO`; from then on the engine sends an `ENERGIES` message (length 1, a step
-//! number and nine 32-bit floats) and an `FCOORDS` message (length = atoms, then x, y, z per atom
-//! as 32-bit floats in Å) every time it reports a step.
+//! Version 3 then sends a session record (7 one-byte flags: time, energies, box, coordinates,
+//! coordinates wrapped into the box, velocities, forces) saying what each frame carries. The
+//! client answers `GO`; from then on each frame the engine reports is, in this order and as the
+//! session says: `TIME` (version 3: time step and time in ps as f64, step as i64), `ENERGIES`
+//! (a step number and nine 32-bit floats), `BOX` (version 3: the three box vectors, nine 32-bit
+//! floats in Å), `FCOORDS` (length = atoms, then x, y, z per atom as 32-bit floats in Å), and
+//! `VELOCITIES` and `FORCES` (version 3, shaped as the coordinates; read past, not kept).
+//! Version 2 has one `PAUSE` message that toggles; version 3 pauses with `PAUSE` and resumes
+//! with `RESUME`.
 //!
 //! Nothing the engine sends is trusted: a coordinate message is allocated only after its atom
 //! count was checked against the topology's, unknown message types end the connection with a
@@ -20,10 +27,10 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-/// The IMD protocol version this client speaks.
-pub(crate) const IMD_VERSION: i32 = 2;
+/// The IMD protocol versions this client speaks, oldest first.
+pub(crate) const IMD_VERSIONS: [i32; 2] = [2, 3];
 
-/// Message types of IMD version 2.
+/// Message types of IMD versions 2 and 3 (the last six are version 3's).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(i32)]
 pub(crate) enum MessageType {
@@ -40,17 +47,29 @@ pub(crate) enum MessageType {
     /// The client asks the engine to stop the simulation.
     Kill = 5,
     /// The client applies forces (not used by this client).
-    Forces = 6,
-    /// The client toggles a pause of the simulation.
+    MdComm = 6,
+    /// The client toggles a pause of the simulation (version 2), or pauses it (version 3).
     Pause = 7,
     /// The client sets the transmission rate: one frame every `length` steps.
     Rate = 8,
     /// Either side reports an I/O error.
     IoError = 9,
+    /// The engine says what each frame carries (version 3).
+    SessionInfo = 10,
+    /// The client resumes a paused simulation (version 3).
+    Resume = 11,
+    /// A frame's time step, time and step (version 3).
+    Time = 12,
+    /// A frame's box vectors (version 3).
+    Box = 13,
+    /// A frame's velocities (version 3).
+    Velocities = 14,
+    /// A frame's forces (version 3).
+    Forces = 15,
 }
 
 impl MessageType {
-    /// The type with number `value`, if IMD version 2 has one.
+    /// The type with number `value`, if IMD version 2 or 3 has one.
     fn from_i32(value: i32) -> Option<MessageType> {
         use MessageType::*;
         [
@@ -60,10 +79,16 @@ impl MessageType {
             Go,
             Handshake,
             Kill,
-            Forces,
+            MdComm,
             Pause,
             Rate,
             IoError,
+            SessionInfo,
+            Resume,
+            Time,
+            Box,
+            Velocities,
+            Forces,
         ]
         .into_iter()
         .find(|t| *t as i32 == value)
@@ -77,7 +102,7 @@ pub enum ImdError {
     #[error("cannot connect: {0}")]
     Connect(String),
     /// The engine is not an IMD engine, or speaks another version.
-    #[error("not an IMD version 2 engine: {0}")]
+    #[error("not an IMD engine of version 2 or 3: {0}")]
     Handshake(String),
     /// The connection closed (the simulation ended, was killed, or detached us).
     #[error("the simulation closed the connection")]
@@ -109,11 +134,61 @@ pub struct ImdEnergies {
     pub potential: f32,
 }
 
-/// What one step brings: its energies (when the engine sent them first) and the coordinates.
+/// A frame's time record (IMD version 3).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ImdTime {
+    /// The simulation's time step, in the engine's time unit (GROMACS: ps; LAMMPS: its own
+    /// units, fs with `units real`).
+    pub dt: f64,
+    /// The frame's time, in that unit.
+    pub time: f64,
+    /// The frame's step.
+    pub step: i64,
+}
+
+/// What each frame of a session carries (IMD version 3 says so in its session record; a
+/// version 2 engine sends energies and coordinates).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImdSession {
+    /// A time record.
+    pub time: bool,
+    /// An energy record.
+    pub energies: bool,
+    /// The box.
+    pub cell: bool,
+    /// The coordinates.
+    pub positions: bool,
+    /// The coordinates are wrapped into the box.
+    pub wrapped: bool,
+    /// Velocities.
+    pub velocities: bool,
+    /// Forces.
+    pub forces: bool,
+}
+
+impl ImdSession {
+    /// What a version 2 engine sends.
+    const VERSION_2: ImdSession = ImdSession {
+        time: false,
+        energies: true,
+        cell: false,
+        positions: true,
+        wrapped: false,
+        velocities: false,
+        forces: false,
+    };
+}
+
+/// What one frame brings: the records the engine sent before its coordinates (when it sent
+/// them), and the coordinates.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImdStep {
-    /// The energy record sent before these coordinates, if any.
+    /// The time record (version 3), if any.
+    pub time: Option<ImdTime>,
+    /// The energy record, if any.
     pub energies: Option<ImdEnergies>,
+    /// The box vectors a, b, c in Å (version 3), if any.
+    pub cell: Option<[Vec3; 3]>,
     /// Positions of the IMD group's atoms, in Å.
     pub positions: Vec<Vec3>,
 }
@@ -124,6 +199,10 @@ pub struct ImdClient {
     stream: TcpStream,
     /// True when the engine writes its bodies little-endian.
     little_endian: bool,
+    /// The protocol version of the session (2 or 3).
+    version: i32,
+    /// What each frame carries.
+    session: ImdSession,
     /// Longest wait for the next message.
     read_timeout: Duration,
 }
@@ -158,6 +237,8 @@ impl ImdClient {
         let mut client = ImdClient {
             stream,
             little_endian: false,
+            version: IMD_VERSIONS[0],
+            session: ImdSession::VERSION_2,
             read_timeout: connect_timeout.max(read_timeout),
         };
         let (kind, version) = client.read_header().map_err(|e| match e {
@@ -171,9 +252,9 @@ impl ImdClient {
                 "the first message has type {kind}, not the handshake"
             )));
         }
-        client.little_endian = match version {
-            IMD_VERSION => false,
-            v if v.swap_bytes() == IMD_VERSION => true,
+        (client.version, client.little_endian) = match version {
+            v if IMD_VERSIONS.contains(&v) => (v, false),
+            v if IMD_VERSIONS.contains(&v.swap_bytes()) => (v.swap_bytes(), true),
             v => {
                 let v = if v.swap_bytes().unsigned_abs() < v.unsigned_abs() {
                     v.swap_bytes()
@@ -185,20 +266,71 @@ impl ImdClient {
                 )));
             }
         };
+        if client.version >= 3 {
+            client.session = client.read_session()?;
+        }
         client.read_timeout = read_timeout;
         client.send(MessageType::Go, 0)?;
         Ok(client)
+    }
+
+    /// The protocol version of the session (2 or 3).
+    pub fn version(&self) -> i32 {
+        self.version
+    }
+
+    /// What each frame of the session carries (the reader needs only [`ImdStep`]'s options).
+    #[cfg(test)]
+    pub fn session(&self) -> ImdSession {
+        self.session
+    }
+
+    /// Reads version 3's session record; refuses a session without coordinates.
+    fn read_session(&mut self) -> Result<ImdSession, ImdError> {
+        let (kind, length) = self.read_header()?;
+        if kind != MessageType::SessionInfo as i32 || length != 7 {
+            return Err(ImdError::Handshake(format!(
+                "after a version 3 handshake came message type {kind} of length {length}, not \
+                 the session record"
+            )));
+        }
+        let mut flags = [0u8; 7];
+        self.read_exact(&mut flags)?;
+        let [time, energies, cell, positions, wrapped, velocities, forces] = flags.map(|f| f != 0);
+        if !positions {
+            return Err(ImdError::Handshake(
+                "the engine sends no coordinates in this session (GROMACS: set imd-nst... to \
+                 send positions)"
+                    .into(),
+            ));
+        }
+        Ok(ImdSession {
+            time,
+            energies,
+            cell,
+            positions,
+            wrapped,
+            velocities,
+            forces,
+        })
     }
 
     /// Waits for the next coordinates and returns them with the energy record sent before them.
     /// `atoms` is the number the topology expects: another count is refused before anything is
     /// allocated.
     pub fn next_step(&mut self, atoms: usize) -> Result<ImdStep, ImdError> {
-        let mut energies = None;
+        let (mut time, mut energies, mut cell) = (None, None, None);
         loop {
             let (kind, length) = self.read_header()?;
             match MessageType::from_i32(kind) {
+                Some(MessageType::Time) if length == 1 => time = Some(self.read_time()?),
                 Some(MessageType::Energies) => energies = Some(self.read_energies()?),
+                Some(MessageType::Box) if length == 1 => cell = Some(self.read_cell()?),
+                Some(MessageType::Velocities | MessageType::Forces)
+                    if usize::try_from(length).ok() == Some(atoms) =>
+                {
+                    self.skip(atoms * 12)?;
+                }
                 Some(MessageType::Coordinates) => {
                     if usize::try_from(length).ok() != Some(atoms) {
                         return Err(ImdError::Protocol(format!(
@@ -207,7 +339,9 @@ impl ImdClient {
                     }
                     let positions = self.read_positions(atoms)?;
                     return Ok(ImdStep {
+                        time,
                         energies,
+                        cell,
                         positions,
                     });
                 }
@@ -252,23 +386,31 @@ impl ImdClient {
         Ok((word(0), word(4)))
     }
 
+    /// A 32-bit word of a body, in the engine's byte order.
+    fn word(&self, b: &[u8]) -> u32 {
+        let b = [b[0], b[1], b[2], b[3]];
+        if self.little_endian {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        }
+    }
+
+    /// A 64-bit word of a body, in the engine's byte order.
+    fn dword(&self, b: &[u8]) -> u64 {
+        let b = [b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]];
+        if self.little_endian {
+            u64::from_le_bytes(b)
+        } else {
+            u64::from_be_bytes(b)
+        }
+    }
+
     /// Reads an energy record body: the step, then nine floats (T, Etot, Epot, ...).
     fn read_energies(&mut self) -> Result<ImdEnergies, ImdError> {
         let mut body = [0u8; 40];
         self.read_exact(&mut body)?;
-        let word = |i: usize| {
-            let b = [
-                body[4 * i],
-                body[4 * i + 1],
-                body[4 * i + 2],
-                body[4 * i + 3],
-            ];
-            if self.little_endian {
-                u32::from_le_bytes(b)
-            } else {
-                u32::from_be_bytes(b)
-            }
-        };
+        let word = |i: usize| self.word(&body[4 * i..]);
         Ok(ImdEnergies {
             step: word(0) as i32,
             temperature: f32::from_bits(word(1)),
@@ -277,22 +419,46 @@ impl ImdClient {
         })
     }
 
+    /// Reads a time record body: time step and time (f64, the engine's unit), then the step
+    /// (i64).
+    fn read_time(&mut self) -> Result<ImdTime, ImdError> {
+        let mut body = [0u8; 24];
+        self.read_exact(&mut body)?;
+        Ok(ImdTime {
+            dt: f64::from_bits(self.dword(&body[0..])),
+            time: f64::from_bits(self.dword(&body[8..])),
+            step: self.dword(&body[16..]) as i64,
+        })
+    }
+
+    /// Reads a box body: vectors a, b, c (Å), three floats each.
+    fn read_cell(&mut self) -> Result<[Vec3; 3], ImdError> {
+        let mut body = [0u8; 36];
+        self.read_exact(&mut body)?;
+        let value = |i: usize| f32::from_bits(self.word(&body[4 * i..]));
+        Ok([0, 3, 6].map(|k| Vec3::new(value(k), value(k + 1), value(k + 2))))
+    }
+
     /// Reads `atoms` positions (x, y, z as floats in Å).
     fn read_positions(&mut self, atoms: usize) -> Result<Vec<Vec3>, ImdError> {
         let mut body = vec![0u8; atoms * 12];
         self.read_exact(&mut body)?;
-        let value = |c: &[u8]| {
-            let b = [c[0], c[1], c[2], c[3]];
-            f32::from_bits(if self.little_endian {
-                u32::from_le_bytes(b)
-            } else {
-                u32::from_be_bytes(b)
-            })
-        };
+        let value = |c: &[u8]| f32::from_bits(self.word(c));
         Ok(body
             .chunks_exact(12)
             .map(|p| Vec3::new(value(&p[0..4]), value(&p[4..8]), value(&p[8..12])))
             .collect())
+    }
+
+    /// Reads past `bytes` bytes of a body this client does not keep, 64 KiB at a time.
+    fn skip(&mut self, mut bytes: usize) -> Result<(), ImdError> {
+        let mut chunk = vec![0u8; bytes.min(1 << 16)];
+        while bytes > 0 {
+            let n = bytes.min(chunk.len());
+            self.read_exact(&mut chunk[..n])?;
+            bytes -= n;
+        }
+        Ok(())
     }
 
     /// Fills `buf`, waiting at most the read timeout for each piece.
@@ -321,10 +487,17 @@ fn send_header(mut stream: &TcpStream, kind: MessageType, length: i32) -> Result
     stream.write_all(&header).map_err(network)
 }
 
-/// Pauses a running simulation, or resumes a paused one, through `socket` (a handle from
-/// [`ImdClient::socket`]), while the client receives on another thread.
-pub(crate) fn toggle_pause_on(socket: &TcpStream) -> Result<(), ImdError> {
-    send_header(socket, MessageType::Pause, 0)
+/// Pauses a running simulation (`pause`), or resumes a paused one, through `socket` (a handle
+/// from [`ImdClient::socket`]) while the client receives on another thread; `version` is the
+/// session's ([`ImdClient::version`]): version 2's one message toggles, so the caller keeps
+/// track of which it is.
+pub(crate) fn pause_on(socket: &TcpStream, version: i32, pause: bool) -> Result<(), ImdError> {
+    let kind = if version >= 3 && !pause {
+        MessageType::Resume
+    } else {
+        MessageType::Pause
+    };
+    send_header(socket, kind, 0)
 }
 
 /// Detaches from the engine through `socket` (a handle from [`ImdClient::socket`]; the
@@ -352,109 +525,4 @@ fn network(e: std::io::Error) -> ImdError {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use std::net::TcpListener;
-
-    /// A fake engine on a local port that sends `messages` after the handshake (written
-    /// little-endian, as x86 engines do) and records what the client sent.
-    fn fake_engine(messages: Vec<u8>) -> (String, std::thread::JoinHandle<Vec<u8>>) {
-        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
-        let address = listener.local_addr().unwrap().to_string();
-        let handle = std::thread::spawn(move || {
-            let (mut socket, _) = listener.accept().unwrap();
-            let mut hello = (MessageType::Handshake as i32).to_be_bytes().to_vec();
-            hello.extend(IMD_VERSION.to_le_bytes());
-            socket.write_all(&hello).unwrap();
-            let mut go = [0u8; 8];
-            socket.read_exact(&mut go).unwrap();
-            socket.write_all(&messages).unwrap();
-            let mut rest = go.to_vec();
-            let _ = socket.set_read_timeout(Some(Duration::from_millis(300)));
-            let mut buf = [0u8; 64];
-            while let Ok(n) = socket.read(&mut buf) {
-                if n == 0 {
-                    break;
-                }
-                rest.extend(&buf[..n]);
-            }
-            rest
-        });
-        (address, handle)
-    }
-
-    fn header(kind: i32, length: i32) -> Vec<u8> {
-        let mut h = kind.to_be_bytes().to_vec();
-        h.extend(length.to_be_bytes());
-        h
-    }
-
-    #[test]
-    fn reads_energies_and_little_endian_coordinates() {
-        let mut msg = header(1, 1);
-        msg.extend(7i32.to_le_bytes());
-        for v in [300.0f32, -10.0, -20.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0] {
-            msg.extend(v.to_le_bytes());
-        }
-        msg.extend(header(2, 2));
-        for v in [1.0f32, 2.0, 3.0, -4.5, 5.25, 6.0] {
-            msg.extend(v.to_le_bytes());
-        }
-        let (address, engine) = fake_engine(msg);
-        let wait = Duration::from_secs(5);
-        let mut client = ImdClient::connect(&address, wait, wait).unwrap();
-        let step = client.next_step(2).unwrap();
-        assert_eq!(step.energies.unwrap().step, 7);
-        assert_eq!(step.energies.unwrap().temperature, 300.0);
-        assert_eq!(
-            step.positions,
-            vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(-4.5, 5.25, 6.0)]
-        );
-        client.set_rate(10).unwrap();
-        leave(&client.socket().unwrap());
-        let sent = engine.join().unwrap();
-        let mut expected = header(3, 0);
-        expected.extend(header(8, 10));
-        expected.extend(header(0, 0));
-        assert_eq!(sent, expected);
-    }
-
-    #[test]
-    fn refuses_a_wrong_atom_count_and_a_closed_stream() {
-        let (address, engine) = fake_engine(header(2, 1_000_000_000));
-        let wait = Duration::from_secs(5);
-        let mut client = ImdClient::connect(&address, wait, wait).unwrap();
-        let error = client.next_step(3).unwrap_err();
-        assert!(error.to_string().contains("1000000000 atoms"), "{error}");
-        drop(client);
-        engine.join().unwrap();
-
-        let (address, engine) = fake_engine(Vec::new());
-        let mut client = ImdClient::connect(&address, wait, wait).unwrap();
-        engine.join().unwrap();
-        assert_eq!(client.next_step(3).unwrap_err(), ImdError::Closed);
-    }
-
-    #[test]
-    fn nothing_listening_is_one_line() {
-        let port = TcpListener::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port();
-        let error = ImdClient::connect(
-            &format!("127.0.0.1:{port}"),
-            Duration::from_millis(300),
-            Duration::from_secs(1),
-        )
-        .unwrap_err();
-        assert!(
-            error
-                .to_string()
-                .starts_with("cannot connect: nothing listens"),
-            "{error}"
-        );
-        let error = ImdClient::connect("no-port", Duration::ZERO, Duration::ZERO).unwrap_err();
-        assert!(error.to_string().contains("not HOST:PORT"), "{error}");
-    }
-}
+pub(crate) mod tests;

@@ -1,0 +1,79 @@
+//! IMD version 3 through the commands, with the bytes LAMMPS 2025 sent (tests/data/imd/; no
+//! engine in Debian 12 speaks version 3): an engine faster than the surface loses frames from
+//! the ring before they are read, and `surface` goes on from the oldest frame held, saying so.
+
+use std::io::{Read, Write};
+use std::net::TcpListener;
+
+use crate::cli_common::{Csv, data, mdsurf};
+
+/// Bytes of the capture before its first frame: handshake (8) and session record (8 + 7).
+const PREAMBLE: usize = 23;
+/// Bytes of one frame of the capture: time, box, coordinates, velocities, forces of 256 atoms.
+const FRAME: usize = (8 + 24) + (8 + 36) + 3 * (8 + 256 * 12);
+
+/// An engine on a local port that sends the capture's preamble and then its first frame
+/// `frames` times as fast as the socket takes them (steps renumbered), then closes.
+fn flooding_engine(frames: usize) -> String {
+    let capture = std::fs::read(data("imd/lammps_argon_v3.bin")).unwrap();
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        socket.write_all(&capture[..PREAMBLE]).unwrap();
+        let mut go = [0u8; 8];
+        socket.read_exact(&mut go).unwrap();
+        let mut frame = capture[PREAMBLE..PREAMBLE + FRAME].to_vec();
+        for step in 1..=frames as i64 {
+            // The time record's step (i64, little-endian) and time (2 fs per step).
+            frame[24..32].copy_from_slice(&step.to_le_bytes());
+            frame[16..24].copy_from_slice(&(2.0 * step as f64).to_le_bytes());
+            if socket.write_all(&frame).is_err() {
+                return;
+            }
+        }
+    });
+    address
+}
+
+#[test]
+fn surface_skips_the_frames_a_fast_engine_pushed_out_of_the_ring() {
+    let dir = tempfile::tempdir().unwrap();
+    let top = data("imd/argon.xyz");
+    let address = flooding_engine(3000);
+    let run = mdsurf(
+        dir.path(),
+        &[
+            "surface",
+            &top,
+            "--imd",
+            &address,
+            "--imd-wait",
+            "10",
+            "--stats",
+            "s.csv",
+        ],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stderr
+            .contains("skipped: the simulation sends frames faster than they are measured"),
+        "{}",
+        run.stderr
+    );
+    assert!(
+        run.stderr
+            .contains("frames of the simulation skipped in all"),
+        "{}",
+        run.stderr
+    );
+    let stats = Csv::read(&dir.path().join("s.csv"));
+    let frames: Vec<usize> = stats.col("frame").iter().map(|&f| f as usize).collect();
+    // Fewer rows than frames sent, in order, ending with the last frame sent; the times are
+    // the engine's (2 per step, LAMMPS real units).
+    assert!(frames.len() < 3000, "{} rows", frames.len());
+    assert!(frames.windows(2).all(|w| w[0] < w[1]), "{frames:?}");
+    assert_eq!(frames.last(), Some(&2999));
+    let times = stats.col("time_ps");
+    assert_eq!(times.last(), Some(&6000.0));
+}
