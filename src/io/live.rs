@@ -62,8 +62,8 @@ pub struct LiveOptions {
     pub frame_timeout: Duration,
     /// The simulation's time step in ps: with it, a frame's time is its step (from the energy
     /// record the engine sends before the coordinates) times this. IMD version 2 sends no time;
-    /// without this, a version 3 engine's time record is taken as ps (GROMACS; LAMMPS sends its
-    /// own units, fs with `units real`).
+    /// without this, a version 3 engine's time record is used (in ps, or in fs when its time
+    /// step is 0.1 or more: LAMMPS with `units real`).
     pub timestep_ps: Option<f64>,
 }
 
@@ -288,6 +288,14 @@ struct Expected {
     start_ps: f64,
 }
 
+/// Factor from a version 3 engine's time unit to ps, judged from its time step `dt` in that
+/// unit: GROMACS sends ps, LAMMPS its own units, fs with `units real` (the usual units for
+/// molecules) and ps with `units metal`. No MD time step is 0.1 ps or longer, so a step of 0.1 or
+/// more is taken as fs; a shorter one as ps.
+fn engine_time_to_ps(dt: f64) -> f64 {
+    if dt >= 0.1 { 1e-3 } else { 1.0 }
+}
+
 /// The receiving thread: every step into the ring (of `ring_frames` frames) until the
 /// connection ends. After a detach or a stop the steps still on their way are read and dropped
 /// until the engine closes the connection (see [`leave`]).
@@ -308,7 +316,7 @@ fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, share
                     (Some(now), Some(first), Some(dt), _) => {
                         Some(expected.start_ps + (now - first) as f64 * dt)
                     }
-                    (.., Some(time)) => Some(time.time),
+                    (.., Some(time)) => Some(time.time * engine_time_to_ps(time.dt)),
                     _ => None,
                 };
                 received.ring.push_back(Frame {
@@ -500,14 +508,14 @@ mod tests {
         LiveFrames::connect(&options, atoms, &start).unwrap()
     }
 
-    /// A version 3 engine's box and time go to the frames; a time step given wins over the
-    /// engine's time (LAMMPS sends its own units: fs here).
+    /// A version 3 engine's box and time go to the frames (LAMMPS sends fs here: its 2.0 time
+    /// step says so); a time step given wins over the engine's time.
     #[test]
     fn version_3_frames_take_the_engines_box_and_time() {
         use crate::io::imd::tests::{argon_start, lammps_v3_session, replaying_engine};
         let atoms = argon_start().len();
         for (timestep_ps, times) in [
-            (None, [2.0, 4.0, 6.0]),
+            (None, [0.002, 0.004, 0.006]),
             (Some(0.002), [10.0, 10.002, 10.004]),
         ] {
             let (address, _engine) = replaying_engine(lammps_v3_session());

@@ -70,10 +70,10 @@ fn surface_skips_the_frames_a_fast_engine_pushed_out_of_the_ring() {
     let stats = Csv::read(&dir.path().join("s.csv"));
     let frames: Vec<usize> = stats.col("frame").iter().map(|&f| f as usize).collect();
     // Fewer rows than frames sent, in order, ending with the last frame sent; the times are
-    // the engine's (2 per step, LAMMPS real units).
+    // the engine's (2 fs per step, LAMMPS real units: the last is 6 ps).
     assert!(frames.len() < 3000, "{} rows", frames.len());
     assert!(frames.windows(2).all(|w| w[0] < w[1]), "{frames:?}");
     assert_eq!(frames.last(), Some(&2999));
     let times = stats.col("time_ps");
-    assert_eq!(times.last(), Some(&6000.0));
+    assert_eq!(times.last(), Some(&6.0));
 }
