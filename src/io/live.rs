@@ -12,17 +12,17 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-/// How long dropping a live source waits for the engine to close the connection after the
-/// disconnect message (it does so at its next step; see [`leave`] for why we wait) before
-/// closing it anyway.
-const LEAVE_WAIT: Duration = Duration::from_secs(10);
-
 use super::IoError;
 use super::imd::{ImdClient, ImdError, cut, leave};
 use super::native::NativeFrames;
 use glam::Vec3;
 
 use crate::model::Frame;
+
+/// How long dropping a live source waits for the engine to close the connection after the
+/// disconnect message (it does so at its next step; see [`leave`] for why we wait) before
+/// closing it anyway.
+const LEAVE_WAIT: Duration = Duration::from_secs(10);
 
 /// How many frames a live trajectory claims to have when the run's length is not known: the
 /// consumers' loops end at [`IoError::LiveEnded`] long before.
