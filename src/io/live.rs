@@ -440,19 +440,17 @@ impl Drop for LiveFrames {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::imd::IMD_VERSIONS;
+    use crate::io::imd::tests::{greet, header};
     use std::io::{Read, Write};
     use std::net::TcpListener;
 
     /// One step of `atoms` atoms at `step` as an x86 engine writes it (bodies little-endian):
     /// the energy record, then the coordinates.
     fn step_message(step: i32, atoms: i32) -> Vec<u8> {
-        let mut bytes = 1i32.to_be_bytes().to_vec();
-        bytes.extend(1i32.to_be_bytes());
+        let mut bytes = header(1, 1);
         bytes.extend(step.to_le_bytes());
         bytes.extend([0u8; 36]);
-        bytes.extend(2i32.to_be_bytes());
-        bytes.extend(atoms.to_be_bytes());
+        bytes.extend(header(2, atoms));
         for i in 0..atoms * 3 {
             bytes.extend((i as f32).to_le_bytes());
         }
@@ -468,12 +466,9 @@ mod tests {
         let address = listener.local_addr().unwrap().to_string();
         let handle = std::thread::spawn(move || {
             let (mut socket, _) = listener.accept().unwrap();
-            let mut hello = 4i32.to_be_bytes().to_vec();
-            hello.extend(IMD_VERSIONS[0].to_le_bytes());
-            socket.write_all(&hello).unwrap();
-            let mut header = [0u8; 8];
-            socket.read_exact(&mut header).unwrap();
+            greet(&mut socket);
             socket.write_all(&step_message(0, 2)).unwrap();
+            let mut header = [0u8; 8];
             socket.read_exact(&mut header).unwrap();
             assert_eq!(header, [0u8; 8], "the next message is the disconnect");
             (1..=late)

@@ -299,8 +299,8 @@ impl ImdClient {
         let [time, energies, cell, positions, wrapped, velocities, forces] = flags.map(|f| f != 0);
         if !positions {
             return Err(ImdError::Handshake(
-                "the engine sends no coordinates in this session (GROMACS: set imd-nst... to \
-                 send positions)"
+                "the engine sends no coordinates in this session (LAMMPS: `fix imd ... \
+                 coordinates on`)"
                     .into(),
             ));
         }

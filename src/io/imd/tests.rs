@@ -10,11 +10,7 @@ fn fake_engine(messages: Vec<u8>) -> (String, std::thread::JoinHandle<Vec<u8>>) 
     let address = listener.local_addr().unwrap().to_string();
     let handle = std::thread::spawn(move || {
         let (mut socket, _) = listener.accept().unwrap();
-        let mut hello = (MessageType::Handshake as i32).to_be_bytes().to_vec();
-        hello.extend(IMD_VERSIONS[0].to_le_bytes());
-        socket.write_all(&hello).unwrap();
-        let mut go = [0u8; 8];
-        socket.read_exact(&mut go).unwrap();
+        let go = greet(&mut socket);
         socket.write_all(&messages).unwrap();
         let mut rest = go.to_vec();
         let _ = socket.set_read_timeout(Some(Duration::from_millis(300)));
@@ -30,7 +26,19 @@ fn fake_engine(messages: Vec<u8>) -> (String, std::thread::JoinHandle<Vec<u8>>) 
     (address, handle)
 }
 
-fn header(kind: i32, length: i32) -> Vec<u8> {
+/// Sends a version 2 handshake as a little-endian engine does, and returns the client's answer
+/// (8 bytes: `GO`).
+pub(crate) fn greet(socket: &mut TcpStream) -> [u8; 8] {
+    let mut hello = header(MessageType::Handshake as i32, 0);
+    hello[4..].copy_from_slice(&IMD_VERSIONS[0].to_le_bytes());
+    socket.write_all(&hello).unwrap();
+    let mut go = [0u8; 8];
+    socket.read_exact(&mut go).unwrap();
+    go
+}
+
+/// A message header: type and length, big-endian.
+pub(crate) fn header(kind: i32, length: i32) -> Vec<u8> {
     let mut h = kind.to_be_bytes().to_vec();
     h.extend(length.to_be_bytes());
     h
