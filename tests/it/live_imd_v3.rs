@@ -31,6 +31,11 @@ fn flooding_engine(frames: usize) -> String {
             if socket.write_all(&frame).is_err() {
                 return;
             }
+            // Frame 0 is read when the source opens, before the loop that skips: the flood
+            // starts once it has had time to (a frame 0 lost at open is a gap left open).
+            if step == 1 {
+                std::thread::sleep(std::time::Duration::from_secs(3));
+            }
         }
     });
     address

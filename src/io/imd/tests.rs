@@ -264,3 +264,22 @@ fn pause_and_resume_are_one_toggle_in_version_2_and_two_messages_in_version_3() 
         .collect();
     assert_eq!(sent, expected);
 }
+
+#[test]
+fn a_velocity_record_of_another_atom_count_is_one_line() {
+    let mut bytes = lammps_v3_session();
+    // The first frame's velocity header: after the preamble (23), time (32), box (44) and
+    // coordinates (8 + 256 * 12); its length field is 4 bytes in.
+    let at = 23 + 32 + 44 + 8 + 256 * 12 + 4;
+    assert_eq!(bytes[at - 4..at], 14i32.to_be_bytes(), "a velocity record");
+    bytes[at..at + 4].copy_from_slice(&255i32.to_be_bytes());
+    let (address, _engine) = replaying_engine(bytes);
+    let wait = Duration::from_secs(5);
+    let mut client = ImdClient::connect(&address, wait, wait).unwrap();
+    client.next_step(256).unwrap();
+    let error = client.next_step(256).unwrap_err();
+    assert_eq!(
+        error.to_string(),
+        "bad message from the simulation: unexpected message type 14 (length 255)"
+    );
+}
