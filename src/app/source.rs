@@ -311,7 +311,8 @@ fn transform_chain(
     transforms: &TransformOptions,
 ) -> Result<TransformChain, SourceError> {
     use crate::transform::FitReference;
-    let first = trajectory.read_frame(0)?;
+    // A running simulation may have pushed frame 0 out already: then the oldest held.
+    let first = crate::io::read_held(0, |i| trajectory.read_frame(i), IoError::oldest_held)?;
     let reference =
         if transforms.fit.is_some() && transforms.fit_reference == FitReference::Topology {
             let frame = crate::io::open(top, None).and_then(|opened| opened.read_frame(0));

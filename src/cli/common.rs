@@ -470,7 +470,12 @@ impl System {
         if trajectory.is_empty() {
             bail!("{}: the trajectory has no frames", frames_path.display());
         }
-        let first = trajectory.read_frame(first_frame.min(trajectory.len() - 1))?;
+        // A running simulation may have pushed the frame out already: then the oldest held.
+        let first = io::read_held(
+            first_frame.min(trajectory.len() - 1),
+            |i| trajectory.read_frame(i),
+            io::IoError::oldest_held,
+        )?;
         let particles = Particles::new(trajectory.topology(), &first, &options)
             .map_err(|e| anyhow!("{}: {e}", frames_path.display()))?;
         Ok((

@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use anyhow::{Result, bail};
 use mdsurf::io::{FollowOptions, IoError, LiveOptions, LiveSource};
+use mdsurf::model::Frame;
 
 /// Frames from a simulation running now, over IMD (GROMACS `mdrun -imdport`, NAMD, LAMMPS).
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -120,10 +121,65 @@ impl OverrunSkips {
     }
 }
 
+/// [`mdsurf::io::read_held`] for the commands' readers: frame `index`, or the oldest frame a
+/// running simulation still holds when it has already pushed `index` out.
+pub fn read_held(index: usize, read: impl FnMut(usize) -> Result<Frame>) -> Result<Frame> {
+    mdsurf::io::read_held(index, read, |e: &anyhow::Error| {
+        e.downcast_ref::<IoError>().and_then(IoError::oldest_held)
+    })
+}
+
 /// The end of a growing source (a simulation that finished, a file that stopped growing) when
 /// `error` is one: the end of the run, not a failure, for the commands' frame loops.
 pub fn end_of_stream(error: &anyhow::Error) -> Option<&IoError> {
     error
         .downcast_ref::<IoError>()
         .filter(|e| matches!(e, IoError::LiveEnded { .. }))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+
+    use super::*;
+
+    /// A source whose frames before `oldest` were pushed out of the ring, as [`IoError`]s say.
+    fn held_from(oldest: usize) -> impl FnMut(usize) -> Result<Frame> {
+        move |index| {
+            if index < oldest {
+                return Err(IoError::LiveOverrun {
+                    path: PathBuf::from("imd://localhost:8888"),
+                    frame: index,
+                    oldest,
+                    kept: 4,
+                }
+                .into());
+            }
+            Ok(Frame {
+                index,
+                ..Frame::default()
+            })
+        }
+    }
+
+    #[test]
+    fn the_set_up_frame_is_the_oldest_held_when_the_first_was_pushed_out() {
+        assert_eq!(read_held(0, held_from(7)).unwrap().index, 7);
+        assert_eq!(read_held(9, held_from(7)).unwrap().index, 9);
+    }
+
+    #[test]
+    fn other_errors_are_returned_as_they_are() {
+        let gone = |index| -> Result<Frame> {
+            Err(IoError::LiveEnded {
+                path: PathBuf::from("imd://localhost:8888"),
+                frames: index,
+                reason: "the engine closed the connection".into(),
+            }
+            .into())
+        };
+        let err = read_held(3, gone).unwrap_err();
+        assert!(err.to_string().contains("imd://localhost:8888"), "{err}");
+        assert!(end_of_stream(&err).is_some());
+    }
 }

@@ -81,7 +81,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
     check_colour_frames(&options, &frames)?;
     let topology = system.trajectory.topology().clone();
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
-    let first_frame = Arc::new(reader.read_frame(frames[0])?);
+    // A running simulation may have pushed the first frame out already: then the oldest held.
+    let first_frame = Arc::new(super::live_args::read_held(frames[0], |i| {
+        reader.read_frame(i)
+    })?);
     let mut choice = args.scene.representations(
         state,
         &topology,
@@ -186,7 +189,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             }
         }
         let t0 = Instant::now();
-        let frame = if i == 0 {
+        let frame = if i == 0 && first_frame.index == f {
             first_frame.clone()
         } else {
             match reader.read_frame(f) {

@@ -20,7 +20,7 @@ use mdsurf::surface::SurfaceParams;
 
 use super::chunk::{ChunkSpec, check_chunk_count};
 use super::interrupt::{catch_interrupts, interrupted};
-use super::live_args::{LiveArgs, OverrunSkips, end_of_stream};
+use super::live_args::{LiveArgs, OverrunSkips, end_of_stream, read_held};
 use super::measure_args::{MeasureArgs, Measurer};
 
 use super::common::{
@@ -126,8 +126,9 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let start_frame = args.frames.map(|r| r.start).unwrap_or(0);
     let (system, _) = System::open_or_follow(&args.input, live.as_ref(), start_frame)?;
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
-    let first_index = start_frame.min(system.len() - 1);
-    let first = reader.read_frame(first_index)?;
+    // A running simulation may have pushed the start frame out already: then the oldest held.
+    let first = read_held(start_frame.min(system.len() - 1), |i| reader.read_frame(i))?;
+    let first_index = first.index;
     let range = args.frames.unwrap_or_default();
     let frames = range.indices(system.selectable_len());
     if frames.is_empty() {
@@ -287,7 +288,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         }
         let rows = (|| -> Result<Vec<StatsRow>> {
             let t0 = Instant::now();
-            let frame = match first.take().filter(|_| index == first_index) {
+            let frame = match first.take_if(|_| index == first_index) {
                 Some(frame) => frame,
                 None => Arc::new(reader.read_frame(index)?),
             };

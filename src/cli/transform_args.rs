@@ -108,7 +108,8 @@ pub fn host_scene(backend: Backend, chain: &TransformChain, quiet: bool) -> Resu
 /// topology file's coordinates are read when the fit needs them).
 pub fn build_chain(options: &TransformOptions, trajectory: &Trajectory) -> Result<TransformChain> {
     let file = trajectory.path().display().to_string();
-    let first = trajectory.read_frame(0)?;
+    // A running simulation may have pushed frame 0 out already: then the oldest held.
+    let first = io::read_held(0, |i| trajectory.read_frame(i), io::IoError::oldest_held)?;
     let reference = if options.fit.is_some() && options.fit_reference == FitReference::Topology {
         let top = trajectory.topology_path();
         let opened = io::open(top, None).map_err(|e| anyhow!("--fit-reference topology: {e}"))?;

@@ -152,6 +152,15 @@ pub enum IoError {
 }
 
 impl IoError {
+    /// For a frame a running simulation sent and pushed out of the frames kept before it was
+    /// read ([`IoError::LiveOverrun`]): the oldest frame still held; `None` for other errors.
+    pub fn oldest_held(&self) -> Option<usize> {
+        match self {
+            IoError::LiveOverrun { oldest, .. } => Some(*oldest),
+            _ => None,
+        }
+    }
+
     /// The same error with the file `from` called `to` (its path fields, and where a message
     /// quotes it): a trajectory downloaded from a URL names the URL, not its temporary copy.
     pub(crate) fn renamed(mut self, from: &std::path::Path, to: &std::path::Path) -> Self {

@@ -265,6 +265,7 @@ impl LiveFrames {
                 .spawn(move || receive(client, &expected, ring_frames, &shared))
                 .map_err(|e| IoError::unreadable(&path, format!("cannot start a thread: {e}")))?
         };
+        setup_delay_for_tests();
         Ok(LiveFrames {
             path,
             shared,
@@ -338,6 +339,41 @@ fn receive(mut client: ImdClient, expected: &Expected, ring_frames: usize, share
                 shared.arrived.notify_all();
                 return;
             }
+        }
+    }
+}
+
+/// The `test-hooks` build waits `MDSURF_TEST_LIVE_SETUP_DELAY_MS` ms after connecting, before
+/// the caller reads its first frame: a slow machine's set-up, during which a fast engine fills
+/// the ring (the tests that the first frame may be gone by then). Other builds do nothing.
+fn setup_delay_for_tests() {
+    #[cfg(feature = "test-hooks")]
+    if let Some(ms) = std::env::var("MDSURF_TEST_LIVE_SETUP_DELAY_MS")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        std::thread::sleep(Duration::from_millis(ms));
+    }
+}
+
+/// Reads frame `index` with `read`, or, when a running simulation has already pushed it out of
+/// the frames kept (it sends faster than the reader sets up; `oldest` finds that in an error
+/// and says the oldest frame still held), that oldest frame: for the frame a command or the
+/// viewer sets up with, where any frame of the run serves. The frame's own `index` says which
+/// it is. Other errors are returned as they are.
+pub fn read_held<E>(
+    index: usize,
+    mut read: impl FnMut(usize) -> Result<Frame, E>,
+    oldest: impl Fn(&E) -> Option<usize>,
+) -> Result<Frame, E> {
+    let mut index = index;
+    loop {
+        match read(index) {
+            Err(e) => match oldest(&e) {
+                Some(held) if held > index => index = held,
+                _ => return Err(e),
+            },
+            ok => return ok,
         }
     }
 }

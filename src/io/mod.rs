@@ -91,7 +91,9 @@ pub use contained::reader_main;
 pub use error::IoError;
 pub use follow::FollowOptions;
 pub use format::{FileFormat, WwFormat, detect};
-pub use live::{LIVE_FRAMES_UNBOUNDED, LiveAction, LiveControlError, LiveOptions, LiveSource};
+pub use live::{
+    LIVE_FRAMES_UNBOUNDED, LiveAction, LiveControlError, LiveOptions, LiveSource, read_held,
+};
 pub use stream::{
     FrameHook, FrameHookError, FrameResult, FrameStatus, FrameStreamer, ReadyCallback,
     StreamerOptions,

@@ -1,11 +1,12 @@
 //! IMD version 3 through the commands, with the bytes LAMMPS 2025 sent (tests/data/imd/; no
 //! engine in Debian 12 speaks version 3): an engine faster than the surface loses frames from
-//! the ring before they are read, and `surface` goes on from the oldest frame held, saying so.
+//! the ring before they are read, and `surface` goes on from the oldest frame held, saying so
+//! (frame 0 too, which may be gone before `surface` has set up).
 
 use std::io::{Read, Write};
 use std::net::TcpListener;
 
-use crate::cli_common::{Csv, data, mdsurf};
+use crate::cli_common::{Csv, data, mdsurf, mdsurf_env};
 
 /// Bytes of the capture before its first frame: handshake (8) and session record (8 + 7).
 const PREAMBLE: usize = 23;
@@ -31,14 +32,29 @@ fn flooding_engine(frames: usize) -> String {
             if socket.write_all(&frame).is_err() {
                 return;
             }
-            // Frame 0 is read when the source opens, before the loop that skips: the flood
-            // starts once it has had time to (a frame 0 lost at open is a gap left open).
-            if step == 1 {
-                std::thread::sleep(std::time::Duration::from_secs(3));
-            }
         }
     });
     address
+}
+
+#[test]
+fn surface_sets_up_with_the_oldest_frame_held_when_frame_0_is_already_gone() {
+    // Set-up waits 2 s after connecting (the test build's hook): the engine sends its 3000
+    // frames meanwhile, and frame 0 has left the 256-frame ring before `surface` reads it.
+    let dir = tempfile::tempdir().unwrap();
+    let top = data("imd/argon.xyz");
+    let address = flooding_engine(3000);
+    let run = mdsurf_env(
+        dir.path(),
+        &["surface", &top, "--imd", &address, "--stats", "s.csv"],
+        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "2000")],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(run.stderr.contains("frames 0 to "), "{}", run.stderr);
+    let stats = Csv::read(&dir.path().join("s.csv"));
+    let frames = stats.col("frame");
+    assert!(frames[0] > 0.0, "{frames:?}");
+    assert_eq!(frames.last(), Some(&2999.0));
 }
 
 #[test]
@@ -81,4 +97,32 @@ fn surface_skips_the_frames_a_fast_engine_pushed_out_of_the_ring() {
     assert_eq!(frames.last(), Some(&2999));
     let times = stats.col("time_ps");
     assert_eq!(times.last(), Some(&6.0));
+}
+
+#[test]
+fn render_sets_up_with_the_oldest_frame_held_when_frame_0_is_already_gone() {
+    // As above, for a movie: its first image is the oldest frame held, and the frames before
+    // it are skipped with one line.
+    let dir = tempfile::tempdir().unwrap();
+    let top = data("imd/argon.xyz");
+    let address = flooding_engine(3000);
+    let run = mdsurf_env(
+        dir.path(),
+        &[
+            "render", &top, "--imd", &address, "--frames", ":2800", "--size", "160x120", "-o",
+            "live.mp4",
+        ],
+        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "2000")],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(run.stderr.contains("frames 0 to "), "{}", run.stderr);
+    // Frames 2744 to 2799 (56) when all 3000 arrived during the set-up: the 256 frames held,
+    // up to the range's end; never more than the ring held.
+    let frames = crate::cli_common::probe_video(&dir.path().join("live.mp4"), "nb_read_frames");
+    let frames: usize = frames.parse().unwrap();
+    assert!(
+        (1..=256).contains(&frames),
+        "{frames} frames: {}",
+        run.stderr
+    );
 }

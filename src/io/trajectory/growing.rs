@@ -8,7 +8,9 @@ use std::sync::Mutex;
 use super::{FrameSource, Trajectory, open};
 use crate::io::IoError;
 use crate::io::follow::{FollowOptions, FollowedFrames};
-use crate::io::live::{LiveAction, LiveControlError, LiveFrames, LiveOptions, LiveSource};
+use crate::io::live::{
+    LiveAction, LiveControlError, LiveFrames, LiveOptions, LiveSource, read_held,
+};
 
 /// Opens the structure `top` (a file with atom names, as for [`open`]) with its frames coming
 /// from the simulation running at `options.address` over IMD (see `live`): frame `i` is the
@@ -31,8 +33,9 @@ pub fn open_live(top: &Path, options: &LiveOptions) -> Result<Trajectory, IoErro
         live,
         ..structure
     };
-    // Waits for the first frame: a wrong atom count is reported at once.
-    trajectory.check_first_frame()?;
+    // Waits for the first frame: a wrong atom count is reported at once (on the oldest frame
+    // held when a fast engine has already pushed frame 0 out).
+    read_held(0, |i| trajectory.read_frame(i), IoError::oldest_held)?;
     Ok(trajectory)
 }
 
