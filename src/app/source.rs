@@ -13,6 +13,17 @@ use crate::io::{
 use crate::model::{Frame, Topology};
 use crate::transform::{TransformChain, TransformError, TransformOptions};
 
+impl From<crate::transform::ChainSetupError> for SourceError {
+    fn from(error: crate::transform::ChainSetupError) -> SourceError {
+        use crate::transform::ChainSetupError as E;
+        match error {
+            E::Io(e) => SourceError::Io(e),
+            E::FitReference(e) => SourceError::FitReference(e),
+            E::Transform(e) => SourceError::Transform(e),
+        }
+    }
+}
+
 /// How long the worker waits for the reader thread to deliver one frame.
 const READ_TIMEOUT: Duration = Duration::from_secs(120);
 
@@ -274,7 +285,7 @@ pub fn open_files_with(
             message: "the reader crashed on this file".into(),
         })
     });
-    streamed(opened?, top, transforms)
+    streamed(opened?, transforms)
 }
 
 /// Like [`open_files_with`], with the frames coming as they arrive from a running simulation
@@ -285,50 +296,21 @@ pub fn open_live_with(
     transforms: &TransformOptions,
 ) -> Result<Arc<dyn FrameSource>, SourceError> {
     let trajectory = crate::io::open_growing(top, live)?;
-    streamed(trajectory, top, transforms)
+    streamed(trajectory, transforms)
 }
 
 /// `trajectory` read ahead by a [`StreamedSource`], its frames transformed as `transforms`
 /// ask.
 fn streamed(
     trajectory: Trajectory,
-    top: &std::path::Path,
     transforms: &TransformOptions,
 ) -> Result<Arc<dyn FrameSource>, SourceError> {
-    let chain = transform_chain(&trajectory, top, transforms)?;
+    let chain = crate::transform::chain_for(transforms, &trajectory)?;
     Ok(Arc::new(StreamedSource::transformed(
         trajectory,
         StreamerOptions::default(),
         chain,
     )))
-}
-
-/// The transformation chain `transforms` ask for on `trajectory` (its topology file `top`
-/// gives the fit reference when asked).
-fn transform_chain(
-    trajectory: &Trajectory,
-    top: &std::path::Path,
-    transforms: &TransformOptions,
-) -> Result<TransformChain, SourceError> {
-    use crate::transform::FitReference;
-    // A running simulation may have pushed frame 0 out already: then the oldest held.
-    let first = crate::io::read_held(0, |i| trajectory.read_frame(i), IoError::oldest_held)?;
-    let reference =
-        if transforms.fit.is_some() && transforms.fit_reference == FitReference::Topology {
-            let frame = crate::io::open(top, None).and_then(|opened| opened.read_frame(0));
-            Some(frame.map_err(SourceError::FitReference)?)
-        } else {
-            None
-        };
-    let file = trajectory.path().display().to_string();
-    TransformChain::new(
-        transforms,
-        trajectory.topology(),
-        &first,
-        reference.as_ref(),
-        &file,
-    )
-    .map_err(SourceError::from)
 }
 
 /// A small test system: `residues` residues of three atoms each along a helix, moving a little

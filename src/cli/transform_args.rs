@@ -3,15 +3,15 @@
 //! [`FrameReader`]: a trajectory read through the transformations the flags ask for.
 
 use super::common::{Backend, make_engine};
-use anyhow::{Result, anyhow};
-use mdsurf::io::{self, Trajectory};
+use anyhow::Result;
+use mdsurf::io::Trajectory;
 use mdsurf::model::Frame;
 use mdsurf::scene::state_file::StateFile;
 use mdsurf::scene::{SceneBackend, SceneEngine};
 use mdsurf::surface::periodic::GPU_NOTE;
 use mdsurf::surface::{CpuEngine, SurfaceEngine};
 use mdsurf::transform::{
-    FitReference, Replicate, TransformChain, TransformOptions, TransformedFrames,
+    FitReference, Replicate, TransformChain, TransformOptions, TransformedFrames, chain_for,
 };
 
 /// Per-frame transformations, applied in this order: whole, center, fit, smooth.
@@ -104,32 +104,6 @@ pub fn host_scene(backend: Backend, chain: &TransformChain, quiet: bool) -> Resu
     Ok(scene)
 }
 
-/// Builds the transformation chain for `trajectory` (its first frame decides the defaults; the
-/// topology file's coordinates are read when the fit needs them).
-pub fn build_chain(options: &TransformOptions, trajectory: &Trajectory) -> Result<TransformChain> {
-    let file = trajectory.path().display().to_string();
-    // A running simulation may have pushed frame 0 out already: then the oldest held.
-    let first = io::read_held(0, |i| trajectory.read_frame(i), io::IoError::oldest_held)?;
-    let reference = if options.fit.is_some() && options.fit_reference == FitReference::Topology {
-        let top = trajectory.topology_path();
-        let opened = io::open(top, None).map_err(|e| anyhow!("--fit-reference topology: {e}"))?;
-        Some(
-            opened
-                .read_frame(0)
-                .map_err(|e| anyhow!("--fit-reference topology: {e}"))?,
-        )
-    } else {
-        None
-    };
-    Ok(TransformChain::new(
-        options,
-        trajectory.topology(),
-        &first,
-        reference.as_ref(),
-        &file,
-    )?)
-}
-
 /// A trajectory read through a transformation chain.
 pub struct FrameReader<'a> {
     trajectory: &'a Trajectory,
@@ -139,7 +113,7 @@ pub struct FrameReader<'a> {
 impl<'a> FrameReader<'a> {
     /// Reads `trajectory` through the transformations `options` ask for.
     pub fn new(trajectory: &'a Trajectory, options: &TransformOptions) -> Result<FrameReader<'a>> {
-        let chain = build_chain(options, trajectory)?;
+        let chain = chain_for(options, trajectory)?;
         Ok(FrameReader {
             frames: TransformedFrames::new(chain, trajectory.len()),
             trajectory,

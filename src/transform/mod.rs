@@ -4,7 +4,7 @@
 //! frame ([`fit`]), and average positions over neighbouring frames ([`smooth`]).
 //!
 //! A [`TransformChain`] is built once per trajectory from [`TransformOptions`], the topology and
-//! the first frame; [`TransformChain::apply`] runs the first three steps on one frame. Smoothing
+//! the first frame ([`chain_for`] does it for an opened trajectory); [`TransformChain::apply`] runs the first three steps on one frame. Smoothing
 //! needs neighbouring frames, so whoever reads frames does it with [`smooth::smooth_frame`]
 //! (the viewer's frame streamer caches transformed frames; the command line uses
 //! [`reader::TransformedFrames`]).
@@ -12,6 +12,7 @@
 pub(crate) mod center;
 pub(crate) mod fit;
 pub(crate) mod reader;
+pub(crate) mod setup;
 pub mod smooth;
 pub(crate) mod whole;
 
@@ -26,6 +27,7 @@ use crate::model::{Frame, Topology};
 use crate::selection::{BoundSelection, Selection, SelectionError};
 pub use crate::surface::periodic::Replicate;
 pub use reader::TransformedFrames;
+pub use setup::{ChainSetupError, chain_for};
 pub use whole::{Connectivity, Molecules};
 
 /// The widest smoothing window half-width, in frames.
