@@ -12,6 +12,7 @@
 pub(crate) mod center;
 pub(crate) mod fit;
 pub(crate) mod reader;
+#[cfg(feature = "readers")]
 pub(crate) mod setup;
 pub mod smooth;
 pub(crate) mod whole;
@@ -27,6 +28,7 @@ use crate::model::{Frame, Topology};
 use crate::selection::{BoundSelection, Selection, SelectionError};
 pub use crate::surface::periodic::Replicate;
 pub use reader::TransformedFrames;
+#[cfg(feature = "readers")]
 pub use setup::{ChainSetupError, chain_for};
 pub use whole::{Connectivity, Molecules};
 
