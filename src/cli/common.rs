@@ -471,7 +471,7 @@ impl System {
             bail!("{}: the trajectory has no frames", frames_path.display());
         }
         // A running simulation may have pushed the frame out already: then the oldest held.
-        let first = io::read_held(
+        let (_, first) = io::read_held(
             first_frame.min(trajectory.len() - 1),
             |i| trajectory.read_frame(i),
             io::IoError::oldest_held,

@@ -122,8 +122,8 @@ impl OverrunSkips {
 }
 
 /// [`mdsurf::io::read_held`] for the commands' readers: frame `index`, or the oldest frame a
-/// running simulation still holds when it has already pushed `index` out.
-pub fn read_held(index: usize, read: impl FnMut(usize) -> Result<Frame>) -> Result<Frame> {
+/// running simulation still holds when it has already pushed `index` out, with its index.
+pub fn read_held(index: usize, read: impl FnMut(usize) -> Result<Frame>) -> Result<(usize, Frame)> {
     mdsurf::io::read_held(index, read, |e: &anyhow::Error| {
         e.downcast_ref::<IoError>().and_then(IoError::oldest_held)
     })
@@ -164,8 +164,9 @@ mod tests {
 
     #[test]
     fn the_set_up_frame_is_the_oldest_held_when_the_first_was_pushed_out() {
-        assert_eq!(read_held(0, held_from(7)).unwrap().index, 7);
-        assert_eq!(read_held(9, held_from(7)).unwrap().index, 9);
+        let (index, frame) = read_held(0, held_from(7)).unwrap();
+        assert_eq!((index, frame.index), (7, 7));
+        assert_eq!(read_held(9, held_from(7)).unwrap().0, 9);
     }
 
     #[test]

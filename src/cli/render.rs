@@ -82,9 +82,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let topology = system.trajectory.topology().clone();
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
     // A running simulation may have pushed the first frame out already: then the oldest held.
-    let first_frame = Arc::new(super::live_args::read_held(frames[0], |i| {
-        reader.read_frame(i)
-    })?);
+    let (first_index, first_frame) =
+        super::live_args::read_held(frames[0], |i| reader.read_frame(i))?;
+    let first_frame = Arc::new(first_frame);
     let mut choice = args.scene.representations(
         state,
         &topology,
@@ -189,7 +189,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             }
         }
         let t0 = Instant::now();
-        let frame = if i == 0 && first_frame.index == f {
+        let frame = if i == 0 && first_index == f {
             first_frame.clone()
         } else {
             match reader.read_frame(f) {

@@ -127,8 +127,8 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let (system, _) = System::open_or_follow(&args.input, live.as_ref(), start_frame)?;
     let mut reader = FrameReader::new(&system.trajectory, &transforms)?;
     // A running simulation may have pushed the start frame out already: then the oldest held.
-    let first = read_held(start_frame.min(system.len() - 1), |i| reader.read_frame(i))?;
-    let first_index = first.index;
+    let (first_index, first) =
+        read_held(start_frame.min(system.len() - 1), |i| reader.read_frame(i))?;
     let range = args.frames.unwrap_or_default();
     let frames = range.indices(system.selectable_len());
     if frames.is_empty() {

@@ -359,21 +359,21 @@ fn setup_delay_for_tests() {
 /// Reads frame `index` with `read`, or, when a running simulation has already pushed it out of
 /// the frames kept (it sends faster than the reader sets up; `oldest` finds that in an error
 /// and says the oldest frame still held), that oldest frame: for the frame a command or the
-/// viewer sets up with, where any frame of the run serves. The frame's own `index` says which
-/// it is. Other errors are returned as they are.
+/// viewer sets up with, where any frame of the run serves. Returns the index of the frame read
+/// with it. Other errors are returned as they are.
 pub fn read_held<E>(
     index: usize,
     mut read: impl FnMut(usize) -> Result<Frame, E>,
     oldest: impl Fn(&E) -> Option<usize>,
-) -> Result<Frame, E> {
+) -> Result<(usize, Frame), E> {
     let mut index = index;
     loop {
         match read(index) {
+            Ok(frame) => return Ok((index, frame)),
             Err(e) => match oldest(&e) {
                 Some(held) if held > index => index = held,
                 _ => return Err(e),
             },
-            ok => return ok,
         }
     }
 }

@@ -26,7 +26,7 @@ pub fn chain_for(
     options: &TransformOptions,
     trajectory: &Trajectory,
 ) -> Result<TransformChain, ChainSetupError> {
-    let first = read_held(0, |i| trajectory.read_frame(i), IoError::oldest_held)?;
+    let (_, first) = read_held(0, |i| trajectory.read_frame(i), IoError::oldest_held)?;
     let reference = if options.fit.is_some() && options.fit_reference == FitReference::Topology {
         let frame = io::open(trajectory.topology_path(), None).and_then(|t| t.read_frame(0));
         Some(frame.map_err(ChainSetupError::FitReference)?)
