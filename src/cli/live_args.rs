@@ -80,16 +80,18 @@ impl LiveArgs {
 }
 
 /// The frames a command's loop skipped because a running simulation sent them faster than they
-/// were read (they left the ring of frames kept before being read).
+/// were read (they left the ring of frames kept before being read). Only the frames the command
+/// was asked for count (`--frames` may take one in N, or stop before the simulation does).
 #[derive(Default)]
 pub struct OverrunSkips {
-    /// Frames skipped so far.
+    /// Frames asked for and skipped so far.
     frames: usize,
 }
 
 impl OverrunSkips {
-    /// When `error` says frames were lost that way: counts them, says so in one line the first
-    /// time (unless `quiet`), and returns the oldest frame still held, where the loop goes on.
+    /// When `error` says frames were lost that way: counts the frame asked for, says so in one
+    /// line the first time (unless `quiet`), and returns the oldest frame still held, where the
+    /// loop goes on (the frames asked for before it are counted by [`OverrunSkips::pass_over`]).
     pub fn skip(&mut self, error: &anyhow::Error, quiet: bool) -> Option<usize> {
         let IoError::LiveOverrun {
             path,
@@ -109,8 +111,14 @@ impl OverrunSkips {
                 oldest - 1
             );
         }
-        self.frames += oldest - frame;
+        self.frames += 1;
         Some(*oldest)
+    }
+
+    /// Counts a frame asked for that the loop passes over because it left the ring with the
+    /// one [`OverrunSkips::skip`] was told about (it comes before the returned frame).
+    pub fn pass_over(&mut self) {
+        self.frames += 1;
     }
 
     /// Says in one line how many frames were skipped in all, if any.

@@ -170,7 +170,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         if i >= block.end {
             break;
         }
-        if (i > 0 && i < block.start) || f < resume_at {
+        if i > 0 && i < block.start {
+            continue;
+        }
+        if f < resume_at {
+            skips.pass_over();
             continue;
         }
         if interrupted() {

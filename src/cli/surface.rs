@@ -277,6 +277,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     catch_interrupts();
     for &index in &frames {
         if index < resume_at {
+            skips.pass_over();
             continue;
         }
         if interrupted() {

@@ -97,6 +97,47 @@ fn surface_skips_the_frames_a_fast_engine_pushed_out_of_the_ring() {
     assert_eq!(frames.last(), Some(&2999));
     let times = stats.col("time_ps");
     assert_eq!(times.last(), Some(&6.0));
+    // Every frame is either measured or counted as skipped.
+    assert_eq!(
+        frames.len() + skipped_in_all(&run.stderr),
+        3000,
+        "{}",
+        run.stderr
+    );
+}
+
+/// The count of `N frames of the simulation skipped in all`, the run's last skip line.
+fn skipped_in_all(stderr: &str) -> usize {
+    let line = stderr
+        .lines()
+        .find(|l| l.ends_with("frames of the simulation skipped in all"))
+        .unwrap_or_else(|| panic!("no skip total in: {stderr}"));
+    line.split(' ').next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn the_skip_total_counts_only_the_frames_asked_for() {
+    // One frame in two: the skipped ones the engine sent in between are not the user's.
+    let dir = tempfile::tempdir().unwrap();
+    let top = data("imd/argon.xyz");
+    let address = flooding_engine(3000);
+    let run = mdsurf_env(
+        dir.path(),
+        &[
+            "surface", &top, "--imd", &address, "--frames", "::2", "--stats", "s.csv",
+        ],
+        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "500")],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let stats = Csv::read(&dir.path().join("s.csv"));
+    let frames = stats.col("frame");
+    assert!(frames.iter().all(|&f| f as usize % 2 == 0), "{frames:?}");
+    assert_eq!(
+        frames.len() + skipped_in_all(&run.stderr),
+        1500,
+        "{}",
+        run.stderr
+    );
 }
 
 #[test]
