@@ -86,9 +86,16 @@ impl LiveArgs {
 pub struct OverrunSkips {
     /// Frames asked for and skipped so far.
     frames: usize,
+    /// The last frame asked for, if the run has one: the skip line names no frame after it.
+    last: Option<usize>,
 }
 
 impl OverrunSkips {
+    /// Skips of a loop over frames up to `last` (the last frame asked for, if known).
+    pub fn up_to(last: Option<usize>) -> OverrunSkips {
+        OverrunSkips { frames: 0, last }
+    }
+
     /// When `error` says frames were lost that way: counts the frame asked for, says so in one
     /// line the first time (unless `quiet`), and returns the oldest frame still held, where the
     /// loop goes on (the frames asked for before it are counted by [`OverrunSkips::pass_over`]).
@@ -103,12 +110,12 @@ impl OverrunSkips {
             return None;
         };
         if self.frames == 0 && !quiet {
+            let to = self.last.map_or(oldest - 1, |last| last.min(oldest - 1));
             eprintln!(
-                "{}: frames {frame} to {} skipped: the simulation sends frames faster than they \
-                 are measured (--imd-every N asks for one frame in N steps; later skips are \
-                 counted at the end)",
+                "{}: frames {frame} to {to} skipped: the simulation sends frames faster than \
+                 they are measured (--imd-every N asks for one frame in N steps; later skips \
+                 are counted at the end)",
                 path.display(),
-                oldest - 1
             );
         }
         self.frames += 1;

@@ -165,7 +165,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut images = 0usize;
     let mut cavity_ids = MovieCavityIds::default();
     // Frames before this one left a running simulation's ring unread (skipped).
-    let (mut resume_at, mut skips) = (0usize, super::live_args::OverrunSkips::default());
+    let last = frames.last().copied();
+    let (mut resume_at, mut skips) = (0usize, super::live_args::OverrunSkips::up_to(last));
     for (i, &f) in frames.iter().enumerate() {
         if i >= block.end {
             break;

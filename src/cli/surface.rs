@@ -273,7 +273,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let mut failure = None;
     let mut ok_frames = 0usize;
     // Frames before this one left a running simulation's ring unread (skipped).
-    let (mut resume_at, mut skips) = (0usize, OverrunSkips::default());
+    let (mut resume_at, mut skips) = (0usize, OverrunSkips::up_to(frames.last().copied()));
     catch_interrupts();
     for &index in &frames {
         if index < resume_at {

@@ -170,3 +170,28 @@ fn render_sets_up_with_the_oldest_frame_held_when_frame_0_is_already_gone() {
         run.stderr
     );
 }
+
+#[test]
+fn the_skip_line_names_no_frame_past_the_range() {
+    // Frames 0 to 999 asked for, all gone before set-up (the ring holds 2744 on once the 3000
+    // have come; 1256 are enough): the line names the frames asked for, and nothing is
+    // measured or written.
+    let dir = tempfile::tempdir().unwrap();
+    let top = data("imd/argon.xyz");
+    let address = flooding_engine(3000);
+    let run = mdsurf_env(
+        dir.path(),
+        &[
+            "surface", &top, "--imd", &address, "--frames", ":1000", "--stats", "s.csv",
+        ],
+        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "2000")],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("frames 0 to 999 skipped"),
+        "{}",
+        run.stderr
+    );
+    assert_eq!(skipped_in_all(&run.stderr), 1000, "{}", run.stderr);
+    assert!(!dir.path().join("s.csv").exists());
+}
