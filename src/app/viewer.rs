@@ -44,6 +44,8 @@ pub struct Viewer {
     picked: Option<Receiver<Command>>,
     script: Script,
     script_played: usize,
+    /// The frame the scripted run last counted as shown.
+    script_last_shown: Option<usize>,
     script_result: ScriptResult,
     /// (frames shown, anonymous memory in KiB) after each frame of a scripted run with a
     /// memory log.
@@ -87,6 +89,7 @@ impl Viewer {
             picked: None,
             script,
             script_played: 0,
+            script_last_shown: None,
             memory_samples: Vec::new(),
             script_result,
             last_update: Instant::now(),

@@ -16,6 +16,11 @@ const FRAME: usize = (8 + 24) + (8 + 36) + 3 * (8 + 256 * 12);
 /// An engine on a local port that sends the capture's preamble and then its first frame
 /// `frames` times as fast as the socket takes them (steps renumbered), then closes.
 fn flooding_engine(frames: usize) -> String {
+    paced_engine(frames, std::time::Duration::ZERO)
+}
+
+/// [`flooding_engine`] waiting `pace` after each frame.
+fn paced_engine(frames: usize, pace: std::time::Duration) -> String {
     let capture = std::fs::read(data("imd/lammps_argon_v3.bin")).unwrap();
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let address = listener.local_addr().unwrap().to_string();
@@ -32,6 +37,7 @@ fn flooding_engine(frames: usize) -> String {
             if socket.write_all(&frame).is_err() {
                 return;
             }
+            std::thread::sleep(pace);
         }
     });
     address
@@ -194,4 +200,38 @@ fn the_skip_line_names_no_frame_past_the_range() {
     );
     assert_eq!(skipped_in_all(&run.stderr), 1000, "{}", run.stderr);
     assert!(!dir.path().join("s.csv").exists());
+}
+
+#[test]
+fn the_windows_scripted_run_takes_the_frames_of_a_running_simulation_as_they_come() {
+    // The window follows the newest frame, which moves on while one is computed: the scripted
+    // run counts each new frame on screen (it used to wait for the newest to be the one shown,
+    // which a fast engine never allowed, and hung until the engine stopped). 30000 frames 2 ms
+    // apart: a minute of frames, more than the 60 s the run is given.
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("shot.png");
+    let address = paced_engine(30_000, std::time::Duration::from_millis(2));
+    let (_one_server_at_a_time, mut xvfb) = crate::xvfb_support::xvfb_run();
+    // A hang is a failure after 60 s, not a stuck suite.
+    let out = xvfb
+        .args(["timeout", "60", env!("CARGO_BIN_EXE_mdsurf")])
+        .arg(data("imd/argon.xyz"))
+        .args([
+            "--imd",
+            &address,
+            "--cpu",
+            "--play-frames",
+            "3",
+            "--screenshot",
+        ])
+        .arg(&shot)
+        .arg("--quit")
+        .env("XDG_RUNTIME_DIR", dir.path())
+        .output()
+        .expect("run xvfb-run");
+    let log = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "exit {}: {log}", out.status);
+    assert!(log.contains("scripted run: showed 3 frame(s)"), "{log}");
+    let image = mdsurf::render::RgbaImage::read_png(&shot).unwrap_or_else(|e| panic!("{e}: {log}"));
+    assert!(image.distinct_colours() > 500, "blank screenshot: {log}");
 }

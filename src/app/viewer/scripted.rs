@@ -99,7 +99,8 @@ impl Viewer {
         }
     }
 
-    /// The scripted run: show frames 0..N one by one, then screenshot, then quit.
+    /// The scripted run: show frames 0..N one by one (from a running simulation: the next N
+    /// frames that reach the screen), then screenshot, then quit.
     pub(super) fn step_script(&mut self, ctx: &egui::Context) {
         if self.core.source.is_none() {
             if self.loading.is_none() && (self.core.error.is_some()) && self.script.quit {
@@ -119,9 +120,18 @@ impl Viewer {
             .unwrap_or(1)
             .min(self.core.timeline.len.max(1));
         let shown = self.core.shown.as_ref().map(|s| s.computed.frame);
-        if self.core.computing() || shown != Some(self.core.timeline.current) {
+        // A running simulation's newest frame moves on while one is computed, and the window
+        // follows it: there each new frame on screen counts, as it comes.
+        let live = self.core.is_live();
+        let ready = match shown {
+            Some(frame) if live => self.script_last_shown != Some(frame),
+            Some(frame) => !self.core.computing() && frame == self.core.timeline.current,
+            None => false,
+        };
+        if !ready {
             return;
         }
+        self.script_last_shown = shown;
         if self.script.memory_log.is_some()
             && let Some(kib) = anonymous_memory_kib()
         {
@@ -135,7 +145,9 @@ impl Viewer {
                 gpu.destroy_device();
             }
             self.script_played += 1;
-            self.core.apply(Command::Timeline(TimelineCmd::Step(1)));
+            if !live {
+                self.core.apply(Command::Timeline(TimelineCmd::Step(1)));
+            }
             return;
         }
         let result = match self.script.screenshot.clone() {
