@@ -121,11 +121,13 @@ impl Viewer {
             .min(self.core.timeline.len.max(1));
         let shown = self.core.shown.as_ref().map(|s| s.computed.frame);
         // A running simulation's newest frame moves on while one is computed, and the window
-        // follows it: there each new frame on screen counts, as it comes.
+        // follows it: there each new frame on screen counts, as it comes (and, once the
+        // simulation has stopped sending, the last one, as for a file).
         let live = self.core.is_live();
+        let caught_up = |frame| !self.core.computing() && frame == self.core.timeline.current;
         let ready = match shown {
-            Some(frame) if live => self.script_last_shown != Some(frame),
-            Some(frame) => !self.core.computing() && frame == self.core.timeline.current,
+            Some(frame) if live => self.script_last_shown != Some(frame) || caught_up(frame),
+            Some(frame) => caught_up(frame),
             None => false,
         };
         if !ready {
