@@ -11,6 +11,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::lanes::{Lanes, Run, SLACK, pick_near_box, pick_near_point};
 use crate::model::cells::sort_by_cell;
 use crate::surface::{AtomSet, SurfaceParams};
 
@@ -22,39 +23,53 @@ fn clamped_cell(v: f32, origin: f32, edge: f32, cells: i64) -> i64 {
     (((v - origin) / edge).max(0.0) as i64).min(cells - 1)
 }
 
-/// Atoms sorted into cells, and the cubic cells points are grouped by.
-pub(crate) struct CellList {
+/// The cells of a [`CellList`] before any atom is binned: where they start, how long they are,
+/// and the cubic cells points are grouped by ([`CellGrid::key`]). Planning it first lets the
+/// points be grouped while the atoms are binned.
+#[derive(Clone)]
+pub(crate) struct CellGrid {
     origin: Vec3,
     /// Cell edges along x, y and z (Å).
     cell: Vec3,
-    /// Edge (Å) of the cubic cells points are grouped by ([`CellList::key`]), from `origin`.
+    /// Edge (Å) of the cubic cells points are grouped by ([`CellGrid::key`]), from `origin`.
     group: f32,
     /// Group cells along each axis.
     group_dims: [i64; 3],
     /// The longest cutoff `q alpha` in Å.
     reach: f32,
+    /// Cells along each axis.
     dims: [i64; 3],
-    /// Start of each cell's run in the sorted arrays (one more entry than cells).
-    starts: Vec<u32>,
-    /// Sorted atoms: index into the atom set, and `1 / (2 alpha^2)` (Å⁻²).
-    index: Vec<u32>,
-    inv_two_alpha2: Vec<f32>,
-    /// The sorted atoms' coordinates (Å) and squared cutoff `(q alpha)^2` (Å²) side by side,
-    /// `[x, y, z, cutoff2]`.
-    packed: Vec<[f32; 4]>,
 }
 
-impl CellList {
-    /// The cell list of `atoms` (already validated, not empty) under `params`.
-    pub(crate) fn new(atoms: &AtomSet<'_>, params: &SurfaceParams) -> CellList {
+impl CellGrid {
+    /// The cells for `atoms` (already validated, not empty) under `params`.
+    pub(crate) fn plan(atoms: &AtomSet<'_>, params: &SurfaceParams) -> CellGrid {
         let n = atoms.len();
-        let alpha = |i: usize| atoms.radii[i] * params.radius_scale;
         let q = params.cutoff();
-        let widest = (0..n).fold(0.0f32, |m, i| m.max(alpha(i)));
-        let (lo, hi) = atoms.positions.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        );
+        let (widest, lo, hi) = atoms
+            .positions
+            .par_iter()
+            .zip(atoms.radii)
+            .fold(
+                || {
+                    (
+                        0.0f32,
+                        Vec3::splat(f32::INFINITY),
+                        Vec3::splat(f32::NEG_INFINITY),
+                    )
+                },
+                |(w, lo, hi), (p, r)| (w.max(r * params.radius_scale), lo.min(*p), hi.max(*p)),
+            )
+            .reduce(
+                || {
+                    (
+                        0.0f32,
+                        Vec3::splat(f32::INFINITY),
+                        Vec3::splat(f32::NEG_INFINITY),
+                    )
+                },
+                |a, b| (a.0.max(b.0), a.1.min(b.1), a.2.max(b.2)),
+            );
         // The grid reaches one cutoff beyond the atoms: a point outside it has no contributor.
         let reach = widest * q;
         let (lo, hi) = (lo - reach, hi + reach);
@@ -74,37 +89,14 @@ impl CellList {
             group *= 1.25;
         }
         let d = (extent / cell).floor() + 1.0;
-        let dims = [d.x as i64, d.y as i64, d.z as i64];
         let g = (extent / group).floor() + 1.0;
-        let group_dims = [g.x as i64, g.y as i64, g.z as i64];
-        let cell_of = |p: Vec3| {
-            let c = |k: usize| clamped_cell(p[k], lo[k], cell[k], dims[k]);
-            (c(0) + dims[0] * (c(1) + dims[1] * c(2))) as usize
-        };
-        let cells = (dims[0] * dims[1] * dims[2]) as usize;
-        let of: Vec<usize> = atoms.positions.par_iter().map(|p| cell_of(*p)).collect();
-        let (starts, index) = sort_by_cell(&of, cells);
-        let packed = index
-            .par_iter()
-            .map(|&i| {
-                let (p, a) = (atoms.positions[i as usize], alpha(i as usize));
-                [p.x, p.y, p.z, (q * a).powi(2)]
-            })
-            .collect();
-        CellList {
-            group,
-            group_dims,
-            packed,
+        CellGrid {
             origin: lo,
             cell,
+            group,
+            group_dims: [g.x as i64, g.y as i64, g.z as i64],
             reach,
-            dims,
-            inv_two_alpha2: index
-                .par_iter()
-                .map(|&i| 1.0 / (2.0 * alpha(i as usize) * alpha(i as usize)))
-                .collect(),
-            starts,
-            index,
+            dims: [d.x as i64, d.y as i64, d.z as i64],
         }
     }
 
@@ -127,29 +119,92 @@ impl CellList {
         Some((x + dims[0] * (y + dims[1] * z)) as u32)
     }
 
+    /// The cell list of `atoms` (those the grid was planned for) on these cells.
+    pub(crate) fn bin(&self, atoms: &AtomSet<'_>, params: &SurfaceParams) -> CellList {
+        let alpha = |i: usize| atoms.radii[i] * params.radius_scale;
+        let q = params.cutoff();
+        let (lo, cell, dims) = (self.origin, self.cell, self.dims);
+        let cell_of = |p: Vec3| {
+            let c = |k: usize| clamped_cell(p[k], lo[k], cell[k], dims[k]);
+            (c(0) + dims[0] * (c(1) + dims[1] * c(2))) as usize
+        };
+        let cells = (dims[0] * dims[1] * dims[2]) as usize;
+        let of: Vec<usize> = atoms.positions.par_iter().map(|p| cell_of(*p)).collect();
+        let (starts, index) = sort_by_cell(&of, cells);
+        let sorted = |value: &(dyn Fn(usize) -> f32 + Sync)| -> Vec<f32> {
+            index.par_iter().map(|&i| value(i as usize)).collect()
+        };
+        let (x, y, z) = (
+            sorted(&|i| atoms.positions[i].x),
+            sorted(&|i| atoms.positions[i].y),
+            sorted(&|i| atoms.positions[i].z),
+        );
+        let cutoff2 = sorted(&|i| (q * alpha(i)).powi(2));
+        let inv_two_alpha2 = index
+            .par_iter()
+            .map(|&i| 1.0 / (2.0 * alpha(i as usize) * alpha(i as usize)))
+            .collect();
+        CellList {
+            grid: self.clone(),
+            starts,
+            index,
+            inv_two_alpha2,
+            x,
+            y,
+            z,
+            cutoff2,
+            lanes: Lanes::detect(),
+        }
+    }
+}
+
+/// Atoms sorted into the cells of a [`CellGrid`].
+pub(crate) struct CellList {
+    grid: CellGrid,
+    /// Start of each cell's run in the sorted arrays (one more entry than cells).
+    starts: Vec<u32>,
+    /// Sorted atoms: index into the atom set, and `1 / (2 alpha^2)` (Å⁻²).
+    index: Vec<u32>,
+    inv_two_alpha2: Vec<f32>,
+    /// The sorted atoms' coordinates (Å) and squared cutoff `(q alpha)^2` (Å²).
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    cutoff2: Vec<f32>,
+    /// The instruction set of the inner loops.
+    lanes: Lanes,
+}
+
+impl CellList {
+    /// The cell list of `atoms` (already validated, not empty) under `params`.
+    pub(crate) fn new(atoms: &AtomSet<'_>, params: &SurfaceParams) -> CellList {
+        CellGrid::plan(atoms, params).bin(atoms, params)
+    }
+
     /// Fills `out` with the atoms whose cutoff sphere reaches the box `lo..hi` (Å; the bounds
     /// of the points asked about next, for example the vertices of one cell), in sorted order.
     #[inline(always)]
     pub(crate) fn gather(&self, lo: Vec3, hi: Vec3, out: &mut Batch) {
+        let grid = &self.grid;
         // The cells from `lo - reach` to `hi + reach` along `axis`.
         let cell_of = |v: f32, axis: usize| {
-            clamped_cell(v, self.origin[axis], self.cell[axis], self.dims[axis])
+            clamped_cell(v, grid.origin[axis], grid.cell[axis], grid.dims[axis])
         };
         let span = |axis: usize| {
             (
-                cell_of(lo[axis] - self.reach, axis),
-                cell_of(hi[axis] + self.reach, axis),
+                cell_of(lo[axis] - grid.reach, axis),
+                cell_of(hi[axis] + grid.reach, axis),
             )
         };
         let ((ys, ye), (zs, ze)) = (span(1), span(2));
         // Distance (Å) along `axis` from the box to cell `c`'s slab.
         let gap = |c: i64, axis: usize| {
-            let start = self.origin[axis] + c as f32 * self.cell[axis];
+            let start = grid.origin[axis] + c as f32 * grid.cell[axis];
             (start - hi[axis])
-                .max(lo[axis] - start - self.cell[axis])
+                .max(lo[axis] - start - grid.cell[axis])
                 .max(0.0)
         };
-        let reach2 = self.reach * self.reach;
+        let reach2 = grid.reach * grid.reach;
         // First the sorted positions of the atoms that reach the box: every atom of a row is
         // written and the count advances past those that reach (no branch per atom).
         let mut n = 0;
@@ -163,30 +218,29 @@ impl CellList {
                 // The cells of this row that the longest cutoff still reaches along x.
                 let left = left2.sqrt();
                 let (xs, xe) = (cell_of(lo.x - left, 0), cell_of(hi.x + left, 0));
-                let row = self.dims[0] * (y + self.dims[1] * z);
+                let row = grid.dims[0] * (y + grid.dims[1] * z);
                 let start = self.starts[(row + xs) as usize] as usize;
                 let end = self.starts[(row + xe + 1) as usize] as usize;
                 out.grow(n + end - start);
-                for (s, a) in self.packed[start..end].iter().enumerate() {
-                    let [x, y, z, cut2] = *a;
-                    let dx = (lo.x - x).max(x - hi.x).max(0.0);
-                    let dy = (lo.y - y).max(y - hi.y).max(0.0);
-                    let dz = (lo.z - z).max(z - hi.z).max(0.0);
-                    out.hits[n] = (start + s) as u32;
-                    n += usize::from(dx * dx + dy * dy + dz * dz < cut2);
-                }
+                let run = Run {
+                    x: &self.x[start..end],
+                    y: &self.y[start..end],
+                    z: &self.z[start..end],
+                    cutoff2: &self.cutoff2[start..end],
+                };
+                n = pick_near_box(self.lanes, run, lo, hi, start as u32, &mut out.hits, n);
             }
         }
         // Then their values, in that order.
         out.len = n;
+        out.lanes = self.lanes;
         for k in 0..n {
             let s = out.hits[k] as usize;
-            let [x, y, z, cut2] = self.packed[s];
             out.index[k] = self.index[s];
-            out.x[k] = x;
-            out.y[k] = y;
-            out.z[k] = z;
-            out.cutoff2[k] = cut2;
+            out.x[k] = self.x[s];
+            out.y[k] = self.y[s];
+            out.z[k] = self.z[s];
+            out.cutoff2[k] = self.cutoff2[s];
             out.inv_two_alpha2[k] = self.inv_two_alpha2[s];
         }
     }
@@ -194,7 +248,6 @@ impl CellList {
 
 /// The atoms that may reach the points of one cell ([`CellList::gather`]), in separate arrays:
 /// the first `len` entries of each; the arrays only grow, and are scratch past `len`.
-#[derive(Default)]
 pub(crate) struct Batch {
     len: usize,
     index: Vec<u32>,
@@ -206,12 +259,31 @@ pub(crate) struct Batch {
     d2: Vec<f32>,
     /// Positions in the arrays above of the atoms that reach the current point.
     hits: Vec<u32>,
+    /// The instruction set of the inner loops.
+    lanes: Lanes,
+}
+
+impl Default for Batch {
+    fn default() -> Batch {
+        Batch {
+            len: 0,
+            index: Vec::new(),
+            x: Vec::new(),
+            y: Vec::new(),
+            z: Vec::new(),
+            inv_two_alpha2: Vec::new(),
+            cutoff2: Vec::new(),
+            d2: Vec::new(),
+            hits: Vec::new(),
+            lanes: Lanes::Portable,
+        }
+    }
 }
 
 impl Batch {
-    /// Makes every array at least `room` long.
+    /// Makes every array at least `room` long (the picked positions [`SLACK`] longer).
     fn grow(&mut self, room: usize) {
-        if self.index.len() >= room {
+        if self.hits.len() >= room + SLACK {
             return;
         }
         for v in [
@@ -225,28 +297,47 @@ impl Batch {
             v.resize(room, 0.0);
         }
         self.index.resize(room, 0);
-        self.hits.resize(room, 0);
+        self.hits.resize(room + SLACK, 0);
+    }
+
+    /// Number of gathered atoms.
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Index in the atom set of gathered atom `k` (below [`Batch::len`]).
+    pub(crate) fn atom(&self, k: usize) -> u32 {
+        self.index[k]
+    }
+
+    /// Appends to `picked` the gathered atoms whose Gaussians reach `p` (a point of the
+    /// gathered box; positions below [`Batch::len`], ascending) and to `exponents` the
+    /// exponent of each Gaussian there, `-d^2 / (2 alpha^2)` (the Gaussian is its `exp`).
+    #[inline(always)]
+    pub(crate) fn reaching(&mut self, p: Vec3, picked: &mut Vec<u32>, exponents: &mut Vec<f32>) {
+        let n = self.len;
+        let run = Run {
+            x: &self.x[..n],
+            y: &self.y[..n],
+            z: &self.z[..n],
+            cutoff2: &self.cutoff2[..n],
+        };
+        let m = pick_near_point(self.lanes, run, p, &mut self.d2, &mut self.hits);
+        let hits = &self.hits[..m];
+        picked.extend_from_slice(hits);
+        exponents.extend(
+            hits.iter()
+                .map(|&k| -self.d2[k as usize] * self.inv_two_alpha2[k as usize]),
+        );
     }
 
     /// Calls `visit(atom, weight)` for every gathered atom whose Gaussian reaches `p` (a point
-    /// of the gathered cell), with the Gaussian's value there. The distances are computed in
-    /// one loop the compiler vectorises, the reaching atoms picked without a branch per atom.
-    #[inline(always)]
+    /// of the gathered box), with the Gaussian's value there, in gathered order.
     pub(crate) fn for_each_gaussian(&mut self, p: Vec3, mut visit: impl FnMut(u32, f32)) {
-        let n = self.len;
-        let (x, y, z, d2) = (&self.x[..n], &self.y[..n], &self.z[..n], &mut self.d2[..n]);
-        for k in 0..n {
-            d2[k] = (x[k] - p.x).powi(2) + (y[k] - p.y).powi(2) + (z[k] - p.z).powi(2);
-        }
-        let (cut, hits) = (&self.cutoff2[..n], &mut self.hits[..n]);
-        let mut m = 0;
-        for k in 0..n {
-            hits[m] = k as u32;
-            m += usize::from(d2[k] < cut[k]);
-        }
-        for &k in &hits[..m] {
-            let k = k as usize;
-            visit(self.index[k], (-d2[k] * self.inv_two_alpha2[k]).exp());
+        let (mut picked, mut exponents) = (Vec::new(), Vec::new());
+        self.reaching(p, &mut picked, &mut exponents);
+        for (&k, &e) in picked.iter().zip(&exponents) {
+            visit(self.index[k as usize], e.exp());
         }
     }
 }

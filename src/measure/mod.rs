@@ -11,7 +11,8 @@
 //! - **Area per atom** ([`atom_areas`]): each triangle's area goes one third to each of its
 //!   three vertices; a vertex's share goes to the atoms in proportion to each atom's Gaussian
 //!   `exp(-|v - p_i|^2 / (2 alpha_i^2))` at the vertex, over the atoms with
-//!   `|v - p_i| < q alpha_i` (the density's own terms and cutoff, DESIGN section 2). A vertex
+//!   `|v - p_i| < q alpha_i` (the density's own terms and cutoff, DESIGN section 2; the
+//!   exponential is the analytic engine's polynomial one, relative error below 1e-6). A vertex
 //!   no atom reaches (impossible on a surface the engine made) goes to the atom nearest it. The
 //!   per-atom areas sum to the mesh's area ([`Mesh::area`](crate::surface::Mesh::area)), in
 //!   f64. [`atom_areas_of`] rescales them to [`SurfaceOutput::area`], which differs from the flat
@@ -46,6 +47,7 @@ pub(crate) mod csv;
 mod grid_balls;
 mod grid_flood;
 pub mod interface;
+mod lanes;
 pub(crate) mod probe_cavities;
 mod probe_small_voids;
 pub(crate) mod probe_surface;
