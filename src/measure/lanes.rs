@@ -173,6 +173,45 @@ mod avx2 {
         unsafe { _mm256_loadu_ps(v[k..k + 8].as_ptr()) }
     }
 
+    /// x, y, z and squared cutoff of atoms `k..k + 8` of `run` (bounds-checked).
+    #[inline(always)]
+    unsafe fn load_run(run: Run<'_>, k: usize) -> [__m256; 4] {
+        // SAFETY: each load is bounds-checked.
+        unsafe {
+            [
+                load8(run.x, k),
+                load8(run.y, k),
+                load8(run.z, k),
+                load8(run.cutoff2, k),
+            ]
+        }
+    }
+
+    /// `v` in every lane, per coordinate.
+    #[inline(always)]
+    unsafe fn splat(v: Vec3) -> [__m256; 3] {
+        // SAFETY: plain register operations.
+        unsafe {
+            [
+                _mm256_set1_ps(v.x),
+                _mm256_set1_ps(v.y),
+                _mm256_set1_ps(v.z),
+            ]
+        }
+    }
+
+    /// `dx^2 + dy^2 + dz^2` per lane, added in that order.
+    #[inline(always)]
+    unsafe fn length2(dx: __m256, dy: __m256, dz: __m256) -> __m256 {
+        // SAFETY: plain register operations.
+        unsafe {
+            _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                _mm256_mul_ps(dz, dz),
+            )
+        }
+    }
+
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn pick_near_box(
         run: Run<'_>,
@@ -186,16 +225,8 @@ mod avx2 {
         let full = n - n % 8;
         let mut m = at;
         let zero = _mm256_setzero_ps();
-        let (lx, ly, lz) = (
-            _mm256_set1_ps(lo.x),
-            _mm256_set1_ps(lo.y),
-            _mm256_set1_ps(lo.z),
-        );
-        let (hx, hy, hz) = (
-            _mm256_set1_ps(hi.x),
-            _mm256_set1_ps(hi.y),
-            _mm256_set1_ps(hi.z),
-        );
+        // SAFETY: plain register operations.
+        let ([lx, ly, lz], [hx, hy, hz]) = unsafe { (splat(lo), splat(hi)) };
         let gap = |v: __m256, lo: __m256, hi: __m256| {
             _mm256_max_ps(
                 _mm256_max_ps(_mm256_sub_ps(lo, v), _mm256_sub_ps(v, hi)),
@@ -204,19 +235,10 @@ mod avx2 {
         };
         for k in (0..full).step_by(8) {
             // SAFETY: k + 8 <= n for every array of the run (equally long).
-            let (x, y, z, cut) = unsafe {
-                (
-                    load8(run.x, k),
-                    load8(run.y, k),
-                    load8(run.z, k),
-                    load8(run.cutoff2, k),
-                )
-            };
+            let [x, y, z, cut] = unsafe { load_run(run, k) };
             let (dx, dy, dz) = (gap(x, lx, hx), gap(y, ly, hy), gap(z, lz, hz));
-            let d2 = _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
-                _mm256_mul_ps(dz, dz),
-            );
+            // SAFETY: plain register operations.
+            let d2 = unsafe { length2(dx, dy, dz) };
             let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(d2, cut));
             // SAFETY: `picked` holds `at + n + 8` entries and m <= at + k.
             m = unsafe { write_set_bits(mask, base + k as u32, picked, m) };
@@ -239,30 +261,18 @@ mod avx2 {
         let n = run.len();
         let full = n - n % 8;
         let mut m = 0;
-        let (px, py, pz) = (
-            _mm256_set1_ps(p.x),
-            _mm256_set1_ps(p.y),
-            _mm256_set1_ps(p.z),
-        );
+        // SAFETY: plain register operations.
+        let [px, py, pz] = unsafe { splat(p) };
         for k in (0..full).step_by(8) {
             // SAFETY: k + 8 <= n for every array of the run (equally long).
-            let (x, y, z, cut) = unsafe {
-                (
-                    load8(run.x, k),
-                    load8(run.y, k),
-                    load8(run.z, k),
-                    load8(run.cutoff2, k),
-                )
-            };
+            let [x, y, z, cut] = unsafe { load_run(run, k) };
             let (dx, dy, dz) = (
                 _mm256_sub_ps(x, px),
                 _mm256_sub_ps(y, py),
                 _mm256_sub_ps(z, pz),
             );
-            let d2 = _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
-                _mm256_mul_ps(dz, dz),
-            );
+            // SAFETY: plain register operations.
+            let d2 = unsafe { length2(dx, dy, dz) };
             // SAFETY: `distance2` holds n entries and k + 8 <= n.
             unsafe { _mm256_storeu_ps(distance2[k..k + 8].as_mut_ptr(), d2) };
             let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(d2, cut));
