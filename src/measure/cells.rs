@@ -208,6 +208,7 @@ impl CellList {
         // First the sorted positions of the atoms that reach the box: every atom of a row is
         // written and the count advances past those that reach (no branch per atom).
         let mut n = 0;
+        out.grow(0); // the picked positions' slack, even when no row is visited
         for z in zs..=ze {
             let gz2 = gap(z, 2).powi(2);
             for y in ys..=ye {
@@ -310,11 +311,11 @@ impl Batch {
         self.index[k]
     }
 
-    /// Appends to `picked` the gathered atoms whose Gaussians reach `p` (a point of the
-    /// gathered box; positions below [`Batch::len`], ascending) and to `exponents` the
-    /// exponent of each Gaussian there, `-d^2 / (2 alpha^2)` (the Gaussian is its `exp`).
+    /// The gathered atoms whose Gaussians reach `p` (a point of the gathered box): their
+    /// positions below [`Batch::len`], ascending, in `hits[..m]` (`m` returned), each one's
+    /// squared distance (Å²) in `d2`.
     #[inline(always)]
-    pub(crate) fn reaching(&mut self, p: Vec3, picked: &mut Vec<u32>, exponents: &mut Vec<f32>) {
+    fn pick(&mut self, p: Vec3) -> usize {
         let n = self.len;
         let run = Run {
             x: &self.x[..n],
@@ -322,22 +323,33 @@ impl Batch {
             z: &self.z[..n],
             cutoff2: &self.cutoff2[..n],
         };
-        let m = pick_near_point(self.lanes, run, p, &mut self.d2, &mut self.hits);
+        pick_near_point(self.lanes, run, p, &mut self.d2, &mut self.hits)
+    }
+
+    /// The exponent of gathered atom `k`'s Gaussian at the point last picked,
+    /// `-d^2 / (2 alpha^2)` (the Gaussian is its `exp`).
+    #[inline(always)]
+    fn exponent(&self, k: u32) -> f32 {
+        -self.d2[k as usize] * self.inv_two_alpha2[k as usize]
+    }
+
+    /// Appends to `picked` the gathered atoms whose Gaussians reach `p` (a point of the
+    /// gathered box; positions below [`Batch::len`], ascending) and to `exponents` the
+    /// exponent of each Gaussian there (see [`Batch::exponent`]).
+    #[inline(always)]
+    pub(crate) fn reaching(&mut self, p: Vec3, picked: &mut Vec<u32>, exponents: &mut Vec<f32>) {
+        let m = self.pick(p);
         let hits = &self.hits[..m];
         picked.extend_from_slice(hits);
-        exponents.extend(
-            hits.iter()
-                .map(|&k| -self.d2[k as usize] * self.inv_two_alpha2[k as usize]),
-        );
+        exponents.extend(hits.iter().map(|&k| self.exponent(k)));
     }
 
     /// Calls `visit(atom, weight)` for every gathered atom whose Gaussian reaches `p` (a point
     /// of the gathered box), with the Gaussian's value there, in gathered order.
     pub(crate) fn for_each_gaussian(&mut self, p: Vec3, mut visit: impl FnMut(u32, f32)) {
-        let (mut picked, mut exponents) = (Vec::new(), Vec::new());
-        self.reaching(p, &mut picked, &mut exponents);
-        for (&k, &e) in picked.iter().zip(&exponents) {
-            visit(self.index[k as usize], e.exp());
+        let m = self.pick(p);
+        for &k in &self.hits[..m] {
+            visit(self.index[k as usize], self.exponent(k).exp());
         }
     }
 }
@@ -352,4 +364,62 @@ pub(crate) fn nearest(positions: &[Vec3], p: Vec3) -> u32 {
         }
     }
     best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Atoms on a small jittered lattice, radii 1.5 to 2 Å.
+    fn lattice() -> (Vec<Vec3>, Vec<f32>) {
+        let mut positions = Vec::new();
+        for i in 0..40 {
+            let f = i as f32;
+            positions.push(Vec3::new(
+                (i % 4) as f32 * 1.7 + (f * 0.37).sin() * 0.3,
+                (i / 4 % 5) as f32 * 1.6,
+                (i / 20) as f32 * 1.8 + (f * 0.71).cos() * 0.2,
+            ));
+        }
+        let radii = (0..40).map(|i| 1.5 + (i % 3) as f32 * 0.25).collect();
+        (positions, radii)
+    }
+
+    #[test]
+    fn gathered_gaussians_are_those_of_every_atom_within_its_cutoff() {
+        let (positions, radii) = lattice();
+        let atoms = AtomSet {
+            positions: &positions,
+            radii: &radii,
+            colours: None,
+        };
+        let params = SurfaceParams::default();
+        let cells = CellList::new(&atoms, &params);
+        let q = params.cutoff();
+        for p in [
+            Vec3::new(2.0, 3.0, 1.0),
+            Vec3::new(-3.0, 0.5, 0.0),
+            Vec3::new(500.0, -800.0, 90.0), // far off the grid: nothing, no panic
+        ] {
+            // A fresh batch each time: its arrays start empty.
+            let mut batch = Batch::default();
+            cells.gather(p, p, &mut batch);
+            let mut got = Vec::new();
+            batch.for_each_gaussian(p, |atom, w| got.push((atom, w)));
+            got.sort_by_key(|g| g.0);
+            let want: Vec<(u32, f32)> = (0..positions.len())
+                .filter_map(|i| {
+                    let alpha = radii[i] * params.radius_scale;
+                    let d2 = (positions[i] - p).length_squared();
+                    (d2 < (q * alpha).powi(2))
+                        .then(|| (i as u32, (-d2 / (2.0 * alpha * alpha)).exp()))
+                })
+                .collect();
+            assert_eq!(got.len(), want.len(), "at {p}");
+            for ((a, w), (b, v)) in got.iter().zip(&want) {
+                assert_eq!(a, b, "at {p}");
+                assert!((w - v).abs() <= 1e-6 * v, "atom {a} at {p}: {w} vs {v}");
+            }
+        }
+    }
 }

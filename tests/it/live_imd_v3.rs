@@ -6,7 +6,7 @@
 use std::io::{Read, Write};
 use std::net::TcpListener;
 
-use crate::cli_common::{Csv, data, mdsurf, mdsurf_env};
+use crate::cli_common::{Csv, Run, data, mdsurf_env};
 
 /// Bytes of the capture before its first frame: handshake (8) and session record (8 + 7).
 const PREAMBLE: usize = 23;
@@ -43,18 +43,32 @@ fn paced_engine(frames: usize, pace: std::time::Duration) -> String {
     address
 }
 
+/// Runs `mdsurf COMMAND TOP --imd ADDRESS ARGS...` in a new folder (returned with the run)
+/// against an engine flooding 3000 frames; with `setup_delay_ms`, the command's set-up waits
+/// that long after connecting (the test build's hook), while the frames arrive.
+fn against_flood(
+    command: &str,
+    args: &[&str],
+    setup_delay_ms: Option<&str>,
+) -> (tempfile::TempDir, Run) {
+    let dir = tempfile::tempdir().unwrap();
+    let top = data("imd/argon.xyz");
+    let address = flooding_engine(3000);
+    let mut all = vec![command, top.as_str(), "--imd", address.as_str()];
+    all.extend_from_slice(args);
+    let env: Vec<(&str, &str)> = setup_delay_ms
+        .map(|ms| ("MDSURF_TEST_LIVE_SETUP_DELAY_MS", ms))
+        .into_iter()
+        .collect();
+    let run = mdsurf_env(dir.path(), &all, &env);
+    (dir, run)
+}
+
 #[test]
 fn surface_sets_up_with_the_oldest_frame_held_when_frame_0_is_already_gone() {
     // Set-up waits 2 s after connecting (the test build's hook): the engine sends its 3000
     // frames meanwhile, and frame 0 has left the 256-frame ring before `surface` reads it.
-    let dir = tempfile::tempdir().unwrap();
-    let top = data("imd/argon.xyz");
-    let address = flooding_engine(3000);
-    let run = mdsurf_env(
-        dir.path(),
-        &["surface", &top, "--imd", &address, "--stats", "s.csv"],
-        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "2000")],
-    );
+    let (dir, run) = against_flood("surface", &["--stats", "s.csv"], Some("2000"));
     assert_eq!(run.code, 0, "{}", run.stderr);
     assert!(run.stderr.contains("frames 0 to "), "{}", run.stderr);
     let stats = Csv::read(&dir.path().join("s.csv"));
@@ -65,22 +79,7 @@ fn surface_sets_up_with_the_oldest_frame_held_when_frame_0_is_already_gone() {
 
 #[test]
 fn surface_skips_the_frames_a_fast_engine_pushed_out_of_the_ring() {
-    let dir = tempfile::tempdir().unwrap();
-    let top = data("imd/argon.xyz");
-    let address = flooding_engine(3000);
-    let run = mdsurf(
-        dir.path(),
-        &[
-            "surface",
-            &top,
-            "--imd",
-            &address,
-            "--imd-wait",
-            "10",
-            "--stats",
-            "s.csv",
-        ],
-    );
+    let (dir, run) = against_flood("surface", &["--imd-wait", "10", "--stats", "s.csv"], None);
     assert_eq!(run.code, 0, "{}", run.stderr);
     assert!(
         run.stderr
@@ -124,15 +123,10 @@ fn skipped_in_all(stderr: &str) -> usize {
 #[test]
 fn the_skip_total_counts_only_the_frames_asked_for() {
     // One frame in two: the skipped ones the engine sent in between are not the user's.
-    let dir = tempfile::tempdir().unwrap();
-    let top = data("imd/argon.xyz");
-    let address = flooding_engine(3000);
-    let run = mdsurf_env(
-        dir.path(),
-        &[
-            "surface", &top, "--imd", &address, "--frames", "::2", "--stats", "s.csv",
-        ],
-        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "500")],
+    let (dir, run) = against_flood(
+        "surface",
+        &["--frames", "::2", "--stats", "s.csv"],
+        Some("500"),
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
     let stats = Csv::read(&dir.path().join("s.csv"));
@@ -153,17 +147,8 @@ fn the_skip_total_counts_only_the_frames_asked_for() {
 fn render_sets_up_with_the_oldest_frame_held_when_frame_0_is_already_gone() {
     // As above, for a movie: its first image is the oldest frame held, and the frames before
     // it are skipped with one line.
-    let dir = tempfile::tempdir().unwrap();
-    let top = data("imd/argon.xyz");
-    let address = flooding_engine(3000);
-    let run = mdsurf_env(
-        dir.path(),
-        &[
-            "render", &top, "--imd", &address, "--frames", ":2800", "--size", "160x120", "-o",
-            "live.mp4",
-        ],
-        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "2000")],
-    );
+    let render = ["--frames", ":2800", "--size", "160x120", "-o", "live.mp4"];
+    let (dir, run) = against_flood("render", &render, Some("2000"));
     assert_eq!(run.code, 0, "{}", run.stderr);
     assert!(run.stderr.contains("frames 0 to "), "{}", run.stderr);
     // Frames 2744 to 2799 (56) when all 3000 arrived during the set-up: the 256 frames held,
@@ -182,15 +167,10 @@ fn the_skip_line_names_no_frame_past_the_range() {
     // Frames 0 to 999 asked for, all gone before set-up (the ring holds 2744 on once the 3000
     // have come; 1256 are enough): the line names the frames asked for, and nothing is
     // measured or written.
-    let dir = tempfile::tempdir().unwrap();
-    let top = data("imd/argon.xyz");
-    let address = flooding_engine(3000);
-    let run = mdsurf_env(
-        dir.path(),
-        &[
-            "surface", &top, "--imd", &address, "--frames", ":1000", "--stats", "s.csv",
-        ],
-        &[("MDSURF_TEST_LIVE_SETUP_DELAY_MS", "2000")],
+    let (dir, run) = against_flood(
+        "surface",
+        &["--frames", ":1000", "--stats", "s.csv"],
+        Some("2000"),
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
     assert!(
