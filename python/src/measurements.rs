@@ -248,7 +248,7 @@ pub fn scene_residue_areas(
                 .map(|r| {
                     table
                         .as_ref()
-                        .and_then(|t| t.exposure(r))
+                        .and_then(|t| t.exposure(r.names(&core.topology).resname, r.area))
                         .unwrap_or(f64::NAN)
                 })
                 .collect();
@@ -416,7 +416,7 @@ pub fn scene_interface(
                 .map(|c| {
                     let side = u8::from(c.side == Side::B);
                     let alone = c.residue.area;
-                    let label = c.residue.label();
+                    let label = c.residue.names(&core.topology).label();
                     (
                         side,
                         c.residue.residue,

@@ -135,7 +135,7 @@ impl InterfaceDraft {
                     m.contacts
                         .iter()
                         .filter(|c| c.side == side)
-                        .map(|c| c.residue.label())
+                        .map(|c| c.residue.names(topology).label())
                         .collect()
                 };
                 Ok(InterfaceRow {

@@ -247,7 +247,7 @@ impl Measurer {
                     self.exposure.insert(name.clone(), table);
                 }
                 self.residues
-                    .push(index, name, &residues, self.exposure.get(name));
+                    .push(index, name, topology, &residues, self.exposure.get(name));
             }
         }
         if self.args.tracks_cavities() {
@@ -320,7 +320,7 @@ impl Interface {
             let labels: Vec<String> = contacts
                 .iter()
                 .filter(|c| c.side == s)
-                .map(|c| c.residue.label())
+                .map(|c| c.residue.names(topology).label())
                 .collect();
             labels.join(" ")
         };

@@ -21,24 +21,39 @@ pub fn vertex_areas(mesh: &Mesh) -> Result<Vec<f64>, MeasureError> {
             len: n,
         });
     }
-    // Each triangle's third in parallel, then added to its vertices in triangle order (the
-    // sums do not depend on the thread count).
-    let thirds: Vec<f64> = mesh
+    // Runs of triangles in parallel, each adding its thirds to the vertices it uses (in a
+    // local array over the run's range of vertex indices, narrow on a mesh written cell by
+    // cell), then the runs added in order: runs of a fixed length, so the sums do not depend
+    // on the thread count.
+    let runs: Vec<(usize, Vec<f64>)> = mesh
         .indices
-        .par_chunks_exact(3)
-        .map(|t| {
-            let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
-            0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length() / 3.0
+        .par_chunks(3 * TRIANGLES_PER_RUN)
+        .map(|run| {
+            let (lo, hi) = run
+                .iter()
+                .fold((u32::MAX, 0), |(lo, hi), &i| (lo.min(i), hi.max(i)));
+            let mut local = vec![0.0f64; (hi - lo) as usize + 1];
+            for t in run.chunks_exact(3) {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+                let third = 0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length() / 3.0;
+                for &i in t {
+                    local[(i - lo) as usize] += third;
+                }
+            }
+            (lo as usize, local)
         })
         .collect();
     let mut shares = vec![0.0f64; n];
-    for (t, third) in mesh.indices.chunks_exact(3).zip(thirds) {
-        for &i in t {
-            shares[i as usize] += third;
+    for (lo, local) in runs {
+        for (share, add) in shares[lo..lo + local.len()].iter_mut().zip(local) {
+            *share += add;
         }
     }
     Ok(shares)
 }
+
+/// Triangles per run of [`vertex_areas`].
+const TRIANGLES_PER_RUN: usize = 8192;
 
 /// The smallest box (Å, lower and upper corner) holding `points` (not empty).
 fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
@@ -194,12 +209,12 @@ pub fn atom_areas(
 ) -> Result<Vec<f64>, MeasureError> {
     params.validate()?;
     atoms.validate()?;
-    // The vertices' shares, the vertices grouped by cell and the atoms binned, side by side
-    // (a vertex without a share, in no triangle, adds nothing).
+    // The vertices' shares beside the atoms binned and then the vertices grouped by cell (a
+    // vertex without a share, in no triangle, adds nothing).
     let grid = CellGrid::plan(atoms, params);
-    let ((shares, groups), cells) = rayon::join(
-        || (vertex_areas(mesh), VertexGroups::new(&grid, mesh)),
-        || grid.bin(atoms, params),
+    let (shares, (cells, groups)) = rayon::join(
+        || vertex_areas(mesh),
+        || (grid.bin(atoms, params), VertexGroups::new(&grid, mesh)),
     );
     let shares = shares?;
     let VertexGroups {
@@ -260,4 +275,60 @@ pub fn atom_areas_of(
         areas.iter_mut().for_each(|a| *a *= scale);
     }
     Ok(areas)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each vertex's share is a third of the area of every triangle using it, with triangles
+    /// spread over several runs of [`TRIANGLES_PER_RUN`] and runs whose vertices are far apart
+    /// (the first and last vertex in one triangle).
+    #[test]
+    fn vertex_shares_are_thirds_of_their_triangles_across_runs() {
+        let side = 120u32; // a jittered sheet of 120 x 120 vertices: 28,322 triangles
+        let positions: Vec<Vec3> = (0..side * side)
+            .map(|i| {
+                let (x, y) = ((i % side) as f32, (i / side) as f32);
+                Vec3::new(x, y, (x * 0.3).sin() + (y * 0.7).cos())
+            })
+            .collect();
+        let mut indices = Vec::new();
+        for y in 0..side - 1 {
+            for x in 0..side - 1 {
+                let v = y * side + x;
+                indices.extend([v, v + 1, v + side, v + 1, v + side + 1, v + side]);
+            }
+        }
+        let last = side * side - 1;
+        indices.extend([0, last, side - 1]);
+        assert!(indices.len() / 3 > 3 * TRIANGLES_PER_RUN);
+        let mesh = Mesh {
+            positions,
+            indices,
+            ..Mesh::default()
+        };
+        let mut want = vec![0.0f64; mesh.positions.len()];
+        for t in mesh.indices.chunks_exact(3) {
+            // Edges in f32, the cross product in f64, as the function computes them.
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+            let area = (b - a).as_dvec3().cross((c - a).as_dvec3()).length() / 2.0;
+            for &i in t {
+                want[i as usize] += area / 3.0;
+            }
+        }
+        let got = vertex_areas(&mesh).expect("vertex areas");
+        assert_eq!(got.len(), want.len());
+        for (v, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert!(
+                (g - w).abs() <= 1e-12 * w.abs().max(1.0),
+                "vertex {v}: {g} vs {w}"
+            );
+        }
+        let bad = Mesh {
+            indices: vec![0, 1, u32::MAX],
+            ..mesh
+        };
+        assert!(vertex_areas(&bad).is_err());
+    }
 }

@@ -24,8 +24,8 @@ fn clamped_cell(v: f32, origin: f32, edge: f32, cells: i64) -> i64 {
 }
 
 /// The cells of a [`CellList`] before any atom is binned: where they start, how long they are,
-/// and the cubic cells points are grouped by ([`CellGrid::key`]). Planning it first lets the
-/// points be grouped while the atoms are binned.
+/// and the cubic cells points are grouped by ([`CellGrid::key`]). The plan needs only the atoms'
+/// bounds and radii: points are grouped on it without the binned atoms.
 #[derive(Clone)]
 pub(crate) struct CellGrid {
     origin: Vec3,
@@ -131,19 +131,16 @@ impl CellGrid {
         let cells = (dims[0] * dims[1] * dims[2]) as usize;
         let of: Vec<usize> = atoms.positions.par_iter().map(|p| cell_of(*p)).collect();
         let (starts, index) = sort_by_cell(&of, cells);
-        let sorted = |value: &(dyn Fn(usize) -> f32 + Sync)| -> Vec<f32> {
-            index.par_iter().map(|&i| value(i as usize)).collect()
-        };
-        let (x, y, z) = (
-            sorted(&|i| atoms.positions[i].x),
-            sorted(&|i| atoms.positions[i].y),
-            sorted(&|i| atoms.positions[i].z),
-        );
-        let cutoff2 = sorted(&|i| (q * alpha(i)).powi(2));
-        let inv_two_alpha2 = index
-            .par_iter()
-            .map(|&i| 1.0 / (2.0 * alpha(i as usize) * alpha(i as usize)))
-            .collect();
+        // The sorted atoms' values, in one pass over the order (each atom read once).
+        let n = index.len();
+        let (mut x, mut y, mut z) = (vec![0.0f32; n], vec![0.0f32; n], vec![0.0f32; n]);
+        let (mut cutoff2, mut inv_two_alpha2) = (vec![0.0f32; n], vec![0.0f32; n]);
+        for (k, &i) in index.iter().enumerate() {
+            let (p, a) = (atoms.positions[i as usize], alpha(i as usize));
+            (x[k], y[k], z[k]) = (p.x, p.y, p.z);
+            cutoff2[k] = (q * a).powi(2);
+            inv_two_alpha2[k] = 1.0 / (2.0 * a * a);
+        }
         CellList {
             grid: self.clone(),
             starts,

@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::residues::{residue_label, topology_atoms};
+use super::residues::{ResidueNames, topology_atoms};
 use super::{CavityEvent, ExposureTable, MeasureError, ResidueArea, TrackedCavity};
 use crate::export::ExportError;
 use crate::export::atomic::write_atomic;
@@ -61,30 +61,27 @@ impl ResidueCsv {
         ResidueCsv::default()
     }
 
-    /// Adds the residues of one frame of representation `rep`.
+    /// Adds the residues of one frame of representation `rep`, measured on `topology`.
     pub fn push(
         &mut self,
         frame: usize,
         rep: &str,
+        topology: &Topology,
         residues: &[ResidueArea],
         exposure: Option<&ExposureTable>,
     ) {
         let rep = field(rep);
         for r in residues {
-            let chain = if r.chain.trim().is_empty() {
-                &r.segment
-            } else {
-                &r.chain
-            };
+            let names = r.names(topology);
             let e = exposure
-                .and_then(|t| t.exposure(r))
+                .and_then(|t| t.exposure(names.resname, r.area))
                 .map_or(String::new(), |e| format!("{e:.4}"));
             let _ = writeln!(
                 self.0.rows,
                 "{frame},{rep},{},{},{},{:.3},{e}",
-                field(chain.trim()),
-                r.resid,
-                field(r.resname.trim()),
+                field(names.chain_or_segment()),
+                names.resid,
+                field(names.resname.trim()),
                 r.area
             );
         }
@@ -269,17 +266,9 @@ pub fn lining_residues(
     }
     residues.sort_unstable();
     residues.dedup_by_key(|r| r.0);
-    let text = |l: &crate::model::Labels, i: usize| l.get(i).unwrap_or("").to_string();
     Ok(residues
         .into_iter()
-        .map(|(_, i)| {
-            residue_label(
-                &text(&topology.chains, i),
-                &text(&topology.segments, i),
-                &text(&topology.residue_names, i),
-                topology.residue_ids.get(i).copied().unwrap_or(0),
-            )
-        })
+        .map(|(_, i)| ResidueNames::of_atom(topology, i).label())
         .collect())
 }
 

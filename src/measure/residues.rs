@@ -1,6 +1,7 @@
 //! Area per residue (the sum over its atoms) and exposure (its area over the largest area a
 //! residue of its name has alone).
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use glam::Vec3;
@@ -9,19 +10,15 @@ use super::MeasureError;
 use crate::model::Topology;
 use crate::surface::{AtomSet, SurfaceEngine, SurfaceParams};
 
-/// The area of one residue of a surface.
-#[derive(Debug, Clone, PartialEq)]
+/// The area of one residue of a surface. Its names are the topology's, read on demand
+/// ([`ResidueArea::names`]): a frame's residues hold no strings of their own.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ResidueArea {
     /// Index of the residue in the topology ([`Topology::residue_index`]).
     pub residue: u32,
-    /// Chain identifier (empty when the file has none).
-    pub chain: String,
-    /// Segment name (empty when the file has none).
-    pub segment: String,
-    /// Residue number as written in the file.
-    pub resid: i64,
-    /// Residue name (`LEU`).
-    pub resname: String,
+    /// A topology atom of the residue in the atom set, the first given (its names are read
+    /// from it).
+    pub atom: u32,
     /// Atoms of the residue in the atom set.
     pub atoms: usize,
     /// Area in Å² (the sum of its atoms' areas).
@@ -29,9 +26,54 @@ pub struct ResidueArea {
 }
 
 impl ResidueArea {
+    /// The residue's chain, segment, number and name in `topology` (the one it was measured
+    /// on; empty names and number 0 past its end).
+    pub fn names<'t>(&self, topology: &'t Topology) -> ResidueNames<'t> {
+        ResidueNames::of_atom(topology, self.atom as usize)
+    }
+}
+
+impl<'t> ResidueNames<'t> {
+    /// The names of the residue of topology atom `atom` (empty names and number 0 past the
+    /// topology's end).
+    pub fn of_atom(topology: &'t Topology, atom: usize) -> ResidueNames<'t> {
+        let text = |l: &'t crate::model::Labels| l.get(atom).unwrap_or("");
+        ResidueNames {
+            chain: text(&topology.chains),
+            segment: text(&topology.segments),
+            resid: topology.residue_ids.get(atom).copied().unwrap_or(0),
+            resname: text(&topology.residue_names),
+        }
+    }
+}
+
+/// A residue's names as the topology holds them (untrimmed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ResidueNames<'t> {
+    /// Chain identifier (empty when the file has none).
+    pub chain: &'t str,
+    /// Segment name (empty when the file has none).
+    pub segment: &'t str,
+    /// Residue number as written in the file.
+    pub resid: i64,
+    /// Residue name (`LEU`).
+    pub resname: &'t str,
+}
+
+impl<'t> ResidueNames<'t> {
+    /// The chain, else the segment, trimmed (empty with neither).
+    pub fn chain_or_segment(&self) -> &'t str {
+        let chain = self.chain.trim();
+        if chain.is_empty() {
+            self.segment.trim()
+        } else {
+            chain
+        }
+    }
+
     /// `A:LEU12` (chain, else segment, then name and number; `LEU12` with neither).
     pub fn label(&self) -> String {
-        residue_label(&self.chain, &self.segment, &self.resname, self.resid)
+        residue_label(self.chain, self.segment, self.resname, self.resid)
     }
 }
 
@@ -51,15 +93,15 @@ pub fn residue_label(chain: &str, segment: &str, resname: &str, resid: i64) -> S
 
 /// The topology atoms an atom set holds: `atom_indices`, or all of them for `None`; checked
 /// against the topology and against `len`, the number of per-atom values given.
-pub(crate) fn topology_atoms(
+pub(crate) fn topology_atoms<'a>(
     topology: &Topology,
-    atom_indices: Option<&[u32]>,
+    atom_indices: Option<&'a [u32]>,
     len: usize,
     what: &'static str,
-) -> Result<Vec<u32>, MeasureError> {
-    let indices: Vec<u32> = match atom_indices {
-        Some(ix) => ix.to_vec(),
-        None => (0..topology.len() as u32).collect(),
+) -> Result<Cow<'a, [u32]>, MeasureError> {
+    let indices: Cow<'a, [u32]> = match atom_indices {
+        Some(ix) => Cow::Borrowed(ix),
+        None => Cow::Owned((0..topology.len() as u32).collect()),
     };
     if indices.len() != len {
         return Err(MeasureError::LengthMismatch {
@@ -79,20 +121,6 @@ pub(crate) fn topology_atoms(
     Ok(indices)
 }
 
-/// One residue's description from the topology atom `atom` (in range).
-fn describe(topology: &Topology, atom: usize) -> ResidueArea {
-    let text = |l: &crate::model::Labels| l.get(atom).unwrap_or("").to_string();
-    ResidueArea {
-        residue: topology.residue_index[atom],
-        chain: text(&topology.chains),
-        segment: text(&topology.segments),
-        resid: topology.residue_ids.get(atom).copied().unwrap_or(0),
-        resname: text(&topology.residue_names),
-        atoms: 0,
-        area: 0.0,
-    }
-}
-
 /// Area per residue in Å²: the sum of `atom_areas` (one per atom of the set, whose topology
 /// atoms are `atom_indices`, or all atoms for `None`) over each residue's atoms, residues in
 /// topology order, only those with atoms in the set.
@@ -109,13 +137,18 @@ pub fn residue_areas(
     let mut slot = vec![u32::MAX; topology.residue_count()];
     let mut found: Vec<ResidueArea> = Vec::new();
     for (&atom, &area) in indices.iter().zip(atom_areas) {
-        let atom = atom as usize;
-        let residue = topology.residue_index[atom] as usize;
-        if slot[residue] == u32::MAX {
-            slot[residue] = found.len() as u32;
-            found.push(describe(topology, atom));
+        let residue = topology.residue_index[atom as usize];
+        let place = &mut slot[residue as usize];
+        if *place == u32::MAX {
+            *place = found.len() as u32;
+            found.push(ResidueArea {
+                residue,
+                atom,
+                atoms: 0,
+                area: 0.0,
+            });
         }
-        let r = &mut found[slot[residue] as usize];
+        let r = &mut found[*place as usize];
         r.atoms += 1;
         r.area += area;
     }
@@ -230,12 +263,12 @@ impl ExposureTable {
         self.max_area.get(resname.trim()).copied()
     }
 
-    /// Exposure of `residue`: its area over [`Self::max_area`] of its name (`None` when the
-    /// table lacks the name or its area is 0).
-    pub fn exposure(&self, residue: &ResidueArea) -> Option<f64> {
-        self.max_area(&residue.resname)
+    /// Exposure of a residue named `resname` with `area` (Å²): the area over
+    /// [`Self::max_area`] of its name (`None` when the table lacks the name or its area is 0).
+    pub fn exposure(&self, resname: &str, area: f64) -> Option<f64> {
+        self.max_area(resname)
             .filter(|&m| m > 0.0)
-            .map(|m| residue.area / m)
+            .map(|m| area / m)
     }
 
     /// Residue names and their largest isolated areas (Å²), by name.

@@ -73,7 +73,11 @@ impl ExposureColouring {
         let residues = measure::residue_areas(topology, atom_indices, &areas)?;
         let exposure: HashMap<u32, f32> = residues
             .iter()
-            .map(|r| (r.residue, table.exposure(r).map_or(f32::NAN, |e| e as f32)))
+            .map(|r| {
+                let resname = r.names(topology).resname;
+                let exposure = table.exposure(resname, r.area);
+                (r.residue, exposure.map_or(f32::NAN, |e| e as f32))
+            })
             .collect();
         let colour_of = |atom: u32| {
             let residue = topology.residue_index[atom as usize];

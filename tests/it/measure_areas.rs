@@ -109,8 +109,8 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     assert_eq!(residues.iter().map(|r| r.atoms).sum::<usize>(), idx.len());
     let total: f64 = residues.iter().map(|r| r.area).sum();
     assert!(close(total, out.area, 1e-9));
-    assert_eq!(residues[0].label(), "A:PRO1");
-    assert_eq!(residues[99].label(), "B:PRO1");
+    assert_eq!(residues[0].names(&top).label(), "A:PRO1");
+    assert_eq!(residues[99].names(&top).label(), "B:PRO1");
     // Atoms given in any order give the same residues, in topology order.
     let (rev_idx, rev_areas): (Vec<u32>, Vec<f64>) =
         idx.iter().zip(&areas).rev().map(|(&i, &a)| (i, a)).unzip();
@@ -118,13 +118,13 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     assert_eq!(reversed.len(), residues.len());
     for (r, s) in reversed.iter().zip(&residues) {
         assert_eq!(
-            (r.residue, r.atoms, r.label()),
-            (s.residue, s.atoms, s.label())
+            (r.residue, r.atoms, r.names(&top).label()),
+            (s.residue, s.atoms, s.names(&top).label())
         );
         assert!(
             close(r.area, s.area, 1e-12),
             "{} {} {}",
-            r.label(),
+            r.names(&top).label(),
             r.area,
             s.area
         );
@@ -140,20 +140,26 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
             .expect("exposure table");
     assert_eq!(table.entries().count(), 20, "amino acids of 1hpv");
     for r in &residues {
-        let e = table.exposure(r).expect("every name has a maximum");
-        assert!((0.0..1.3).contains(&e), "{}: exposure {e}", r.label());
+        let names = r.names(&top);
+        let e = table
+            .exposure(names.resname, r.area)
+            .expect("every name has a maximum");
+        assert!((0.0..1.3).contains(&e), "{}: exposure {e}", names.label());
     }
     let buried = residues
         .iter()
-        .filter(|r| table.exposure(r).unwrap_or(1.0) < 0.05)
+        .filter(|r| {
+            let resname = r.names(&top).resname;
+            table.exposure(resname, r.area).unwrap_or(1.0) < 0.05
+        })
         .count();
     assert!(buried > 10, "only {buried} residues buried");
 
     // The CSV tables, written atomically.
     let dir = tempfile::tempdir().expect("tempdir");
     let mut csv = ResidueCsv::new();
-    csv.push(0, "protein", &residues, Some(&table));
-    csv.push(1, "a, \"b\"", &residues[..1], None);
+    csv.push(0, "protein", &top, &residues, Some(&table));
+    csv.push(1, "a, \"b\"", &top, &residues[..1], None);
     let path = dir.path().join("residues.csv");
     csv.write(&path).expect("write");
     let text = std::fs::read_to_string(&path).expect("read");
@@ -218,7 +224,11 @@ fn measure_residue_areas_follow_msms_ses_on_1hpv() {
         .collect();
     assert_eq!(reference.len(), residues.len());
     for (r, (chain, resid, name, _)) in residues.iter().zip(&reference) {
-        assert_eq!((&r.chain, r.resid, &r.resname), (chain, *resid, name));
+        let names = r.names(&top);
+        assert_eq!(
+            (names.chain, names.resid, names.resname),
+            (chain.as_str(), *resid, name.as_str())
+        );
     }
     let ours: Vec<f64> = residues.iter().map(|r| r.area).collect();
     let theirs: Vec<f64> = reference.iter().map(|r| r.3).collect();
