@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use mdsurf::measure::{
     self, CavityOptions, CavityTracker, ExposureTable, MeasureError, ProbeOptions, Side,
-    lining_residues, residue_label,
+    lining_residues,
 };
 use mdsurf::model::{Frame, RadiusOverrides};
 use mdsurf::scene::interface::{Interface, InterfaceError};
@@ -144,7 +144,7 @@ pub fn scene_residues(
             top.residue_ids.get(i).copied().unwrap_or(0),
             text(&top.residue_names, i),
         );
-        labels.push(residue_label(&chain, &segment, &resname, resid));
+        labels.push(measure::ResidueNames::of_atom(top, i).label());
         chains.push(if chain.is_empty() { segment } else { chain });
         resids.push(resid);
         resnames.push(resname);

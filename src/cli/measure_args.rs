@@ -234,6 +234,14 @@ impl Measurer {
                     .push(index, name, topology, atom_indices, &areas)?;
             }
             if self.args.per_residue.is_some() {
+                if !self.exposure.contains_key(name)
+                    && !measure::names_residues(topology, atom_indices)
+                {
+                    bail!(
+                        "--per-residue: its atoms are in no residue (the file names none, as \
+                         LAMMPS dumps and XYZ files do): use --per-atom"
+                    );
+                }
                 let residues = measure::residue_areas(topology, atom_indices, &areas)?;
                 if !self.exposure.contains_key(name) {
                     let mut engine = CpuEngine::new();

@@ -65,7 +65,9 @@ pub use probe_cavities::{
     ses_radius,
 };
 pub use probe_surface::{ProbeSurface, probe_interface, probe_surface, ses_probe_interface};
-pub use residues::{ExposureTable, ResidueArea, ResidueNames, residue_areas, residue_label};
+pub use residues::{
+    ExposureTable, ResidueArea, ResidueNames, names_residues, residue_areas, residue_label,
+};
 pub use tracking::{CavityEvent, CavityTracker, TrackUpdate, TrackedCavity};
 
 use crate::surface::SurfaceError;

@@ -34,8 +34,8 @@ impl ResidueArea {
 }
 
 impl<'t> ResidueNames<'t> {
-    /// The names of the residue of topology atom `atom` (empty names and number 0 past the
-    /// topology's end).
+    /// The names of the residue of topology atom `atom`, and the atom's own (empty names and
+    /// number 0 past the topology's end).
     pub fn of_atom(topology: &'t Topology, atom: usize) -> ResidueNames<'t> {
         let text = |l: &'t crate::model::Labels| l.get(atom).unwrap_or("");
         ResidueNames {
@@ -43,6 +43,8 @@ impl<'t> ResidueNames<'t> {
             segment: text(&topology.segments),
             resid: topology.residue_ids.get(atom).copied().unwrap_or(0),
             resname: text(&topology.residue_names),
+            atom_name: text(&topology.names),
+            serial: (topology.serials.get(atom).copied()).unwrap_or(atom as i64 + 1),
         }
     }
 }
@@ -58,6 +60,11 @@ pub struct ResidueNames<'t> {
     pub resid: i64,
     /// Residue name (`LEU`).
     pub resname: &'t str,
+    /// Name of the atom the names were read from (`CA`).
+    pub atom_name: &'t str,
+    /// That atom's serial number as written in the file (its place from 1 when the file has
+    /// none).
+    pub serial: i64,
 }
 
 impl<'t> ResidueNames<'t> {
@@ -71,9 +78,23 @@ impl<'t> ResidueNames<'t> {
         }
     }
 
-    /// `A:LEU12` (chain, else segment, then name and number; `LEU12` with neither).
+    /// True for an atom in no residue: no chain, segment or residue name, and number 0 (every
+    /// atom of a LAMMPS dump or an XYZ file, which name no residues).
+    pub fn is_anonymous(&self) -> bool {
+        [self.chain, self.segment, self.resname]
+            .iter()
+            .all(|s| s.trim().is_empty())
+            && self.resid == 0
+    }
+
+    /// `A:LEU12` (chain, else segment, then name and number; `LEU12` with neither); for an
+    /// atom in no residue ([`Self::is_anonymous`]) the atom's name and serial, `O@340`.
     pub fn label(&self) -> String {
-        residue_label(self.chain, self.segment, self.resname, self.resid)
+        if self.is_anonymous() {
+            format!("{}@{}", self.atom_name.trim(), self.serial)
+        } else {
+            residue_label(self.chain, self.segment, self.resname, self.resid)
+        }
     }
 }
 
@@ -88,6 +109,19 @@ pub fn residue_label(chain: &str, segment: &str, resname: &str, resid: i64) -> S
         format!("{}{resid}", resname.trim())
     } else {
         format!("{chain}:{}{resid}", resname.trim())
+    }
+}
+
+/// True when some atom of the set (the topology atoms `atom_indices`, all for `None`; indices
+/// past the topology are skipped) is in a residue, that is not
+/// [anonymous](ResidueNames::is_anonymous).
+pub fn names_residues(topology: &Topology, atom_indices: Option<&[u32]>) -> bool {
+    let named = |atom: usize| !ResidueNames::of_atom(topology, atom).is_anonymous();
+    match atom_indices {
+        Some(ix) => ix
+            .iter()
+            .any(|&a| (a as usize) < topology.len() && named(a as usize)),
+        None => (0..topology.len()).any(named),
     }
 }
 
@@ -274,5 +308,29 @@ impl ExposureTable {
     /// Residue names and their largest isolated areas (Å²), by name.
     pub fn entries(&self) -> impl Iterator<Item = (&str, f64)> + '_ {
         self.max_area.iter().map(|(k, v)| (k.as_str(), *v))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atoms_in_no_residue_are_labelled_by_name_and_serial() {
+        let mut top = Topology::of_residues(&[(0, ""), (0, ""), (7, "LEU")]);
+        top.number_residue_runs(&[u32::MAX; 3]);
+        top.serials = vec![340, 341, 342];
+        let names = |atom| ResidueNames::of_atom(&top, atom);
+        assert!(names(0).is_anonymous());
+        assert_eq!(names(1).label(), "C@341");
+        assert!(!names(2).is_anonymous());
+        assert_eq!(names(2).label(), "LEU7");
+        assert!(!names_residues(&top, Some(&[0, 1])));
+        assert!(names_residues(&top, Some(&[0, 2])));
+        assert!(names_residues(&top, None));
+        assert!(
+            !names_residues(&top, Some(&[0, 99])),
+            "indices past the end are skipped"
+        );
     }
 }

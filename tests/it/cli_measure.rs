@@ -216,3 +216,42 @@ fn check_events(cavities: &Csv, events: &Csv) {
         assert_eq!(ended, gone, "frame {f}: ended ids");
     }
 }
+
+/// A LAMMPS dump names no residues: `--per-residue` refuses in one line and writes nothing,
+/// and the cavities' lining atoms are labelled by atom name and serial (`1@373`), not by a
+/// residue number 0 repeated.
+#[test]
+fn files_without_residues_label_atoms_and_refuse_per_residue_areas() {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = data("spce_all_coords.lammpstrj.bz2");
+    let args = [
+        "surface",
+        &dump,
+        "--frames",
+        "0:1",
+        "--backend",
+        "cpu",
+        "-q",
+    ];
+    let with = |extra: [&'static str; 2]| [&args[..], &extra[..]].concat();
+    let run = mdsurf(dir.path(), &with(["--per-residue", "res.csv"]));
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_eq!(run.stderr.trim().lines().count(), 1, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("--per-residue") && run.stderr.contains("--per-atom"),
+        "{}",
+        run.stderr
+    );
+    assert!(!dir.path().join("res.csv").exists());
+
+    let run = mdsurf(dir.path(), &with(["--cavities", "cav.csv"]));
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let lining = Csv::read(&dir.path().join("cav.csv")).text_col("lining");
+    assert!(!lining.is_empty(), "the water box has cavities");
+    for label in lining.iter().flat_map(|l| l.split_whitespace()) {
+        let (name, serial) = label.split_once('@').expect(label);
+        assert!(["1", "2"].contains(&name), "{label}: LAMMPS types 1 and 2");
+        let serial: usize = serial.parse().expect(label);
+        assert!((1..=4500).contains(&serial), "{label}");
+    }
+}
