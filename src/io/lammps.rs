@@ -15,6 +15,8 @@
 //!
 //! The topology is what the chemfiles path gives (see `super::chem`): the `element` column is
 //! the name, else the `type`; `mass` and `q` columns give masses and charges; no residues.
+//! The serial numbers are the ids (chemfiles numbers atoms 1 to n; the same where the ids run
+//! from 1 without gaps).
 //! `tests/it/io_native_text.rs` compares both on every LAMMPS test file.
 //!
 //! A damaged or cut frame is a [`LammpsError`] naming the line, wrapped in an [`IoError`]
@@ -185,7 +187,20 @@ fn parse_frame(
         positions,
         cell: header.cell,
     };
-    Ok((frame, with_topology.then(|| topology(&atom_lines))))
+    let topology = with_topology.then(|| {
+        let mut top = topology(&atom_lines);
+        // The atoms' ids as their serial numbers (a dump of a group has gaps; ids past i64 are
+        // left at their place).
+        if ids.len() == top.len() {
+            let mut sorted = ids;
+            sorted.sort_unstable();
+            for (serial, id) in top.serials.iter_mut().zip(sorted) {
+                *serial = i64::try_from(id).unwrap_or(*serial);
+            }
+        }
+        top
+    });
+    Ok((frame, topology))
 }
 
 /// The image flags of an atom line (0 where absent), when they are to be applied.

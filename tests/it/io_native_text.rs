@@ -180,6 +180,8 @@ fn lammps_dumps_of_groups_with_any_ids_read_in_id_order() {
     std::fs::write(&path, text.replace('\n', "\r\n")).unwrap();
     let t = io::open(&path, None).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(t.topology().names, vec!["1", "2", "2", "3"]);
+    // The ids are the serial numbers (labels and `--per-atom` rows name the file's atoms).
+    assert_eq!(t.topology().serials, [0, 17, 3_000_000_000, 1 << 40]);
     let xs: Vec<f32> = t
         .read_frame(0)
         .unwrap()
