@@ -21,32 +21,54 @@ pub fn vertex_areas(mesh: &Mesh) -> Result<Vec<f64>, MeasureError> {
             len: n,
         });
     }
-    // Runs of triangles in parallel, each adding its thirds to the vertices it uses (in a
-    // local array over the run's range of vertex indices, narrow on a mesh written cell by
-    // cell), then the runs added in order: runs of a fixed length, so the sums do not depend
-    // on the thread count.
-    let runs: Vec<(usize, Vec<f64>)> = mesh
+    // Runs of triangles in parallel, each adding its thirds to the vertices it uses in a local
+    // array over the run's range of vertex indices (narrow on a mesh written cell by cell),
+    // then the runs added in order: runs of a fixed length, so the sums do not depend on the
+    // thread count. A run whose vertices lie further apart keeps its thirds instead, added
+    // vertex by vertex in the merge (memory stays within 3 f64 per triangle).
+    let third = |t: &[u32]| {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+        0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length() / 3.0
+    };
+    let runs: Vec<RunShares> = mesh
         .indices
         .par_chunks(3 * TRIANGLES_PER_RUN)
         .map(|run| {
             let (lo, hi) = run
                 .iter()
                 .fold((u32::MAX, 0), |(lo, hi), &i| (lo.min(i), hi.max(i)));
-            let mut local = vec![0.0f64; (hi - lo) as usize + 1];
+            let range = (hi - lo) as usize + 1;
+            if range > run.len() {
+                return RunShares::Thirds(run.chunks_exact(3).map(third).collect());
+            }
+            let mut local = vec![0.0f64; range];
             for t in run.chunks_exact(3) {
-                let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
-                let third = 0.5 * (b - a).as_dvec3().cross((c - a).as_dvec3()).length() / 3.0;
+                let third = third(t);
                 for &i in t {
                     local[(i - lo) as usize] += third;
                 }
             }
-            (lo as usize, local)
+            RunShares::Local {
+                lo: lo as usize,
+                shares: local,
+            }
         })
         .collect();
     let mut shares = vec![0.0f64; n];
-    for (lo, local) in runs {
-        for (share, add) in shares[lo..lo + local.len()].iter_mut().zip(local) {
-            *share += add;
+    for (run, run_shares) in mesh.indices.chunks(3 * TRIANGLES_PER_RUN).zip(runs) {
+        match run_shares {
+            RunShares::Local { lo, shares: local } => {
+                for (share, add) in shares[lo..lo + local.len()].iter_mut().zip(local) {
+                    *share += add;
+                }
+            }
+            RunShares::Thirds(thirds) => {
+                for (t, third) in run.chunks_exact(3).zip(thirds) {
+                    for &i in t {
+                        shares[i as usize] += third;
+                    }
+                }
+            }
         }
     }
     Ok(shares)
@@ -54,6 +76,14 @@ pub fn vertex_areas(mesh: &Mesh) -> Result<Vec<f64>, MeasureError> {
 
 /// Triangles per run of [`vertex_areas`].
 const TRIANGLES_PER_RUN: usize = 8192;
+
+/// What one run of triangles of [`vertex_areas`] adds to the vertices' shares (Å²).
+enum RunShares {
+    /// The sums over the run's vertex indices `lo..lo + shares.len()`.
+    Local { lo: usize, shares: Vec<f64> },
+    /// Each triangle's third, in triangle order (the run's vertices lie far apart).
+    Thirds(Vec<f64>),
+}
 
 /// The smallest box (Å, lower and upper corner) holding `points` (not empty).
 fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
@@ -282,11 +312,11 @@ mod tests {
     use super::*;
 
     /// Each vertex's share is a third of the area of every triangle using it, with triangles
-    /// spread over several runs of [`TRIANGLES_PER_RUN`] and runs whose vertices are far apart
-    /// (the first and last vertex in one triangle).
+    /// spread over several runs of [`TRIANGLES_PER_RUN`], and a run whose vertices are too far
+    /// apart for a local array (the last, with a triangle of the first and last vertex).
     #[test]
     fn vertex_shares_are_thirds_of_their_triangles_across_runs() {
-        let side = 120u32; // a jittered sheet of 120 x 120 vertices: 28,322 triangles
+        let side = 160u32; // a jittered sheet of 160 x 160 vertices: 50,563 triangles
         let positions: Vec<Vec3> = (0..side * side)
             .map(|i| {
                 let (x, y) = ((i % side) as f32, (i / side) as f32);
@@ -302,7 +332,11 @@ mod tests {
         }
         let last = side * side - 1;
         indices.extend([0, last, side - 1]);
-        assert!(indices.len() / 3 > 3 * TRIANGLES_PER_RUN);
+        assert!(indices.len() / 3 > 6 * TRIANGLES_PER_RUN);
+        assert!(
+            side * side > 3 * TRIANGLES_PER_RUN as u32,
+            "the last run keeps thirds"
+        );
         let mesh = Mesh {
             positions,
             indices,
