@@ -13,13 +13,15 @@ struct FullscreenOut {
     @builtin(position) clip: vec4<f32>,
 };
 
-// One triangle that covers the viewport.
+// One triangle that covers the viewport, on the far plane (depth 1): the pipelines' depth test
+// against the scene's depth picks the drawn pixels or the empty ones (`PostPixels` in
+// src/render/pipelines.rs).
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> FullscreenOut {
     let x = f32((vi << 1u) & 2u);
     let y = f32(vi & 2u);
     var o: FullscreenOut;
-    o.clip = vec4<f32>(x * 2.0 - 1.0, 1.0 - y * 2.0, 0.0, 1.0);
+    o.clip = vec4<f32>(x * 2.0 - 1.0, 1.0 - y * 2.0, 1.0, 1.0);
     return o;
 }
 

@@ -67,13 +67,42 @@ pub(crate) struct Pipelines {
     pub mean_show: wgpu::RenderPipeline,
 }
 
+/// Which pixels a full-screen pass after the opaque scene shades. Its triangle lies on the far
+/// plane (depth 1) and the depth test against the scene's depth buffer (read-only, also read by
+/// the shader) picks the pixels, so that a driver skips the rest before the shader runs: a CPU
+/// driver such as lavapipe runs a fragment shader's branches under a mask and would otherwise
+/// pay for every empty pixel as for a drawn one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum PostPixels {
+    /// Where something was drawn (depth below 1).
+    Drawn,
+    /// The empty background (depth exactly 1, the clear value), where only outlines fall.
+    Empty,
+}
+
+impl PostPixels {
+    /// The read-only depth state that selects these pixels.
+    fn depth_state(self) -> Option<wgpu::DepthStencilState> {
+        Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(match self {
+                PostPixels::Drawn => wgpu::CompareFunction::Greater,
+                PostPixels::Empty => wgpu::CompareFunction::Equal,
+            }),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        })
+    }
+}
+
 /// The look pass's pipelines, one per combination of its parts (ambient occlusion, outlines,
-/// shadows), each compiled with only its parts (WGSL override constants: a CPU driver such as
-/// lavapipe runs every instruction of a shader whatever its uniforms say).
+/// shadows) and pixels, each compiled with only its parts (WGSL override constants: a CPU
+/// driver such as lavapipe runs every instruction of a shader whatever its uniforms say).
 pub(crate) struct LookPipelines {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    made: std::sync::Mutex<[Option<wgpu::RenderPipeline>; 8]>,
+    made: std::sync::Mutex<[Option<wgpu::RenderPipeline>; 16]>,
 }
 
 impl LookPipelines {
@@ -84,8 +113,12 @@ impl LookPipelines {
         ao: bool,
         outline: bool,
         shadows: bool,
+        pixels: PostPixels,
     ) -> wgpu::RenderPipeline {
-        let key = usize::from(ao) | usize::from(outline) << 1 | usize::from(shadows) << 2;
+        let key = usize::from(ao)
+            | usize::from(outline) << 1
+            | usize::from(shadows) << 2
+            | usize::from(pixels == PostPixels::Empty) << 3;
         let mut made = self
             .made
             .lock()
@@ -120,7 +153,7 @@ impl LookPipelines {
                 vs: "vs_fullscreen",
                 fs: "fs_look",
                 buffers: &[],
-                depth: None,
+                depth: pixels.depth_state(),
                 targets: &target,
                 constants: &constants,
             },
@@ -473,7 +506,8 @@ impl Pipelines {
                 vs: "vs_fullscreen",
                 fs: "fs_ambient_occlusion",
                 buffers: &[],
-                depth: None,
+                // The background's occlusion is 1: only drawn pixels change.
+                depth: PostPixels::Drawn.depth_state(),
                 targets: &multiply,
                 constants: &[],
             },

@@ -5,7 +5,7 @@
 use glam::{Mat4, Vec3};
 
 use super::camera::{Camera, Eye, Projection};
-use super::pipelines::{CYLINDER_VERTICES, Pipelines};
+use super::pipelines::{CYLINDER_VERTICES, Pipelines, PostPixels};
 use super::scene::{GpuScene, SurfaceLayer};
 
 /// Surfaces at least this opaque are drawn in the opaque pass.
@@ -447,19 +447,25 @@ impl Renderer {
             }
         }
         // One full-screen pass over the opaque image that reads its depth: the look pass
-        // (ambient occlusion, outlines and shadows) or the ambient occlusion alone.
+        // (ambient occlusion, outlines and shadows) or the ambient occlusion alone on the drawn
+        // pixels, and the outlines that fall on the empty background.
         let ao = settings.ambient_occlusion > 0.0;
-        let depth_pass = if settings.has_look_pass() {
-            Some(self.pipelines.look.get(
-                device,
-                ao,
-                settings.outline_width > 0.0,
-                settings.shadows > 0.0,
-            ))
-        } else {
-            ao.then(|| self.pipelines.ambient_occlusion.clone())
+        let outline = settings.outline_width > 0.0;
+        let look = |pixels| {
+            let shadows = settings.shadows > 0.0 && pixels == PostPixels::Drawn;
+            let ao = ao && pixels == PostPixels::Drawn;
+            self.pipelines
+                .look
+                .get(device, ao, outline, shadows, pixels)
         };
-        if let Some(pipeline) = depth_pass {
+        let depth_pipelines = if settings.has_look_pass() {
+            let empty = outline.then(|| look(PostPixels::Empty));
+            vec![Some(look(PostPixels::Drawn)), empty]
+        } else {
+            vec![ao.then(|| self.pipelines.ambient_occlusion.clone())]
+        };
+        let depth_pipelines: Vec<_> = depth_pipelines.into_iter().flatten().collect();
+        if !depth_pipelines.is_empty() {
             let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("scene depth"),
                 layout: &self.pipelines.depth_layout,
@@ -471,13 +477,21 @@ impl Renderer {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("depth post pass"),
                 color_attachments: &[Some(colour_attachment(pass.target, None))],
+                // Read-only: the depth test picks the pixels while the shader reads it too.
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &targets.depth_view,
+                    depth_ops: None,
+                    stencil_ops: None,
+                }),
                 ..Default::default()
             });
             rp.set_viewport(x, y, w, h, 0.0, 1.0);
-            rp.set_pipeline(&pipeline);
             rp.set_bind_group(0, view_group, &[]);
             rp.set_bind_group(1, &depth_group, &[]);
-            rp.draw(0..3, 0..1);
+            for pipeline in &depth_pipelines {
+                rp.set_pipeline(pipeline);
+                rp.draw(0..3, 0..1);
+            }
         }
         if transparent_layers.is_empty() {
             return;
