@@ -14,6 +14,7 @@ pub(crate) mod readback;
 pub(crate) mod renderer;
 pub(crate) mod scene;
 mod scene_layers;
+pub(crate) mod screen_rect;
 pub(crate) mod setting_error;
 pub mod settings;
 pub mod shapes;

@@ -328,9 +328,14 @@ impl GpuScene {
         );
         self.sphere_count = spheres.len() as u32;
         self.cylinder_count = cylinders.len() as u32;
-        self.atom_bounds = spheres.iter().fold(None, |acc, s| {
-            let c = Vec3::from(s.centre);
-            let r = Vec3::splat(s.radius);
+        // Each sphere and both ends of each cylinder, widened by their radii.
+        let balls = spheres.iter().map(|s| (Vec3::from(s.centre), s.radius));
+        let ends = cylinders.iter().flat_map(|c| {
+            let end = Vec3::new(c.end[0], c.end[1], c.end[2]);
+            [(Vec3::from(c.start), c.radius), (end, c.radius)]
+        });
+        self.atom_bounds = balls.chain(ends).fold(None, |acc, (c, r)| {
+            let r = Vec3::splat(r);
             Some(match acc {
                 None => (c - r, c + r),
                 Some((lo, hi)) => (lo.min(c - r), hi.max(c + r)),
@@ -347,6 +352,19 @@ impl GpuScene {
     /// Number of atom spheres uploaded.
     pub fn sphere_count(&self) -> u32 {
         self.sphere_count
+    }
+
+    /// Bounds (Å) of everything drawn, for clipping the full-screen passes: `None` when a
+    /// surface's bounds are not known (draw everywhere).
+    pub(crate) fn drawn_bounds(&self) -> Option<(Vec3, Vec3)> {
+        let surfaces = self.surfaces.iter().filter(|l| l.has_surface());
+        if surfaces.clone().any(|l| l.bounds.is_none()) {
+            return None;
+        }
+        surfaces
+            .filter_map(|l| l.bounds)
+            .chain(self.atom_bounds)
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
     }
 
     /// Bounds (Å) of everything in the scene, for fitting the camera; `None` when empty.
