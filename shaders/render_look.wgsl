@@ -1,6 +1,11 @@
 // The figure look of the renderer (src/render/renderer.rs): one full-screen pass after the
 // opaque scene and before the transparent surface, reading only the depth buffer, that does the
-// ambient occlusion (render_ao.wgsl), and:
+// ambient occlusion (render_ao.wgsl), and the parts below. The pass draws its triangle twice,
+// each time on the pixels its pipeline's depth test picks (`PostPixels` in
+// src/render/pipelines.rs): the drawn pixels with every part, then the empty background with
+// the outlines alone (they fall just outside silhouettes); within the screen rectangle the
+// scene covers (a scissor). Empty pixels far from the scene are not shaded at all.
+// The parts:
 // - silhouette outlines: a pixel is drawn in the outline colour where a neighbour `look.x`
 //   pixels away is nearer by a depth jump (relative to the depth), so the line lies just outside
 //   each silhouette, and where the surface bends sharply (the slopes on both sides differ by more
@@ -22,6 +27,9 @@
 override LOOK_AO: bool = true;
 override LOOK_OUTLINE: bool = true;
 override LOOK_SHADOWS: bool = true;
+// The pipeline for the empty background (`PostPixels::Empty`): outlines only, and only the
+// background's test (a CPU driver runs both sides of a branch under a mask).
+override LOOK_EMPTY: bool = false;
 
 // Depth at pixel `q`, clamped into the viewport.
 fn depth_at(q: vec2<i32>) -> f32 {
@@ -77,14 +85,19 @@ fn crease(zm: f32, z0: f32, zp: f32, span: f32, jump: f32) -> f32 {
     return 1.0 - smoothstep(0.17, 0.54, cos_bend);
 }
 
+// Outline coverage 0 or 1 at an empty pixel with neighbours `c`: 1 next to anything drawn,
+// just outside the silhouette.
+fn outline_on_background(c: Cross) -> f32 {
+    return select(0.0, 1.0, min(min(c.d.x, c.d.y), min(c.d.z, c.d.w)) < 1.0);
+}
+
 // Outline coverage 0..1 at a pixel of depth `d0` with neighbours `c` at the outline width.
 fn outline(d0: f32, c: Cross) -> f32 {
     if (u.look.x <= 0.0) {
         return 0.0;
     }
     if (d0 >= 1.0) {
-        // Background next to anything drawn: just outside the silhouette.
-        return select(0.0, 1.0, min(min(c.d.x, c.d.y), min(c.d.z, c.d.w)) < 1.0);
+        return outline_on_background(c);
     }
     let z0 = eye_distance(d0);
     let pix = pixel_size(z0);
@@ -166,6 +179,10 @@ fn shadow(p: vec2<i32>, d0: f32, c: Cross, noise: f32) -> f32 {
 @fragment
 fn fs_look(i: FullscreenOut) -> @location(0) vec4<f32> {
     let p = vec2<i32>(i.clip.xy);
+    if (LOOK_EMPTY) {
+        let o = outline_on_background(cross_at(p, max(i32(round(u.look.x)), 1)));
+        return vec4<f32>(u.outline_colour.rgb * o, o);
+    }
     let d0 = textureLoad(depth_tex, p, 0);
     let noise = pixel_noise(i.clip.xy);
     var lit = 1.0;

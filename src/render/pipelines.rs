@@ -143,6 +143,7 @@ impl LookPipelines {
             ("LOOK_AO", flag(ao)),
             ("LOOK_OUTLINE", flag(outline)),
             ("LOOK_SHADOWS", flag(shadows)),
+            ("LOOK_EMPTY", flag(pixels == PostPixels::Empty)),
         ];
         let p = pipeline(
             device,
