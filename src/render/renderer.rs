@@ -7,6 +7,7 @@ use glam::{Mat4, Vec3};
 use super::camera::{Camera, Eye, Projection};
 use super::pipelines::{CYLINDER_VERTICES, Pipelines, PostPixels};
 use super::scene::{GpuScene, SurfaceLayer};
+use super::screen_rect::covered_rect;
 
 /// Surfaces at least this opaque are drawn in the opaque pass.
 const OPAQUE: f32 = 0.999;
@@ -465,7 +466,11 @@ impl Renderer {
             vec![ao.then(|| self.pipelines.ambient_occlusion.clone())]
         };
         let depth_pipelines: Vec<_> = depth_pipelines.into_iter().flatten().collect();
-        if !depth_pipelines.is_empty() {
+        // Only where the scene can be on screen, and the outlines beside it.
+        let (view, proj) = pass.matrices;
+        let margin = settings.outline_width.clamp(0.0, MAX_OUTLINE_PX).ceil() + 2.0;
+        let rect = covered_rect(scene.drawn_bounds(), proj * view, pass.viewport, margin);
+        if let (false, Some([sx, sy, sw, sh])) = (depth_pipelines.is_empty(), rect) {
             let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("scene depth"),
                 layout: &self.pipelines.depth_layout,
@@ -486,6 +491,7 @@ impl Renderer {
                 ..Default::default()
             });
             rp.set_viewport(x, y, w, h, 0.0, 1.0);
+            rp.set_scissor_rect(sx, sy, sw, sh);
             rp.set_bind_group(0, view_group, &[]);
             rp.set_bind_group(1, &depth_group, &[]);
             for pipeline in &depth_pipelines {

@@ -28,7 +28,7 @@ pub(crate) fn covered_rect(
             if corner & 4 == 0 { lo.z } else { hi.z },
         );
         let clip: Vec4 = view_proj * p.extend(1.0);
-        if !(clip.w > 1e-6) || !clip.is_finite() {
+        if clip.w <= 1e-6 || !clip.is_finite() {
             return Some(viewport);
         }
         let px = [
