@@ -78,7 +78,7 @@ pub enum ArgError {
         count: usize,
     },
     /// A frame range that is not START:STOP:STEP.
-    #[error("bad frame range '{0}': expected START:STOP:STEP, e.g. 0:50:5 or 10")]
+    #[error("bad frame range '{0}': expected START:STOP:STEP, e.g. 0:50:5, 10 or all")]
     FrameRange(String),
     /// A frame range with step 0.
     #[error("bad frame range '{0}': the step must be at least 1")]

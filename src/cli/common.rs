@@ -358,7 +358,7 @@ pub fn engines_for(backend: BenchBackend) -> Result<Vec<BenchEngine>> {
 }
 
 /// A `START:STOP:STEP` frame selection (STOP exclusive; each part optional; a single number
-/// selects one frame).
+/// selects one frame; `all` every frame).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FrameRange {
     /// First frame, from 0.
@@ -391,6 +391,9 @@ impl FromStr for FrameRange {
                 p.parse().map(Some).map_err(|_| bad())
             }
         };
+        if s.trim().eq_ignore_ascii_case("all") {
+            return Ok(FrameRange::default());
+        }
         let parts: Vec<&str> = s.split(':').collect();
         let range = match parts.as_slice() {
             [one] => {
@@ -531,4 +534,34 @@ pub fn demo_files() -> Result<(PathBuf, PathBuf)> {
         }
     }
     bail!("the bundled demo assets/md_1u19.gro + .xtc was not found; give TOP [TRAJ]")
+}
+
+#[cfg(test)]
+mod frame_range_tests {
+    use super::FrameRange;
+
+    fn range(s: &str) -> FrameRange {
+        s.parse().unwrap_or_else(|e| panic!("{s}: {e}"))
+    }
+
+    #[test]
+    fn ranges_parse_with_optional_parts_and_all_means_every_frame() {
+        let r = |start, stop, step| FrameRange { start, stop, step };
+        assert_eq!(range("10"), r(10, Some(11), 1));
+        assert_eq!(range("0:50:5"), r(0, Some(50), 5));
+        assert_eq!(range("3:"), r(3, None, 1));
+        assert_eq!(range("::2"), r(0, None, 2));
+        assert_eq!(range("all"), r(0, None, 1));
+        assert_eq!(range(" All "), r(0, None, 1));
+    }
+
+    #[test]
+    fn bad_ranges_name_the_text() {
+        for bad in ["", "x", "1:2:3:4", "-1", "every"] {
+            let e = bad.parse::<FrameRange>().unwrap_err().to_string();
+            assert!(e.contains(&format!("'{bad}'")), "{bad}: {e}");
+        }
+        let e = "0:10:0".parse::<FrameRange>().unwrap_err().to_string();
+        assert!(e.contains("step must be at least 1"), "{e}");
+    }
 }

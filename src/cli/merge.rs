@@ -1,18 +1,23 @@
 //! `mdsurf merge STATS.csv`: joins the stats parts that the chunks of a job array wrote
 //! (`STATS.part-IIII-of-NNNN.csv`, from `--chunk`) into `STATS.csv`, sorted by frame; refuses
 //! parts of runs with other parameters and names missing or duplicated frames in one line. The
-//! work is [`mdsurf::export::stats_merge::merge_parts`].
+//! work is [`mdsurf::export::stats_merge::merge_parts`]. `mdsurf merge MOVIE.mp4` joins the
+//! movie parts of `render --chunk` without re-encoding
+//! ([`mdsurf::export::movie_merge::merge_movie_parts`]).
 
 use std::path::PathBuf;
 
 use anyhow::Result;
+use mdsurf::export::movie_merge::merge_movie_parts;
 use mdsurf::export::stats_merge::merge_parts;
+use mdsurf::export::video::is_mp4;
 
 /// Arguments of `mdsurf merge`.
 #[derive(clap::Args, Debug)]
 pub struct MergeArgs {
-    /// The merged stats CSV; its parts are `STATS.part-IIII-of-NNNN.csv` beside it.
-    #[arg(value_name = "STATS.csv")]
+    /// The merged stats CSV or MP4 movie; its parts are `STATS.part-IIII-of-NNNN.csv` (or
+    /// `MOVIE.part-IIII-of-NNNN.mp4`, joined without re-encoding) beside it.
+    #[arg(value_name = "STATS.csv|MOVIE.mp4")]
     pub stats: PathBuf,
     /// Delete the part files after a successful merge.
     #[arg(long)]
@@ -24,14 +29,23 @@ pub struct MergeArgs {
 
 /// Runs `mdsurf merge`.
 pub fn run(args: MergeArgs) -> Result<()> {
-    let summary = merge_parts(&args.stats)?;
-    if args.remove_parts {
-        for part in &summary.parts {
-            if let Err(e) = std::fs::remove_file(part) {
-                eprintln!("note: cannot remove {}: {e}", part.display());
-            }
+    if is_mp4(&args.stats) {
+        let summary = merge_movie_parts(&args.stats)?;
+        remove_parts(&args, &summary.parts);
+        if !args.quiet {
+            eprintln!(
+                "{}: {} frame(s), {:.2} s, {:.1} kB from {} part(s)",
+                args.stats.display(),
+                summary.frames,
+                summary.seconds,
+                summary.bytes as f64 / 1000.0,
+                summary.parts.len()
+            );
         }
+        return Ok(());
     }
+    let summary = merge_parts(&args.stats)?;
+    remove_parts(&args, &summary.parts);
     if !args.quiet {
         eprintln!(
             "{}: {} frame(s), {} row(s) from {} part(s)",
@@ -42,4 +56,15 @@ pub fn run(args: MergeArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Deletes the merged parts with `--remove-parts` (a part that cannot be removed is noted).
+fn remove_parts(args: &MergeArgs, parts: &[PathBuf]) {
+    if args.remove_parts {
+        for part in parts {
+            if let Err(e) = std::fs::remove_file(part) {
+                eprintln!("note: cannot remove {}: {e}", part.display());
+            }
+        }
+    }
 }

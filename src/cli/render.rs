@@ -15,6 +15,7 @@ use mdsurf::render::{
 };
 use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 
+use mdsurf::export::stats_merge::part_path;
 use mdsurf::export::video::{Mp4Movie, check_even_size, is_mp4};
 use mdsurf::export::{StatsRow, StatsWriter};
 use mdsurf::gpu::{GpuEngine, Picked, SOFTWARE_ADAPTER, pick_engine};
@@ -25,7 +26,7 @@ use mdsurf::scene::representation::Representation;
 use mdsurf::scene::state_file::{CameraState, StateFile};
 use mdsurf::scene::{LayerResult, SceneBackend, SceneEngine, SceneFrame};
 
-use super::chunk::ChunkSpec;
+use super::chunk::{Chunk, ChunkSpec};
 use super::common::{Backend, System, check_colour_frames, ms_since, set_vertex_mode};
 use super::interrupt::{catch_interrupts, interrupted};
 pub use super::render_args::{RenderArgs, StereoArgs};
@@ -62,7 +63,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let (system, _) = System::open_or_follow(&args.input, live.as_ref(), first)?;
     let Images { frames, shots, fps } = images(&args, state.as_ref(), &system)?;
     let movie_out = is_mp4(&args.output);
-    let paths = output_files(&args, &frames, movie_out)?;
+    let paths = output_files(&args, &frames, movie_out, chunk)?;
     // The images this process writes; the camera is still fitted to the run's first frame.
     if let Some(c) = chunk {
         super::chunk::check_chunk_count(c, frames.len())?;
@@ -151,7 +152,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // exit) on any frame leaves no movie file.
     let mut movie = if movie_out {
         let quality = args.video_quality.unwrap_or_default();
-        Some(Mp4Movie::create(&args.output, args.size, fps, quality)?)
+        Some(Mp4Movie::create(&paths[0], args.size, fps, quality)?)
     } else {
         None
     };
@@ -308,6 +309,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         stats.finish()?;
     }
     if let Some(m) = movie {
+        let written = m.path().to_path_buf();
         let s = m.finish()?;
         if args.quiet {
             return Ok(());
@@ -318,7 +320,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             s.seconds,
             fps,
             s.bytes as f64 / 1000.0,
-            args.output.display()
+            written.display()
         );
     } else if progress.shows_summary() {
         let secs = started.elapsed().as_secs_f64();
@@ -492,19 +494,23 @@ fn images(args: &RenderArgs, state: Option<&StateFile>, system: &System) -> Resu
     Ok(Images { frames, shots, fps })
 }
 
-/// The file of every image (one movie for all with `movie_out`), checked before any work: a
-/// known format, no two images in one file, existing folders, and a `--stats` file that is
-/// neither an image nor an input.
-fn output_files(args: &RenderArgs, frames: &[usize], movie_out: bool) -> Result<Vec<PathBuf>> {
+/// The file of every image (one movie for all with `movie_out`; a chunk's movie is its part,
+/// `OUT.part-IIII-of-NNNN.mp4`, for `mdsurf merge OUT.mp4`), checked before any work: a known
+/// format, no two images in one file, existing folders, and a `--stats` file that is neither an
+/// image nor an input.
+fn output_files(
+    args: &RenderArgs,
+    frames: &[usize],
+    movie_out: bool,
+    chunk: Option<Chunk>,
+) -> Result<Vec<PathBuf>> {
     let paths = if movie_out {
-        if args.chunk.is_some() {
-            bail!(
-                "-o {}: --chunk renders PNG sequences only; render the movie in one run",
-                args.output.display()
-            );
-        }
         check_even_size(&args.output, args.size)?;
-        vec![args.output.clone(); frames.len()]
+        let movie = chunk.map_or_else(
+            || args.output.clone(),
+            |c| part_path(&args.output, c.index, c.count),
+        );
+        vec![movie; frames.len()]
     } else {
         if args.fps.is_some() || args.video_quality.is_some() {
             bail!(

@@ -34,7 +34,8 @@ pub struct RenderArgs {
     /// frame the script leaves].
     #[arg(long)]
     pub frame: Option<usize>,
-    /// Frames to render, START:STOP:STEP (STOP exclusive); needs `{frame}` in the output name.
+    /// Frames to render, START:STOP:STEP (STOP exclusive, parts optional), one index, or `all`;
+    /// PNGs need `{frame}` or `{image}` in the output name, an MP4 takes them all.
     #[arg(long, value_name = "A:B[:S]")]
     pub frames: Option<FrameRange>,
     /// Output PNG. For several images a pattern: `{frame}` (or `{frame:05}`, zero-padded) is the

@@ -37,7 +37,7 @@ pub struct SurfaceArgs {
     pub input: InputArgs,
     #[command(flatten)]
     pub live: LiveArgs,
-    /// Frames to process, START:STOP:STEP (STOP exclusive, parts optional), or one index.
+    /// Frames to process, START:STOP:STEP (STOP exclusive, parts optional), one index, or `all`.
     #[arg(long, value_name = "START:STOP:STEP")]
     pub frames: Option<FrameRange>,
     #[command(flatten)]

@@ -6,6 +6,8 @@
 
 pub(crate) mod atomic;
 pub mod glb;
+#[cfg(feature = "app")]
+pub mod movie_merge;
 pub(crate) mod obj;
 pub(crate) mod ply;
 pub(crate) mod stats;

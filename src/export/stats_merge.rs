@@ -275,7 +275,7 @@ pub fn merge_parts(stats: &Path) -> Result<MergeSummary, MergeError> {
 }
 
 /// `DIR/STEM.part-*-of-*.EXT`, for messages.
-fn show_pattern(stats: &Path) -> String {
+pub(crate) fn show_pattern(stats: &Path) -> String {
     let (stem, ext) = stem_ext(stats);
     stats
         .with_file_name(format!("{stem}.part-*-of-*{ext}"))
@@ -284,7 +284,7 @@ fn show_pattern(stats: &Path) -> String {
 }
 
 /// The part files next to `stats`: (chunk index, chunk count, path), sorted.
-fn find_parts(stats: &Path) -> Result<Vec<(usize, usize, PathBuf)>, MergeError> {
+pub(crate) fn find_parts(stats: &Path) -> Result<Vec<(usize, usize, PathBuf)>, MergeError> {
     let dir = match stats.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),

@@ -22,7 +22,7 @@ use crate::render::RgbaImage;
 
 /// The MP4 track's clock: 90 kHz, the usual video clock (integer frame durations for 24, 25,
 /// 30, 50, 60 and 29.97 frames/s).
-const TIMESCALE: u32 = 90_000;
+pub(crate) const TIMESCALE: u32 = 90_000;
 
 /// The lowest and highest frame rates accepted, frames per second.
 pub const FPS_RANGE: (f64, f64) = (0.1, 240.0);
@@ -236,18 +236,7 @@ impl Mp4Movie {
                 (&raw mut level).cast(),
             );
         }
-        let file = AtomicFile::create(path)?;
-        let brands = ["isom", "iso2", "avc1", "mp41"];
-        let config = Mp4Config {
-            major_brand: brands[0].parse().expect("four letters"),
-            minor_version: 512,
-            compatible_brands: brands
-                .iter()
-                .map(|b| b.parse().expect("four letters"))
-                .collect(),
-            timescale: 1000,
-        };
-        let mp4 = Mp4Writer::write_start(file, &config).map_err(|e| mux(path, e))?;
+        let mp4 = start_mp4(path)?;
         Ok(Mp4Movie {
             path: path.to_path_buf(),
             size,
@@ -323,17 +312,7 @@ impl Mp4Movie {
                     "the first frame has no SPS/PPS".into(),
                 ));
             };
-            let track = TrackConfig {
-                track_type: TrackType::Video,
-                timescale: TIMESCALE,
-                language: "und".into(),
-                media_conf: MediaConfig::AvcConfig(AvcConfig {
-                    width: w as u16,
-                    height: h as u16,
-                    seq_param_set,
-                    pic_param_set,
-                }),
-            };
+            let track = avc_track(self.size, seq_param_set, pic_param_set);
             self.mp4.add_track(&track).map_err(|e| mux(&self.path, e))?;
             self.track = true;
         }
@@ -384,7 +363,38 @@ impl Mp4Movie {
     }
 }
 
-fn codec(path: &Path, what: &'static str, message: String) -> VideoError {
+/// Starts an MP4 file (ISO brands, millisecond movie clock) in a temporary file beside `path`.
+pub(crate) fn start_mp4(path: &Path) -> Result<Mp4Writer<AtomicFile>, VideoError> {
+    let file = AtomicFile::create(path)?;
+    let brands = ["isom", "iso2", "avc1", "mp41"];
+    let config = Mp4Config {
+        major_brand: brands[0].parse().expect("four letters"),
+        minor_version: 512,
+        compatible_brands: brands
+            .iter()
+            .map(|b| b.parse().expect("four letters"))
+            .collect(),
+        timescale: 1000,
+    };
+    Mp4Writer::write_start(file, &config).map_err(|e| mux(path, e))
+}
+
+/// The H.264 video track of `size` pixels with its SPS and PPS, on the [`TIMESCALE`] clock.
+pub(crate) fn avc_track([w, h]: [u32; 2], sps: Vec<u8>, pps: Vec<u8>) -> TrackConfig {
+    TrackConfig {
+        track_type: TrackType::Video,
+        timescale: TIMESCALE,
+        language: "und".into(),
+        media_conf: MediaConfig::AvcConfig(AvcConfig {
+            width: w as u16,
+            height: h as u16,
+            seq_param_set: sps,
+            pic_param_set: pps,
+        }),
+    }
+}
+
+pub(crate) fn codec(path: &Path, what: &'static str, message: String) -> VideoError {
     VideoError::Codec {
         path: path.to_path_buf(),
         what,
@@ -392,7 +402,7 @@ fn codec(path: &Path, what: &'static str, message: String) -> VideoError {
     }
 }
 
-fn mux(path: &Path, e: mp4::Error) -> VideoError {
+pub(crate) fn mux(path: &Path, e: mp4::Error) -> VideoError {
     match e {
         mp4::Error::IoError(io) => ExportError::io(path, io).into(),
         e => codec(path, "MP4 muxing failed", e.to_string()),

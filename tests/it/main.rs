@@ -75,6 +75,7 @@ mod render_gpu_surface;
 mod render_images;
 mod render_look;
 mod render_movie;
+mod render_movie_chunks;
 mod render_refined;
 mod render_script;
 mod render_stereo;
