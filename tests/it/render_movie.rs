@@ -14,7 +14,7 @@ use mdsurf::render::RgbaImage;
 use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf};
 
 /// The value of `"key": value` in ffprobe's JSON (quotes stripped): enough for its flat output.
-pub(crate) fn json_field(json: &str, key: &str) -> String {
+fn json_field(json: &str, key: &str) -> String {
     let at = json
         .find(&format!("\"{key}\""))
         .unwrap_or_else(|| panic!("ffprobe output has no {key}: {json}"));
@@ -25,7 +25,7 @@ pub(crate) fn json_field(json: &str, key: &str) -> String {
 }
 
 /// Peak signal-to-noise ratio in dB of two RGB images (8 bits per channel).
-pub(crate) fn psnr(a: &[u8], b: &[u8]) -> f64 {
+fn psnr(a: &[u8], b: &[u8]) -> f64 {
     assert_eq!(a.len(), b.len());
     let mse = a
         .iter()
@@ -55,7 +55,7 @@ fn files_in(dir: &Path) -> Vec<String> {
     names
 }
 
-fn assert_one_line_failure(r: &Run, needle: &str) {
+pub(crate) fn assert_one_line_failure(r: &Run, needle: &str) {
     assert_ne!(r.code, 0, "should fail: {}", r.stderr);
     let err = r.stderr.trim();
     assert!(

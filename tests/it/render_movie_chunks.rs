@@ -7,13 +7,13 @@
 
 use std::path::Path;
 
-use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf};
-use crate::render_movie::json_field;
+use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf, probe_video};
+use crate::render_movie::assert_one_line_failure;
 
-/// Renders chunk `chunk` of frames 0:6 of the demo trajectory into `movie.mp4`'s part.
-fn render_chunk(dir: &Path, chunk: &str, size: &str) -> Run {
+/// Renders chunk `chunk` of frames 0:6 of the demo trajectory at 10 frames/s into `out`'s part.
+fn render_chunk_to(dir: &Path, chunk: &str, size: &str, out: &str, quiet: bool) -> Run {
     let (gro, xtc) = (asset("md_1u19.gro"), asset("md_1u19.xtc"));
-    let args = [
+    let mut args = vec![
         "render",
         &gro,
         &xtc,
@@ -28,10 +28,17 @@ fn render_chunk(dir: &Path, chunk: &str, size: &str) -> Run {
         "--chunk",
         chunk,
         "-o",
-        "movie.mp4",
-        "-q",
+        out,
     ];
+    if quiet {
+        args.push("-q");
+    }
     mdsurf(dir, &args)
+}
+
+/// [`render_chunk_to`] `movie.mp4`, quietly.
+fn render_chunk(dir: &Path, chunk: &str, size: &str) -> Run {
+    render_chunk_to(dir, chunk, size, "movie.mp4", true)
 }
 
 /// The H.264 samples of the one video track of an MP4 file, in order.
@@ -53,15 +60,6 @@ fn samples(path: &Path) -> Vec<Vec<u8>> {
         .collect()
 }
 
-fn assert_one_line_failure(r: &Run, needle: &str) {
-    assert_ne!(r.code, 0, "should fail: {}", r.stderr);
-    let err = r.stderr.trim();
-    assert!(
-        err.lines().count() == 1 && err.contains(needle),
-        "expected one line naming {needle:?}, got:\n{err}"
-    );
-}
-
 #[test]
 fn chunks_write_parts_that_merge_joins_without_re_encoding() {
     if !have_gpu() {
@@ -74,23 +72,7 @@ fn chunks_write_parts_that_merge_joins_without_re_encoding() {
         assert_eq!(r.code, 0, "chunk {chunk}: {}", r.stderr);
         // Without -q: the summary names the part written.
         if i == 0 {
-            let (gro, xtc) = (asset("md_1u19.gro"), asset("md_1u19.xtc"));
-            let args = [
-                "render",
-                &gro,
-                &xtc,
-                "--backend",
-                "cpu",
-                "--frames",
-                "0:6",
-                "--size",
-                "160x120",
-                "--chunk",
-                chunk,
-                "-o",
-                "check.mp4",
-            ];
-            let r = mdsurf(d, &args);
+            let r = render_chunk_to(d, chunk, "160x120", "check.mp4", false);
             assert!(
                 r.stderr.contains("-> check.part-0000-of-0003.mp4"),
                 "{}",
@@ -121,30 +103,28 @@ fn chunks_write_parts_that_merge_joins_without_re_encoding() {
     assert!(parts.iter().all(|p| !p.exists()), "--remove-parts");
 
     let m = movie.to_str().expect("utf-8 path");
-    let probe = ffmpeg_tool(
+    let probe = probe_video(
+        &movie,
+        "codec_name,width,height,r_frame_rate,nb_read_frames",
+    );
+    assert_eq!(probe, "h264,160,120,10/1,6", "ffprobe");
+    let duration = ffmpeg_tool(
         "ffprobe",
         &[
             "-v",
             "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=codec_name,width,height,r_frame_rate,nb_read_frames",
             "-show_entries",
             "format=duration",
             "-of",
-            "json",
+            "csv=p=0",
             m,
         ],
     );
-    let json = String::from_utf8_lossy(&probe);
-    assert_eq!(json_field(&json, "codec_name"), "h264", "{json}");
-    assert_eq!(json_field(&json, "width"), "160", "{json}");
-    assert_eq!(json_field(&json, "r_frame_rate"), "10/1", "{json}");
-    assert_eq!(json_field(&json, "nb_read_frames"), "6", "{json}");
-    let duration: f64 = json_field(&json, "duration").parse().expect("duration");
-    assert!((duration - 0.6).abs() < 0.02, "duration {duration}: {json}");
+    let duration: f64 = String::from_utf8_lossy(&duration)
+        .trim()
+        .parse()
+        .expect("duration");
+    assert!((duration - 0.6).abs() < 0.02, "duration {duration}");
     // Decodes without an error (each part starts with a key frame).
     let log = ffmpeg_tool("ffmpeg", &["-v", "error", "-i", m, "-f", "null", "-"]);
     assert!(log.is_empty(), "{}", String::from_utf8_lossy(&log));
