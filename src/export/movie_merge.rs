@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use mp4::{MediaType, Mp4Reader, Mp4Sample, TrackType};
 
 use super::ExportError;
-use super::stats_merge::{MergeError, find_parts, part_path, show_pattern};
+use super::stats_merge::{MergeError, check_one_chunk_count, find_parts, part_path, show_pattern};
 use super::video::{TIMESCALE, avc_track, mux, start_mp4};
 
 /// What [`merge_movie_parts`] did.
@@ -55,15 +55,7 @@ pub fn merge_movie_parts(movie: &Path) -> Result<MovieMergeSummary, MergeError> 
             show_pattern(movie)
         )));
     };
-    let counts: BTreeSet<usize> = found.iter().map(|(_, n, _)| *n).collect();
-    if counts.len() > 1 {
-        let list: Vec<String> = counts.iter().map(|n| format!("of-{n:04}")).collect();
-        return Err(invalid(format!(
-            "{}: parts of runs with different chunk counts ({}); remove the stale ones",
-            show_pattern(movie),
-            list.join(", ")
-        )));
-    }
+    check_one_chunk_count(movie, &found)?;
     let present: BTreeSet<usize> = found.iter().map(|(i, _, _)| *i).collect();
     if let Some(missing) = (0..count).find(|i| !present.contains(i)) {
         return Err(invalid(format!(

@@ -161,15 +161,7 @@ struct Row {
 pub fn merge_parts(stats: &Path) -> Result<MergeSummary, MergeError> {
     let invalid = |m: String| MergeError::Invalid(m);
     let parts = find_parts(stats)?;
-    let counts: BTreeSet<usize> = parts.iter().map(|(_, n, _)| *n).collect();
-    if counts.len() > 1 {
-        let list: Vec<String> = counts.iter().map(|n| format!("of-{n:04}")).collect();
-        return Err(invalid(format!(
-            "{}: parts of runs with different chunk counts ({}); remove the stale ones",
-            show_pattern(stats),
-            list.join(", ")
-        )));
-    }
+    check_one_chunk_count(stats, &parts)?;
     let mut first: Option<(PathBuf, PartHeader)> = None;
     let mut rows: Vec<Row> = Vec::new();
     let mut present = BTreeSet::new();
@@ -272,6 +264,23 @@ pub fn merge_parts(stats: &Path) -> Result<MergeSummary, MergeError> {
         rows: rows.len(),
         frames: have.len(),
     })
+}
+
+/// Refuses parts (as [`find_parts`] lists them) of runs with different chunk counts.
+pub(crate) fn check_one_chunk_count(
+    merged: &Path,
+    parts: &[(usize, usize, PathBuf)],
+) -> Result<(), MergeError> {
+    let counts: BTreeSet<usize> = parts.iter().map(|(_, n, _)| *n).collect();
+    if counts.len() > 1 {
+        let list: Vec<String> = counts.iter().map(|n| format!("of-{n:04}")).collect();
+        return Err(MergeError::Invalid(format!(
+            "{}: parts of runs with different chunk counts ({}); remove the stale ones",
+            show_pattern(merged),
+            list.join(", ")
+        )));
+    }
+    Ok(())
 }
 
 /// `DIR/STEM.part-*-of-*.EXT`, for messages.
