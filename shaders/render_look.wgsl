@@ -91,13 +91,11 @@ fn outline_on_background(c: Cross) -> f32 {
     return select(0.0, 1.0, min(min(c.d.x, c.d.y), min(c.d.z, c.d.w)) < 1.0);
 }
 
-// Outline coverage 0..1 at a pixel of depth `d0` with neighbours `c` at the outline width.
+// Outline coverage 0..1 at a drawn pixel of depth `d0` (below 1: the drawn pipeline's depth
+// test passes no other) with neighbours `c` at the outline width.
 fn outline(d0: f32, c: Cross) -> f32 {
     if (u.look.x <= 0.0) {
         return 0.0;
-    }
-    if (d0 >= 1.0) {
-        return outline_on_background(c);
     }
     let z0 = eye_distance(d0);
     let pix = pixel_size(z0);

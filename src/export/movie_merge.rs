@@ -63,23 +63,27 @@ pub fn merge_movie_parts(movie: &Path) -> Result<MovieMergeSummary, MergeError> 
             part_path(movie, missing, count).display()
         )));
     }
-    let mut parts = Vec::with_capacity(found.len());
-    for (_, _, path) in &found {
-        let part = open_part(path)?;
-        if let Some(first) = parts.first() {
-            check_same(first, &part)?;
-        }
-        parts.push(part);
+    // Every part is checked before anything is written, one open file at a time (an array
+    // of a thousand tasks would pass the usual limit of open files): each is opened again to
+    // copy its frames.
+    let paths: Vec<&PathBuf> = found.iter().map(|(_, _, p)| p).collect();
+    let first = open_part(paths[0])?;
+    for path in &paths[1..] {
+        check_same(&first, &open_part(path)?)?;
     }
-    let first = &parts[0];
     let mut out = start_mp4(movie).map_err(|e| invalid(e.to_string()))?;
     let track = avc_track(first.size, first.sps.clone(), first.pps.clone());
     out.add_track(&track)
         .map_err(|e| invalid(mux(movie, e).to_string()))?;
     let (mut ticks, mut frames) = (0u64, 0usize);
-    for part in &mut parts {
+    let mut opened_first = Some(first);
+    for path in &paths {
+        let mut part = match opened_first.take() {
+            Some(first) => first,
+            None => open_part(path)?,
+        };
         for id in 1..=part.samples {
-            let sample = read_sample(part, id)?;
+            let sample = read_sample(&mut part, id)?;
             let shifted = Mp4Sample {
                 start_time: ticks,
                 ..sample
@@ -98,7 +102,7 @@ pub fn merge_movie_parts(movie: &Path) -> Result<MovieMergeSummary, MergeError> 
         .map_err(|e| ExportError::io(movie, e))?;
     file.commit()?;
     Ok(MovieMergeSummary {
-        parts: parts.into_iter().map(|p| p.path).collect(),
+        parts: paths.into_iter().cloned().collect(),
         frames,
         seconds: ticks as f64 / f64::from(TIMESCALE),
         bytes,

@@ -300,7 +300,12 @@ pub(crate) fn find_parts(stats: &Path) -> Result<Vec<(usize, usize, PathBuf)>, M
     };
     let (stem, ext) = stem_ext(stats);
     let prefix = format!("{stem}.part-");
-    let entries = fs::read_dir(dir).map_err(|e| ExportError::io(dir, e))?;
+    let entries = fs::read_dir(dir).map_err(|e| {
+        MergeError::Invalid(format!(
+            "{}: cannot read the folder of its parts ({e})",
+            show_pattern(stats)
+        ))
+    })?;
     let mut parts = Vec::new();
     for entry in entries {
         let entry = entry.map_err(|e| ExportError::io(dir, e))?;

@@ -394,7 +394,7 @@ pub(crate) fn avc_track([w, h]: [u32; 2], sps: Vec<u8>, pps: Vec<u8>) -> TrackCo
     }
 }
 
-pub(crate) fn codec(path: &Path, what: &'static str, message: String) -> VideoError {
+fn codec(path: &Path, what: &'static str, message: String) -> VideoError {
     VideoError::Codec {
         path: path.to_path_buf(),
         what,

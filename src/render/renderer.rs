@@ -459,13 +459,15 @@ impl Renderer {
                 .look
                 .get(device, ao, outline, shadows, pixels)
         };
-        let depth_pipelines = if settings.has_look_pass() {
-            let empty = outline.then(|| look(PostPixels::Empty));
-            vec![Some(look(PostPixels::Drawn)), empty]
-        } else {
-            vec![ao.then(|| self.pipelines.ambient_occlusion.clone())]
-        };
-        let depth_pipelines: Vec<_> = depth_pipelines.into_iter().flatten().collect();
+        let mut depth_pipelines = Vec::with_capacity(2);
+        if settings.has_look_pass() {
+            depth_pipelines.push(look(PostPixels::Drawn));
+            if outline {
+                depth_pipelines.push(look(PostPixels::Empty));
+            }
+        } else if ao {
+            depth_pipelines.push(self.pipelines.ambient_occlusion.clone());
+        }
         // Only where the scene can be on screen, and the outlines beside it.
         let (view, proj) = pass.matrices;
         let margin = settings.outline_width.clamp(0.0, MAX_OUTLINE_PX).ceil() + 2.0;

@@ -137,6 +137,8 @@ fn merge_refuses_missing_mismatched_and_damaged_parts_in_one_line() {
     }
     let dir = tempfile::tempdir().expect("tempdir");
     let d = dir.path();
+    let r = mdsurf(d, &["merge", "no_such_folder/movie.mp4"]);
+    assert_one_line_failure(&r, "cannot read the folder of its parts");
     assert_eq!(render_chunk(d, "0/2", "160x120").code, 0);
     let r = mdsurf(d, &["merge", "movie.mp4"]);
     assert_one_line_failure(&r, "movie.part-0001-of-0002.mp4: missing");
