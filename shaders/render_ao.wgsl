@@ -14,7 +14,7 @@ struct FullscreenOut {
 };
 
 // One triangle that covers the viewport, on the far plane (depth 1): the pipelines' depth test
-// against the scene's depth picks the drawn pixels or the empty ones (`PostPixels` in
+// against the scene's depth passes only the drawn pixels (`drawn_pixels_depth` in
 // src/render/pipelines.rs).
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) vi: u32) -> FullscreenOut {

@@ -1,22 +1,21 @@
 // The figure look of the renderer (src/render/renderer.rs): one full-screen pass after the
 // opaque scene and before the transparent surface, reading only the depth buffer, that does the
-// ambient occlusion (render_ao.wgsl), and the parts below. The pass draws its triangle twice,
-// each time on the pixels its pipeline's depth test picks (`PostPixels` in
-// src/render/pipelines.rs): the drawn pixels with every part, then the empty background with
-// the outlines alone (they fall just outside silhouettes); within the screen rectangle the
-// scene covers (a scissor). Empty pixels far from the scene are not shaded at all.
+// ambient occlusion (render_ao.wgsl), and the parts below. It shades only the drawn pixels (its
+// pipeline's depth test, `drawn_pixels_depth` in src/render/pipelines.rs) within the screen
+// rectangle the scene covers (a scissor): the empty background is not shaded at all.
 // The parts:
-// - silhouette outlines: a pixel is drawn in the outline colour where a neighbour `look.x`
-//   pixels away is nearer by a depth jump (relative to the depth), so the line lies just outside
-//   each silhouette, and where the surface bends sharply (the slopes on both sides differ by more
-//   than about 60 degrees); the inside of a smooth surface is left alone;
+// - silhouette outlines: a drawn pixel is drawn in the outline colour where a neighbour
+//   `look.x` pixels away is farther by a depth jump (relative to the depth) or empty, so the
+//   line lies just inside each silhouette, on the nearer side of every depth edge, and where
+//   the surface bends sharply (the slopes on both sides differ by more than about 60 degrees);
+//   the inside of a smooth surface is left alone;
 // - soft shadows from the key light (`light_dir`, the light that shade() in render_scene.wgsl
 //   uses): a ray, turned per pixel within a cone of about 8 degrees, marches `look.z` Å from
 //   each pixel towards the light through the depth buffer in jittered steps; a ray that passes
 //   behind a nearer surface is blocked. Only what is on screen casts shadows.
 // Output: premultiplied outline colour and a coverage alpha; blended with (one, 1 - src alpha)
-// the image becomes dst * occlusion * shade * (1 - o) + colour * o, and the alpha of a
-// background pixel under an outline becomes o (transparent backgrounds).
+// the image becomes dst * occlusion * shade * (1 - o) + colour * o. Drawn pixels stay opaque
+// and the background is never written, so a transparent background keeps alpha 0.
 
 // src/render/pipelines.rs prepends render_view.wgsl and render_ao.wgsl (the view uniform `u`,
 // `depth_tex`, the full-screen triangle, eye_distance, ambient_occlusion, pixel_noise): this one
@@ -27,9 +26,6 @@
 override LOOK_AO: bool = true;
 override LOOK_OUTLINE: bool = true;
 override LOOK_SHADOWS: bool = true;
-// The pipeline for the empty background (`PostPixels::Empty`): outlines only, and only the
-// background's test (a CPU driver runs both sides of a branch under a mask).
-override LOOK_EMPTY: bool = false;
 
 // Depth at pixel `q`, clamped into the viewport.
 fn depth_at(q: vec2<i32>) -> f32 {
@@ -85,12 +81,6 @@ fn crease(zm: f32, z0: f32, zp: f32, span: f32, jump: f32) -> f32 {
     return 1.0 - smoothstep(0.17, 0.54, cos_bend);
 }
 
-// Outline coverage 0 or 1 at an empty pixel with neighbours `c`: 1 next to anything drawn,
-// just outside the silhouette.
-fn outline_on_background(c: Cross) -> f32 {
-    return select(0.0, 1.0, min(min(c.d.x, c.d.y), min(c.d.z, c.d.w)) < 1.0);
-}
-
 // Outline coverage 0..1 at a drawn pixel of depth `d0` (below 1: the drawn pipeline's depth
 // test passes no other) with neighbours `c` at the outline width.
 fn outline(d0: f32, c: Cross) -> f32 {
@@ -108,9 +98,9 @@ fn outline(d0: f32, c: Cross) -> f32 {
         far,
         c.d >= vec4<f32>(1.0),
     );
-    // A nearer neighbour across a jump: this pixel is just behind its silhouette.
-    let nearest = min(min(z.x, z.y), min(z.z, z.w));
-    var o = smoothstep(jump, 2.0 * jump, z0 - nearest);
+    // A farther neighbour across a jump, or the background: this pixel is on its silhouette.
+    let farthest = max(max(z.x, z.y), max(z.z, z.w));
+    var o = smoothstep(jump, 2.0 * jump, farthest - z0);
     let span = f32(c.k) * pix;
     o = max(o, crease(z.x, z0, z.y, span, jump));
     return max(o, crease(z.z, z0, z.w, span, jump));
@@ -177,10 +167,6 @@ fn shadow(p: vec2<i32>, d0: f32, c: Cross, noise: f32) -> f32 {
 @fragment
 fn fs_look(i: FullscreenOut) -> @location(0) vec4<f32> {
     let p = vec2<i32>(i.clip.xy);
-    if (LOOK_EMPTY) {
-        let o = outline_on_background(cross_at(p, max(i32(round(u.look.x)), 1)));
-        return vec4<f32>(u.outline_colour.rgb * o, o);
-    }
     let d0 = textureLoad(depth_tex, p, 0);
     let noise = pixel_noise(i.clip.xy);
     var lit = 1.0;

@@ -67,42 +67,29 @@ pub(crate) struct Pipelines {
     pub mean_show: wgpu::RenderPipeline,
 }
 
-/// Which pixels a full-screen pass after the opaque scene shades. Its triangle lies on the far
-/// plane (depth 1) and the depth test against the scene's depth buffer (read-only, also read by
-/// the shader) picks the pixels, so that a driver skips the rest before the shader runs: a CPU
+/// The read-only depth state of a full-screen pass after the opaque scene that shades only the
+/// drawn pixels. Its triangle lies on the far plane (depth 1) and the test against the scene's
+/// depth buffer (read-only, also read by the shader) passes only where something was drawn
+/// (depth below 1), so that a driver skips the empty background before the shader runs: a CPU
 /// driver such as lavapipe runs a fragment shader's branches under a mask and would otherwise
 /// pay for every empty pixel as for a drawn one.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum PostPixels {
-    /// Where something was drawn (depth below 1).
-    Drawn,
-    /// The empty background (depth exactly 1, the clear value), where only outlines fall.
-    Empty,
-}
-
-impl PostPixels {
-    /// The read-only depth state that selects these pixels.
-    fn depth_state(self) -> Option<wgpu::DepthStencilState> {
-        Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(false),
-            depth_compare: Some(match self {
-                PostPixels::Drawn => wgpu::CompareFunction::Greater,
-                PostPixels::Empty => wgpu::CompareFunction::Equal,
-            }),
-            stencil: wgpu::StencilState::default(),
-            bias: wgpu::DepthBiasState::default(),
-        })
-    }
+fn drawn_pixels_depth() -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(false),
+        depth_compare: Some(wgpu::CompareFunction::Greater),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
+    })
 }
 
 /// The look pass's pipelines, one per combination of its parts (ambient occlusion, outlines,
-/// shadows) and pixels, each compiled with only its parts (WGSL override constants: a CPU
+/// shadows), each compiled with only its parts (WGSL override constants: a CPU
 /// driver such as lavapipe runs every instruction of a shader whatever its uniforms say).
 pub(crate) struct LookPipelines {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
-    made: std::sync::Mutex<[Option<wgpu::RenderPipeline>; 16]>,
+    made: std::sync::Mutex<[Option<wgpu::RenderPipeline>; 8]>,
 }
 
 impl LookPipelines {
@@ -113,12 +100,8 @@ impl LookPipelines {
         ao: bool,
         outline: bool,
         shadows: bool,
-        pixels: PostPixels,
     ) -> wgpu::RenderPipeline {
-        let key = usize::from(ao)
-            | usize::from(outline) << 1
-            | usize::from(shadows) << 2
-            | usize::from(pixels == PostPixels::Empty) << 3;
+        let key = usize::from(ao) | usize::from(outline) << 1 | usize::from(shadows) << 2;
         let mut made = self
             .made
             .lock()
@@ -128,22 +111,24 @@ impl LookPipelines {
         }
         let _compiling = crate::gpu::context::compile_lock();
         // Outline colour over the shaded image: colour = src + dst * (1 - src alpha); the alpha
-        // likewise, so a background pixel under an outline gets the outline's coverage.
-        let over_premultiplied = wgpu::BlendComponent {
-            src_factor: wgpu::BlendFactor::One,
-            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-            operation: wgpu::BlendOperation::Add,
-        };
+        // kept (the pass shades drawn pixels only, which stay opaque).
         let target = [colour_target(Some(wgpu::BlendState {
-            color: over_premultiplied,
-            alpha: over_premultiplied,
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
         }))];
         let flag = |on: bool| if on { 1.0 } else { 0.0 };
         let constants = [
             ("LOOK_AO", flag(ao)),
             ("LOOK_OUTLINE", flag(outline)),
             ("LOOK_SHADOWS", flag(shadows)),
-            ("LOOK_EMPTY", flag(pixels == PostPixels::Empty)),
         ];
         let p = pipeline(
             device,
@@ -154,7 +139,7 @@ impl LookPipelines {
                 vs: "vs_fullscreen",
                 fs: "fs_look",
                 buffers: &[],
-                depth: pixels.depth_state(),
+                depth: drawn_pixels_depth(),
                 targets: &target,
                 constants: &constants,
             },
@@ -508,7 +493,7 @@ impl Pipelines {
                 fs: "fs_ambient_occlusion",
                 buffers: &[],
                 // The background's occlusion is 1: only drawn pixels change.
-                depth: PostPixels::Drawn.depth_state(),
+                depth: drawn_pixels_depth(),
                 targets: &multiply,
                 constants: &[],
             },

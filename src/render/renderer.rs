@@ -5,7 +5,7 @@
 use glam::{Mat4, Vec3};
 
 use super::camera::{Camera, Eye, Projection};
-use super::pipelines::{CYLINDER_VERTICES, Pipelines, PostPixels};
+use super::pipelines::{CYLINDER_VERTICES, Pipelines};
 use super::scene::{GpuScene, SurfaceLayer};
 use super::screen_rect::covered_rect;
 
@@ -447,32 +447,24 @@ impl Renderer {
                 self.draw_mesh(&mut rp, &scene.surfaces[k], false);
             }
         }
-        // One full-screen pass over the opaque image that reads its depth: the look pass
-        // (ambient occlusion, outlines and shadows) or the ambient occlusion alone on the drawn
-        // pixels, and the outlines that fall on the empty background.
-        let ao = settings.ambient_occlusion > 0.0;
-        let outline = settings.outline_width > 0.0;
-        let look = |pixels| {
-            let shadows = settings.shadows > 0.0 && pixels == PostPixels::Drawn;
-            let ao = ao && pixels == PostPixels::Drawn;
-            self.pipelines
-                .look
-                .get(device, ao, outline, shadows, pixels)
+        // One full-screen pass over the drawn pixels of the opaque image that reads its depth:
+        // the look pass (ambient occlusion, outlines and shadows) or the ambient occlusion alone.
+        let post_pipeline = if settings.has_look_pass() {
+            Some(self.pipelines.look.get(
+                device,
+                settings.ambient_occlusion > 0.0,
+                settings.outline_width > 0.0,
+                settings.shadows > 0.0,
+            ))
+        } else if settings.ambient_occlusion > 0.0 {
+            Some(self.pipelines.ambient_occlusion.clone())
+        } else {
+            None
         };
-        let mut depth_pipelines = Vec::with_capacity(2);
-        if settings.has_look_pass() {
-            depth_pipelines.push(look(PostPixels::Drawn));
-            if outline {
-                depth_pipelines.push(look(PostPixels::Empty));
-            }
-        } else if ao {
-            depth_pipelines.push(self.pipelines.ambient_occlusion.clone());
-        }
-        // Only where the scene can be on screen, and the outlines beside it.
+        // Only where the scene can be on screen (2 px around it for rounding).
         let (view, proj) = pass.matrices;
-        let margin = settings.outline_width.clamp(0.0, MAX_OUTLINE_PX).ceil() + 2.0;
-        let rect = covered_rect(scene.drawn_bounds(), proj * view, pass.viewport, margin);
-        if let (false, Some([sx, sy, sw, sh])) = (depth_pipelines.is_empty(), rect) {
+        let rect = covered_rect(scene.drawn_bounds(), proj * view, pass.viewport, 2.0);
+        if let (Some(pipeline), Some([sx, sy, sw, sh])) = (post_pipeline, rect) {
             let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("scene depth"),
                 layout: &self.pipelines.depth_layout,
@@ -496,10 +488,8 @@ impl Renderer {
             rp.set_scissor_rect(sx, sy, sw, sh);
             rp.set_bind_group(0, view_group, &[]);
             rp.set_bind_group(1, &depth_group, &[]);
-            for pipeline in &depth_pipelines {
-                rp.set_pipeline(pipeline);
-                rp.draw(0..3, 0..1);
-            }
+            rp.set_pipeline(&pipeline);
+            rp.draw(0..3, 0..1);
         }
         if transparent_layers.is_empty() {
             return;

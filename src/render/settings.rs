@@ -190,7 +190,8 @@ pub struct RenderSettings {
     /// follow the camera's target.
     pub focal_distance: Option<f32>,
     /// Silhouette outline width in pixels (0: off): lines where the depth jumps (relative to the
-    /// depth) or the surface turns sharply; smooth surfaces are not darkened inside.
+    /// depth), on the nearer side (just inside a silhouette), or where the surface turns
+    /// sharply; smooth surfaces are not darkened inside and the background is left alone.
     pub outline_width: f32,
     /// Linear RGB colour of the outlines.
     pub outline_colour: [f32; 3],

@@ -1,5 +1,5 @@
-//! The figure look on the offscreen renderer: silhouette outlines darken a ring just outside the
-//! silhouette and leave the inside of a smooth sphere alone; key-light shadows darken the surface
+//! The figure look on the offscreen renderer: silhouette outlines darken a ring just inside the
+//! silhouette, leave the inside of a smooth sphere and the background alone; key-light shadows darken the surface
 //! behind an occluder and nothing on a lone sphere; `mdsurf render --transparent` writes alpha 0
 //! on the background and 1 on the molecule. Needs a wgpu adapter (lavapipe is enough); without
 //! one the tests return early with a note unless `REQUIRE_GPU=1`.
@@ -121,35 +121,39 @@ fn outlines_darken_the_silhouette_not_the_inside() {
     keep("outline_on.png", &on);
     let mask = drawn(&off);
     let dist = edge_distance(&mask, SIZE, 8);
-    let (mut ring, mut inside) = (Vec::new(), Vec::new());
+    // Luminance of each pixel without and with the outlines, by where it lies.
+    let (mut ring, mut inside, mut background) = (Vec::new(), Vec::new(), Vec::new());
     for (i, (&m, &d)) in mask.iter().zip(&dist).enumerate() {
-        let (a, b) = (
-            luminance(off.pixel(i as u32 % SIZE[0], i as u32 / SIZE[0])),
-            { luminance(on.pixel(i as u32 % SIZE[0], i as u32 / SIZE[0])) },
-        );
-        if !m && d <= 1 {
-            ring.push(a - b);
+        let (x, y) = (i as u32 % SIZE[0], i as u32 / SIZE[0]);
+        let pair = (luminance(off.pixel(x, y)), luminance(on.pixel(x, y)));
+        if m && d <= 1 {
+            ring.push(pair);
         } else if m && d > 4 {
-            inside.push((a - b).abs());
+            inside.push(pair);
+        } else if !m {
+            background.push(pair);
         }
     }
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let mean = |v: &[(f64, f64)], f: fn((f64, f64)) -> f64| {
+        v.iter().map(|&p| f(p)).sum::<f64>() / v.len().max(1) as f64
+    };
     assert!(
-        ring.len() > 50 && inside.len() > 1000,
-        "{} {}",
+        ring.len() > 50 && inside.len() > 1000 && background.len() > 1000,
+        "{} {} {}",
         ring.len(),
-        inside.len()
+        inside.len(),
+        background.len()
     );
+    let ring_off = mean(&ring, |(a, _)| a);
+    let ring_on = mean(&ring, |(_, b)| b);
     assert!(
-        mean(&ring) > 150.0,
-        "ring darkened by {:.1} only",
-        mean(&ring)
+        ring_on < 60.0 && ring_off - ring_on > 100.0,
+        "the silhouette's ring has luminance {ring_on:.1} with outlines, {ring_off:.1} without"
     );
-    assert!(
-        mean(&inside) < 1.0,
-        "inside changed by {:.2}",
-        mean(&inside)
-    );
+    let inside_change = mean(&inside, |(a, b)| (a - b).abs());
+    assert!(inside_change < 1.0, "inside changed by {inside_change:.2}");
+    let background_change = mean(&background, |(a, b)| (a - b).abs());
+    assert_eq!(background_change, 0.0, "the background changed");
 }
 
 #[test]
