@@ -122,23 +122,29 @@ fn refine_vertex(id: u32, p0: vec3<u32>, axis: u32) {
     }
 }
 
-@compute @workgroup_size(64)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
-    let a = gid.x + gid.y * nwg.x * 64u;
+// Three threads per active cell, one per own edge (x, y, z), so that a cell's vertices are
+// refined side by side rather than one after the other: the dispatch is the emission's (64
+// cells per workgroup, arguments from measure.wgsl's slab_begin), each workgroup 3 x 64 threads.
+@compute @workgroup_size(192)
+fn main(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let a = (wg.x + wg.y * nwg.x) * 64u + lid / 3u;
+    let axis = lid % 3u;
     if (a >= counters[C_SCAN_ACTIVE]) {
         return;
     }
     let p = class_point(active_cells[a].x);
     let e = class_entry(p);
     let edges = (classes[e] >> 8u) & 7u;
-    let vcap = counters[C_VERTEX_CAPACITY];
-    var id = vertex_base[e];
-    for (var axis = 0u; axis < 3u; axis++) {
-        if ((edges & (1u << axis)) != 0u) {
-            if (id < vcap) {
-                refine_vertex(id, p, axis);
-            }
-            id++;
-        }
+    if ((edges & (1u << axis)) == 0u) {
+        return;
+    }
+    // The vertices of a cell's crossed edges follow in x, y, z order from its base.
+    let id = vertex_base[e] + countOneBits(edges & ((1u << axis) - 1u));
+    if (id < counters[C_VERTEX_CAPACITY]) {
+        refine_vertex(id, p, axis);
     }
 }
