@@ -1,16 +1,18 @@
 //! Pictures out of the viewer: the movie plan (a frame range, a turntable, or both) and its
 //! step list, the progress of a running export, and the numbered file names. The window layer
 //! renders each step with the same offscreen renderer as screenshots (`render_to_rgba`) and
-//! writes it as a numbered PNG or into an H.264 MP4 file ([`crate::export::video`]).
+//! writes it as a numbered PNG or into one movie file, an H.264 MP4 or an animated GIF
+//! ([`crate::export::movie`]).
 
 use std::path::{Path, PathBuf};
 
-use crate::export::video::{Mp4Movie, VideoQuality};
+use crate::export::movie::{Movie, MovieFormat};
+use crate::export::video::VideoQuality;
 
-/// An MP4 movie's file, frame rate and quality (instead of a PNG sequence).
+/// A movie's file, frame rate and quality (instead of a PNG sequence).
 #[derive(Debug, Clone, PartialEq)]
 pub struct VideoPlan {
-    /// The `.mp4` file written (atomically: no partial file on cancel or failure).
+    /// The `.mp4` or `.gif` file written (atomically: no partial file on cancel or failure).
     pub path: PathBuf,
     /// Frames per second.
     pub fps: f64,
@@ -43,7 +45,7 @@ pub struct MoviePlan {
     pub size: [u32; 2],
     /// Folder the numbered PNGs go to (when `video` is `None`).
     pub dir: PathBuf,
-    /// Write one MP4 file instead of numbered PNGs.
+    /// Write one movie file (MP4 or GIF, by its name) instead of numbered PNGs.
     pub video: Option<VideoPlan>,
 }
 
@@ -108,9 +110,9 @@ pub struct MovieJob {
     pub start_yaw: f32,
     /// Image size in pixels.
     pub size: [u32; 2],
-    /// The MP4 file being written, or `None` for numbered PNGs. Dropping the job (cancel, a
+    /// The movie file being written, or `None` for numbered PNGs. Dropping the job (cancel, a
     /// failed image) deletes its temporary file.
-    pub video: Option<Mp4Movie>,
+    pub video: Option<Movie>,
 }
 
 impl MovieJob {
@@ -195,15 +197,25 @@ pub fn export_ui(
                 .prefix("h "),
         );
     });
-    let mut mp4 = plan.video.is_some();
+    let format_now = plan
+        .video
+        .as_ref()
+        .map(|v| MovieFormat::of(&v.path).unwrap_or(MovieFormat::Mp4));
+    let mut format = format_now;
     ui.horizontal(|ui| {
-        ui.radio_value(&mut mp4, true, "MP4 (H.264)");
-        ui.radio_value(&mut mp4, false, "PNG sequence");
+        ui.radio_value(&mut format, Some(MovieFormat::Mp4), "MP4 (H.264)");
+        ui.radio_value(&mut format, Some(MovieFormat::Gif), "GIF");
+        ui.radio_value(&mut format, None, "PNG sequence");
     });
-    match (mp4, plan.video.as_mut()) {
-        (true, None) => plan.video = Some(VideoPlan::default()),
-        (false, Some(_)) => plan.video = None,
-        _ => {}
+    if format != format_now {
+        plan.video = format.map(|f| {
+            let mut video = plan.video.take().unwrap_or_default();
+            video.path.set_extension(match f {
+                MovieFormat::Mp4 => "mp4",
+                MovieFormat::Gif => "gif",
+            });
+            video
+        });
     }
     match plan.video.as_mut() {
         Some(video) => {
@@ -215,9 +227,14 @@ pub fn export_ui(
                 video.path = PathBuf::from(file);
             }
             ui.horizontal(|ui| {
+                // A GIF's delays are hundredths of a second: at most 50 frames per second.
+                let max_fps = match format {
+                    Some(MovieFormat::Gif) => crate::export::gif_movie::GIF_MAX_FPS,
+                    _ => 240.0,
+                };
                 ui.add(
                     egui::DragValue::new(&mut video.fps)
-                        .range(1.0..=240.0)
+                        .range(1.0..=max_fps)
                         .suffix(" fps"),
                 );
                 egui::ComboBox::from_label("quality")
@@ -251,10 +268,10 @@ pub fn export_ui(
             }
         }
         None => {
-            let label = if plan.video.is_some() {
-                "Export movie (MP4)"
-            } else {
-                "Export movie (PNG sequence)"
+            let label = match format {
+                Some(MovieFormat::Mp4) => "Export movie (MP4)",
+                Some(MovieFormat::Gif) => "Export movie (GIF)",
+                None => "Export movie (PNG sequence)",
             };
             if ui.button(label).clicked() {
                 out.push(Command::StartMovie(plan.clone()));

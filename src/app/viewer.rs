@@ -17,7 +17,7 @@ use super::source::{FrameSource, SourceError, open_files_with, open_live_with};
 use super::state::{AppCore, Command};
 use super::timeline::timeline_ui;
 use super::viewport::{GpuView, viewport_ui};
-use crate::export::video::Mp4Movie;
+use crate::export::movie::Movie;
 use crate::render::colour_bar::draw_colour_bar;
 use crate::render::{RenderSettings, write_png};
 use crate::scene::state_file::StateFile;
@@ -266,7 +266,7 @@ impl Viewer {
                     let video = match &plan.video {
                         // The movie goes to a temporary file beside the target, renamed when
                         // the last image is in.
-                        Some(v) => match Mp4Movie::create(&v.path, plan.size, v.fps, v.quality) {
+                        Some(v) => match Movie::create(&v.path, plan.size, v.fps, v.quality, 0) {
                             Ok(m) => Some(m),
                             Err(e) => {
                                 self.core.error = Some(e.to_string());

@@ -15,8 +15,8 @@ use mdsurf::render::{
 };
 use mdsurf::scene::defaults::{LIPID, MACROMOLECULE};
 
+use mdsurf::export::movie::{Movie, MovieFormat, is_movie};
 use mdsurf::export::stats_merge::part_path;
-use mdsurf::export::video::{Mp4Movie, check_even_size, is_mp4};
 use mdsurf::export::{StatsRow, StatsWriter};
 use mdsurf::gpu::{GpuEngine, Picked, SOFTWARE_ADAPTER, pick_engine};
 use mdsurf::render::colour_bar::draw_colour_bar;
@@ -62,8 +62,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let (system, _) = System::open_or_follow(&args.input, live.as_ref(), first)?;
     let Images { frames, shots, fps } = images(&args, state.as_ref(), &system)?;
-    let movie_out = is_mp4(&args.output);
-    let paths = output_files(&args, &frames, movie_out, chunk)?;
+    let movie_out = is_movie(&args.output);
+    let paths = output_files(&args, &frames, fps, chunk)?;
     // The images this process writes; the camera is still fitted to the run's first frame.
     if let Some(c) = chunk {
         super::chunk::check_chunk_count(c, frames.len())?;
@@ -152,7 +152,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // exit) on any frame leaves no movie file.
     let mut movie = if movie_out {
         let quality = args.video_quality.unwrap_or_default();
-        Some(Mp4Movie::create(&paths[0], args.size, fps, quality)?)
+        Some(Movie::create(
+            &paths[0],
+            args.size,
+            fps,
+            quality,
+            block.start,
+        )?)
     } else {
         None
     };
@@ -359,9 +365,9 @@ fn check_live_output(args: &RenderArgs) -> Result<()> {
         );
     }
     let bounded = args.frames.is_some_and(|r| r.stop.is_some());
-    if !is_mp4(&args.output) && !bounded {
+    if !is_movie(&args.output) && !bounded {
         bail!(
-            "-o {}: with --imd, render a movie (.mp4) or say how many images with --frames :N",
+            "-o {}: with --imd, render a movie (.mp4 or .gif) or say how many images with --frames :N",
             args.output.display()
         );
     }
@@ -494,18 +500,19 @@ fn images(args: &RenderArgs, state: Option<&StateFile>, system: &System) -> Resu
     Ok(Images { frames, shots, fps })
 }
 
-/// The file of every image (one movie for all with `movie_out`; a chunk's movie is its part,
-/// `OUT.part-IIII-of-NNNN.mp4`, for `mdsurf merge OUT.mp4`), checked before any work: a known
+/// The file of every image (one movie for all when `-o` is a movie; a chunk's movie is its
+/// part, `OUT.part-IIII-of-NNNN.mp4` or `.gif`, for `mdsurf merge OUT.mp4`), checked before any
+/// work, with the movie's size and frame rate `fps`: a known
 /// format, no two images in one file, existing folders, and a `--stats` file that is neither an
 /// image nor an input.
 fn output_files(
     args: &RenderArgs,
     frames: &[usize],
-    movie_out: bool,
+    fps: f64,
     chunk: Option<Chunk>,
 ) -> Result<Vec<PathBuf>> {
-    let paths = if movie_out {
-        check_even_size(&args.output, args.size)?;
+    let paths = if let Some(format) = MovieFormat::of(&args.output) {
+        format.check(&args.output, args.size, fps)?;
         let movie = chunk.map_or_else(
             || args.output.clone(),
             |c| part_path(&args.output, c.index, c.count),
@@ -514,7 +521,7 @@ fn output_files(
     } else {
         if args.fps.is_some() || args.video_quality.is_some() {
             bail!(
-                "-o {}: --fps and --video-quality apply to a movie; give the output a .mp4 name",
+                "-o {}: --fps and --video-quality apply to a movie; give the output a .mp4 or .gif name",
                 args.output.display()
             );
         }

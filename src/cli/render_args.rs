@@ -35,13 +35,14 @@ pub struct RenderArgs {
     #[arg(long)]
     pub frame: Option<usize>,
     /// Frames to render, START:STOP:STEP (STOP exclusive, parts optional), one index, or `all`;
-    /// PNGs need `{frame}` or `{image}` in the output name, an MP4 takes them all.
+    /// PNGs need `{frame}` or `{image}` in the output name, a movie takes them all.
     #[arg(long, value_name = "A:B[:S]")]
     pub frames: Option<FrameRange>,
     /// Output PNG. For several images a pattern: `{frame}` (or `{frame:05}`, zero-padded) is the
     /// trajectory frame index, as in `mdsurf surface`; `{image}` the image number (5 digits).
-    /// A `.mp4` name writes all images as one H.264 movie instead (even --size needed).
-    #[arg(short = 'o', long = "output", value_name = "PNG|MP4")]
+    /// A `.mp4` name writes all images as one H.264 movie instead (even --size needed), a
+    /// `.gif` name as one looping animated GIF (256 colours a frame, at most 50 frames/s).
+    #[arg(short = 'o', long = "output", value_name = "PNG|MP4|GIF")]
     pub output: PathBuf,
     /// Run the console commands of this file first, headless (one per line, `#` comments; the
     /// window's console language: `rep`, `frame`, `fit`, `view`, `screenshot FILE [WxH]`,
@@ -59,11 +60,11 @@ pub struct RenderArgs {
     /// `mdsurf surface --stats` does (same columns).
     #[arg(long, value_name = "FILE.csv")]
     pub stats: Option<PathBuf>,
-    /// Movie frame rate, frames per second (MP4 output; default 24).
+    /// Movie frame rate, frames per second (MP4 or GIF output; default 24).
     #[arg(long, value_name = "FPS", value_parser = parse_fps)]
     pub fps: Option<f64>,
-    /// Movie quality preset: low, medium (default) or high (MP4 output; the surface's
-    /// resolution is --quality).
+    /// Movie quality preset: low, medium (default) or high (MP4: the bit rate; GIF: the colour
+    /// quantiser's care; the surface's resolution is --quality).
     #[arg(long, value_name = "PRESET")]
     pub video_quality: Option<VideoQuality>,
     /// Image size in pixels.

@@ -32,7 +32,7 @@ pub(crate) fn output_paths(pattern: &Path, frames: &[usize]) -> Result<Vec<PathB
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     if !is_png {
         bail!(
-            "-o {}: render writes PNG images or an MP4 movie; give the output a .png or .mp4 name",
+            "-o {}: render writes PNG images or a movie; give the output a .png, .mp4 or .gif name",
             pattern.display()
         );
     }
@@ -76,7 +76,7 @@ mod tests {
         let jpg = output_paths(Path::new("x.jpg"), &[0])
             .unwrap_err()
             .to_string();
-        assert!(jpg.contains(".png or .mp4"), "{jpg}");
+        assert!(jpg.contains(".png, .mp4 or .gif"), "{jpg}");
         assert!(output_paths(Path::new("x_{frame}.png"), &[3, 3]).is_err());
         assert!(output_paths(Path::new("x_{image}.png"), &[3, 3]).is_ok());
     }

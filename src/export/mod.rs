@@ -5,7 +5,11 @@
 //! and to glTF as linear RGB (what its spec requires).
 
 pub(crate) mod atomic;
+#[cfg(feature = "app")]
+pub mod gif_movie;
 pub mod glb;
+#[cfg(feature = "app")]
+pub mod movie;
 #[cfg(feature = "app")]
 pub mod movie_merge;
 pub(crate) mod obj;

@@ -1,5 +1,6 @@
 //! `mdsurf merge MOVIE.mp4`: joins the MP4 parts that the chunks of a job array wrote
 //! (`MOVIE.part-IIII-of-NNNN.mp4`, from `render --chunk`) into one movie without re-encoding.
+//! (`MOVIE.gif` parts are joined frame by frame as they are: [`super::gif_movie`].)
 //! Each part is an H.264 stream that starts with a key frame; the merged file holds every part's
 //! samples in chunk order, byte for byte, with their durations, under one track whose SPS and
 //! PPS all parts share. Written atomically: a failed merge leaves no movie.
@@ -13,6 +14,8 @@ use std::path::{Path, PathBuf};
 use mp4::{MediaType, Mp4Reader, Mp4Sample, TrackType};
 
 use super::ExportError;
+use super::gif_movie::merge_gif_parts;
+use super::movie::MovieFormat;
 use super::stats_merge::{MergeError, check_one_chunk_count, find_parts, part_path, show_pattern};
 use super::video::{TIMESCALE, avc_track, mux, start_mp4};
 
@@ -67,6 +70,16 @@ pub fn merge_movie_parts(movie: &Path) -> Result<MovieMergeSummary, MergeError> 
     // of a thousand tasks would pass the usual limit of open files): each is opened again to
     // copy its frames.
     let paths: Vec<&PathBuf> = found.iter().map(|(_, _, p)| p).collect();
+    if MovieFormat::of(movie) == Some(MovieFormat::Gif) {
+        let parts: Vec<PathBuf> = paths.into_iter().cloned().collect();
+        let s = merge_gif_parts(movie, &parts).map_err(invalid)?;
+        return Ok(MovieMergeSummary {
+            parts,
+            frames: s.frames,
+            seconds: s.seconds,
+            bytes: s.bytes,
+        });
+    }
     let first = open_part(paths[0])?;
     for path in &paths[1..] {
         check_same(&first, &open_part(path)?)?;

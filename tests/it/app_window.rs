@@ -146,11 +146,26 @@ fn window_loads_demo_and_draws_the_surface() {
                 fps: 10.0,
                 ..VideoPlan::default()
             }),
-            ..plan
+            ..plan.clone()
         },
     );
     let text = probe_video(&mp4, "codec_name,width,height,nb_read_frames");
     assert_eq!(text, "h264,64,48,3", "ffprobe: {text}");
+    // And as an animated GIF, chosen by the file's name.
+    let gif = config.path().join("movie.gif");
+    run_movie(
+        &mut h,
+        MoviePlan {
+            video: Some(VideoPlan {
+                path: gif.clone(),
+                fps: 10.0,
+                ..VideoPlan::default()
+            }),
+            ..plan
+        },
+    );
+    let text = probe_video(&gif, "codec_name,width,height,nb_read_frames");
+    assert_eq!(text, "gif,64,48,3", "ffprobe: {text}");
     // No temporary file is left beside it.
     let leftovers: Vec<_> = std::fs::read_dir(config.path())
         .unwrap()

@@ -71,6 +71,7 @@ mod measure_cavities;
 mod measure_msms;
 mod measure_probe_cavities;
 mod render_cli;
+mod render_gif;
 mod render_gpu_surface;
 mod render_images;
 mod render_look;

@@ -14,7 +14,7 @@ use mdsurf::render::RgbaImage;
 use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf};
 
 /// The value of `"key": value` in ffprobe's JSON (quotes stripped): enough for its flat output.
-fn json_field(json: &str, key: &str) -> String {
+pub(crate) fn json_field(json: &str, key: &str) -> String {
     let at = json
         .find(&format!("\"{key}\""))
         .unwrap_or_else(|| panic!("ffprobe output has no {key}: {json}"));
@@ -25,7 +25,7 @@ fn json_field(json: &str, key: &str) -> String {
 }
 
 /// Peak signal-to-noise ratio in dB of two RGB images (8 bits per channel).
-fn psnr(a: &[u8], b: &[u8]) -> f64 {
+pub(crate) fn psnr(a: &[u8], b: &[u8]) -> f64 {
     assert_eq!(a.len(), b.len());
     let mse = a
         .iter()
@@ -46,7 +46,7 @@ fn render(dir: &Path, extra: &[&str]) -> Run {
     mdsurf(dir, &args)
 }
 
-fn files_in(dir: &Path) -> Vec<String> {
+pub(crate) fn files_in(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .expect("dir")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())

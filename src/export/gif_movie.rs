@@ -1,0 +1,295 @@
+//! Animated GIF movies, for web pages, slides and chat, with no external program: rendered RGBA
+//! images in, one looping GIF out. Each frame gets its own palette of at most 256 colours
+//! (NeuQuant, the `gif` crate's `color_quant`); a pixel of alpha 0 (`render --transparent`)
+//! becomes the frame's transparent colour. GIF delays are whole hundredths of a second: frame
+//! `i` lasts `round((i + 1) * 100 / fps) - round(i * 100 / fps)`, so that the running time stays
+//! within 5 ms of `i / fps` (30 frames/s gives 3, 4, 3, 3, 4, 3, ...). Players show delays under
+//! 2/100 s as 1/10 s, so at most [`GIF_MAX_FPS`] frames per second.
+//!
+//! Written to a temporary file beside the target and renamed over it only by
+//! [`GifMovie::finish`] ([`super::atomic`]), as the MP4 movies. The parts of a job array's chunks
+//! (each started at its first frame's index, so its delays continue the running time) are joined
+//! by [`merge_gif_parts`] byte for byte: the merged file equals one run's.
+
+use std::fs::File;
+use std::io::{BufReader, Seek};
+use std::path::{Path, PathBuf};
+
+use gif::{DisposalMethod, Encoder, Repeat};
+
+use super::AtomicFile;
+use super::video::{MovieSummary, VideoError, VideoQuality, check_fps};
+use crate::render::RgbaImage;
+
+/// The highest frame rate of a GIF movie, frames per second (a delay of 2/100 s).
+pub const GIF_MAX_FPS: f64 = 50.0;
+
+/// The largest side of a GIF, pixels (a 16-bit field).
+pub const GIF_MAX_SIDE: u32 = u16::MAX as u32;
+
+/// An animated GIF being written. Dropping it without [`GifMovie::finish`] deletes the temporary
+/// file and leaves any existing target untouched.
+pub struct GifMovie {
+    path: PathBuf,
+    size: [u16; 2],
+    fps: f64,
+    /// NeuQuant's sampling factor, 1 (best) to 30 (fastest).
+    speed: i32,
+    encoder: Encoder<AtomicFile>,
+    /// Index of the first frame in the whole movie (a chunk's part starts later).
+    first_frame: usize,
+    frames: usize,
+}
+
+impl GifMovie {
+    /// Starts a GIF of `size` pixels at `fps` frames per second in `path`, whose first frame is
+    /// frame `first_frame` of the whole movie (0 unless this is a chunk's part).
+    pub fn create(
+        path: &Path,
+        size: [u32; 2],
+        fps: f64,
+        quality: VideoQuality,
+        first_frame: usize,
+    ) -> Result<GifMovie, VideoError> {
+        let fps = check_gif_fps(path, fps)?;
+        let [w, h] = check_gif_size(path, size)?;
+        let file = AtomicFile::create(path)?;
+        let mut encoder =
+            Encoder::new(file, w, h, &[]).map_err(|e| encoding(path, "cannot start", e))?;
+        encoder
+            .set_repeat(Repeat::Infinite)
+            .map_err(|e| encoding(path, "cannot start", e))?;
+        Ok(GifMovie {
+            path: path.to_path_buf(),
+            size: [w, h],
+            fps,
+            speed: neuquant_speed(quality),
+            encoder,
+            first_frame,
+            frames: 0,
+        })
+    }
+
+    /// The output path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Frames added so far.
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Adds `image` as the next frame (alpha 0: transparent, any other alpha: opaque).
+    pub fn push(&mut self, image: &RgbaImage) -> Result<(), VideoError> {
+        let [w, h] = self.size;
+        if [image.width, image.height] != [u32::from(w), u32::from(h)] {
+            return Err(VideoError::SizeChanged {
+                path: self.path.clone(),
+                index: self.frames,
+                got_w: image.width,
+                got_h: image.height,
+                w: u32::from(w),
+                h: u32::from(h),
+            });
+        }
+        let mut pixels = image.pixels.clone();
+        let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, self.speed);
+        frame.delay = delay_cs(self.first_frame + self.frames, self.fps);
+        // Each frame covers the whole picture; clearing it first keeps a transparent
+        // background from showing the frame before.
+        frame.dispose = DisposalMethod::Background;
+        self.encoder
+            .write_frame(&frame)
+            .map_err(|e| encoding(&self.path, "cannot write a frame", e))?;
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// Writes the trailer, syncs and renames the movie into place.
+    pub fn finish(self) -> Result<MovieSummary, VideoError> {
+        if self.frames == 0 {
+            return Err(VideoError::Codec {
+                path: self.path,
+                what: "cannot write a movie",
+                message: "no frames".into(),
+            });
+        }
+        let path = self.path;
+        let mut file = self
+            .encoder
+            .into_inner()
+            .map_err(|e| encoding(&path, "cannot finish", e))?;
+        let bytes = file
+            .stream_position()
+            .map_err(|e| super::ExportError::io(&path, e))?;
+        file.commit()?;
+        let first = self.first_frame;
+        let centis = running_cs(first + self.frames, self.fps) - running_cs(first, self.fps);
+        Ok(MovieSummary {
+            frames: self.frames,
+            seconds: centis as f64 / 100.0,
+            bytes,
+        })
+    }
+}
+
+/// Refuses a frame rate a GIF cannot keep (see [`GIF_MAX_FPS`]) with one line naming the file.
+pub fn check_gif_fps(path: &Path, fps: f64) -> Result<f64, VideoError> {
+    let fps = check_fps(fps).map_err(|e| VideoError::Codec {
+        path: path.to_path_buf(),
+        what: "frame rate",
+        message: e.to_string(),
+    })?;
+    if fps > GIF_MAX_FPS {
+        return Err(VideoError::Codec {
+            path: path.to_path_buf(),
+            what: "frame rate",
+            message: format!(
+                "a GIF shows at most {GIF_MAX_FPS} frames/s (its delays are hundredths of a second), not {fps}; use --fps {GIF_MAX_FPS} or an .mp4 movie"
+            ),
+        });
+    }
+    Ok(fps)
+}
+
+/// The size as GIF fields, or one line naming the file when a side is 0 or too large.
+pub fn check_gif_size(path: &Path, [w, h]: [u32; 2]) -> Result<[u16; 2], VideoError> {
+    match (u16::try_from(w), u16::try_from(h)) {
+        (Ok(w), Ok(h)) if w > 0 && h > 0 => Ok([w, h]),
+        _ => Err(VideoError::Codec {
+            path: path.to_path_buf(),
+            what: "picture size",
+            message: format!("a GIF's sides are 1 to {GIF_MAX_SIDE} pixels, not {w}x{h}"),
+        }),
+    }
+}
+
+/// NeuQuant's sampling factor for a quality preset (1 samples every pixel).
+fn neuquant_speed(quality: VideoQuality) -> i32 {
+    match quality {
+        VideoQuality::Low => 20,
+        VideoQuality::Medium => 10,
+        VideoQuality::High => 3,
+    }
+}
+
+/// The running time in hundredths of a second at the start of frame `index`.
+fn running_cs(index: usize, fps: f64) -> u64 {
+    (index as f64 * 100.0 / fps).round() as u64
+}
+
+/// Frame `index`'s delay in hundredths of a second (see the module's comment).
+fn delay_cs(index: usize, fps: f64) -> u16 {
+    let d = running_cs(index + 1, fps) - running_cs(index, fps);
+    d.clamp(1, u64::from(u16::MAX)) as u16
+}
+
+fn encoding(path: &Path, what: &'static str, e: gif::EncodingError) -> VideoError {
+    match e {
+        gif::EncodingError::Io(io) => super::ExportError::io(path, io).into(),
+        e => VideoError::Codec {
+            path: path.to_path_buf(),
+            what,
+            message: e.to_string(),
+        },
+    }
+}
+
+/// One part as read for a merge: its frames' compressed data is kept as it is.
+fn open_gif_part(path: &Path) -> Result<gif::Decoder<BufReader<File>>, String> {
+    let file = File::open(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let mut options = gif::DecodeOptions::new();
+    options.skip_frame_decoding(true);
+    options.check_frame_consistency(true);
+    options
+        .read_info(BufReader::new(file))
+        .map_err(|e| format!("{}: not a GIF movie: {e}", path.display()))
+}
+
+/// Joins the GIF parts `paths` (in chunk order, checked by the caller to be complete) into
+/// `movie`, atomically: every frame is copied as it is (palette, delay, compressed pixels).
+/// Fails with one line naming the part when one is not a GIF or has another size than the
+/// first.
+pub fn merge_gif_parts(movie: &Path, paths: &[PathBuf]) -> Result<MovieSummary, String> {
+    let Some(first) = paths.first() else {
+        return Err(format!("{}: no parts to merge", movie.display()));
+    };
+    let size = {
+        let d = open_gif_part(first)?;
+        [d.width(), d.height()]
+    };
+    // Every part is checked before anything is written.
+    for path in &paths[1..] {
+        let d = open_gif_part(path)?;
+        if [d.width(), d.height()] != size {
+            return Err(format!(
+                "{}: {}x{} pixels, the first part {}x{}",
+                path.display(),
+                d.width(),
+                d.height(),
+                size[0],
+                size[1]
+            ));
+        }
+    }
+    let file = AtomicFile::create(movie).map_err(|e| e.to_string())?;
+    let fail = |e: gif::EncodingError| encoding(movie, "cannot write", e).to_string();
+    let mut out = Encoder::new(file, size[0], size[1], &[]).map_err(fail)?;
+    out.set_repeat(Repeat::Infinite).map_err(fail)?;
+    let (mut frames, mut centis) = (0usize, 0u64);
+    for path in paths {
+        let mut part = open_gif_part(path)?;
+        while let Some(frame) = part
+            .read_next_frame()
+            .map_err(|e| format!("{}: frame {frames}: {e}", path.display()))?
+        {
+            out.write_lzw_pre_encoded_frame(frame).map_err(fail)?;
+            frames += 1;
+            centis += u64::from(frame.delay);
+        }
+    }
+    let mut file = out.into_inner().map_err(fail)?;
+    let bytes = file
+        .stream_position()
+        .map_err(|e| super::ExportError::io(movie, e).to_string())?;
+    file.commit().map_err(|e| e.to_string())?;
+    Ok(MovieSummary {
+        frames,
+        seconds: centis as f64 / 100.0,
+        bytes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn delays_keep_the_running_time() {
+        let delays: Vec<u16> = (0..6).map(|i| delay_cs(i, 30.0)).collect();
+        assert_eq!(delays, [3, 4, 3, 3, 4, 3]);
+        let total: u64 = (0..300).map(|i| u64::from(delay_cs(i, 30.0))).sum();
+        assert_eq!(total, 1000);
+        // A chunk's part continues the running time of the frames before it.
+        let split: u64 = (100..300).map(|i| u64::from(delay_cs(i, 30.0))).sum();
+        assert_eq!(split, running_cs(300, 30.0) - running_cs(100, 30.0));
+    }
+
+    #[test]
+    fn fast_rates_and_huge_sizes_are_refused_in_one_line() {
+        let p = Path::new("m.gif");
+        assert_eq!(check_gif_fps(p, 50.0).ok(), Some(50.0));
+        let e = check_gif_fps(p, 60.0).expect_err("too fast").to_string();
+        assert!(
+            e.starts_with("m.gif") && e.contains("60") && !e.contains('\n'),
+            "{e}"
+        );
+        assert!(check_gif_fps(p, f64::NAN).is_err());
+        assert_eq!(check_gif_size(p, [640, 480]).ok(), Some([640, 480]));
+        let e = check_gif_size(p, [70_000, 10])
+            .expect_err("too wide")
+            .to_string();
+        assert!(e.contains("70000x10") && !e.contains('\n'), "{e}");
+    }
+}
