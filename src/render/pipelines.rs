@@ -53,6 +53,10 @@ pub(crate) struct Pipelines {
     /// The opaque and transparent mesh pipelines for one interleaved vertex buffer
     /// ([`crate::gpu::GpuSurface::vertex_layout`]: the GPU engine's output).
     pub gpu_mesh_opaque: wgpu::RenderPipeline,
+    /// `gpu_mesh_opaque` with back faces culled: for a closed surface seen from outside (the
+    /// GPU engine's meshes are closed, counter-clockwise seen from outside), where every back
+    /// face lies behind a front one.
+    pub gpu_mesh_culled: wgpu::RenderPipeline,
     pub gpu_mesh_oit: wgpu::RenderPipeline,
     pub sphere: wgpu::RenderPipeline,
     pub cylinder: wgpu::RenderPipeline,
@@ -202,6 +206,15 @@ struct PipelineSpec<'a> {
 }
 
 fn pipeline(device: &wgpu::Device, s: PipelineSpec<'_>) -> wgpu::RenderPipeline {
+    pipeline_culling(device, s, None)
+}
+
+/// [`pipeline`] drawing only the triangles not facing `cull` (counter-clockwise is front).
+fn pipeline_culling(
+    device: &wgpu::Device,
+    s: PipelineSpec<'_>,
+    cull: Option<wgpu::Face>,
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(s.label),
         layout: Some(s.layout),
@@ -213,7 +226,7 @@ fn pipeline(device: &wgpu::Device, s: PipelineSpec<'_>) -> wgpu::RenderPipeline 
         },
         primitive: wgpu::PrimitiveState {
             topology: wgpu::PrimitiveTopology::TriangleList,
-            cull_mode: None,
+            cull_mode: cull,
             ..Default::default()
         },
         depth_stencil: s.depth,
@@ -402,6 +415,18 @@ impl Pipelines {
                 &opaque_target,
             ),
         );
+        let gpu_mesh_culled = pipeline_culling(
+            device,
+            scene_spec(
+                "gpu mesh opaque, back faces culled",
+                "vs_mesh",
+                "fs_mesh",
+                &gpu_mesh_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+            Some(wgpu::Face::Back),
+        );
         let gpu_mesh_oit = pipeline(
             device,
             scene_spec(
@@ -511,6 +536,7 @@ impl Pipelines {
             mesh_opaque,
             mesh_oit,
             gpu_mesh_opaque,
+            gpu_mesh_culled,
             gpu_mesh_oit,
             sphere,
             cylinder,

@@ -7,7 +7,7 @@ use glam::{Mat4, Vec3};
 use super::camera::{Camera, Eye, Projection};
 use super::pipelines::{CYLINDER_VERTICES, Pipelines};
 use super::scene::{GpuScene, SurfaceLayer};
-use super::screen_rect::covered_rect;
+use super::screen_rect::{beyond_near_plane, covered_rect};
 
 /// Surfaces at least this opaque are drawn in the opaque pass.
 const OPAQUE: f32 = 0.999;
@@ -442,9 +442,12 @@ impl Renderer {
                 rp.set_vertex_buffer(0, c.buffer.slice(..));
                 rp.draw(0..CYLINDER_VERTICES, 0..scene.cylinder_count);
             }
+            let view_proj = pass.matrices.1 * pass.matrices.0;
             for &k in &opaque_layers {
                 rp.set_bind_group(0, &layer_groups[k], &[]);
-                self.draw_mesh(&mut rp, &scene.surfaces[k], false);
+                // Back faces are drawn only where the near plane may cut the surface open.
+                let closed = beyond_near_plane(scene.surfaces[k].bounds, view_proj);
+                self.draw_mesh(&mut rp, &scene.surfaces[k], false, closed);
             }
         }
         // One full-screen pass over the drawn pixels of the opaque image that reads its depth:
@@ -520,7 +523,7 @@ impl Renderer {
             rp.set_viewport(x, y, w, h, 0.0, 1.0);
             for &k in &transparent_layers {
                 rp.set_bind_group(0, &layer_groups[k], &[]);
-                self.draw_mesh(&mut rp, &scene.surfaces[k], true);
+                self.draw_mesh(&mut rp, &scene.surfaces[k], true, false);
             }
         }
         let group = self.post_group(device, &targets.accum_view, &targets.reveal_view);
@@ -537,12 +540,20 @@ impl Renderer {
 
     /// Draws the surface: from the GPU engine's buffers with the indirect arguments it wrote,
     /// or from the uploaded mesh.
-    fn draw_mesh(&self, rp: &mut wgpu::RenderPass<'_>, scene: &SurfaceLayer, transparent: bool) {
+    /// Draws one surface; `seen_closed`: an opaque GPU-engine surface (closed) that the near
+    /// plane does not cut, whose back faces are culled.
+    fn draw_mesh(
+        &self,
+        rp: &mut wgpu::RenderPass<'_>,
+        scene: &SurfaceLayer,
+        transparent: bool,
+        seen_closed: bool,
+    ) {
         if let Some(g) = &scene.gpu_surface {
-            rp.set_pipeline(if transparent {
-                &self.pipelines.gpu_mesh_oit
-            } else {
-                &self.pipelines.gpu_mesh_opaque
+            rp.set_pipeline(match (transparent, seen_closed) {
+                (true, _) => &self.pipelines.gpu_mesh_oit,
+                (false, true) => &self.pipelines.gpu_mesh_culled,
+                (false, false) => &self.pipelines.gpu_mesh_opaque,
             });
             rp.set_vertex_buffer(0, g.vertices.slice(..));
             rp.set_index_buffer(g.indices.slice(..), wgpu::IndexFormat::Uint32);

@@ -118,7 +118,8 @@ pub struct SurfaceLayer {
     pub(crate) index_count: u32,
     /// The GPU engine's surface, drawn instead of the uploaded mesh when set.
     pub(crate) gpu_surface: Option<crate::gpu::GpuSurface>,
-    bounds: Option<(Vec3, Vec3)>,
+    /// Box around the surface in Å (for the GPU engine's, its grid), when known.
+    pub(crate) bounds: Option<(Vec3, Vec3)>,
     /// Opacity 0..1 of this surface; `None` takes [`crate::render::RenderSettings`]'s.
     pub opacity: Option<f32>,
     /// A single linear RGB colour for this surface; `None` takes the settings' choice.

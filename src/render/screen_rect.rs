@@ -1,6 +1,8 @@
-//! The part of an eye's viewport that the scene can cover, in pixels. The full-screen passes
-//! after the opaque scene (ambient occlusion, outlines, shadows) are clipped to it with a
-//! scissor, so that the empty background around a molecule is not shaded at all.
+//! Where a box around part of the scene lies seen through an eye's matrices. The part of the
+//! viewport it can cover, in pixels: the full-screen passes after the opaque scene (ambient
+//! occlusion, outlines, shadows) are clipped to it with a scissor, so that the empty background
+//! around a molecule is not shaded at all. And whether it lies wholly beyond the near plane:
+//! then no cut opens a closed surface inside it, and its back faces need not be drawn.
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -51,6 +53,23 @@ pub(crate) fn covered_rect(
         clamp_y((max[1] + margin).ceil()),
     );
     (x1 > x0 && y1 > y0).then_some([x0, y0, x1 - x0, y1 - y0])
+}
+
+/// True when the box `bounds` (Å) lies wholly beyond the near clip plane of `view_proj` (depth 0
+/// near, 1 far), so that the plane cuts nothing inside it; false without a box.
+pub(crate) fn beyond_near_plane(bounds: Option<(Vec3, Vec3)>, view_proj: Mat4) -> bool {
+    let Some((lo, hi)) = bounds else {
+        return false;
+    };
+    (0..8).all(|corner| {
+        let p = Vec3::new(
+            if corner & 1 == 0 { lo.x } else { hi.x },
+            if corner & 2 == 0 { lo.y } else { hi.y },
+            if corner & 4 == 0 { lo.z } else { hi.z },
+        );
+        let clip: Vec4 = view_proj * p.extend(1.0);
+        clip.is_finite() && clip.w > 1e-6 && clip.z > 1e-6 * clip.w
+    })
 }
 
 #[cfg(test)]
@@ -109,5 +128,24 @@ mod tests {
         // Far to the side: outside the viewport, so nothing to shade.
         let aside = (Vec3::new(200.0, -1.0, -1.0), Vec3::new(202.0, 1.0, 1.0));
         assert_eq!(covered_rect(Some(aside), vp, VIEWPORT, 2.0), None);
+    }
+
+    #[test]
+    fn only_a_box_wholly_past_the_near_plane_is_beyond_it() {
+        let cube = Some((Vec3::splat(-1.0), Vec3::splat(1.0)));
+        assert!(beyond_near_plane(cube, camera(20.0)));
+        // The eye inside the box (zoomed into it): not beyond.
+        assert!(!beyond_near_plane(
+            Some((Vec3::splat(-30.0), Vec3::splat(30.0))),
+            camera(20.0)
+        ));
+        assert!(!beyond_near_plane(cube, camera(0.5)));
+        // The near plane through the box, the eye outside it.
+        let (view, _) = crate::render::Camera::default().matrices(2.0);
+        let eye_z = (view * Vec3::ZERO.extend(1.0)).z;
+        let proj = glam::camera::rh::proj::directx::perspective(1.0, 2.0, -eye_z, 100.0);
+        let cube_at_origin = Some((Vec3::splat(-1.0), Vec3::splat(1.0)));
+        assert!(!beyond_near_plane(cube_at_origin, proj * view));
+        assert!(!beyond_near_plane(None, camera(20.0)));
     }
 }

@@ -135,6 +135,25 @@ fn gpu_buffers_render_like_the_uploaded_mesh() {
         0.0005,
     );
 
+    // Seen from outside, the GPU buffers' back faces are culled (the pictures above are equal);
+    // with the eye inside the surface's box, where the near plane may cut it open, they are
+    // drawn as for the uploaded mesh.
+    let mut inside = camera;
+    inside.distance = 1.0;
+    let cut_buffers = render(&g, &renderer, &direct, &inside);
+    let cut_readback = render(&g, &renderer, &uploaded, &inside);
+    assert!(
+        cut_buffers.difference(&from_buffers).expect("size").0 > 5.0,
+        "the view from inside looks like the one from outside"
+    );
+    assert_close(
+        "eye inside: GPU buffers vs readback",
+        &cut_buffers,
+        &cut_readback,
+        0.05,
+        0.0005,
+    );
+
     // The transparent (order-independent) pipeline for GPU buffers too.
     let glass = RenderSettings {
         surface_opacity: 0.5,
