@@ -49,13 +49,15 @@ pub(crate) struct Pipelines {
     /// Ambient occlusion, outlines and shadows (shaders/render_look.wgsl), made on first use.
     pub look: LookPipelines,
     pub mesh_opaque: wgpu::RenderPipeline,
+    /// `mesh_opaque` with back faces culled, for a closed surface seen from outside.
+    pub mesh_culled: wgpu::RenderPipeline,
     pub mesh_oit: wgpu::RenderPipeline,
     /// The opaque and transparent mesh pipelines for one interleaved vertex buffer
     /// ([`crate::gpu::GpuSurface::vertex_layout`]: the GPU engine's output).
     pub gpu_mesh_opaque: wgpu::RenderPipeline,
     /// `gpu_mesh_opaque` with back faces culled: for a closed surface seen from outside (the
-    /// GPU engine's meshes are closed, counter-clockwise seen from outside), where every back
-    /// face lies behind a front one.
+    /// engines' meshes are counter-clockwise seen from outside), where every back face lies
+    /// behind a front one.
     pub gpu_mesh_culled: wgpu::RenderPipeline,
     pub gpu_mesh_oit: wgpu::RenderPipeline,
     pub sphere: wgpu::RenderPipeline,
@@ -393,6 +395,18 @@ impl Pipelines {
                 &opaque_target,
             ),
         );
+        let mesh_culled = pipeline_culling(
+            device,
+            scene_spec(
+                "mesh opaque, back faces culled",
+                "vs_mesh",
+                "fs_mesh",
+                &mesh_buffers,
+                depth(true),
+                &opaque_target,
+            ),
+            Some(wgpu::Face::Back),
+        );
         let mesh_oit = pipeline(
             device,
             scene_spec(
@@ -534,6 +548,7 @@ impl Pipelines {
             depth_layout,
             ambient_occlusion,
             mesh_opaque,
+            mesh_culled,
             mesh_oit,
             gpu_mesh_opaque,
             gpu_mesh_culled,

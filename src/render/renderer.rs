@@ -446,8 +446,9 @@ impl Renderer {
             for &k in &opaque_layers {
                 rp.set_bind_group(0, &layer_groups[k], &[]);
                 // Back faces are drawn only where the near plane may cut the surface open.
-                let closed = beyond_near_plane(scene.surfaces[k].bounds, view_proj);
-                self.draw_mesh(&mut rp, &scene.surfaces[k], false, closed);
+                let layer = &scene.surfaces[k];
+                let closed = layer.closed && beyond_near_plane(layer.bounds, view_proj);
+                self.draw_mesh(&mut rp, layer, false, closed);
             }
         }
         // One full-screen pass over the drawn pixels of the opaque image that reads its depth:
@@ -540,8 +541,8 @@ impl Renderer {
 
     /// Draws the surface: from the GPU engine's buffers with the indirect arguments it wrote,
     /// or from the uploaded mesh.
-    /// Draws one surface; `seen_closed`: an opaque GPU-engine surface (closed) that the near
-    /// plane does not cut, whose back faces are culled.
+    /// Draws one surface; `seen_closed`: an opaque closed surface that the near plane does not
+    /// cut, whose back faces are culled.
     fn draw_mesh(
         &self,
         rp: &mut wgpu::RenderPass<'_>,
@@ -560,10 +561,10 @@ impl Renderer {
             rp.draw_indexed_indirect(&g.draw_args, 0);
             return;
         }
-        rp.set_pipeline(if transparent {
-            &self.pipelines.mesh_oit
-        } else {
-            &self.pipelines.mesh_opaque
+        rp.set_pipeline(match (transparent, seen_closed) {
+            (true, _) => &self.pipelines.mesh_oit,
+            (false, true) => &self.pipelines.mesh_culled,
+            (false, false) => &self.pipelines.mesh_opaque,
         });
         let (Some(p), Some(n), Some(c), Some(i)) = (
             &scene.positions,

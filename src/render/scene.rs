@@ -120,6 +120,10 @@ pub struct SurfaceLayer {
     pub(crate) gpu_surface: Option<crate::gpu::GpuSurface>,
     /// Box around the surface in Å (for the GPU engine's, its grid), when known.
     pub(crate) bounds: Option<(Vec3, Vec3)>,
+    /// True when the surface is closed, counter-clockwise seen from outside (the GPU engine's,
+    /// or an uploaded mesh said to be: not the periodic engine's, open at the cell faces), so
+    /// that its back faces may be culled where no plane cuts it.
+    pub closed: bool,
     /// Opacity 0..1 of this surface; `None` takes [`crate::render::RenderSettings`]'s.
     pub opacity: Option<f32>,
     /// A single linear RGB colour for this surface; `None` takes the settings' choice.
@@ -183,6 +187,7 @@ impl SurfaceLayer {
         self.index_count = mesh.indices.len() as u32;
         self.bounds = mesh.bounds();
         self.gpu_surface = None;
+        self.closed = false;
     }
 
     fn clear(&mut self) {
@@ -260,6 +265,7 @@ impl GpuScene {
         layer.gpu_surface = Some(surface);
         layer.index_count = 0;
         layer.bounds = bounds;
+        layer.closed = true;
     }
 
     /// Removes the surface of layer `k` (keeping its buffers for reuse).

@@ -48,7 +48,10 @@ impl GpuScene {
                     let hi = grid.origin + far.as_vec3() * grid.spacing;
                     self.set_layer_gpu_surface(k, g.clone(), Some((grid.origin, hi)));
                 }
-                None => self.set_layer_mesh(k, device, queue, &layer.output.mesh),
+                None => {
+                    self.set_layer_mesh(k, device, queue, &layer.output.mesh);
+                    self.layer_mut(k).closed = layer.closed;
+                }
             }
             let surface = self.layer_mut(k);
             surface.opacity = Some(rep.opacity);

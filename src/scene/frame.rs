@@ -68,6 +68,9 @@ pub struct LayerResult {
     /// Wall-clock time spent on this representation in ms: its particles and its surface
     /// (submit and collect on the GPU), and its cavities when found.
     pub compute_ms: f64,
+    /// True when the surface's mesh is closed (every engine's but the periodic one's, whose
+    /// meshes are open at the cell faces): the renderer may cull its back faces.
+    pub closed: bool,
     /// The surface's cavities, when the representation's `cavities` switch is on (`None`
     /// otherwise, for atom styles, and for a host surface whose mesh was not kept).
     pub cavities: Option<Arc<CavityLayer>>,

@@ -319,6 +319,7 @@ fn scene_with(id: u64, rep: &Representation, frame: usize, cavities: Vec<Cavity>
         gpu_work: None,
         reused: false,
         compute_ms: 0.0,
+        closed: true,
         cavities: Some(Arc::new(CavityLayer {
             cavities,
             lining: vec![Vec::new(); n],

@@ -193,6 +193,10 @@ fn cavities_are_drawn_as_an_opaque_layer_after_their_surface() {
     assert_eq!(scene.layer_mut(0).colour, None);
     assert_eq!(scene.layer_mut(1).opacity, Some(1.0));
     assert_eq!(scene.layer_mut(1).colour, None, "the walls' vertex colours");
+    // The surface is closed (back faces may be culled); the walls, seen from inside the
+    // surface, are drawn on both sides.
+    assert!(layer.closed && scene.layer_mut(0).closed);
+    assert!(!scene.layer_mut(1).closed);
     let off = Representation {
         cavities: false,
         ..drawn
@@ -279,4 +283,39 @@ fn cavity_panel_lists_the_tracked_void() {
     assert_eq!(tracks.current.len(), 1);
     let probe_void = tracks.current[0].cavity.volume;
     assert!(probe_void > surface_void, "{probe_void} vs {surface_void}");
+}
+
+/// A periodic surface is open at the cell's faces: its layer says so, and the renderer draws
+/// both of its sides.
+#[test]
+fn periodic_layers_are_open() {
+    let Some(ctx) = crate::gpu_support::context() else {
+        return;
+    };
+    let mut engine = SceneEngine::new(SceneBackend::Host(Box::new(CpuEngine::new())));
+    engine.set_periodic(Some(mdsurf::surface::periodic::Replicate::default()));
+    // The shell in a 12 Å box: its atoms cross the faces.
+    let frame = Arc::new(Frame {
+        cell: Some([Vec3::X * 12.0, Vec3::Y * 12.0, Vec3::Z * 12.0]),
+        ..frames().remove(0)
+    });
+    let reps = [RepRequest {
+        id: 1,
+        rep: rep(false),
+    }];
+    let computed = engine
+        .frame(&topology(), 0, &frame, &reps)
+        .expect("the periodic frame computes");
+    let layer = computed.layers[0].clone();
+    assert!(!layer.closed, "a periodic surface is open at the faces");
+    assert!(!layer.output.mesh.is_closed());
+    let mut scene = GpuScene::new();
+    let look = RenderSettings::default();
+    scene.show_layers(
+        &ctx.device,
+        &ctx.queue,
+        [(layer.as_ref(), &rep(false))],
+        &look,
+    );
+    assert!(!scene.layer_mut(0).closed);
 }

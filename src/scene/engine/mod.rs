@@ -355,6 +355,7 @@ impl SceneEngine {
             gpu_work: None,
             reused: false,
             compute_ms: 0.0,
+            closed: self.replicate.is_none(),
             cavities: None,
         };
         let mut submitted = None;
