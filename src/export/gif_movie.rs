@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use gif::{DisposalMethod, Encoder, Repeat};
 
 use super::AtomicFile;
-use super::video::{MovieSummary, VideoError, VideoQuality, check_fps};
+use super::video::{MovieSummary, VideoError, VideoQuality, check_fps, check_image_size};
 use crate::render::RgbaImage;
 
 /// The highest frame rate of a GIF movie, frames per second (a delay of 2/100 s).
@@ -83,16 +83,7 @@ impl GifMovie {
     /// Adds `image` as the next frame (alpha 0: transparent, any other alpha: opaque).
     pub fn push(&mut self, image: &RgbaImage) -> Result<(), VideoError> {
         let [w, h] = self.size;
-        if [image.width, image.height] != [u32::from(w), u32::from(h)] {
-            return Err(VideoError::SizeChanged {
-                path: self.path.clone(),
-                index: self.frames,
-                got_w: image.width,
-                got_h: image.height,
-                w: u32::from(w),
-                h: u32::from(h),
-            });
-        }
+        check_image_size(&self.path, self.frames, image, [w, h].map(u32::from))?;
         let mut pixels = image.pixels.clone();
         let mut frame = gif::Frame::from_rgba_speed(w, h, &mut pixels, self.speed);
         frame.delay = delay_cs(self.first_frame + self.frames, self.fps);

@@ -170,6 +170,26 @@ pub fn check_even_size(path: &Path, [w, h]: [u32; 2]) -> Result<(), VideoError> 
     Ok(())
 }
 
+/// Refuses image `index` of the movie `path` when it is not of the movie's `size`.
+pub(crate) fn check_image_size(
+    path: &Path,
+    index: usize,
+    image: &RgbaImage,
+    [w, h]: [u32; 2],
+) -> Result<(), VideoError> {
+    if [image.width, image.height] == [w, h] {
+        return Ok(());
+    }
+    Err(VideoError::SizeChanged {
+        path: path.to_path_buf(),
+        index,
+        got_w: image.width,
+        got_h: image.height,
+        w,
+        h,
+    })
+}
+
 /// What a finished movie holds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MovieSummary {
@@ -262,16 +282,7 @@ impl Mp4Movie {
     /// Encodes `image` as the next frame (alpha is ignored).
     pub fn push(&mut self, image: &RgbaImage) -> Result<(), VideoError> {
         let [w, h] = self.size;
-        if [image.width, image.height] != self.size {
-            return Err(VideoError::SizeChanged {
-                path: self.path.clone(),
-                index: self.frames,
-                got_w: image.width,
-                got_h: image.height,
-                w,
-                h,
-            });
-        }
+        check_image_size(&self.path, self.frames, image, self.size)?;
         let mut planes = Vec::new();
         rgba_to_i420(&image.pixels, w as usize, h as usize, &mut planes);
         let yuv = YUVBuffer::from_vec(planes, w as usize, h as usize);

@@ -246,3 +246,24 @@ pub fn probe_video(path: &Path, entries: &str) -> String {
     );
     String::from_utf8_lossy(&out).trim().to_string()
 }
+
+/// The length in seconds of the movie `path` as ffprobe reads it from the container.
+pub fn probe_duration(path: &Path) -> f64 {
+    let path = path.to_str().expect("utf-8 path");
+    let out = ffmpeg_tool(
+        "ffprobe",
+        &[
+            "-v",
+            "error",
+            "-show_entries",
+            "format=duration",
+            "-of",
+            "csv=p=0",
+            path,
+        ],
+    );
+    String::from_utf8_lossy(&out)
+        .trim()
+        .parse()
+        .expect("ffprobe duration")
+}

@@ -8,10 +8,8 @@
 
 use std::path::Path;
 
-use mdsurf::render::RgbaImage;
-
-use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf};
-use crate::render_movie::{assert_one_line_failure, files_in, json_field, psnr};
+use crate::cli_common::{Run, asset, have_gpu, mdsurf, probe_duration, probe_video};
+use crate::render_movie::{assert_one_line_failure, decoded_frame_psnr, files_in};
 
 /// Renders frames 0:6 of the demo trajectory at 30 frames/s, 160x120, with `extra` flags.
 fn render(dir: &Path, extra: &[&str]) -> Run {
@@ -46,66 +44,18 @@ fn gif_has_the_frames_size_duration_and_pictures_of_the_png_renders() {
         "no temporary file left"
     );
     let movie = dir.path().join("movie.gif");
-    let m = movie.to_str().expect("utf-8 path");
-    let probe = ffmpeg_tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=codec_name,width,height,nb_read_frames",
-            "-show_entries",
-            "format=duration",
-            "-of",
-            "json",
-            m,
-        ],
-    );
-    let json = String::from_utf8_lossy(&probe);
-    assert_eq!(json_field(&json, "codec_name"), "gif", "{json}");
-    assert_eq!(json_field(&json, "width"), "160", "{json}");
-    assert_eq!(json_field(&json, "height"), "120", "{json}");
-    assert_eq!(json_field(&json, "nb_read_frames"), "6", "{json}");
+    let probe = probe_video(&movie, "codec_name,width,height,nb_read_frames");
+    assert_eq!(probe, "gif,160,120,6", "ffprobe");
     // Six frames at 30 frames/s: 0.2 s, as delays of 3, 4, 3, 3, 4, 3 hundredths.
-    let duration: f64 = json_field(&json, "duration").parse().expect("duration");
-    assert!(
-        (duration - 0.2).abs() < 0.005,
-        "duration {duration}: {json}"
-    );
+    let duration = probe_duration(&movie);
+    assert!((duration - 0.2).abs() < 0.005, "duration {duration}");
 
     let r = render(dir.path(), &["-o", "f_{frame}.png"]);
     assert_eq!(r.code, 0, "{}", r.stderr);
+    let m = movie.to_str().expect("utf-8 path");
     for image in [0, 5] {
-        let png = RgbaImage::read_png(&dir.path().join(format!("f_{image}.png"))).expect("png");
-        let rgb: Vec<u8> = png
-            .pixels
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .collect();
-        let select = format!("select=eq(n\\,{image})");
-        let decoded = ffmpeg_tool(
-            "ffmpeg",
-            &[
-                "-v",
-                "error",
-                "-i",
-                m,
-                "-vf",
-                &select,
-                "-frames:v",
-                "1",
-                "-f",
-                "rawvideo",
-                "-pix_fmt",
-                "rgb24",
-                "-",
-            ],
-        );
-        assert_eq!(decoded.len(), 160 * 120 * 3, "decoded frame size");
-        let db = psnr(&decoded, &rgb);
+        let png = dir.path().join(format!("f_{image}.png"));
+        let db = decoded_frame_psnr(m, image, &png, [160, 120]);
         eprintln!("gif frame {image}: PSNR {db:.1} dB");
         assert!(db >= 35.0, "gif frame {image}: PSNR {db:.1} dB < 35");
     }

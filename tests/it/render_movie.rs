@@ -14,7 +14,7 @@ use mdsurf::render::RgbaImage;
 use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf};
 
 /// The value of `"key": value` in ffprobe's JSON (quotes stripped): enough for its flat output.
-pub(crate) fn json_field(json: &str, key: &str) -> String {
+fn json_field(json: &str, key: &str) -> String {
     let at = json
         .find(&format!("\"{key}\""))
         .unwrap_or_else(|| panic!("ffprobe output has no {key}: {json}"));
@@ -25,7 +25,7 @@ pub(crate) fn json_field(json: &str, key: &str) -> String {
 }
 
 /// Peak signal-to-noise ratio in dB of two RGB images (8 bits per channel).
-pub(crate) fn psnr(a: &[u8], b: &[u8]) -> f64 {
+fn psnr(a: &[u8], b: &[u8]) -> f64 {
     assert_eq!(a.len(), b.len());
     let mse = a
         .iter()
@@ -37,6 +37,38 @@ pub(crate) fn psnr(a: &[u8], b: &[u8]) -> f64 {
         return f64::INFINITY;
     }
     10.0 * (255.0f64 * 255.0 / mse).log10()
+}
+
+/// PSNR in dB of image `image` of `movie`, decoded to RGB by ffmpeg, against the PNG `png` of
+/// `w x h` pixels.
+pub(crate) fn decoded_frame_psnr(movie: &str, image: usize, png: &Path, [w, h]: [usize; 2]) -> f64 {
+    let png = RgbaImage::read_png(png).expect("png");
+    let rgb: Vec<u8> = png
+        .pixels
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let select = format!("select=eq(n\\,{image})");
+    let decoded = ffmpeg_tool(
+        "ffmpeg",
+        &[
+            "-v",
+            "error",
+            "-i",
+            movie,
+            "-vf",
+            &select,
+            "-frames:v",
+            "1",
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            "rgb24",
+            "-",
+        ],
+    );
+    assert_eq!(decoded.len(), w * h * 3, "decoded frame size");
+    psnr(&decoded, &rgb)
 }
 
 fn render(dir: &Path, extra: &[&str]) -> Run {
@@ -123,33 +155,7 @@ fn movie_has_the_frames_size_rate_and_pictures_of_the_png_renders() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     for image in [0, 5] {
         let png_name = format!("f_{image}.png");
-        let png = RgbaImage::read_png(&dir.path().join(&png_name)).expect("png");
-        let rgb: Vec<u8> = png
-            .pixels
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .collect();
-        let select = format!("select=eq(n\\,{image})");
-        let decoded = ffmpeg_tool(
-            "ffmpeg",
-            &[
-                "-v",
-                "error",
-                "-i",
-                m,
-                "-vf",
-                &select,
-                "-frames:v",
-                "1",
-                "-f",
-                "rawvideo",
-                "-pix_fmt",
-                "rgb24",
-                "-",
-            ],
-        );
-        assert_eq!(decoded.len(), 320 * 240 * 3, "decoded frame size");
-        let db = psnr(&decoded, &rgb);
+        let db = decoded_frame_psnr(m, image, &dir.path().join(&png_name), [320, 240]);
         eprintln!("movie frame {image}: PSNR {db:.1} dB");
         assert!(
             db >= 35.0,

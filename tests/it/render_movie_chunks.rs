@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf, probe_video};
+use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf, probe_duration, probe_video};
 use crate::render_movie::assert_one_line_failure;
 
 /// Renders chunk `chunk` of frames 0:6 of the demo trajectory at 10 frames/s into `out`'s part.
@@ -108,22 +108,7 @@ fn chunks_write_parts_that_merge_joins_without_re_encoding() {
         "codec_name,width,height,r_frame_rate,nb_read_frames",
     );
     assert_eq!(probe, "h264,160,120,10/1,6", "ffprobe");
-    let duration = ffmpeg_tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-show_entries",
-            "format=duration",
-            "-of",
-            "csv=p=0",
-            m,
-        ],
-    );
-    let duration: f64 = String::from_utf8_lossy(&duration)
-        .trim()
-        .parse()
-        .expect("duration");
+    let duration = probe_duration(&movie);
     assert!((duration - 0.6).abs() < 0.02, "duration {duration}");
     // Decodes without an error (each part starts with a key frame).
     let log = ffmpeg_tool("ffmpeg", &["-v", "error", "-i", m, "-f", "null", "-"]);
