@@ -209,3 +209,36 @@ fn typed_selection_shows_its_error_and_keeps_the_last_good_one() {
     assert!(s.core.wait_idle(WAIT));
     assert_eq!(shown(&s.core).particles.positions.len(), 15);
 }
+
+/// The Export panel's movie formats: GIF and MP4 name the movie file accordingly (the file's
+/// name picks the writer), PNG sequence drops it; the export button says which.
+#[test]
+fn export_panel_switches_between_mp4_gif_and_pngs() {
+    use mdsurf::app::export::{MoviePlan, export_ui};
+    let mut h = Harness::builder().with_size([400.0, 700.0]).build_ui_state(
+        |ui, plan: &mut MoviePlan| {
+            export_ui(ui, plan, &mut 1, 10, None);
+        },
+        MoviePlan::default(),
+    );
+    h.run();
+    h.get_by_label("Export movie (PNG sequence)");
+    let extension = |plan: &MoviePlan| {
+        plan.video
+            .as_ref()
+            .and_then(|v| v.path.extension())
+            .map(|e| e.to_string_lossy().into_owned())
+    };
+    h.get_by_label("GIF").click();
+    h.run();
+    assert_eq!(extension(h.state()).as_deref(), Some("gif"));
+    h.get_by_label("Export movie (GIF)");
+    h.get_by_label("MP4 (H.264)").click();
+    h.run();
+    assert_eq!(extension(h.state()).as_deref(), Some("mp4"));
+    h.get_by_label("Export movie (MP4)");
+    h.get_by_label("PNG sequence").click();
+    h.run();
+    assert!(h.state().video.is_none());
+    h.get_by_label("Export movie (PNG sequence)");
+}
