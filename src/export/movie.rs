@@ -58,10 +58,10 @@ pub fn is_movie(path: &Path) -> bool {
 
 /// A movie being written; dropped without [`Movie::finish`], it leaves no file.
 pub enum Movie {
-    /// An H.264 MP4 movie (boxed: its encoder state is some kilobytes).
+    /// An H.264 MP4 movie (boxed, as the GIF: each writer's state is some kilobytes).
     Mp4(Box<Mp4Movie>),
     /// An animated GIF.
-    Gif(GifMovie),
+    Gif(Box<GifMovie>),
 }
 
 impl Movie {
@@ -76,9 +76,13 @@ impl Movie {
         first_frame: usize,
     ) -> Result<Movie, VideoError> {
         Ok(match MovieFormat::of(path) {
-            Some(MovieFormat::Gif) => {
-                Movie::Gif(GifMovie::create(path, size, fps, quality, first_frame)?)
-            }
+            Some(MovieFormat::Gif) => Movie::Gif(Box::new(GifMovie::create(
+                path,
+                size,
+                fps,
+                quality,
+                first_frame,
+            )?)),
             _ => Movie::Mp4(Box::new(Mp4Movie::create(path, size, fps, quality)?)),
         })
     }
