@@ -412,6 +412,8 @@ impl Renderer {
                 .collect()
         };
         let (opaque_layers, transparent_layers) = (drawn(true), drawn(false));
+        // This eye's world-to-clip matrix, for where the surfaces' boxes lie on screen.
+        let view_proj = pass.matrices.1 * pass.matrices.0;
         {
             let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("opaque"),
@@ -442,7 +444,6 @@ impl Renderer {
                 rp.set_vertex_buffer(0, c.buffer.slice(..));
                 rp.draw(0..CYLINDER_VERTICES, 0..scene.cylinder_count);
             }
-            let view_proj = pass.matrices.1 * pass.matrices.0;
             for &k in &opaque_layers {
                 rp.set_bind_group(0, &layer_groups[k], &[]);
                 // Back faces are drawn only where the near plane may cut the surface open.
@@ -466,8 +467,7 @@ impl Renderer {
             None
         };
         // Only where the scene can be on screen (2 px around it for rounding).
-        let (view, proj) = pass.matrices;
-        let rect = covered_rect(scene.drawn_bounds(), proj * view, pass.viewport, 2.0);
+        let rect = covered_rect(scene.drawn_bounds(), view_proj, pass.viewport, 2.0);
         if let (Some(pipeline), Some([sx, sy, sw, sh])) = (post_pipeline, rect) {
             let depth_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("scene depth"),

@@ -11,18 +11,7 @@ use std::process::Command;
 
 use mdsurf::render::RgbaImage;
 
-use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf};
-
-/// The value of `"key": value` in ffprobe's JSON (quotes stripped): enough for its flat output.
-fn json_field(json: &str, key: &str) -> String {
-    let at = json
-        .find(&format!("\"{key}\""))
-        .unwrap_or_else(|| panic!("ffprobe output has no {key}: {json}"));
-    let rest = &json[at + key.len() + 2..];
-    let rest = rest.trim_start().trim_start_matches(':').trim_start();
-    let end = rest.find([',', '\n', '}']).unwrap_or(rest.len());
-    rest[..end].trim().trim_matches('"').to_string()
-}
+use crate::cli_common::{Run, asset, ffmpeg_tool, have_gpu, mdsurf, probe_duration, probe_video};
 
 /// Peak signal-to-noise ratio in dB of two RGB images (8 bits per channel).
 fn psnr(a: &[u8], b: &[u8]) -> f64 {
@@ -119,31 +108,13 @@ fn movie_has_the_frames_size_rate_and_pictures_of_the_png_renders() {
     let movie = dir.path().join("movie.mp4");
     let m = movie.to_str().expect("utf-8 path");
 
-    let probe = ffmpeg_tool(
-        "ffprobe",
-        &[
-            "-v",
-            "error",
-            "-count_frames",
-            "-select_streams",
-            "v:0",
-            "-show_entries",
-            "stream=codec_name,width,height,r_frame_rate,avg_frame_rate,nb_read_frames",
-            "-show_entries",
-            "format=duration",
-            "-of",
-            "json",
-            m,
-        ],
+    let probe = probe_video(
+        &movie,
+        "codec_name,width,height,r_frame_rate,nb_read_frames",
     );
-    let json = String::from_utf8_lossy(&probe);
-    assert_eq!(json_field(&json, "codec_name"), "h264", "{json}");
-    assert_eq!(json_field(&json, "width"), "320", "{json}");
-    assert_eq!(json_field(&json, "height"), "240", "{json}");
-    assert_eq!(json_field(&json, "r_frame_rate"), "10/1", "{json}");
-    assert_eq!(json_field(&json, "nb_read_frames"), "6", "{json}");
-    let duration: f64 = json_field(&json, "duration").parse().expect("duration");
-    assert!((duration - 0.6).abs() < 0.02, "duration {duration}: {json}");
+    assert_eq!(probe, "h264,320,240,10/1,6", "ffprobe");
+    let duration = probe_duration(&movie);
+    assert!((duration - 0.6).abs() < 0.02, "duration {duration}");
 
     // The first (key) frame and the last (predicted) frame decoded to RGB against the PNG
     // sequence of the same run (same camera). 4:2:0 chroma alone limits these small pictures to
