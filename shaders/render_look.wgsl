@@ -34,27 +34,39 @@ fn depth_at(q: vec2<i32>) -> f32 {
     return textureLoad(depth_tex, clamp(q, lo, hi), 0);
 }
 
-// View-space position (Å) of the pixel centre `px` (render-target pixels) at depth `d`.
-fn view_position(px: vec2<f32>, d: f32) -> vec3<f32> {
-    let uv = (px - u.viewport.xy) / u.viewport.zw;
-    let h = u.inv_proj * vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, d, 1.0);
-    return h.xyz / h.w;
+// View-space position (Å) of the pixel centre `px` (render-target pixels) at distance `z` (Å)
+// from the eye: `proj` solved for x and y through the coefficients of `u.unproject_px` and
+// `u.unproject_z` (no divisions: a CPU driver divides far slower than it multiplies).
+fn view_at(px: vec2<f32>, z: f32) -> vec3<f32> {
+    let zv = -z;
+    let w = u.proj[2].w * zv + u.proj[3].w;
+    let xy = (px * u.unproject_px.xy + u.unproject_px.zw) * w - u.unproject_z.xy * zv
+        - u.unproject_z.zw;
+    return vec3<f32>(xy, zv);
 }
 
-// Size of one pixel in Å at distance `z` from the eye.
+// Size of one pixel in Å at distance `z` from the eye (the same at every distance when
+// orthographic).
 fn pixel_size(z: f32) -> f32 {
-    let px_per_a = u.proj[1][1] * 0.5 * u.viewport.w;
-    if (u.fog.w > 0.5) {
-        return 1.0 / px_per_a;
-    }
-    return z / px_per_a;
+    return abs(u.unproject_px.y) * select(z, 1.0, u.fog.w > 0.5);
 }
 
-// Depths of the four neighbours `k` pixels away: -x, +x, -y, +y.
+// smoothstep(e0, e0 + 1 / inv_width, x) with the width's inverse given (no division).
+fn ramp(x: f32, e0: f32, inv_width: f32) -> f32 {
+    let t = clamp((x - e0) * inv_width, 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// The four neighbours `k` pixels away (-x, +x, -y, +y): their depths, and their distances from
+// the eye (Å; the background at `FAR_AWAY`).
 struct Cross {
     k: i32,
     d: vec4<f32>,
+    z: vec4<f32>,
 };
+
+// Distance from the eye given to the background's pixels (Å).
+const FAR_AWAY: f32 = 1e30;
 
 fn cross_at(p: vec2<i32>, k: i32) -> Cross {
     var c: Cross;
@@ -64,6 +76,12 @@ fn cross_at(p: vec2<i32>, k: i32) -> Cross {
         depth_at(p + vec2<i32>(k, 0)),
         depth_at(p - vec2<i32>(0, k)),
         depth_at(p + vec2<i32>(0, k)),
+    );
+    c.z = select(
+        vec4<f32>(eye_distance(c.d.x), eye_distance(c.d.y), eye_distance(c.d.z),
+                  eye_distance(c.d.w)),
+        vec4<f32>(FAR_AWAY),
+        c.d >= vec4<f32>(1.0),
     );
     return c;
 }
@@ -78,26 +96,19 @@ fn crease(zm: f32, z0: f32, zp: f32, span: f32, jump: f32) -> f32 {
     let a = vec2<f32>(span, z0 - zm);
     let b = vec2<f32>(span, zp - z0);
     let cos_bend = dot(a, b) * inverseSqrt(dot(a, a) * dot(b, b));
-    return 1.0 - smoothstep(0.17, 0.54, cos_bend);
+    return 1.0 - ramp(cos_bend, 0.17, 1.0 / (0.54 - 0.17));
 }
 
-// Outline coverage 0..1 at a drawn pixel of depth `d0` (below 1: the drawn pipeline's depth
-// test passes no other) with neighbours `c` at the outline width.
-fn outline(d0: f32, c: Cross) -> f32 {
+// Outline coverage 0..1 at a drawn pixel at `z0` Å from the eye (the drawn pipeline's depth
+// test passes no empty pixel) with neighbours `c` at the outline width.
+fn outline(z0: f32, c: Cross) -> f32 {
     if (u.look.x <= 0.0) {
         return 0.0;
     }
-    let z0 = eye_distance(d0);
     let pix = pixel_size(z0);
     // A jump is more than 1.5 % of the depth plus a slope of 3 over the offset.
     let jump = 0.015 * z0 + 3.0 * f32(c.k) * pix;
-    let far = vec4<f32>(1e30);
-    let z = select(
-        vec4<f32>(eye_distance(c.d.x), eye_distance(c.d.y), eye_distance(c.d.z),
-                  eye_distance(c.d.w)),
-        far,
-        c.d >= vec4<f32>(1.0),
-    );
+    let z = c.z;
     // A farther neighbour across a jump, or the background: this pixel is on its silhouette.
     let farthest = max(max(z.x, z.y), max(z.z, z.w));
     var o = smoothstep(jump, 2.0 * jump, farthest - z0);
@@ -106,62 +117,74 @@ fn outline(d0: f32, c: Cross) -> f32 {
     return max(o, crease(z.z, z0, z.w, span, jump));
 }
 
-// Steps along the shadow ray.
+// Steps along the shadow ray, shared by the four pixels of a 2x2 quad: each pixel marches one
+// of them (its place in the quad picks which) and the quad takes the largest blocking of the
+// four (`quad_max`), so a pixel pays one depth load for a march of four.
 const SHADOW_STEPS: u32 = 4u;
 
-// Fraction 0..1 of the light blocked at pixel `p` of depth `d0` with neighbours `c`: the share
-// of the key light blocked, times the key light's share of the pixel's light. Written without
-// branches or early exits: a CPU driver runs a fragment shader's lanes together, and divergent
-// loops with texture loads cost it far more than the arithmetic saved.
-fn shadow(p: vec2<i32>, d0: f32, c: Cross, noise: f32) -> f32 {
+// Largest of `v` over the pixel's 2x2 quad, through fine derivatives (the differences between
+// the quad's columns and rows). Called in uniform control flow: the quad's pixels outside the
+// drawn area run as helpers and give their `v` too, so callers pass 0 there.
+fn quad_max(v: f32, corner: vec2<i32>) -> f32 {
+    // The other column's and the other row's values: +difference from the left / top pixel,
+    // -difference from the right / bottom one.
+    let sx = select(1.0, -1.0, corner.x == 1);
+    let sy = select(1.0, -1.0, corner.y == 1);
+    let across = v + sx * dpdxFine(v);
+    let below = v + sy * dpdyFine(v);
+    let diagonal = across + sy * dpdyFine(across);
+    return max(max(v, across), max(below, diagonal));
+}
+
+// The key light's share of the light at a drawn pixel, and how much of it the pixel's step of
+// the shadow march finds blocked (0..1; 0 on the background): `vec2(blocked, key share)`.
+// Written without branches or early exits: a CPU driver runs a fragment shader's lanes
+// together, and divergent loops with texture loads cost it far more than the arithmetic saved.
+fn shadow_step(p: vec2<i32>, d0: f32, c: Cross, noise: f32, step: u32) -> vec2<f32> {
     let centre = vec2<f32>(p) + 0.5;
-    let pos = view_position(centre, min(d0, 0.999999));
-    // Normal from the depth buffer: on each axis the side with the smaller depth step (chosen
-    // on the stored depths, so only two neighbours are turned into positions).
+    // Distances from the eye, the background's clamped to the far plane.
+    let far = u.misc.z;
+    let z0 = min(eye_distance(d0), far);
+    let pos = view_at(centre, z0);
+    // Normal from the depth buffer: on each axis the side with the smaller depth step.
     let k = f32(c.k);
-    let left = abs(d0 - c.d.x) < abs(c.d.y - d0);
-    let up = abs(d0 - c.d.z) < abs(c.d.w - d0);
+    let left = abs(z0 - c.z.x) < abs(c.z.y - z0);
+    let up = abs(z0 - c.z.z) < abs(c.z.w - z0);
     let sx = select(k, -k, left);
     let sy = select(k, -k, up);
-    let px = view_position(centre + vec2<f32>(sx, 0.0), select(c.d.y, c.d.x, left));
-    let py = view_position(centre + vec2<f32>(0.0, sy), select(c.d.w, c.d.z, up));
+    let px = view_at(centre + vec2<f32>(sx, 0.0), min(select(c.z.y, c.z.x, left), far));
+    let py = view_at(centre + vec2<f32>(0.0, sy), min(select(c.z.w, c.z.z, up), far));
     let dx = (px - pos) * sign(sx);
     let dy = (py - pos) * sign(sy);
     // Pixel rows grow downwards, view-space y upwards: dy x dx points towards the eye.
     let n = normalize(cross(dy, dx) + vec3<f32>(0.0, 0.0, 1e-12));
-    let l = normalize(u.light_dir.xyz);
+    let l = u.light_dir.xyz;
     let ndotl = max(dot(n, l), 0.0);
     let pix = pixel_size(-pos.z);
     let start = pos + n * (2.0 * pix + 0.05);
     // The ray leans off the light by up to about 8 degrees, per pixel (a soft penumbra).
-    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(l.x) > 0.9);
-    let a = normalize(cross(l, helper));
-    let b = cross(l, a);
     let jitter = vec2<f32>(noise, fract(noise * 1.618034)) * 2.0 - 1.0;
-    let dir = normalize(l + 0.1 * (jitter.x * a + jitter.y * b));
+    let dir = normalize(l + 0.1 * (jitter.x * u.light_across.xyz + jitter.y * u.light_up.xyz));
     let reach = u.look.z;
     let thickness = 0.5 * reach;
     let bias = 0.1 + pix;
-    var hit = 0.0;
-    for (var s = 0u; s < SHADOW_STEPS; s = s + 1u) {
-        let t = (f32(s) + fract(noise * 2.618034)) / f32(SHADOW_STEPS);
-        // Denser steps near the surface, where the contact shadows are.
-        let q = start + dir * (t * t * reach + pix);
-        let clip = u.proj * vec4<f32>(q, 1.0);
-        let uv = vec2<f32>(0.5, -0.5) * clip.xy / clip.w + 0.5;
-        let inside = all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0));
-        let qp = clamp(u.viewport.xy + uv * u.viewport.zw, u.viewport.xy,
-                       u.viewport.xy + u.viewport.zw - 1.0);
-        let dq = textureLoad(depth_tex, vec2<i32>(qp), 0);
-        // How far the drawn surface lies in front of the ray point (Å); background: never.
-        let behind = select(-q.z - eye_distance(dq), -1.0, dq >= 1.0 || !inside);
-        hit = max(hit, smoothstep(bias, 2.0 * bias, behind)
-            * (1.0 - smoothstep(0.5 * thickness, thickness, behind)));
-    }
+    let t = (f32(step) + fract(noise * 2.618034)) / f32(SHADOW_STEPS);
+    // Denser steps near the surface, where the contact shadows are.
+    let q = start + dir * (t * t * reach + pix);
+    let clip = u.proj * vec4<f32>(q, 1.0);
+    let uv = vec2<f32>(0.5, -0.5) * clip.xy * (1.0 / clip.w) + 0.5;
+    let inside = all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0));
+    let qp = clamp(u.viewport.xy + uv * u.viewport.zw, u.viewport.xy,
+                   u.viewport.xy + u.viewport.zw - 1.0);
+    let dq = textureLoad(depth_tex, vec2<i32>(qp), 0);
+    // How far the drawn surface lies in front of the ray point (Å); background: never.
+    let behind = select(-q.z - eye_distance(dq), -1.0, dq >= 1.0 || !inside);
+    let hit = ramp(behind, bias, 1.0 / bias)
+        * (1.0 - ramp(behind, 0.5 * thickness, 2.0 / thickness));
     // The key light's share of the light here (shade() in render_scene.wgsl: key 0.75 n.l over
     // about 0.3 of fill and ambient).
     let key = 0.75 * ndotl;
-    return select(hit * key / (key + 0.3), 0.0, d0 >= 1.0);
+    return select(vec2<f32>(hit, key / (key + 0.3)), vec2<f32>(0.0), d0 >= 1.0);
 }
 
 @fragment
@@ -178,10 +201,14 @@ fn fs_look(i: FullscreenOut) -> @location(0) vec4<f32> {
         // One set of neighbours for the outline and the shadow's normal.
         let c = cross_at(p, max(i32(round(u.look.x)), 1));
         if (LOOK_OUTLINE) {
-            o = outline(d0, c);
+            o = outline(eye_distance(d0), c);
         }
         if (LOOK_SHADOWS) {
-            lit = lit * (1.0 - u.look.y * shadow(p, d0, c, noise));
+            // This pixel's step of the quad's march (its place in the 2x2 quad).
+            let corner = p & vec2<i32>(1);
+            let step = u32(corner.x + 2 * corner.y);
+            let s = shadow_step(p, d0, c, noise, step);
+            lit = lit * (1.0 - u.look.y * quad_max(s.x, corner) * s.y);
         }
     }
     return vec4<f32>(u.outline_colour.rgb * o, 1.0 - lit * (1.0 - o));

@@ -77,6 +77,11 @@ pub struct PlayReport {
     /// The last frame drawn again with nothing else on the device, each draw waited for, in
     /// ms ([`DRAWS_ALONE`] draws after playback).
     pub draw_alone_ms: Vec<f64>,
+    /// When the look has outlines or shadows: the same draws with both off (the default
+    /// look's parts), each timed between two of `draw_alone_ms`'s, in ms. Paired in one
+    /// process, their ratios show the outlines' and shadows' cost with less of the machine's
+    /// noise than two runs compared.
+    pub draw_alone_plain_ms: Vec<f64>,
     /// Most GPU memory the surface engines held, in bytes.
     pub engine_bytes: u64,
     /// Triangles of the last shown frame (every surface together).
@@ -186,12 +191,28 @@ pub fn play(
     core.timeline.apply(TimelineCmd::SetPlaying(false));
     core.wait_idle(Duration::from_secs(600));
     view.sync(&mut core);
-    for _ in 0..DRAWS_ALONE {
+    let plain = RenderSettings {
+        outline_width: 0.0,
+        shadows: 0.0,
+        ..core.render
+    };
+    let paired = core.render.has_look_pass();
+    let mut timed_draw = |settings: &RenderSettings| -> Result<f64, PlayError> {
         view.redraw();
         let t = Instant::now();
-        view.draw(&core.camera, &core.render, opts.size);
+        view.draw(&core.camera, settings, opts.size);
         ctx.wait()?;
-        report.draw_alone_ms.push(ms(t.elapsed()));
+        Ok(ms(t.elapsed()))
+    };
+    if paired {
+        // The plain look's pipelines are made on first use: not timed.
+        timed_draw(&plain)?;
+    }
+    for _ in 0..DRAWS_ALONE {
+        report.draw_alone_ms.push(timed_draw(&core.render)?);
+        if paired {
+            report.draw_alone_plain_ms.push(timed_draw(&plain)?);
+        }
     }
     Ok(report)
 }

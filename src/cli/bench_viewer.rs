@@ -77,6 +77,28 @@ fn spread(v: &[f64]) -> String {
     format!("{:.2} ms (p95 {:.2})", at(0.5), at(0.95))
 }
 
+/// The outlines' and shadows' share of the draw: the draws alone with the look against the same
+/// draws with both off, interleaved (median of the pairs' ratios); a dash without them.
+fn look_cost(r: &PlayReport) -> String {
+    if r.draw_alone_plain_ms.is_empty() {
+        return "  look's extra cost  - (no outlines or shadows)".into();
+    }
+    let mut ratios: Vec<f64> = r
+        .draw_alone_ms
+        .iter()
+        .zip(&r.draw_alone_plain_ms)
+        .map(|(with, without)| with / without.max(1e-9) - 1.0)
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    format!(
+        "  look's extra cost  {:+.1} % over the same draw without outlines and shadows ({}; median of {} interleaved pairs)",
+        median * 100.0,
+        spread(&r.draw_alone_plain_ms),
+        ratios.len()
+    )
+}
+
 /// The report as aligned lines.
 fn format_report(
     r: &PlayReport,
@@ -112,6 +134,7 @@ fn format_report(
         format!("  draw, to GPU done  {}", spread(&r.draw_ms)),
         format!("  draw, host side    {}", spread(&r.draw_host_ms)),
         format!("  draw alone         {}", spread(&r.draw_alone_ms)),
+        look_cost(r),
         format!("  triangles          {}", r.triangles),
         format!("  peak host memory   {rss}"),
         format!(

@@ -19,6 +19,7 @@ pub(crate) mod setting_error;
 pub mod settings;
 pub mod shapes;
 pub(crate) mod targets;
+mod view_uniform;
 
 pub use atoms::atom_instances;
 pub use camera::{Camera, Projection, bounding_sphere};

@@ -2,115 +2,18 @@
 //! [`RenderTargets`]. [`Renderer::render`] is the one render-to-texture function; the window shows
 //! its output texture, and screenshots, movies and tests read it back (see `readback`).
 
-use glam::{Mat4, Vec3};
+use glam::Mat4;
 
-use super::camera::{Camera, Eye, Projection};
+use super::camera::{Camera, Eye};
 use super::pipelines::{CYLINDER_VERTICES, Pipelines};
 use super::scene::{GpuScene, SurfaceLayer};
 use super::screen_rect::{beyond_near_plane, covered_rect};
 
 /// Surfaces at least this opaque are drawn in the opaque pass.
 const OPAQUE: f32 = 0.999;
-use super::settings::{MAX_OUTLINE_PX, RenderSettings, Stereo};
+use super::settings::{RenderSettings, Stereo};
 use super::targets::RenderTargets;
-
-/// Per-view uniforms. Twin of `View` in shaders/render_view.wgsl.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct ViewUniform {
-    view: [[f32; 4]; 4],
-    proj: [[f32; 4]; 4],
-    light_dir: [f32; 4],
-    background: [f32; 4],
-    fog: [f32; 4],
-    surface: [f32; 4],
-    surface_colour: [f32; 4],
-    misc: [f32; 4],
-    ao: [f32; 4],
-    inv_proj: [[f32; 4]; 4],
-    viewport: [f32; 4],
-    look: [f32; 4],
-    outline_colour: [f32; 4],
-}
-
-const _: () = assert!(std::mem::size_of::<ViewUniform>() == 352);
-
-impl ViewUniform {
-    /// Uniforms for `camera` seen through `view` and `proj` (the camera's own matrices, or one
-    /// stereo eye's) into `viewport`.
-    fn new(
-        camera: &Camera,
-        (view, proj): (Mat4, Mat4),
-        viewport: [u32; 4],
-        settings: &RenderSettings,
-    ) -> Self {
-        let (near, far) = camera.clip_range();
-        // A progressive sample's sub-pixel camera offset: the projection moved in clip space.
-        let [jx, jy] = RenderSettings::sample_offset(settings.sample);
-        let proj = if settings.sample == 0 {
-            proj
-        } else {
-            let (w, h) = (viewport[2].max(1) as f32, viewport[3].max(1) as f32);
-            Mat4::from_translation(Vec3::new(2.0 * jx / w, 2.0 * jy / h, 0.0)) * proj
-        };
-        let bg = settings.background.linear_rgb();
-        // Depth cue from the front to the back of the scene's bounding sphere.
-        let r = camera.scene_radius.max(1.0);
-        let (cue_start, cue_end) = (camera.distance - r * 0.5, camera.distance + r);
-        let ortho = if camera.projection == Projection::Orthographic {
-            1.0
-        } else {
-            0.0
-        };
-        let light = Vec3::new(-0.4, 0.6, 0.7).normalize();
-        let oc = settings.outline_colour;
-        let (single, sc) = match settings.surface_colour {
-            Some(c) => (1.0, c),
-            None => (0.0, [1.0; 3]),
-        };
-        ViewUniform {
-            view: view.to_cols_array_2d(),
-            proj: proj.to_cols_array_2d(),
-            light_dir: [light.x, light.y, light.z, 0.0],
-            background: [bg[0], bg[1], bg[2], 1.0],
-            fog: [
-                cue_start,
-                cue_end,
-                settings.depth_cue.clamp(0.0, 1.0),
-                ortho,
-            ],
-            surface: [settings.surface_opacity.clamp(0.0, 1.0), single, 0.0, 0.0],
-            surface_colour: [sc[0], sc[1], sc[2], 1.0],
-            // w: the progressive sample's turn of the AO and shadow patterns (0 to 1).
-            misc: [
-                0.35,
-                near,
-                far,
-                (settings.sample as f32 * 0.618_034).fract(),
-            ],
-            ao: [
-                settings.ambient_occlusion.clamp(0.0, 1.0),
-                AO_RADIUS,
-                viewport[3] as f32,
-                0.0,
-            ],
-            inv_proj: proj.inverse().to_cols_array_2d(),
-            viewport: viewport.map(|v| v as f32),
-            look: [
-                settings.outline_width.clamp(0.0, MAX_OUTLINE_PX),
-                settings.shadows.clamp(0.0, 1.0),
-                SHADOW_REACH,
-                0.0,
-            ],
-            outline_colour: [oc[0], oc[1], oc[2], 1.0],
-        }
-    }
-}
-
-/// Reach of the screen-space ambient occlusion in Å (about one atom diameter).
-pub const AO_RADIUS: f32 = 3.0;
-/// How far towards the key light the screen-space shadow rays look for an occluder, in Å.
-pub const SHADOW_REACH: f32 = 12.0;
+use super::view_uniform::ViewUniform;
 
 /// Draws scenes on one wgpu device. Create once; reuse for every frame and image.
 pub struct Renderer {
