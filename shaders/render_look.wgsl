@@ -12,7 +12,8 @@
 // - soft shadows from the key light (`light_dir`, the light that shade() in render_scene.wgsl
 //   uses): a ray, turned per pixel within a cone of about 8 degrees, marches `look.z` Å from
 //   each pixel towards the light through the depth buffer in jittered steps; a ray that passes
-//   behind a nearer surface is blocked. Only what is on screen casts shadows.
+//   behind a nearer surface is blocked. Only what is on screen casts shadows. The four pixels
+//   of each 2x2 quad march one step each and share the result (`quad_max`).
 // Output: premultiplied outline colour and a coverage alpha; blended with (one, 1 - src alpha)
 // the image becomes dst * occlusion * shade * (1 - o) + colour * o. Drawn pixels stay opaque
 // and the background is never written, so a transparent background keeps alpha 0.

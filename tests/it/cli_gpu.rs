@@ -181,6 +181,21 @@ fn viewer_bench_plays_frames_offscreen() {
     assert!(gpu_mib > 0.0, "{}", run.stdout);
     let draw = field("draw alone");
     assert!(draw[0].parse::<f64>().unwrap() > 0.0, "{}", run.stdout);
+    // The default look has no outlines or shadows to time against.
+    assert_eq!(field("look's extra cost")[0], "-", "{}", run.stdout);
+
+    // With them, each draw is paired with the same draw without them.
+    let figure = mdsurf(dir.path(), &[&args[..], &["--look", "figure"]].concat());
+    assert_eq!(figure.code, 0, "{}", figure.stderr);
+    let line = figure
+        .stdout
+        .lines()
+        .find(|l| l.contains("look's extra cost"))
+        .unwrap_or_else(|| panic!("no look line in:\n{}", figure.stdout));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let percent: f64 = words[3].parse().unwrap();
+    assert!(percent.is_finite() && percent > -100.0, "{line}");
+    assert!(line.contains("median of 20 interleaved pairs"), "{line}");
 }
 
 /// Without a desktop session (`XDG_RUNTIME_DIR` unset, as over SSH, on clusters and in CI) the
