@@ -242,29 +242,80 @@ fn open_gif_part(path: &Path) -> Result<gif::Decoder<BufReader<File>>, String> {
         .map_err(|e| format!("{}: not a GIF movie: {e}", path.display()))
 }
 
+/// A GIF part's size (pixels), frame count and running time (hundredths of a second).
+struct PartTiming {
+    size: [u16; 2],
+    frames: u64,
+    centis: u64,
+}
+
+impl PartTiming {
+    /// Reads the part's header and every frame's delay (the pixels stay compressed).
+    fn read(path: &Path) -> Result<Self, String> {
+        let mut d = open_gif_part(path)?;
+        let size = [d.width(), d.height()];
+        let (mut frames, mut centis) = (0u64, 0u64);
+        while let Some(frame) = d
+            .read_next_frame()
+            .map_err(|e| format!("{}: frame {frames}: {e}", path.display()))?
+        {
+            frames += 1;
+            centis += u64::from(frame.delay);
+        }
+        Ok(PartTiming {
+            size,
+            frames,
+            centis,
+        })
+    }
+
+    /// Frames per second over the part (its delays are rounded on the running time, so the
+    /// whole part keeps the rate to 1 / 100 s).
+    fn fps(&self) -> f64 {
+        self.frames as f64 * 100.0 / (self.centis.max(1) as f64)
+    }
+
+    /// Whether `self` and `other` can be one movie's parts at one frame rate: the mean
+    /// delays agree within what rounding the running time to 1 / 100 s allows (under
+    /// 1 / frames hundredths each).
+    fn same_rate(&self, other: &PartTiming) -> bool {
+        let mean = |p: &PartTiming| p.centis as f64 / p.frames.max(1) as f64;
+        let allowed = 1.0 / self.frames.max(1) as f64 + 1.0 / other.frames.max(1) as f64;
+        (mean(self) - mean(other)).abs() <= allowed + 1e-9
+    }
+}
+
 /// Joins the GIF parts `paths` (in chunk order, checked by the caller to be complete) into
 /// `movie`, atomically: every frame is copied as it is (palette, delay, compressed pixels).
-/// Fails with one line naming the part when one is not a GIF or has another size than the
-/// first.
+/// Fails with one line naming the part when one is not a GIF, or has another size or frame
+/// rate than the first.
 pub fn merge_gif_parts(movie: &Path, paths: &[PathBuf]) -> Result<MovieSummary, String> {
     let Some(first) = paths.first() else {
         return Err(format!("{}: no parts to merge", movie.display()));
     };
-    let size = {
-        let d = open_gif_part(first)?;
-        [d.width(), d.height()]
-    };
+    let first_part = PartTiming::read(first)?;
+    let size = first_part.size;
     // Every part is checked before anything is written.
     for path in &paths[1..] {
-        let d = open_gif_part(path)?;
-        if [d.width(), d.height()] != size {
+        let part = PartTiming::read(path)?;
+        if part.size != size {
             return Err(format!(
-                "{}: {}x{} pixels, the first part {}x{}",
+                "{}: {}x{} pixels, {} has {}x{}",
                 path.display(),
-                d.width(),
-                d.height(),
+                part.size[0],
+                part.size[1],
+                first.display(),
                 size[0],
                 size[1]
+            ));
+        }
+        if !part.same_rate(&first_part) {
+            return Err(format!(
+                "{}: {:.2} frames/s, {} has {:.2} (--fps?)",
+                path.display(),
+                part.fps(),
+                first.display(),
+                first_part.fps()
             ));
         }
     }
@@ -309,6 +360,29 @@ mod tests {
         // A chunk's part continues the running time of the frames before it.
         let split: u64 = (100..300).map(|i| u64::from(delay_cs(i, 30.0))).sum();
         assert_eq!(split, running_cs(300, 30.0) - running_cs(100, 30.0));
+    }
+
+    /// The timing of the part holding frames `frames` of a movie at `fps`.
+    fn part(frames: std::ops::Range<usize>, fps: f64) -> PartTiming {
+        PartTiming {
+            size: [8, 8],
+            frames: frames.len() as u64,
+            centis: frames.map(|i| u64::from(delay_cs(i, fps))).sum(),
+        }
+    }
+
+    #[test]
+    fn parts_of_one_rate_agree_and_other_rates_do_not() {
+        // Every split of a 30 frames/s movie, however its delays round, is one rate.
+        for fps in [30.0, 24.0, 29.97, 50.0, 7.0] {
+            for cut in 1..40 {
+                let (a, b) = (part(0..cut, fps), part(cut..40, fps));
+                assert!(a.same_rate(&b) && b.same_rate(&a), "{fps} cut at {cut}");
+            }
+        }
+        assert!(!part(0..10, 30.0).same_rate(&part(10..20, 25.0)));
+        assert!(!part(0..3, 30.0).same_rate(&part(3..6, 10.0)));
+        assert!((part(0..30, 30.0).fps() - 30.0).abs() < 1e-9);
     }
 
     #[test]

@@ -96,6 +96,16 @@ fn gif_chunks_merge_into_the_bytes_of_one_run() {
     let r = mdsurf(d, &["merge", "again.gif"]);
     assert_one_line_failure(&r, "again.part-0001-of-0002.gif");
     assert!(!d.join("again.gif").exists());
+
+    // Parts rendered at other frame rates are named with both rates.
+    for (chunk, fps) in [("0/2", "30"), ("1/2", "10")] {
+        let r = render(d, &["--fps", fps, "--chunk", chunk, "-o", "mixed.gif"]);
+        assert_eq!(r.code, 0, "chunk {chunk}: {}", r.stderr);
+    }
+    let r = mdsurf(d, &["merge", "mixed.gif"]);
+    assert_one_line_failure(&r, "mixed.part-0001-of-0002.gif");
+    assert!(r.stderr.contains("10.00 frames/s"), "{}", r.stderr);
+    assert!(!d.join("mixed.gif").exists());
 }
 
 #[test]
