@@ -163,6 +163,12 @@ fn render_constants_match_rust() {
         "CYLINDER_SEGMENTS",
         Value::U32(pipelines::CYLINDER_SEGMENTS),
     )];
-    // The ambient occlusion's samples per pixel and the shadow ray's steps are the look's own.
-    check(&found, &twins, &[], &["SAMPLES", "SHADOW_STEPS"]);
+    // The ambient occlusion's samples per pixel, the shadow ray's steps and the outline's
+    // distance for the background are the look's own.
+    check(
+        &found,
+        &twins,
+        &[],
+        &["SAMPLES", "SHADOW_STEPS", "FAR_AWAY"],
+    );
 }
