@@ -155,25 +155,29 @@ fn shadow_step(p: vec2<i32>, d0: f32, c: Cross, noise: f32, step: u32) -> vec2<f
     let sy = select(k, -k, up);
     let px = view_at(centre + vec2<f32>(sx, 0.0), min(select(c.z.y, c.z.x, left), far));
     let py = view_at(centre + vec2<f32>(0.0, sy), min(select(c.z.w, c.z.z, up), far));
-    let dx = (px - pos) * sign(sx);
-    let dy = (py - pos) * sign(sy);
-    // Pixel rows grow downwards, view-space y upwards: dy x dx points towards the eye.
-    let n = normalize(cross(dy, dx) + vec3<f32>(0.0, 0.0, 1e-12));
+    // Pixel rows grow downwards, view-space y upwards: (py - pos) x (px - pos) points towards
+    // the eye when both steps go the positive way; each step taken the other way flips it.
+    let flip = sign(sx) * sign(sy);
+    let n = normalize(cross(py - pos, px - pos) * flip + vec3<f32>(0.0, 0.0, 1e-12));
     let l = u.light_dir.xyz;
     let ndotl = max(dot(n, l), 0.0);
     let pix = pixel_size(-pos.z);
     let start = pos + n * (2.0 * pix + 0.05);
     // The ray leans off the light by up to about 8 degrees, per pixel (a soft penumbra).
     let jitter = vec2<f32>(noise, fract(noise * 1.618034)) * 2.0 - 1.0;
-    let dir = normalize(l + 0.1 * (jitter.x * u.light_across.xyz + jitter.y * u.light_up.xyz));
+    // (Not normalised: at most 1 % longer than the light's unit vector.)
+    let dir = l + 0.1 * (jitter.x * u.light_across.xyz + jitter.y * u.light_up.xyz);
     let reach = u.look.z;
     let thickness = 0.5 * reach;
     let bias = 0.1 + pix;
     let t = (f32(step) + fract(noise * 2.618034)) / f32(SHADOW_STEPS);
     // Denser steps near the surface, where the contact shadows are.
     let q = start + dir * (t * t * reach + pix);
-    let clip = u.proj * vec4<f32>(q, 1.0);
-    let uv = vec2<f32>(0.5, -0.5) * clip.xy * (1.0 / clip.w) + 0.5;
+    // `proj * (q, 1)` with only the terms the projection has (see view_at).
+    let clip_xy = vec2<f32>(u.proj[0].x * q.x, u.proj[1].y * q.y) + u.proj[2].xy * q.z
+        + u.proj[3].xy;
+    let clip_w = u.proj[2].w * q.z + u.proj[3].w;
+    let uv = vec2<f32>(0.5, -0.5) * clip_xy * (1.0 / clip_w) + 0.5;
     let inside = all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0));
     let qp = clamp(u.viewport.xy + uv * u.viewport.zw, u.viewport.xy,
                    u.viewport.xy + u.viewport.zw - 1.0);
