@@ -137,15 +137,16 @@ fn quad_max(v: f32, corner: vec2<i32>) -> f32 {
     return max(max(v, across), max(below, diagonal));
 }
 
-// The key light's share of the light at a drawn pixel, and how much of it the pixel's step of
-// the shadow march finds blocked (0..1; 0 on the background): `vec2(blocked, key share)`.
+// The key light's share of the light at a drawn pixel of depth `d0`, `z` Å from the eye, and
+// how much of it the pixel's step of the shadow march finds blocked (0..1; 0 on the
+// background): `vec2(blocked, key share)`.
 // Written without branches or early exits: a CPU driver runs a fragment shader's lanes
 // together, and divergent loops with texture loads cost it far more than the arithmetic saved.
-fn shadow_step(p: vec2<i32>, d0: f32, c: Cross, noise: f32, step: u32) -> vec2<f32> {
+fn shadow_step(p: vec2<i32>, d0: f32, z: f32, c: Cross, noise: f32, step: u32) -> vec2<f32> {
     let centre = vec2<f32>(p) + 0.5;
     // Distances from the eye, the background's clamped to the far plane.
     let far = u.misc.z;
-    let z0 = min(eye_distance(d0), far);
+    let z0 = min(z, far);
     let pos = view_at(centre, z0);
     // Normal from the depth buffer: on each axis the side with the smaller depth step.
     let k = f32(c.k);
@@ -205,14 +206,16 @@ fn fs_look(i: FullscreenOut) -> @location(0) vec4<f32> {
     if (LOOK_OUTLINE || LOOK_SHADOWS) {
         // One set of neighbours for the outline and the shadow's normal.
         let c = cross_at(p, max(i32(round(u.look.x)), 1));
+        // The pixel's distance from the eye (Å), for both.
+        let z0 = eye_distance(d0);
         if (LOOK_OUTLINE) {
-            o = outline(eye_distance(d0), c);
+            o = outline(z0, c);
         }
         if (LOOK_SHADOWS) {
             // This pixel's step of the quad's march (its place in the 2x2 quad).
             let corner = p & vec2<i32>(1);
             let step = u32(corner.x + 2 * corner.y);
-            let s = shadow_step(p, d0, c, noise, step);
+            let s = shadow_step(p, d0, z0, c, noise, step);
             lit = lit * (1.0 - u.look.y * quad_max(s.x, corner) * s.y);
         }
     }
