@@ -57,6 +57,9 @@ pub enum ArgError {
     /// A volume (Å³) that is negative or not a number.
     #[error("'{0}': expected a volume in Å³, 0 or more")]
     Volume(String),
+    /// An area (Å²) that is negative or not a number.
+    #[error("'{0}': expected an area of 0 Å² or more")]
+    Area(String),
     /// A probe radius (Å) out of range or not a number.
     #[error("'{0}': expected a probe radius of 0.1 to 10 Å (1.4 for water)")]
     Probe(String),

@@ -7,7 +7,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::residues::{ResidueNames, topology_atoms};
-use super::{CavityEvent, ExposureTable, MeasureError, ResidueArea, TrackedCavity};
+use super::{
+    CavityEvent, ContactResidue, ExposureTable, MeasureError, ResidueArea, Side, TrackedCavity,
+};
 use crate::export::ExportError;
 use crate::export::atomic::write_atomic;
 use crate::model::Topology;
@@ -241,6 +243,61 @@ impl CavityEventCsv {
     }
 }
 
+/// The residues an interface buries, one row per contact residue and frame:
+/// `frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2`, side `A`
+/// or `B` (the two selections in the order given), `buried_A2` = alone minus in the complex
+/// (the residue's own loss, not halved), `time_ps` empty when the frame has no time.
+#[derive(Debug, Clone)]
+pub struct ContactCsv(Table);
+
+impl Default for ContactCsv {
+    fn default() -> Self {
+        ContactCsv(Table::new(
+            "frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2",
+        ))
+    }
+}
+
+impl ContactCsv {
+    /// An empty table.
+    pub fn new() -> ContactCsv {
+        ContactCsv::default()
+    }
+
+    /// Adds the contact residues of one frame (time in ps), measured on `topology`.
+    pub fn push(
+        &mut self,
+        frame: usize,
+        time_ps: Option<f64>,
+        topology: &Topology,
+        contacts: &[ContactResidue],
+    ) {
+        let time = time_ps.map(|t| t.to_string()).unwrap_or_default();
+        for c in contacts {
+            let names = c.residue.names(topology);
+            let side = match c.side {
+                Side::A => "A",
+                Side::B => "B",
+            };
+            let _ = writeln!(
+                self.0.rows,
+                "{frame},{time},{side},{},{},{},{:.3},{:.3},{:.3}",
+                field(names.chain_or_segment()),
+                names.resid,
+                field(names.resname.trim()),
+                c.residue.area,
+                c.area_complex,
+                c.buried
+            );
+        }
+    }
+
+    /// Writes the table to `path` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
+        self.0.write(path)
+    }
+}
+
 /// Labels (`A:LEU12`) of the residues of `atoms` (indices into an atom set holding the
 /// topology atoms `atom_indices`, `None`: all), once each, in topology order.
 pub fn lining_residues(
@@ -305,6 +362,44 @@ mod tests {
         assert_eq!(
             csv.0.rows,
             "4,\"a,b\",birth,7,\n4,\"a,b\",merge,2,3 5\n4,\"a,b\",split,1,8\n4,\"a,b\",death,6,\n"
+        );
+    }
+
+    #[test]
+    fn measure_contact_rows_name_side_chain_and_areas() {
+        let mut top = Topology::default();
+        for (name, chain, resid, index) in [("LEU", "A", 12, 0), ("ASP", "B", 25, 1)] {
+            top.names.push("CA");
+            top.residue_names.push(name);
+            top.chains.push(chain);
+            top.residue_ids.push(resid);
+            top.residue_index.push(index);
+        }
+        let contact = |side, atom: u32, alone: f64, with: f64| ContactResidue {
+            side,
+            residue: ResidueArea {
+                residue: atom,
+                atom,
+                atoms: 1,
+                area: alone,
+            },
+            area_complex: with,
+            buried: alone - with,
+        };
+        let mut csv = ContactCsv::new();
+        csv.push(
+            3,
+            Some(40.5),
+            &top,
+            &[
+                contact(Side::A, 0, 80.0, 12.5),
+                contact(Side::B, 1, 60.25, 59.0),
+            ],
+        );
+        csv.push(4, None, &top, &[]);
+        assert_eq!(
+            csv.0.rows,
+            "3,40.5,A,A,12,LEU,80.000,12.500,67.500\n3,40.5,B,B,25,ASP,60.250,59.000,1.250\n"
         );
     }
 

@@ -75,6 +75,8 @@ fn the_protease_dimer_buries_area_and_names_its_contacts() {
             "protein and chain B",
             "--interface-csv",
             "i.csv",
+            "--interface-residues",
+            "r.csv",
         ],
     );
     assert_eq!(run.code, 0, "{}", run.stderr);
@@ -99,6 +101,83 @@ fn the_protease_dimer_buries_area_and_names_its_contacts() {
         let n = contacts.split_whitespace().count();
         assert!(n > 10, "{side}: {contacts}");
     }
+    // The residue table: one row per contact residue, named as in contacts_a/b, on its
+    // selection's chain, each losing more than the default 1 Å².
+    let residues = Csv::read(&dir.path().join("r.csv"));
+    let (sides, chains) = (residues.text_col("side"), residues.text_col("chain"));
+    let (ids, names) = (residues.text_col("resid"), residues.text_col("resname"));
+    for (side, column) in [("A", "contacts_a"), ("B", "contacts_b")] {
+        let listed: Vec<String> = (0..residues.rows.len())
+            .filter(|&r| sides[r] == side)
+            .inspect(|&r| assert_eq!(chains[r], side, "row {r}"))
+            .map(|r| format!("{}:{}{}", chains[r], names[r], ids[r]))
+            .collect();
+        let named: Vec<String> = csv.text_col(column)[0]
+            .split_whitespace()
+            .map(str::to_string)
+            .collect();
+        assert_eq!(listed, named, "side {side}");
+    }
+    let (alone, with, lost) = (
+        residues.col("area_alone_A2"),
+        residues.col("area_complex_A2"),
+        residues.col("buried_A2"),
+    );
+    for r in 0..lost.len() {
+        assert!(lost[r] > 1.0, "row {r}: {}", lost[r]);
+        assert!((alone[r] - with[r] - lost[r]).abs() < 2e-3, "row {r}");
+    }
+    // With every losing residue counted, the rows' losses hold at least both sides' loss,
+    // 2 x buried (residues that gain area in the complex are left out), and more rows; a
+    // higher threshold keeps only the rows above it.
+    let by_threshold = |threshold: &str, out: &str| {
+        let run = mdsurf(
+            dir.path(),
+            &[
+                "surface",
+                &pdb,
+                "--backend",
+                "cpu",
+                "--interface",
+                "protein and chain A",
+                "protein and chain B",
+                "--contact-threshold",
+                threshold,
+                "--interface-residues",
+                out,
+                "-q",
+            ],
+        );
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        Csv::read(&dir.path().join(out)).col("buried_A2")
+    };
+    let all = by_threshold("0", "r0.csv");
+    let sum: f64 = all.iter().sum();
+    assert!(all.len() > lost.len(), "{} vs {}", all.len(), lost.len());
+    assert!(sum >= 2.0 * buried - 0.1, "{sum} vs 2 x {buried}");
+    assert!(sum < 2.0 * buried * 1.2, "{sum} vs 2 x {buried}");
+    let large = by_threshold("20", "r20.csv");
+    assert!(!large.is_empty() && large.len() < lost.len());
+    assert!(large.iter().all(|l| *l > 20.0));
+    let mut expected: Vec<f64> = lost.iter().copied().filter(|l| *l > 20.0).collect();
+    let mut got = large.clone();
+    expected.sort_by(f64::total_cmp);
+    got.sort_by(f64::total_cmp);
+    assert_eq!(got, expected);
+    let run = mdsurf(
+        dir.path(),
+        &[
+            "surface",
+            &pdb,
+            "--interface",
+            "chain A",
+            "chain B",
+            "--contact-threshold",
+            "-2",
+        ],
+    );
+    assert_eq!(run.code, 2);
+    assert!(run.last_line().contains("'-2'"), "{}", run.stderr);
     // A side that picks nothing: one line naming it, no file.
     let run = mdsurf(
         dir.path(),
