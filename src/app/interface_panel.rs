@@ -30,8 +30,9 @@ pub struct InterfaceRow {
     pub area_ab: f64,
     /// `(area_a + area_b - area_ab) / 2` (Å²).
     pub buried: f64,
-    /// Contact residues of A, then of B (`A:LEU23`).
-    pub contacts: [Vec<String>; 2],
+    /// Contact residues of A, then of B, in topology order: label (`A:LEU23`) and the area it
+    /// loses from alone to the complex (Å²).
+    pub contacts: [Vec<(String, f64)>; 2],
 }
 
 /// What the section holds between frames.
@@ -131,11 +132,11 @@ impl InterfaceDraft {
                 let m = sides
                     .measure(topology, &data, CONTACT_THRESHOLD)
                     .map_err(|e| format!("frame {frame}: {e}"))?;
-                let labels = |side: Side| -> Vec<String> {
+                let labels = |side: Side| -> Vec<(String, f64)> {
                     m.contacts
                         .iter()
                         .filter(|c| c.side == side)
-                        .map(|c| c.residue.names(topology).label())
+                        .map(|c| (c.residue.names(topology).label(), c.buried))
                         .collect()
                 };
                 Ok(InterfaceRow {
@@ -204,23 +205,38 @@ fn interface_body(ui: &mut egui::Ui, core: &AppCore, draft: &mut InterfaceDraft)
             row.buried, row.area_a, row.area_b, row.area_ab
         ));
         for (name, contacts) in ["A", "B"].iter().zip(&row.contacts) {
-            let shown: Vec<&str> = contacts.iter().take(12).map(String::as_str).collect();
-            let more = contacts.len().saturating_sub(shown.len());
-            let tail = if more > 0 {
-                format!(" and {more} more")
-            } else {
-                String::new()
-            };
-            ui.label(format!(
-                "{} contact residues of {name}: {}{tail}",
-                contacts.len(),
-                shown.join(" ")
-            ));
+            ui.label(contacts_line(name, contacts));
         }
     }
     if !draft.rows.is_empty() {
         buried_plot(ui, &draft.rows, current, core.timeline.len);
     }
+}
+
+/// How many residues to name per side.
+const NAMED_CONTACTS: usize = 12;
+
+/// One side's contact residues, those that lose most first, each with the area it loses (Å²):
+/// `21 contact residues of A (Å² lost): A:LYS353 63.4, A:HIS34 46.9, … and 9 more`.
+pub fn contacts_line(side: &str, contacts: &[(String, f64)]) -> String {
+    let mut ranked: Vec<&(String, f64)> = contacts.iter().collect();
+    ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let named: Vec<String> = ranked
+        .iter()
+        .take(NAMED_CONTACTS)
+        .map(|(label, lost)| format!("{label} {lost:.1}"))
+        .collect();
+    let more = contacts.len().saturating_sub(named.len());
+    let tail = if more > 0 {
+        format!(" and {more} more")
+    } else {
+        String::new()
+    };
+    format!(
+        "{} contact residues of {side} (Å² lost): {}{tail}",
+        contacts.len(),
+        named.join(", ")
+    )
 }
 
 /// The buried area (Å²) against frame, the shown frame marked.
@@ -249,4 +265,26 @@ fn buried_plot(
         egui::FontId::monospace(10.0),
         colour,
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contacts_are_named_most_buried_first_with_their_loss() {
+        let contacts: Vec<(String, f64)> = (0..15)
+            .map(|i| (format!("A:GLY{i}"), f64::from(i) * 2.5))
+            .collect();
+        let line = contacts_line("A", &contacts);
+        assert!(
+            line.starts_with("15 contact residues of A (Å² lost): A:GLY14 35.0, A:GLY13 32.5, "),
+            "{line}"
+        );
+        assert!(line.ends_with("A:GLY3 7.5 and 3 more"), "{line}");
+        assert_eq!(
+            contacts_line("B", &contacts[1..3]),
+            "2 contact residues of B (Å² lost): A:GLY2 5.0, A:GLY1 2.5"
+        );
+    }
 }

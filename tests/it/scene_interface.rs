@@ -10,7 +10,7 @@ use std::time::Duration;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use glam::Vec3;
-use mdsurf::app::interface_panel::{InterfaceDraft, WATER_PROBE, interface_ui};
+use mdsurf::app::interface_panel::{self, InterfaceDraft, WATER_PROBE, interface_ui};
 use mdsurf::app::source::MemorySource;
 use mdsurf::app::timeline::TimelineCmd;
 use mdsurf::app::worker::Worker;
@@ -96,6 +96,12 @@ fn interface_panel_measures_each_frame_shown() {
     assert_eq!(row.buried, want.result.buried);
     assert!(row.buried > 800.0, "{}", row.buried);
     assert!(row.contacts[0].len() > 10, "{:?}", row.contacts);
+    // Each contact with the area it loses, as the library's contact residues.
+    let lost: Vec<f64> = want.contacts.iter().map(|c| c.buried).collect();
+    let shown: Vec<f64> = row.contacts.iter().flatten().map(|c| c.1).collect();
+    assert_eq!(shown, lost);
+    let line = interface_panel::contacts_line("A", &row.contacts[0]);
+    assert!(h.query_by_label_contains(&line).is_some(), "{line}");
     let label = format!("frame 0: buried {:.1} Å²", row.buried);
     assert!(h.query_by_label_contains(&label).is_some(), "{label}");
     // Frame 1, chain B far away: nothing buried; the plot has both frames.
