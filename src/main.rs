@@ -32,7 +32,7 @@ enum Command {
     Bench(cli::bench::BenchArgs),
     /// Count (and list) the atoms a selection matches in one frame.
     Select(cli::select::SelectArgs),
-    /// Join the parts of a chunked run (--chunk): stats into one CSV sorted by frame, movies into one MP4 or GIF.
+    /// Join the parts of a chunked run (--chunk): stats and measurement tables into one CSV in frame order, movies into one MP4 or GIF.
     Merge(cli::merge::MergeArgs),
 }
 

@@ -9,6 +9,7 @@ use std::ops::Range;
 use std::str::FromStr;
 
 use anyhow::{Result, bail};
+use mdsurf::export::stats_merge::chunk_block;
 
 use super::arg_error::ArgError;
 
@@ -57,10 +58,7 @@ impl Chunk {
     /// whose sizes differ by at most one, the larger ones first (empty when `len < count` and
     /// this is one of the last blocks).
     pub fn block(&self, len: usize) -> Range<usize> {
-        let (base, extra) = (len / self.count, len % self.count);
-        let start = self.index * base + self.index.min(extra);
-        let size = base + usize::from(self.index < extra);
-        start..start + size
+        chunk_block(self.index, self.count, len)
     }
 }
 

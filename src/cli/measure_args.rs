@@ -10,6 +10,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
+use mdsurf::export::stats_merge::{PartHeader, part_path};
 use mdsurf::measure::{
     self, AtomCsv, CavityCsv, CavityEventCsv, CavityOptions, CavityTracker, ContactCsv,
     ExposureTable, ResidueCsv, Side,
@@ -88,6 +89,17 @@ impl MeasureArgs {
         self.cavities.is_some() || self.cavity_events.is_some()
     }
 
+    /// Fails with one line when `--chunk` comes with a table that needs every frame in one
+    /// process: cavity ids are tracked from frame to frame.
+    pub fn check_chunk(&self, chunked: bool) -> Result<()> {
+        if chunked && self.tracks_cavities() {
+            bail!(
+                "--chunk: cavity ids are tracked from frame to frame in one process: run --cavities and --cavity-events without --chunk (the per-residue, per-atom and interface tables can be split)"
+            );
+        }
+        Ok(())
+    }
+
     /// The output files asked for.
     pub fn outputs(&self) -> Vec<&Path> {
         [
@@ -147,6 +159,8 @@ pub struct Measurer {
     trackers: HashMap<String, CavityTracker>,
     exposure: HashMap<String, ExposureTable>,
     interface: Option<Interface>,
+    /// With `--chunk`: the part header; each table goes to its part file.
+    part: Option<PartHeader>,
 }
 
 impl Measurer {
@@ -204,7 +218,79 @@ impl Measurer {
             trackers: HashMap::new(),
             exposure: HashMap::new(),
             interface,
+            part: None,
         })
+    }
+
+    /// Writes the tables as the parts of chunk `header` (`FILE.part-IIII-of-NNNN.csv`, the
+    /// header their first line), which `mdsurf merge FILE.csv` joins.
+    pub fn set_part(&mut self, header: PartHeader) {
+        self.part = Some(header);
+    }
+
+    /// True when the per-residue exposure is asked for: its table of residues alone is built
+    /// from the run's first frame (see [`Measurer::prime_exposure`]).
+    pub fn needs_exposure(&self) -> bool {
+        self.args.per_residue.is_some()
+    }
+
+    /// Builds the exposure tables from `computed`, the run's first frame, without adding rows,
+    /// so that a chunk that starts later gives the exposures one process would.
+    pub fn prime_exposure(
+        &mut self,
+        topology: &Topology,
+        frame: &Frame,
+        computed: &SceneFrame,
+        scene: &SceneEngine,
+    ) -> Result<()> {
+        for layer in computed.surfaces() {
+            let indices = layer_atoms(scene, layer, frame)?;
+            let (atoms, params) = measured_atoms(layer);
+            self.exposure_table(
+                topology,
+                &layer.rep.name,
+                indices.as_deref(),
+                &atoms,
+                &params,
+            )
+            .with_context(|| {
+                format!(
+                    "frame {}: representation '{}'",
+                    computed.frame, layer.rep.name
+                )
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Builds representation `name`'s exposure table unless it has one.
+    fn exposure_table(
+        &mut self,
+        topology: &Topology,
+        name: &str,
+        atom_indices: Option<&[u32]>,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+    ) -> Result<()> {
+        if self.exposure.contains_key(name) {
+            return Ok(());
+        }
+        if !measure::names_residues(topology, atom_indices) {
+            bail!(
+                "--per-residue: its atoms are in no residue (the file names none, as LAMMPS \
+                 dumps and XYZ files do): use --per-atom"
+            );
+        }
+        let mut engine = CpuEngine::new();
+        let table = ExposureTable::from_isolated_residues(
+            &mut engine,
+            topology,
+            atom_indices,
+            atoms,
+            params,
+        )?;
+        self.exposure.insert(name.to_string(), table);
+        Ok(())
     }
 
     /// Measures one computed frame (`frame`: its transformed coordinates); `scene` gives each
@@ -246,14 +332,7 @@ impl Measurer {
         layer: &LayerResult,
         atom_indices: Option<&[u32]>,
     ) -> Result<()> {
-        let p = &layer.particles;
-        let atoms = AtomSet {
-            positions: &p.positions,
-            radii: &p.radii,
-            colours: None,
-        };
-        // The parameters the engine computed with (refined vertices run at quality max).
-        let params = layer.rep.vertices.effective(&layer.rep.params());
+        let (atoms, params) = measured_atoms(layer);
         let name = &layer.rep.name;
         if self.args.per_residue.is_some() || self.args.per_atom.is_some() {
             let areas = measure::atom_areas_of(&layer.output, &atoms, &params)?;
@@ -262,26 +341,8 @@ impl Measurer {
                     .push(index, name, topology, atom_indices, &areas)?;
             }
             if self.args.per_residue.is_some() {
-                if !self.exposure.contains_key(name)
-                    && !measure::names_residues(topology, atom_indices)
-                {
-                    bail!(
-                        "--per-residue: its atoms are in no residue (the file names none, as \
-                         LAMMPS dumps and XYZ files do): use --per-atom"
-                    );
-                }
+                self.exposure_table(topology, name, atom_indices, &atoms, &params)?;
                 let residues = measure::residue_areas(topology, atom_indices, &areas)?;
-                if !self.exposure.contains_key(name) {
-                    let mut engine = CpuEngine::new();
-                    let table = ExposureTable::from_isolated_residues(
-                        &mut engine,
-                        topology,
-                        atom_indices,
-                        &atoms,
-                        &params,
-                    )?;
-                    self.exposure.insert(name.clone(), table);
-                }
                 self.residues
                     .push(index, name, topology, &residues, self.exposure.get(name));
             }
@@ -314,30 +375,37 @@ impl Measurer {
         Ok(())
     }
 
-    /// Writes every table asked for (atomically).
+    /// Writes every table asked for (atomically; with `--chunk`, to its part file).
     pub fn finish(self) -> Result<()> {
         let a = &self.args;
-        if let Some(path) = &a.per_residue {
-            self.residues.write(path)?;
+        let first = self.part.as_ref().map(PartHeader::line);
+        let first = first.as_deref();
+        let path = |path: &PathBuf| match &self.part {
+            Some(h) => part_path(path, h.index, h.count),
+            None => path.clone(),
+        };
+        if let Some(p) = &a.per_residue {
+            self.residues.write(&path(p), first)?;
         }
-        if let Some(path) = &a.per_atom {
-            self.atoms.write(path)?;
+        if let Some(p) = &a.per_atom {
+            self.atoms.write(&path(p), first)?;
         }
-        if let Some(path) = &a.cavities {
-            self.cavities.write(path)?;
+        if let Some(p) = &a.cavities {
+            self.cavities.write(&path(p), first)?;
         }
-        if let Some(path) = &a.cavity_events {
-            self.cavity_events.write(path)?;
+        if let Some(p) = &a.cavity_events {
+            self.cavity_events.write(&path(p), first)?;
         }
-        if let (Some(path), Some(interface)) = (&a.interface_csv, &self.interface) {
+        if let (Some(p), Some(interface)) = (&a.interface_csv, &self.interface) {
             let text = format!(
-                "frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,contacts_a,contacts_b\n{}",
+                "{}frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,contacts_a,contacts_b\n{}",
+                first.map(|l| format!("{l}\n")).unwrap_or_default(),
                 interface.rows
             );
-            mdsurf::export::write_atomic(path, |w| w.write_all(text.as_bytes()))?;
+            mdsurf::export::write_atomic(&path(p), |w| w.write_all(text.as_bytes()))?;
         }
-        if let (Some(path), Some(interface)) = (&a.interface_residues, &self.interface) {
-            interface.residues.write(path)?;
+        if let (Some(p), Some(interface)) = (&a.interface_residues, &self.interface) {
+            interface.residues.write(&path(p), first)?;
         }
         Ok(())
     }
@@ -380,6 +448,18 @@ impl Interface {
             result.buried, result.area_a, result.area_b, result.area_complex
         ))
     }
+}
+
+/// The atoms `layer`'s surface was computed from, and the parameters the engine computed it
+/// with (refined vertices run at quality max).
+fn measured_atoms(layer: &LayerResult) -> (AtomSet<'_>, SurfaceParams) {
+    let p = &layer.particles;
+    let atoms = AtomSet {
+        positions: &p.positions,
+        radii: &p.radii,
+        colours: None,
+    };
+    (atoms, layer.rep.vertices.effective(&layer.rep.params()))
 }
 
 /// The topology atoms behind `layer`'s particles (`None`: every atom); beads have none.

@@ -1,23 +1,26 @@
 //! `mdsurf merge STATS.csv`: joins the stats parts that the chunks of a job array wrote
 //! (`STATS.part-IIII-of-NNNN.csv`, from `--chunk`) into `STATS.csv`, sorted by frame; refuses
-//! parts of runs with other parameters and names missing or duplicated frames in one line. The
-//! work is [`mdsurf::export::stats_merge::merge_parts`]. `mdsurf merge MOVIE.mp4` (or `.gif`)
-//! joins the movie parts of `render --chunk` without re-encoding
-//! ([`mdsurf::export::movie_merge::merge_movie_parts`]).
+//! parts of runs with other parameters and names missing or duplicated frames in one line
+//! ([`mdsurf::export::stats_merge::merge_parts`]). A measurement table's parts (`--per-residue`,
+//! `--per-atom`, `--interface-csv`, `--interface-residues`) are joined in chunk order
+//! ([`mdsurf::export::table_merge::merge_csv_parts`], which tells the two apart by their
+//! columns). `mdsurf merge MOVIE.mp4` (or `.gif`) joins the movie parts of `render --chunk`
+//! without re-encoding ([`mdsurf::export::movie_merge::merge_movie_parts`]).
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 use mdsurf::export::movie::is_movie;
 use mdsurf::export::movie_merge::merge_movie_parts;
-use mdsurf::export::stats_merge::merge_parts;
+use mdsurf::export::table_merge::merge_csv_parts;
 
 /// Arguments of `mdsurf merge`.
 #[derive(clap::Args, Debug)]
 pub struct MergeArgs {
-    /// The merged stats CSV or MP4/GIF movie; its parts are `STATS.part-IIII-of-NNNN.csv` (or
-    /// `MOVIE.part-IIII-of-NNNN.mp4` / `.gif`, joined without re-encoding) beside it.
-    #[arg(value_name = "STATS.csv|MOVIE.mp4|MOVIE.gif")]
+    /// The merged stats or measurement CSV, or MP4/GIF movie; its parts are
+    /// `STATS.part-IIII-of-NNNN.csv` (or `MOVIE.part-IIII-of-NNNN.mp4` / `.gif`, joined without
+    /// re-encoding) beside it.
+    #[arg(value_name = "TABLE.csv|MOVIE.mp4|MOVIE.gif")]
     pub stats: PathBuf,
     /// Delete the part files after a successful merge.
     #[arg(long)]
@@ -44,7 +47,7 @@ pub fn run(args: MergeArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let summary = merge_parts(&args.stats)?;
+    let summary = merge_csv_parts(&args.stats)?;
     remove_parts(&args, &summary.parts);
     if !args.quiet {
         eprintln!(

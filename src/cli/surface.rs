@@ -70,7 +70,8 @@ pub struct SurfaceArgs {
     /// Do one block of the selected frames: I/N (0-based I of N contiguous blocks) or `slurm`
     /// (I = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, N = SLURM_ARRAY_TASK_COUNT). Meshes keep
     /// the global frame index; --stats goes to STATS.part-IIII-of-NNNN.csv (join them with
-    /// `mdsurf merge STATS.csv`).
+    /// `mdsurf merge STATS.csv`), and so do the per-residue, per-atom and interface tables
+    /// (not the cavities').
     #[arg(long, value_name = "I/N|slurm")]
     pub chunk: Option<ChunkSpec>,
     /// Leave the ms_* timing columns of --stats empty, so that two runs (or a merged chunked
@@ -108,11 +109,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         check_parent_dir(path)?;
         refuse_shared_paths(None, Some(path), &inputs)?;
     }
-    if chunk.is_some() && !args.measure.outputs().is_empty() {
-        bail!(
-            "--chunk writes stats parts only: run the per-residue, cavity and interface tables in one process"
-        );
-    }
+    args.measure.check_chunk(chunk.is_some())?;
 
     let live = args.live.options(args.input.traj.as_deref())?;
     if live.is_some() && chunk.is_some() {
@@ -233,22 +230,36 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         Some(c) => frames[c.block(frames.len())].to_vec(),
         None => frames,
     };
-    let mut stats = match (&args.stats, chunk) {
+    let part = chunk.map(|c| PartHeader {
+        index: c.index,
+        count: c.count,
+        selection,
+        params: part_params(&args, &params, engine.name()),
+    });
+    let mut stats = match (&args.stats, &part) {
         (None, _) => None,
         (Some(path), None) => Some(StatsWriter::create(path)?),
-        (Some(path), Some(c)) => {
-            let header = PartHeader {
-                index: c.index,
-                count: c.count,
-                selection,
-                params: part_params(&args, &params, engine.name()),
-            };
-            Some(StatsWriter::create_with(
-                &part_path(path, c.index, c.count),
-                Some(&header),
-            )?)
-        }
+        (Some(path), Some(h)) => Some(StatsWriter::create_with(
+            &part_path(path, h.index, h.count),
+            Some(h),
+        )?),
     };
+    let first = Arc::new(first);
+    if let Some(mut header) = part {
+        // The tables also depend on the measurement flags.
+        let digest = md5::compute(format!("{:?}", args.measure).as_bytes());
+        header
+            .params
+            .push(("measure".into(), format!("{digest:x}")[..16].to_string()));
+        // A later chunk builds the exposure tables from the run's first frame, as one process.
+        if header.index > 0 && measurer.needs_exposure() {
+            let computed = engine
+                .frame(topology, first_index, &first, &layers)
+                .map_err(|e| anyhow!("{files}: {e}"))?;
+            measurer.prime_exposure(topology, &first, &computed, &engine)?;
+        }
+        measurer.set_part(header);
+    }
     if let Some(stats) = stats.as_mut() {
         stats.set_timings(!args.no_timings);
     }
@@ -268,7 +279,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     let progress = Progress::new(length, args.quiet, args.verbose);
     // The loop's first frame is usually the one read above: it is taken, not read again (a
     // million atoms: a copy and a check of every position).
-    let mut first = Some(Arc::new(first));
+    let mut first = Some(first);
     let t_all = Instant::now();
     let mut failure = None;
     let mut ok_frames = 0usize;

@@ -17,6 +17,7 @@ pub(crate) mod ply;
 pub(crate) mod stats;
 pub mod stats_merge;
 pub(crate) mod stl;
+pub mod table_merge;
 #[cfg(feature = "app")]
 pub mod video;
 

@@ -84,11 +84,30 @@ impl PartHeader {
         })
     }
 
+    /// True when `frame` is one of this chunk's frames: its block of the run's selection
+    /// ([`chunk_block`]).
+    pub fn holds(&self, frame: usize) -> bool {
+        let [a, b, step] = self.selection;
+        let len = b.saturating_sub(a).div_ceil(step);
+        let block = chunk_block(self.index, self.count, len);
+        frame >= a && (frame - a).is_multiple_of(step) && block.contains(&((frame - a) / step))
+    }
+
     /// Every frame index of the whole run (at most [`MAX_RUN_FRAMES`]).
     pub fn frames(&self) -> Vec<usize> {
         let [a, b, s] = self.selection;
         (a..b).step_by(s).collect()
     }
+}
+
+/// The positions in a selection of `len` frames that chunk `index` of `count` does:
+/// contiguous blocks whose sizes differ by at most one, the larger ones first (empty when
+/// `len < count` and this is one of the last blocks).
+pub fn chunk_block(index: usize, count: usize, len: usize) -> std::ops::Range<usize> {
+    let (base, extra) = (len / count.max(1), len % count.max(1));
+    let start = index * base + index.min(extra);
+    let size = base + usize::from(index < extra);
+    start..start + size
 }
 
 /// Most frames a run's header may name (a billion-frame selection is damage, not a run).
@@ -332,27 +351,45 @@ pub(crate) fn find_parts(stats: &Path) -> Result<Vec<(usize, usize, PathBuf)>, M
     Ok(parts)
 }
 
-/// Reads one part: its header and rows.
-fn read_part(path: &Path) -> Result<(PartHeader, Vec<Row>), MergeError> {
+/// A part file as read: its header, its column line, and its data rows, each with its line
+/// number in the file (from 1), its frame (the first field) and its fields re-quoted and joined
+/// by commas.
+pub(crate) struct PartRows {
+    /// The first line.
+    pub header: PartHeader,
+    /// The second line.
+    pub columns: String,
+    /// (line, frame, the row as CSV text, the second field).
+    pub rows: Vec<PartRow>,
+}
+
+/// One data row of a part file.
+pub(crate) struct PartRow {
+    /// Line in the file, from 1.
+    pub line: usize,
+    /// The first field, a frame index.
+    pub frame: usize,
+    /// The second field (the representation of a stats row).
+    pub second: String,
+    /// The fields, quoted where needed, joined by commas.
+    pub text: String,
+}
+
+/// Reads a part file (`what` names its kind in messages): the header line, the column line,
+/// and the rows read as CSV (so quoted names round-trip), each with as many fields as the
+/// columns and a frame index first. Errors name the file and line.
+pub(crate) fn read_part_rows(path: &Path, what: &str) -> Result<PartRows, MergeError> {
     let text = fs::read_to_string(path).map_err(|e| ExportError::io(path, e))?;
     let bad = |line: usize, what: String| {
         MergeError::Invalid(format!("{}:{line}: {what}", path.display()))
     };
     let mut lines = text.lines();
-    let header = lines.next().and_then(PartHeader::parse).ok_or_else(|| {
-        bad(
-            1,
-            format!("not a stats part (no '{PART_MARK} ...' first line)"),
-        )
-    })?;
-    let columns = STATS_COLUMNS.join(",");
-    if lines.next() != Some(columns.as_str()) {
-        return Err(bad(
-            2,
-            "the columns differ from this mdsurf's stats columns".into(),
-        ));
-    }
-    // The data rows (after the two header lines), read as CSV so quoted names round-trip.
+    let header = lines
+        .next()
+        .and_then(PartHeader::parse)
+        .ok_or_else(|| bad(1, format!("not a {what} (no '{PART_MARK} ...' first line)")))?;
+    let columns = lines.next().unwrap_or("").to_string();
+    let width = columns.split(',').count();
     let body_start = text
         .match_indices('\n')
         .nth(1)
@@ -360,6 +397,7 @@ fn read_part(path: &Path) -> Result<(PartHeader, Vec<Row>), MergeError> {
         .unwrap_or(text.len());
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
+        .flexible(true)
         .from_reader(&text.as_bytes()[body_start..]);
     let mut rows = Vec::new();
     for record in reader.records() {
@@ -368,28 +406,58 @@ fn read_part(path: &Path) -> Result<(PartHeader, Vec<Row>), MergeError> {
             bad(line, format!("bad CSV row: {e}"))
         })?;
         let line = record.position().map_or(0, |p| p.line() as usize + 2);
-        if record.len() != STATS_COLUMNS.len() {
+        if record.len() != width {
             return Err(bad(
                 line,
-                format!("{} fields, expected {}", record.len(), STATS_COLUMNS.len()),
+                format!("{} fields, expected {width}", record.len()),
             ));
         }
         let frame = record[0]
             .parse()
             .map_err(|_| bad(line, format!("frame '{}' is not a frame index", &record[0])))?;
         let fields: Vec<String> = record.iter().map(csv_text).collect();
-        rows.push(Row {
+        rows.push(PartRow {
+            line,
             frame,
-            rep: record[1].to_string(),
-            line: fields.join(","),
-            at: format!("{}:{line}", path.display()),
+            second: record.get(1).unwrap_or("").to_string(),
+            text: fields.join(","),
         });
     }
-    Ok((header, rows))
+    Ok(PartRows {
+        header,
+        columns,
+        rows,
+    })
+}
+
+/// Reads one stats part: its header and rows.
+fn read_part(path: &Path) -> Result<(PartHeader, Vec<Row>), MergeError> {
+    // The columns are checked before the rows, whose count of fields follows them.
+    let text = fs::read_to_string(path).map_err(|e| ExportError::io(path, e))?;
+    if text.lines().nth(1) != Some(STATS_COLUMNS.join(",").as_str())
+        && text.lines().next().and_then(PartHeader::parse).is_some()
+    {
+        return Err(MergeError::Invalid(format!(
+            "{}:2: the columns differ from this mdsurf's stats columns",
+            path.display()
+        )));
+    }
+    let part = read_part_rows(path, "stats part")?;
+    let rows = part
+        .rows
+        .into_iter()
+        .map(|r| Row {
+            frame: r.frame,
+            rep: r.second,
+            line: r.text,
+            at: format!("{}:{}", path.display(), r.line),
+        })
+        .collect();
+    Ok((part.header, rows))
 }
 
 /// The first setting of `a` that `b` does not share, as `key=value` (or the frame selection).
-fn difference(a: &PartHeader, b: &PartHeader) -> Option<String> {
+pub(crate) fn difference(a: &PartHeader, b: &PartHeader) -> Option<String> {
     if a.selection != b.selection {
         return Some(format!("--frames {}", frames_text(a)));
     }
@@ -460,6 +528,25 @@ mod tests {
             text += &format!("{f},\"a,b\",,1,2,2,2,3,4,5.0000,6.0000,,,,,,\n");
         }
         fs::write(part_path(&dir.join("s.csv"), h.index, h.count), text).unwrap();
+    }
+
+    #[test]
+    fn a_part_holds_the_frames_of_its_block_only() {
+        // Frames 3, 5, ..., 21 (10 frames) in 3 chunks: 4, 3 and 3 frames.
+        let part = |index| PartHeader {
+            index,
+            count: 3,
+            selection: [3, 22, 2],
+            params: Vec::new(),
+        };
+        let held = |index| {
+            (0..30)
+                .filter(|&f| part(index).holds(f))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(held(0), [3, 5, 7, 9]);
+        assert_eq!(held(1), [11, 13, 15]);
+        assert_eq!(held(2), [17, 19, 21]);
     }
 
     #[test]

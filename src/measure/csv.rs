@@ -12,16 +12,9 @@ use super::{
 };
 use crate::export::ExportError;
 use crate::export::atomic::write_atomic;
+// `text` as one CSV field, quoted when it holds a comma, a quote or a line break.
+use crate::export::stats::csv_text as field;
 use crate::model::Topology;
-
-/// `text` as one CSV field.
-fn field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
-    }
-}
 
 /// A table being filled: a header and formatted rows.
 #[derive(Debug, Clone)]
@@ -38,8 +31,11 @@ impl Table {
         }
     }
 
-    fn write(&self, path: &Path) -> Result<(), ExportError> {
+    fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
         write_atomic(path, |w| {
+            if let Some(line) = first_line {
+                writeln!(w, "{line}")?;
+            }
             writeln!(w, "{}", self.header)?;
             w.write_all(self.rows.as_bytes())
         })
@@ -89,9 +85,10 @@ impl ResidueCsv {
         }
     }
 
-    /// Writes the table to `path` atomically.
-    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
-        self.0.write(path)
+    /// Writes the table to `path` atomically, after `first_line` when given (the header of a
+    /// chunk's part, [`crate::export::stats_merge::PartHeader::line`]).
+    pub fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
+        self.0.write(path, first_line)
     }
 }
 
@@ -142,9 +139,10 @@ impl AtomCsv {
         Ok(())
     }
 
-    /// Writes the table to `path` atomically.
-    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
-        self.0.write(path)
+    /// Writes the table to `path` atomically, after `first_line` when given (the header of a
+    /// chunk's part, [`crate::export::stats_merge::PartHeader::line`]).
+    pub fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
+        self.0.write(path, first_line)
     }
 }
 
@@ -197,9 +195,10 @@ impl CavityCsv {
         Ok(())
     }
 
-    /// Writes the table to `path` atomically.
-    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
-        self.0.write(path)
+    /// Writes the table to `path` atomically, after `first_line` when given (the header of a
+    /// chunk's part, [`crate::export::stats_merge::PartHeader::line`]).
+    pub fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
+        self.0.write(path, first_line)
     }
 }
 
@@ -237,9 +236,10 @@ impl CavityEventCsv {
         }
     }
 
-    /// Writes the table to `path` atomically.
-    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
-        self.0.write(path)
+    /// Writes the table to `path` atomically, after `first_line` when given (the header of a
+    /// chunk's part, [`crate::export::stats_merge::PartHeader::line`]).
+    pub fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
+        self.0.write(path, first_line)
     }
 }
 
@@ -292,9 +292,10 @@ impl ContactCsv {
         }
     }
 
-    /// Writes the table to `path` atomically.
-    pub fn write(&self, path: &Path) -> Result<(), ExportError> {
-        self.0.write(path)
+    /// Writes the table to `path` atomically, after `first_line` when given (the header of a
+    /// chunk's part, [`crate::export::stats_merge::PartHeader::line`]).
+    pub fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
+        self.0.write(path, first_line)
     }
 }
 

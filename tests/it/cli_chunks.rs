@@ -16,7 +16,7 @@ fn inputs() -> [String; 2] {
 
 /// Runs `mdsurf ARGS --chunk i/n` for every i at once (n local processes) in `dir`; each must
 /// succeed.
-fn run_chunks(dir: &Path, args: &[&str], n: usize) {
+pub(crate) fn run_chunks(dir: &Path, args: &[&str], n: usize) {
     let children: Vec<_> = (0..n)
         .map(|i| {
             Command::new(env!("CARGO_BIN_EXE_mdsurf"))

@@ -22,6 +22,7 @@ mod app_time_label;
 mod app_window;
 mod cavity_events;
 mod cli_bench;
+mod cli_chunk_tables;
 mod cli_chunks;
 mod cli_errors;
 mod cli_gpu;

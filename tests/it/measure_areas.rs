@@ -161,7 +161,7 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     csv.push(0, "protein", &top, &residues, Some(&table));
     csv.push(1, "a, \"b\"", &top, &residues[..1], None);
     let path = dir.path().join("residues.csv");
-    csv.write(&path).expect("write");
+    csv.write(&path, None).expect("write");
     let text = std::fs::read_to_string(&path).expect("read");
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "frame,rep,chain,resid,resname,area_A2,exposure");
@@ -174,12 +174,14 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
         .push(0, "protein", &top, Some(&idx), &areas)
         .expect("atom rows");
     let path = dir.path().join("atoms.csv");
-    atoms_csv.write(&path).expect("write");
+    // A chunk's part: its header line first, then the table.
+    atoms_csv.write(&path, Some("# part")).expect("write");
     let text = std::fs::read_to_string(&path).expect("read");
-    assert_eq!(text.lines().count(), 1 + idx.len());
+    assert_eq!(text.lines().count(), 2 + idx.len());
+    assert_eq!(text.lines().next(), Some("# part"));
     assert!(
         text.lines()
-            .nth(1)
+            .nth(2)
             .expect("row")
             .starts_with("0,protein,1,N,A,1,PRO,")
     );

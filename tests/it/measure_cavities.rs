@@ -178,7 +178,7 @@ fn measure_cavity_keeps_its_id_when_moved_and_dies_when_filled() {
         .expect("rows");
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("cavities.csv");
-    csv.write(&path).expect("write");
+    csv.write(&path, None).expect("write");
     let text = std::fs::read_to_string(&path).expect("read");
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(
