@@ -13,6 +13,7 @@ pub mod movie;
 #[cfg(feature = "app")]
 pub mod movie_merge;
 pub(crate) mod obj;
+mod part_rows;
 pub(crate) mod ply;
 pub(crate) mod stats;
 pub mod stats_merge;

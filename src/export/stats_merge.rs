@@ -11,7 +11,8 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::stats::{STATS_COLUMNS, csv_text};
+use super::part_rows::{for_each_part_row, part_head};
+use super::stats::STATS_COLUMNS;
 use super::{ExportError, write_atomic};
 
 /// How a part file's first line starts.
@@ -351,109 +352,26 @@ pub(crate) fn find_parts(stats: &Path) -> Result<Vec<(usize, usize, PathBuf)>, M
     Ok(parts)
 }
 
-/// A part file as read: its header, its column line, and its data rows, each with its line
-/// number in the file (from 1), its frame (the first field) and its fields re-quoted and joined
-/// by commas.
-pub(crate) struct PartRows {
-    /// The first line.
-    pub header: PartHeader,
-    /// The second line.
-    pub columns: String,
-    /// (line, frame, the row as CSV text, the second field).
-    pub rows: Vec<PartRow>,
-}
-
-/// One data row of a part file.
-pub(crate) struct PartRow {
-    /// Line in the file, from 1.
-    pub line: usize,
-    /// The first field, a frame index.
-    pub frame: usize,
-    /// The second field (the representation of a stats row).
-    pub second: String,
-    /// The fields, quoted where needed, joined by commas.
-    pub text: String,
-}
-
-/// Reads a part file (`what` names its kind in messages): the header line, the column line,
-/// and the rows read as CSV (so quoted names round-trip), each with as many fields as the
-/// columns and a frame index first. Errors name the file and line.
-pub(crate) fn read_part_rows(path: &Path, what: &str) -> Result<PartRows, MergeError> {
-    let text = fs::read_to_string(path).map_err(|e| ExportError::io(path, e))?;
-    let bad = |line: usize, what: String| {
-        MergeError::Invalid(format!("{}:{line}: {what}", path.display()))
-    };
-    let mut lines = text.lines();
-    let header = lines
-        .next()
-        .and_then(PartHeader::parse)
-        .ok_or_else(|| bad(1, format!("not a {what} (no '{PART_MARK} ...' first line)")))?;
-    let columns = lines.next().unwrap_or("").to_string();
-    let width = columns.split(',').count();
-    let body_start = text
-        .match_indices('\n')
-        .nth(1)
-        .map(|(i, _)| i + 1)
-        .unwrap_or(text.len());
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .from_reader(&text.as_bytes()[body_start..]);
-    let mut rows = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line() as usize + 2);
-            bad(line, format!("bad CSV row: {e}"))
-        })?;
-        let line = record.position().map_or(0, |p| p.line() as usize + 2);
-        if record.len() != width {
-            return Err(bad(
-                line,
-                format!("{} fields, expected {width}", record.len()),
-            ));
-        }
-        let frame = record[0]
-            .parse()
-            .map_err(|_| bad(line, format!("frame '{}' is not a frame index", &record[0])))?;
-        let fields: Vec<String> = record.iter().map(csv_text).collect();
-        rows.push(PartRow {
-            line,
-            frame,
-            second: record.get(1).unwrap_or("").to_string(),
-            text: fields.join(","),
-        });
-    }
-    Ok(PartRows {
-        header,
-        columns,
-        rows,
-    })
-}
-
 /// Reads one stats part: its header and rows.
 fn read_part(path: &Path) -> Result<(PartHeader, Vec<Row>), MergeError> {
-    // The columns are checked before the rows, whose count of fields follows them.
-    let text = fs::read_to_string(path).map_err(|e| ExportError::io(path, e))?;
-    if text.lines().nth(1) != Some(STATS_COLUMNS.join(",").as_str())
-        && text.lines().next().and_then(PartHeader::parse).is_some()
-    {
+    let (header, columns) = part_head(path, "stats part")?;
+    if columns != STATS_COLUMNS.join(",") {
         return Err(MergeError::Invalid(format!(
             "{}:2: the columns differ from this mdsurf's stats columns",
             path.display()
         )));
     }
-    let part = read_part_rows(path, "stats part")?;
-    let rows = part
-        .rows
-        .into_iter()
-        .map(|r| Row {
-            frame: r.frame,
-            rep: r.second,
-            line: r.text,
-            at: format!("{}:{}", path.display(), r.line),
-        })
-        .collect();
-    Ok((part.header, rows))
+    let mut rows = Vec::new();
+    for_each_part_row(path, "stats part", |row| {
+        rows.push(Row {
+            frame: row.frame,
+            rep: row.second,
+            line: row.text,
+            at: format!("{}:{}", path.display(), row.line),
+        });
+        Ok(())
+    })?;
+    Ok((header, rows))
 }
 
 /// The first setting of `a` that `b` does not share, as `key=value` (or the frame selection).

@@ -7,28 +7,22 @@
 //! process would have written. Stats parts go to [`super::stats_merge::merge_parts`].
 
 use std::collections::BTreeSet;
-use std::fs;
 use std::io::Write;
 use std::path::Path;
 
+use super::part_rows::{for_each_part_row, part_head};
 use super::stats::STATS_COLUMNS;
 use super::stats_merge::{
-    MergeError, MergeSummary, PartHeader, check_one_chunk_count, difference, find_parts,
-    merge_parts, part_path, read_part_rows, show_pattern,
+    MergeError, MergeSummary, check_one_chunk_count, difference, find_parts, merge_parts,
+    part_path, show_pattern,
 };
-use super::{ExportError, write_atomic};
-
-/// One part as read: its header, column line and rows (fields re-quoted, joined by commas).
-struct TablePart {
-    header: PartHeader,
-    columns: String,
-    rows: Vec<(usize, String)>,
-}
+use super::{AtomicFile, ExportError};
 
 /// Joins the parts next to `merged` into `merged`, atomically: stats parts as
 /// [`merge_parts`] does, any other table as described in the module's documentation. Fails
 /// with one line naming the file (and line) on no parts, a missing chunk, parts of other runs
-/// or with other columns, a malformed row, or a row outside its chunk's frames.
+/// or with other columns, a malformed row, or a row outside its chunk's frames; the merged file
+/// is then left as it was. The rows are copied one at a time, never held together.
 pub fn merge_csv_parts(merged: &Path) -> Result<MergeSummary, MergeError> {
     let invalid = MergeError::Invalid;
     let parts = find_parts(merged)?;
@@ -40,8 +34,8 @@ pub fn merge_csv_parts(merged: &Path) -> Result<MergeSummary, MergeError> {
             merged.display()
         )));
     };
-    let first_text = fs::read_to_string(first_path).map_err(|e| ExportError::io(first_path, e))?;
-    if first_text.lines().nth(1) == Some(STATS_COLUMNS.join(",").as_str()) {
+    let (first, columns) = part_head(first_path, "part")?;
+    if columns == STATS_COLUMNS.join(",") {
         return merge_parts(merged);
     }
     let present: BTreeSet<usize> = parts.iter().map(|(i, _, _)| *i).collect();
@@ -57,90 +51,73 @@ pub fn merge_csv_parts(merged: &Path) -> Result<MergeSummary, MergeError> {
             absent.join(", ")
         )));
     }
-    let mut read: Vec<TablePart> = Vec::with_capacity(parts.len());
+    // Every part's first two lines before anything is written.
+    let mut headers = Vec::with_capacity(parts.len());
     for (index, count, path) in &parts {
-        let part = read_table_part(path)?;
-        if (part.header.index, part.header.count) != (*index, *count) {
+        let (header, its_columns) = part_head(path, "part")?;
+        if (header.index, header.count) != (*index, *count) {
             return Err(invalid(format!(
                 "{}:1: the header says chunk {}/{}, the file name {index}/{count}",
                 path.display(),
-                part.header.index,
-                part.header.count
+                header.index,
+                header.count
             )));
         }
-        if let Some(first) = read.first() {
-            if let Some(diff) = difference(&first.header, &part.header) {
-                return Err(invalid(format!(
-                    "{}: written with {diff}, {} with {}; parts of runs with different parameters are not merged",
-                    path.display(),
-                    first_path.display(),
-                    difference(&part.header, &first.header).unwrap_or_default()
-                )));
-            }
-            if first.columns != part.columns {
-                return Err(invalid(format!(
-                    "{}:2: the columns differ from those of {}",
-                    path.display(),
-                    first_path.display()
-                )));
-            }
+        if let Some(diff) = difference(&first, &header) {
+            return Err(invalid(format!(
+                "{}: written with {diff}, {} with {}; parts of runs with different parameters are not merged",
+                path.display(),
+                first_path.display(),
+                difference(&header, &first).unwrap_or_default()
+            )));
         }
-        read.push(part);
+        if its_columns != columns {
+            return Err(invalid(format!(
+                "{}:2: the columns differ from those of {}",
+                path.display(),
+                first_path.display()
+            )));
+        }
+        if !columns.starts_with("frame,") {
+            return Err(invalid(format!(
+                "{}:2: no column line starting with 'frame'",
+                path.display()
+            )));
+        }
+        headers.push(header);
     }
-    let columns = read[0].columns.clone();
-    let rows: usize = read.iter().map(|p| p.rows.len()).sum();
-    let frames: BTreeSet<usize> = read
-        .iter()
-        .flat_map(|p| p.rows.iter().map(|r| r.0))
-        .collect();
-    write_atomic(merged, |w: &mut dyn Write| {
-        writeln!(w, "{columns}")?;
-        for (_, line) in read.iter().flat_map(|p| &p.rows) {
-            writeln!(w, "{line}")?;
-        }
-        Ok(())
-    })?;
+    // Then the rows, part after part, each checked as it is copied.
+    let mut file = AtomicFile::create(merged)?;
+    let io = |e| MergeError::Io(ExportError::io(merged, e));
+    writeln!(file.writer(), "{columns}").map_err(io)?;
+    let (mut rows, mut frames, mut last) = (0usize, 0usize, None);
+    for ((_, _, path), header) in parts.iter().zip(&headers) {
+        let mut before = None;
+        for_each_part_row(path, "part", |row| {
+            let frame = row.frame;
+            let bad = |what: String| invalid(format!("{}:{}: {what}", path.display(), row.line));
+            if !header.holds(frame) {
+                return Err(bad(format!(
+                    "frame {frame} is not in chunk {}/{}'s frames",
+                    header.index, header.count
+                )));
+            }
+            if before.is_some_and(|b| b > frame) {
+                return Err(bad(format!("frame {frame} comes after a later frame")));
+            }
+            before = Some(frame);
+            if last != Some(frame) {
+                frames += 1;
+                last = Some(frame);
+            }
+            rows += 1;
+            writeln!(file.writer(), "{}", row.text).map_err(io)
+        })?;
+    }
+    file.commit()?;
     Ok(MergeSummary {
         parts: parts.into_iter().map(|(_, _, p)| p).collect(),
         rows,
-        frames: frames.len(),
-    })
-}
-
-/// Reads one table part: the header, the column line (its first column `frame`) and the rows,
-/// each with its frame inside the chunk's block and not before the row above it.
-fn read_table_part(path: &Path) -> Result<TablePart, MergeError> {
-    let part = read_part_rows(path, "part")?;
-    let bad = |line: usize, what: String| {
-        MergeError::Invalid(format!("{}:{line}: {what}", path.display()))
-    };
-    if !part.columns.starts_with("frame,") {
-        return Err(bad(2, "no column line starting with 'frame'".into()));
-    }
-    let header = part.header;
-    let mut rows: Vec<(usize, String)> = Vec::with_capacity(part.rows.len());
-    for row in part.rows {
-        let frame = row.frame;
-        if !header.holds(frame) {
-            return Err(bad(
-                row.line,
-                format!(
-                    "frame {frame} is not in chunk {}/{}'s frames",
-                    header.index, header.count
-                ),
-            ));
-        }
-        if rows.last().is_some_and(|(before, _)| *before > frame) {
-            return Err(bad(
-                row.line,
-                format!("frame {frame} comes after a later frame"),
-            ));
-        }
-        rows.push((frame, row.text));
-    }
-    Ok(TablePart {
-        header,
-        columns: part.columns,
-        rows,
+        frames,
     })
 }
