@@ -397,7 +397,7 @@ pub fn scene_interface(
         for &index in &frames {
             let frame = core.read(index, &reader)?;
             sides
-                .check_sides(&frame)
+                .check_sides(&core.topology, &frame)
                 .map_err(|e| PyValueError::new_err(format!("interface: {e} in frame {index}")))?;
             let err = |e| measure_err("interface", index, e);
             let measured =

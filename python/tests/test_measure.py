@@ -183,6 +183,7 @@ def hpv(data):
         ("chain A", "resname XYZ", "interface: selection 'resname XYZ' matches no atom in frame 0"),
         ("chain A and", "chain B", "selection 'chain A and'"),
         ("chain A", "bogus(", "selection 'bogus\\('"),
+        ("protein", "chain A", "selections 'protein' and 'chain A' share 758 atom"),
     ],
 )
 def test_interface_bad_selections(hpv, a, b, message):

@@ -197,7 +197,7 @@ impl Measurer {
                 )
                 .map_err(|e| anyhow!("--interface: {e}"))?;
                 sides
-                    .check_sides(first)
+                    .check_sides(topology, first)
                     .map_err(|e| anyhow!("--interface: {e}"))?;
                 Some(Interface {
                     sides,

@@ -4,7 +4,9 @@
 //! frame is measured on the Gaussian surface ([`measure::interface`], CPU engine) or, with a
 //! probe radius, on the probe's solvent-excluded surface ([`measure::ses_probe_interface`]).
 
-use crate::measure::{self, ContactResidue, InterfaceResult, MeasureError, ProbeOptions};
+use crate::measure::{
+    self, ContactResidue, InterfaceResult, MeasureError, ProbeOptions, ResidueNames,
+};
 use crate::model::{Frame, RadiusOverrides, Topology};
 use crate::surface::{CpuEngine, SurfaceParams};
 
@@ -25,6 +27,20 @@ pub enum InterfaceError {
     NoAtoms {
         /// The selection text.
         selection: String,
+    },
+    /// The two selections pick some of the same atoms.
+    #[error(
+        "selections '{a}' and '{b}' share {shared} atom(s), the first {first}: the buried area is between two separate groups"
+    )]
+    Overlap {
+        /// The first selection.
+        a: String,
+        /// The second selection.
+        b: String,
+        /// How many atoms both pick.
+        shared: usize,
+        /// The first of them, as `A:PRO1 N`.
+        first: String,
     },
     /// The surfaces could not be measured.
     #[error(transparent)]
@@ -80,14 +96,42 @@ impl Interface {
         self.sides.each_ref().map(|s| s.rep().selection.as_str())
     }
 
-    /// Fails when a side picks no atom of `frame` (the error names its selection).
-    pub fn check_sides(&self, frame: &Frame) -> Result<(), InterfaceError> {
-        for side in &self.sides {
-            if side.atoms(frame).is_empty() {
+    /// Fails when a side picks no atom of `frame` (the error names its selection), or when
+    /// both pick some of the same atoms.
+    pub fn check_sides(&self, topology: &Topology, frame: &Frame) -> Result<(), InterfaceError> {
+        let [a, b] = self.sides.each_ref().map(|side| side.atoms(frame));
+        for (side, atoms) in self.sides.iter().zip([&a, &b]) {
+            if atoms.is_empty() {
                 return Err(no_atoms(side));
             }
         }
-        Ok(())
+        self.check_apart(topology, &a, &b)
+    }
+
+    /// Fails when the topology atoms `a` and `b` of the two sides share any.
+    fn check_apart(&self, topology: &Topology, a: &[u32], b: &[u32]) -> Result<(), InterfaceError> {
+        let len = a
+            .iter()
+            .chain(b)
+            .map(|&i| i as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut in_a = vec![false; len];
+        for &i in a {
+            in_a[i as usize] = true;
+        }
+        let shared: Vec<u32> = b.iter().copied().filter(|&i| in_a[i as usize]).collect();
+        let Some(&first) = shared.iter().min() else {
+            return Ok(());
+        };
+        let names = ResidueNames::of_atom(topology, first as usize);
+        let [a, b] = self.selections().map(str::to_string);
+        Err(InterfaceError::Overlap {
+            a,
+            b,
+            shared: shared.len(),
+            first: format!("{} {}", names.label(), names.atom_name.trim()),
+        })
     }
 
     /// The interface in `frame`, with the residues that lose more than `threshold` Å²
@@ -101,6 +145,7 @@ impl Interface {
         let [a, b] = &mut self.sides;
         let (fa, fb) = (a.frame(topology, frame)?, b.frame(topology, frame)?);
         let (ia, ib) = (atoms_of(&fa, a)?, atoms_of(&fb, b)?);
+        self.check_apart(topology, &ia, &ib)?;
         let result = match self.probe {
             Some(probe) => measure::ses_probe_interface(
                 topology,

@@ -178,6 +178,29 @@ fn the_protease_dimer_buries_area_and_names_its_contacts() {
     );
     assert_eq!(run.code, 2);
     assert!(run.last_line().contains("'-2'"), "{}", run.stderr);
+    // Sides that share atoms: one line naming both selections, no file.
+    let run = mdsurf(
+        dir.path(),
+        &[
+            "surface",
+            &pdb,
+            "--backend",
+            "cpu",
+            "--interface",
+            "protein",
+            "protein and chain B",
+            "--interface-csv",
+            "k.csv",
+        ],
+    );
+    assert_eq!(run.code, 2);
+    assert!(
+        run.last_line()
+            .contains("selections 'protein' and 'protein and chain B' share 758 atom(s)"),
+        "{}",
+        run.stderr
+    );
+    assert!(!dir.path().join("k.csv").exists());
     // A side that picks nothing: one line naming it, no file.
     let run = mdsurf(
         dir.path(),
