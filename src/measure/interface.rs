@@ -47,10 +47,34 @@ pub fn interface(
     b: &AtomSet<'_>,
     params: &SurfaceParams,
 ) -> Result<InterfaceResult, MeasureError> {
+    interface_with(engine, a, b, None, params)
+}
+
+/// [`interface`], the complex with `complex_radii` (Å, `a`'s atoms then `b`'s) instead of each
+/// side's own: radii that follow each atom's surroundings (the SES preset's exposure) are then
+/// counted over the complex for the complex, as a surface of both sides together has them.
+/// Fails as [`interface`] does, or when `complex_radii` has another length.
+pub fn interface_with(
+    engine: &mut dyn SurfaceEngine,
+    a: &AtomSet<'_>,
+    b: &AtomSet<'_>,
+    complex_radii: Option<&[f32]>,
+    params: &SurfaceParams,
+) -> Result<InterfaceResult, MeasureError> {
     a.validate()?;
     b.validate()?;
     params.validate()?;
-    let (positions, radii) = union_of(a, b);
+    let (positions, mut radii) = union_of(a, b);
+    if let Some(own) = complex_radii {
+        if own.len() != radii.len() {
+            return Err(MeasureError::LengthMismatch {
+                what: "complex radii",
+                expected: radii.len(),
+                got: own.len(),
+            });
+        }
+        radii.copy_from_slice(own);
+    }
     let union = AtomSet {
         positions: &positions,
         radii: &radii,

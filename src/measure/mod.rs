@@ -59,6 +59,7 @@ pub use cavities::{Cavity, CavityOptions, Component, cavities, components};
 pub use csv::{AtomCsv, CavityCsv, CavityEventCsv, ContactCsv, ResidueCsv, lining_residues};
 pub use interface::{
     CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
+    interface_with,
 };
 pub use probe_cavities::{
     ProbeOptions, probe_cavities, probe_cavity_walls, ses_probe_cavities, ses_probe_cavity_walls,

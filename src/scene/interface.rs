@@ -4,6 +4,8 @@
 //! frame is measured on the Gaussian surface ([`measure::interface`], CPU engine) or, with a
 //! probe radius, on the probe's solvent-excluded surface ([`measure::ses_probe_interface`]).
 
+use glam::Vec3;
+
 use crate::measure::{
     self, ContactResidue, InterfaceResult, MeasureError, ProbeOptions, ResidueNames,
 };
@@ -156,10 +158,11 @@ impl Interface {
                     ..ProbeOptions::default()
                 },
             )?,
-            None => measure::interface(
+            None => measure::interface_with(
                 &mut self.engine,
                 &fa.atom_set(),
                 &fb.atom_set(),
+                complex_radii(&fa, &fb).as_deref(),
                 &self.params,
             )?,
         };
@@ -167,6 +170,21 @@ impl Interface {
             measure::contact_residues(topology, Some(&ia), Some(&ib), &result, threshold)?;
         Ok(InterfaceFrame { result, contacts })
     }
+}
+
+/// The complex's radii (Å, A's atoms then B's) when they follow exposure: each atom's
+/// neighbours counted over both sides, as a surface of the two together counts them (each
+/// side's own frame counts them over that side alone). `None` when radii are fixed.
+fn complex_radii(a: &LayerFrame, b: &LayerFrame) -> Option<Vec<f32>> {
+    let ((model, heavy_a), (_, heavy_b)) = (a.particles.exposure()?, b.particles.exposure()?);
+    let radii: Vec<f32> = [a, b]
+        .iter()
+        .flat_map(|s| s.particles.radii())
+        .copied()
+        .collect();
+    let positions: Vec<Vec3> = [a, b].iter().flat_map(|s| &s.positions).copied().collect();
+    let heavy: Vec<bool> = heavy_a.iter().chain(heavy_b).copied().collect();
+    Some(model.apply(&radii, &positions, &heavy))
 }
 
 /// The error of a side whose selection picks no atom.
