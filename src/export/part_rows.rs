@@ -61,6 +61,24 @@ fn open_part(path: &Path, what: &str) -> Result<(PartHeader, String, BufReader<F
     Ok((header, columns, reader))
 }
 
+/// Fails when a part's header names another chunk than its file name (`index` of `count`).
+pub(crate) fn check_chunk_name(
+    path: &Path,
+    header: &PartHeader,
+    index: usize,
+    count: usize,
+) -> Result<(), MergeError> {
+    if (header.index, header.count) != (index, count) {
+        let said = format!("{}/{}", header.index, header.count);
+        return Err(bad(
+            path,
+            1,
+            format!("the header says chunk {said}, the file name {index}/{count}"),
+        ));
+    }
+    Ok(())
+}
+
 /// The header and the column line of a part file.
 pub(crate) fn part_head(path: &Path, what: &str) -> Result<(PartHeader, String), MergeError> {
     open_part(path, what).map(|(header, columns, _)| (header, columns))

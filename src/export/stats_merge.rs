@@ -11,7 +11,7 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::part_rows::{for_each_part_row, part_head};
+use super::part_rows::{check_chunk_name, for_each_part_row, part_head};
 use super::stats::STATS_COLUMNS;
 use super::{ExportError, write_atomic};
 
@@ -187,14 +187,7 @@ pub fn merge_parts(stats: &Path) -> Result<MergeSummary, MergeError> {
     let mut present = BTreeSet::new();
     for (index, count, path) in &parts {
         let (header, part_rows) = read_part(path)?;
-        if (header.index, header.count) != (*index, *count) {
-            return Err(invalid(format!(
-                "{}:1: the header says chunk {}/{}, the file name {index}/{count}",
-                path.display(),
-                header.index,
-                header.count
-            )));
-        }
+        check_chunk_name(path, &header, *index, *count)?;
         match &first {
             None => first = Some((path.clone(), header)),
             Some((first_path, first_header)) => {

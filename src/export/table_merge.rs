@@ -10,7 +10,7 @@ use std::collections::BTreeSet;
 use std::io::Write;
 use std::path::Path;
 
-use super::part_rows::{for_each_part_row, part_head};
+use super::part_rows::{check_chunk_name, for_each_part_row, part_head};
 use super::stats::STATS_COLUMNS;
 use super::stats_merge::{
     MergeError, MergeSummary, check_one_chunk_count, difference, find_parts, merge_parts,
@@ -55,14 +55,7 @@ pub fn merge_csv_parts(merged: &Path) -> Result<MergeSummary, MergeError> {
     let mut headers = Vec::with_capacity(parts.len());
     for (index, count, path) in &parts {
         let (header, its_columns) = part_head(path, "part")?;
-        if (header.index, header.count) != (*index, *count) {
-            return Err(invalid(format!(
-                "{}:1: the header says chunk {}/{}, the file name {index}/{count}",
-                path.display(),
-                header.index,
-                header.count
-            )));
-        }
+        check_chunk_name(path, &header, *index, *count)?;
         if let Some(diff) = difference(&first, &header) {
             return Err(invalid(format!(
                 "{}: written with {diff}, {} with {}; parts of runs with different parameters are not merged",

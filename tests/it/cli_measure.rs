@@ -4,8 +4,9 @@
 //! flags in one line.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::Path;
 
-use crate::cli_common::{Csv, data, mdsurf};
+use crate::cli_common::{Csv, Run, data, mdsurf};
 
 #[test]
 fn per_atom_and_per_residue_areas_add_up_to_the_surface() {
@@ -55,6 +56,14 @@ fn per_atom_and_per_residue_areas_add_up_to_the_surface() {
     let chains: Vec<String> = residues.text_col("chain");
     assert_eq!(chains.iter().filter(|c| *c == "A").count(), 99);
     assert_eq!(chains.iter().filter(|c| *c == "B").count(), 99);
+}
+
+/// `mdsurf surface 1hpv.pdb --backend cpu --interface A B` and `extra`, run in `dir`.
+fn protease_interface(dir: &Path, [a, b]: [&str; 2], extra: &[&str]) -> Run {
+    let pdb = data("1hpv.pdb");
+    let mut args = vec!["surface", &pdb, "--backend", "cpu", "--interface", a, b];
+    args.extend_from_slice(extra);
+    mdsurf(dir, &args)
 }
 
 #[test]
@@ -130,17 +139,12 @@ fn the_protease_dimer_buries_area_and_names_its_contacts() {
     // With every losing residue counted, the rows' losses hold at least both sides' loss,
     // 2 x buried (residues that gain area in the complex are left out), and more rows; a
     // higher threshold keeps only the rows above it.
+    let sides = ["protein and chain A", "protein and chain B"];
     let by_threshold = |threshold: &str, out: &str| {
-        let run = mdsurf(
+        let run = protease_interface(
             dir.path(),
+            sides,
             &[
-                "surface",
-                &pdb,
-                "--backend",
-                "cpu",
-                "--interface",
-                "protein and chain A",
-                "protein and chain B",
                 "--contact-threshold",
                 threshold,
                 "--interface-residues",
@@ -164,35 +168,12 @@ fn the_protease_dimer_buries_area_and_names_its_contacts() {
     expected.sort_by(f64::total_cmp);
     got.sort_by(f64::total_cmp);
     assert_eq!(got, expected);
-    let run = mdsurf(
-        dir.path(),
-        &[
-            "surface",
-            &pdb,
-            "--interface",
-            "chain A",
-            "chain B",
-            "--contact-threshold",
-            "-2",
-        ],
-    );
+    let run = protease_interface(dir.path(), sides, &["--contact-threshold", "-2"]);
     assert_eq!(run.code, 2);
     assert!(run.last_line().contains("'-2'"), "{}", run.stderr);
     // Sides that share atoms: one line naming both selections, no file.
-    let run = mdsurf(
-        dir.path(),
-        &[
-            "surface",
-            &pdb,
-            "--backend",
-            "cpu",
-            "--interface",
-            "protein",
-            "protein and chain B",
-            "--interface-csv",
-            "k.csv",
-        ],
-    );
+    let overlapping = ["protein", "protein and chain B"];
+    let run = protease_interface(dir.path(), overlapping, &["--interface-csv", "k.csv"]);
     assert_eq!(run.code, 2);
     assert!(
         run.last_line()
