@@ -13,7 +13,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use mdsurf::export::stats_merge::{PartHeader, part_path};
 use mdsurf::measure::{
     self, AtomCsv, CavityCsv, CavityEventCsv, CavityOptions, CavityTracker, ContactCsv,
-    ExposureTable, ResidueCsv, Side,
+    ExposureTable, InterfaceCsv, ResidueCsv,
 };
 use mdsurf::model::{Frame, RadiusOverrides, Topology};
 use mdsurf::scene::interface::{Interface as SceneInterface, InterfaceFrame};
@@ -145,7 +145,7 @@ struct Interface {
     sides: SceneInterface,
     /// Contact threshold in Å².
     threshold: f64,
-    rows: String,
+    rows: InterfaceCsv,
     residues: ContactCsv,
 }
 
@@ -202,7 +202,7 @@ impl Measurer {
                 Some(Interface {
                     sides,
                     threshold: args.contact_threshold,
-                    rows: String::new(),
+                    rows: InterfaceCsv::new(),
                     residues: ContactCsv::new(),
                 })
             }
@@ -397,12 +397,7 @@ impl Measurer {
             self.cavity_events.write(&path(p), first)?;
         }
         if let (Some(p), Some(interface)) = (&a.interface_csv, &self.interface) {
-            let text = format!(
-                "{}frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,contacts_a,contacts_b\n{}",
-                first.map(|l| format!("{l}\n")).unwrap_or_default(),
-                interface.rows
-            );
-            mdsurf::export::write_atomic(&path(p), |w| w.write_all(text.as_bytes()))?;
+            interface.rows.write(&path(p), first)?;
         }
         if let (Some(p), Some(interface)) = (&a.interface_residues, &self.interface) {
             interface.residues.write(&path(p), first)?;
@@ -412,7 +407,7 @@ impl Measurer {
 }
 
 impl Interface {
-    /// The buried area of frame `index`: appends a CSV row and returns a one-line summary.
+    /// The buried area of frame `index`: appends its CSV rows and returns a one-line summary.
     fn frame(
         &mut self,
         topology: &Topology,
@@ -422,27 +417,8 @@ impl Interface {
     ) -> Result<String> {
         let InterfaceFrame { result, contacts } =
             self.sides.measure(topology, frame, self.threshold)?;
+        self.rows.push(index, time_ps, topology, &result, &contacts);
         self.residues.push(index, time_ps, topology, &contacts);
-        let side = |s: Side| -> String {
-            let labels: Vec<String> = contacts
-                .iter()
-                .filter(|c| c.side == s)
-                .map(|c| c.residue.names(topology).label())
-                .collect();
-            labels.join(" ")
-        };
-        use std::fmt::Write;
-        let _ = writeln!(
-            self.rows,
-            "{index},{},{:.4},{:.4},{:.4},{:.4},{},{}",
-            time_ps.map(|t| t.to_string()).unwrap_or_default(),
-            result.area_a,
-            result.area_b,
-            result.area_complex,
-            result.buried,
-            side(Side::A),
-            side(Side::B),
-        );
         Ok(format!(
             "frame {index}: buried area {:.1} Å² (A {:.1}, B {:.1}, together {:.1} Å²)",
             result.buried, result.area_a, result.area_b, result.area_complex

@@ -8,7 +8,8 @@ use std::path::Path;
 
 use super::residues::{ResidueNames, topology_atoms};
 use super::{
-    CavityEvent, ContactResidue, ExposureTable, MeasureError, ResidueArea, Side, TrackedCavity,
+    CavityEvent, ContactResidue, ExposureTable, InterfaceResult, MeasureError, ResidueArea, Side,
+    TrackedCavity,
 };
 use crate::export::ExportError;
 use crate::export::atomic::write_atomic;
@@ -243,6 +244,68 @@ impl CavityEventCsv {
     }
 }
 
+/// A frame's time in ps as a CSV field: empty when the frame has none.
+fn time_field(time_ps: Option<f64>) -> String {
+    time_ps.map(|t| t.to_string()).unwrap_or_default()
+}
+
+/// The buried area between two selections, one row per frame:
+/// `frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,contacts_a,contacts_b`, the contact
+/// residues of each side as labels (`A:LEU23`) separated by spaces.
+#[derive(Debug, Clone)]
+pub struct InterfaceCsv(Table);
+
+impl Default for InterfaceCsv {
+    fn default() -> Self {
+        InterfaceCsv(Table::new(
+            "frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,contacts_a,contacts_b",
+        ))
+    }
+}
+
+impl InterfaceCsv {
+    /// An empty table.
+    pub fn new() -> InterfaceCsv {
+        InterfaceCsv::default()
+    }
+
+    /// Adds one frame (time in ps): its areas and contact residues, measured on `topology`.
+    pub fn push(
+        &mut self,
+        frame: usize,
+        time_ps: Option<f64>,
+        topology: &Topology,
+        result: &InterfaceResult,
+        contacts: &[ContactResidue],
+    ) {
+        let labels = |side: Side| -> String {
+            let labels: Vec<String> = contacts
+                .iter()
+                .filter(|c| c.side == side)
+                .map(|c| c.residue.names(topology).label())
+                .collect();
+            field(&labels.join(" "))
+        };
+        let _ = writeln!(
+            self.0.rows,
+            "{frame},{},{:.4},{:.4},{:.4},{:.4},{},{}",
+            time_field(time_ps),
+            result.area_a,
+            result.area_b,
+            result.area_complex,
+            result.buried,
+            labels(Side::A),
+            labels(Side::B),
+        );
+    }
+
+    /// Writes the table to `path` atomically, after `first_line` when given (the header of a
+    /// chunk's part, [`crate::export::stats_merge::PartHeader::line`]).
+    pub fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
+        self.0.write(path, first_line)
+    }
+}
+
 /// The residues an interface buries, one row per contact residue and frame:
 /// `frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2`, side `A`
 /// or `B` (the two selections in the order given), `buried_A2` = alone minus in the complex
@@ -272,7 +335,7 @@ impl ContactCsv {
         topology: &Topology,
         contacts: &[ContactResidue],
     ) {
-        let time = time_ps.map(|t| t.to_string()).unwrap_or_default();
+        let time = time_field(time_ps);
         for c in contacts {
             let names = c.residue.names(topology);
             let side = match c.side {

@@ -56,7 +56,9 @@ pub(crate) mod tracking;
 
 pub use areas::{atom_areas, atom_areas_of, vertex_areas};
 pub use cavities::{Cavity, CavityOptions, Component, cavities, components};
-pub use csv::{AtomCsv, CavityCsv, CavityEventCsv, ContactCsv, ResidueCsv, lining_residues};
+pub use csv::{
+    AtomCsv, CavityCsv, CavityEventCsv, ContactCsv, InterfaceCsv, ResidueCsv, lining_residues,
+};
 pub use interface::{
     CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
     interface_with,
