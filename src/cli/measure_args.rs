@@ -16,7 +16,7 @@ use mdsurf::measure::{
     ExposureTable, InterfaceCsv, ResidueCsv,
 };
 use mdsurf::model::{Frame, RadiusOverrides, Topology};
-use mdsurf::scene::interface::{Interface as SceneInterface, InterfaceFrame};
+use mdsurf::scene::interface::{Interface as SceneInterface, InterfaceFrame, ShownSurface};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, SceneEngine, SceneFrame};
 use mdsurf::surface::{AtomSet, CpuEngine, RadiusSet, SurfaceParams, VertexMode};
@@ -82,6 +82,12 @@ impl MeasureArgs {
     /// True when the surfaces' meshes are needed on the host.
     pub fn needs_meshes(&self) -> bool {
         self.per_residue.is_some() || self.per_atom.is_some() || self.tracks_cavities()
+    }
+
+    /// True when the frame's surfaces must keep their meshes: measured, or one of them may be
+    /// the interface's complex (a Gaussian interface takes it instead of computing it again).
+    pub fn keeps_meshes(&self) -> bool {
+        self.needs_meshes() || (self.interface.is_some() && self.interface_probe.is_none())
     }
 
     /// True when cavities are found and tracked (`--cavities` or `--cavity-events`).
@@ -314,8 +320,19 @@ impl Measurer {
             }
         }
         if let Some(interface) = self.interface.as_mut() {
+            // The frame's surfaces, one of which may be the interface's complex.
+            let mut atoms = Vec::new();
+            for layer in computed.surfaces().filter(|l| !l.beads) {
+                if let Ok(Some(indices)) = layer_atoms(scene, layer, frame) {
+                    atoms.push((layer, indices));
+                }
+            }
+            let shown: Vec<ShownSurface<'_>> = atoms
+                .iter()
+                .map(|(layer, atoms)| ShownSurface { layer, atoms })
+                .collect();
             let line = interface
-                .frame(topology, frame, computed.time_ps, index)
+                .frame(topology, frame, computed.time_ps, index, &shown)
                 .with_context(|| format!("frame {index}: --interface"))?;
             if self.args.interface_csv.is_none() && !quiet {
                 eprintln!("{line}");
@@ -414,9 +431,13 @@ impl Interface {
         frame: &Frame,
         time_ps: Option<f64>,
         index: usize,
+        shown: &[ShownSurface<'_>],
     ) -> Result<String> {
-        let InterfaceFrame { result, contacts } =
-            self.sides.measure(topology, frame, self.threshold)?;
+        let InterfaceFrame {
+            result, contacts, ..
+        } = self
+            .sides
+            .measure_on(topology, frame, self.threshold, shown)?;
         self.rows.push(index, time_ps, topology, &result, &contacts);
         self.residues.push(index, time_ps, topology, &contacts);
         Ok(format!(

@@ -155,7 +155,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
     if let SceneBackend::Host(e) = engine.backend_mut() {
         // Without -o or a measurement of the mesh only area, volume and counts are reported:
         // the mesh need not be built.
-        e.set_keep_mesh(output.is_some() || args.measure.needs_meshes());
+        e.set_keep_mesh(output.is_some() || args.measure.keeps_meshes());
         if reader.chain().periodic().is_none() {
             set_vertex_mode(e.as_mut(), args.params.vertex_mode());
         }

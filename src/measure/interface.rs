@@ -80,20 +80,63 @@ pub fn interface_with(
         radii: &radii,
         colours: None,
     };
+    let mut fallback = None;
+    let engine = grid_engine(engine, &mut fallback);
+    engine.set_grid(None);
+    engine.set_keep_mesh(true);
+    let output = engine.compute(&union, params)?;
+    let a_at: Vec<u32> = (0..a.len() as u32).collect();
+    let b_at: Vec<u32> = (a.len() as u32..union.len() as u32).collect();
+    let complex = Complex {
+        output: &output,
+        atoms: union,
+        a_at: &a_at,
+        b_at: &b_at,
+    };
+    interface_on(engine, a, b, &complex, params)
+}
+
+/// A surface of both sides together computed elsewhere, such as the frame's own surface of the
+/// same atoms, so that [`interface_on`] need not compute it again.
+#[derive(Debug, Clone, Copy)]
+pub struct Complex<'a> {
+    /// The surface, its mesh kept, on the grid the engine gave these atoms.
+    pub output: &'a SurfaceOutput,
+    /// The atoms it was computed from, in its own order (the radii the complex has).
+    pub atoms: AtomSet<'a>,
+    /// For each atom of A (in A's order), its index in `atoms`.
+    pub a_at: &'a [u32],
+    /// For each atom of B (in B's order), its index in `atoms`.
+    pub b_at: &'a [u32],
+}
+
+/// [`interface`] with the complex's surface already computed (`complex`, under the same
+/// `params` and vertex mode as `engine`'s): A and B are computed on its grid. Bitwise the same
+/// density as [`interface_with`] computes when `complex` came from the same engine with the
+/// atoms in the same order; another order sums each sample's Gaussians in another order (the
+/// same to rounding).
+///
+/// Fails as [`interface`] does, when the index maps do not fit, or when `complex` has no mesh.
+pub fn interface_on(
+    engine: &mut dyn SurfaceEngine,
+    a: &AtomSet<'_>,
+    b: &AtomSet<'_>,
+    complex: &Complex<'_>,
+    params: &SurfaceParams,
+) -> Result<InterfaceResult, MeasureError> {
+    a.validate()?;
+    b.validate()?;
+    params.validate()?;
+    complex.check(a.len(), b.len())?;
     let [a, b] = [a, b].map(|s| AtomSet {
         colours: None,
         ..*s
     });
     let mut fallback = None;
-    let engine: &mut dyn SurfaceEngine = if engine.set_grid(None) {
-        engine
-    } else {
-        fallback.insert(CpuEngine::new().with_vertices(engine.vertices()))
-    };
+    let engine = grid_engine(engine, &mut fallback);
     engine.set_keep_mesh(true);
     let measure = engine.vertices().effective(params);
-    let complex = engine.compute(&union, params)?;
-    engine.set_grid(Some(complex.grid));
+    engine.set_grid(Some(complex.output.grid));
     let alone = |engine: &mut dyn SurfaceEngine, set: &AtomSet<'_>| -> Result<_, MeasureError> {
         let out: SurfaceOutput = engine.compute(set, params)?;
         let areas = atom_areas_of(&out, set, &measure)?;
@@ -102,19 +145,75 @@ pub fn interface_with(
     let both = (|| Ok::<_, MeasureError>((alone(engine, &a)?, alone(engine, &b)?)))();
     engine.set_grid(None);
     let ((area_a, atoms_a_alone), (area_b, atoms_b_alone)) = both?;
-    let mut atoms_a_complex = atom_areas_of(&complex, &union, &measure)?;
-    let atoms_b_complex = atoms_a_complex.split_off(a.len());
+    let in_complex = atom_areas_of(complex.output, &complex.atoms, &measure)?;
+    let pick = |at: &[u32]| -> Vec<f64> { at.iter().map(|&i| in_complex[i as usize]).collect() };
+    let area_complex = complex.output.area;
     Ok(InterfaceResult {
-        grid: complex.grid,
+        grid: complex.output.grid,
         area_a,
         area_b,
-        area_complex: complex.area,
-        buried: 0.5 * (area_a + area_b - complex.area),
+        area_complex,
+        buried: 0.5 * (area_a + area_b - area_complex),
         atoms_a_alone,
         atoms_b_alone,
-        atoms_a_complex,
-        atoms_b_complex,
+        atoms_a_complex: pick(complex.a_at),
+        atoms_b_complex: pick(complex.b_at),
     })
+}
+
+impl Complex<'_> {
+    /// Fails unless the maps give each of A's `a_len` and B's `b_len` atoms its own atom of
+    /// the complex, and every atom of the complex is one of them, or when the mesh is not kept.
+    fn check(&self, a_len: usize, b_len: usize) -> Result<(), MeasureError> {
+        let n = self.atoms.len();
+        for (what, at, len) in [
+            ("complex atoms of A", self.a_at, a_len),
+            ("complex atoms of B", self.b_at, b_len),
+        ] {
+            if at.len() != len {
+                return Err(MeasureError::LengthMismatch {
+                    what,
+                    expected: len,
+                    got: at.len(),
+                });
+            }
+        }
+        if a_len + b_len != n {
+            return Err(MeasureError::LengthMismatch {
+                what: "complex atoms",
+                expected: a_len + b_len,
+                got: n,
+            });
+        }
+        let mut seen = vec![false; n];
+        for &i in self.a_at.iter().chain(self.b_at) {
+            let Some(slot) = seen.get_mut(i as usize).filter(|s| !**s) else {
+                return Err(MeasureError::IndexOutOfRange {
+                    what: "complex atom",
+                    index: i as usize,
+                    len: n,
+                });
+            };
+            *slot = true;
+        }
+        if self.output.counts_without_mesh.is_some() {
+            return Err(MeasureError::NoMesh);
+        }
+        Ok(())
+    }
+}
+
+/// `engine` when it can compute on a given grid ([`SurfaceEngine::set_grid`]), otherwise a
+/// CPU engine with its vertex mode, kept in `fallback`.
+fn grid_engine<'e>(
+    engine: &'e mut dyn SurfaceEngine,
+    fallback: &'e mut Option<CpuEngine>,
+) -> &'e mut dyn SurfaceEngine {
+    if engine.set_grid(None) {
+        engine
+    } else {
+        fallback.insert(CpuEngine::new().with_vertices(engine.vertices()))
+    }
 }
 
 /// The positions (Å) and radii (Å) of `a`'s atoms followed by `b`'s: the complex.

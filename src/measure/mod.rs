@@ -61,7 +61,7 @@ pub use csv::{
 };
 pub use interface::{
     CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
-    interface_with,
+    interface_on, interface_with,
 };
 pub use probe_cavities::{
     ProbeOptions, probe_cavities, probe_cavity_walls, ses_probe_cavities, ses_probe_cavity_walls,

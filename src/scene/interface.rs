@@ -6,12 +6,14 @@
 
 use glam::Vec3;
 
+use crate::measure::interface::Complex;
 use crate::measure::{
     self, ContactResidue, InterfaceResult, MeasureError, ProbeOptions, ResidueNames,
 };
 use crate::model::{Frame, RadiusOverrides, Topology};
-use crate::surface::{CpuEngine, SurfaceParams};
+use crate::surface::{AtomSet, CpuEngine, SurfaceEngine, SurfaceParams};
 
+use super::frame::LayerResult;
 use super::layer::{Layer, LayerError, LayerFrame};
 use super::representation::{RepStyle, Representation, RepresentationError};
 
@@ -56,6 +58,20 @@ pub struct InterfaceFrame {
     pub result: InterfaceResult,
     /// Residues losing more than the threshold asked for, those of A first.
     pub contacts: Vec<ContactResidue>,
+    /// True when the complex was a surface the frame already had ([`ShownSurface`]), not
+    /// computed again.
+    pub complex_shown: bool,
+}
+
+/// A surface the frame already has (a representation's), with the topology atoms of its
+/// particles (sorted): [`Interface::measure_on`] takes it as the complex when it is the surface
+/// of exactly both sides' atoms, with the same positions, radii, parameters and vertex mode.
+#[derive(Clone, Copy)]
+pub struct ShownSurface<'a> {
+    /// The representation's result (its mesh kept).
+    pub layer: &'a LayerResult,
+    /// The topology atoms of its particles, ascending.
+    pub atoms: &'a [u32],
 }
 
 /// Two selections to measure the interface of.
@@ -144,10 +160,24 @@ impl Interface {
         frame: &Frame,
         threshold: f64,
     ) -> Result<InterfaceFrame, InterfaceError> {
+        self.measure_on(topology, frame, threshold, &[])
+    }
+
+    /// [`Interface::measure`], taking the complex from `shown` when one of them is the surface
+    /// of both sides together ([`ShownSurface`]) instead of computing it again: the result is
+    /// the same (to rounding when its atoms are in another order than A's then B's).
+    pub fn measure_on(
+        &mut self,
+        topology: &Topology,
+        frame: &Frame,
+        threshold: f64,
+        shown: &[ShownSurface<'_>],
+    ) -> Result<InterfaceFrame, InterfaceError> {
         let [a, b] = &mut self.sides;
         let (fa, fb) = (a.frame(topology, frame)?, b.frame(topology, frame)?);
         let (ia, ib) = (atoms_of(&fa, a)?, atoms_of(&fb, b)?);
         self.check_apart(topology, &ia, &ib)?;
+        let mut complex_shown = false;
         let result = match self.probe {
             Some(probe) => measure::ses_probe_interface(
                 topology,
@@ -158,17 +188,100 @@ impl Interface {
                     ..ProbeOptions::default()
                 },
             )?,
-            None => measure::interface_with(
-                &mut self.engine,
-                &fa.atom_set(),
-                &fb.atom_set(),
-                complex_radii(&fa, &fb).as_deref(),
-                &self.params,
-            )?,
+            None => {
+                let (sa, sb) = (fa.atom_set(), fb.atom_set());
+                let radii = complex_radii(&fa, &fb);
+                let sides = Sides {
+                    atoms: [&ia, &ib],
+                    sets: [&sa, &sb],
+                    complex_radii: radii.as_deref(),
+                };
+                match shown.iter().find_map(|s| self.complex_in(s, &sides)) {
+                    Some((a_at, b_at, layer)) => {
+                        complex_shown = true;
+                        let complex = Complex {
+                            output: &layer.output,
+                            atoms: AtomSet {
+                                positions: &layer.particles.positions,
+                                radii: &layer.particles.radii,
+                                colours: None,
+                            },
+                            a_at: &a_at,
+                            b_at: &b_at,
+                        };
+                        measure::interface_on(&mut self.engine, &sa, &sb, &complex, &self.params)?
+                    }
+                    None => measure::interface_with(
+                        &mut self.engine,
+                        &sa,
+                        &sb,
+                        radii.as_deref(),
+                        &self.params,
+                    )?,
+                }
+            }
         };
         let contacts =
             measure::contact_residues(topology, Some(&ia), Some(&ib), &result, threshold)?;
-        Ok(InterfaceFrame { result, contacts })
+        Ok(InterfaceFrame {
+            result,
+            contacts,
+            complex_shown,
+        })
+    }
+}
+
+/// One frame's two sides: their topology atoms, their engine inputs and the complex's radii
+/// (A's atoms then B's; `None`: each side's own).
+struct Sides<'a> {
+    atoms: [&'a [u32]; 2],
+    sets: [&'a AtomSet<'a>; 2],
+    complex_radii: Option<&'a [f32]>,
+}
+
+impl Interface {
+    /// Where each atom of A and of B is in `shown`'s particles, when `shown` is the surface of
+    /// exactly these atoms, at the same positions with the complex's radii, computed with this
+    /// interface's parameters and vertex mode, closed (not periodic) and with its mesh.
+    fn complex_in<'s>(
+        &self,
+        shown: &ShownSurface<'s>,
+        sides: &Sides<'_>,
+    ) -> Option<(Vec<u32>, Vec<u32>, &'s LayerResult)> {
+        let layer = shown.layer;
+        let particles = &layer.particles;
+        let fits = self.probe.is_none()
+            && layer.is_surface()
+            && !layer.beads
+            && layer.closed
+            && layer.output.counts_without_mesh.is_none()
+            && layer.rep.params() == self.params
+            && layer.rep.vertices == self.engine.vertices()
+            && particles.positions.len() == shown.atoms.len()
+            && particles.radii.len() == shown.atoms.len()
+            && shown.atoms.len() == sides.atoms[0].len() + sides.atoms[1].len();
+        if !fits {
+            return None;
+        }
+        let mut k = 0;
+        let mut place = |atoms: &[u32], set: &AtomSet<'_>| -> Option<Vec<u32>> {
+            let mut at = Vec::with_capacity(atoms.len());
+            for (i, &atom) in atoms.iter().enumerate() {
+                let j = shown.atoms.binary_search(&atom).ok()?;
+                let radius = sides.complex_radii.map_or(set.radii[i], |r| r[k]);
+                k += 1;
+                let same = particles.positions[j] == set.positions[i]
+                    && particles.radii[j].to_bits() == radius.to_bits();
+                if !same {
+                    return None;
+                }
+                at.push(j as u32);
+            }
+            Some(at)
+        };
+        let a_at = place(sides.atoms[0], sides.sets[0])?;
+        let b_at = place(sides.atoms[1], sides.sets[1])?;
+        Some((a_at, b_at, layer))
     }
 }
 

@@ -84,6 +84,7 @@ mod render_stereo;
 mod render_still;
 mod scene_cavities;
 mod scene_interface;
+mod scene_interface_complex;
 mod scene_lipids;
 mod scene_movie;
 mod scene_one_path;

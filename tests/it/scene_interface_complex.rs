@@ -1,0 +1,175 @@
+//! The interface takes its complex from the frame's own surface (issue 32: "interface costs the
+//! two extra surfaces, no more"): on the HIV protease dimer 1hpv, [`Interface::measure_on`]
+//! with the scene's surface of both chains gives what [`Interface::measure`] computes itself,
+//! bitwise when A's atoms come before B's in the file, to rounding when they do not, at the
+//! default parameters and under the SES preset (radii that follow exposure, refined vertices);
+//! a surface of other atoms, radii or parameters is not taken.
+
+use std::sync::Arc;
+
+use mdsurf::measure::{CONTACT_THRESHOLD, InterfaceResult};
+use mdsurf::model::{Frame, RadiusOverrides, Topology};
+use mdsurf::scene::interface::{Interface, InterfaceFrame, ShownSurface};
+use mdsurf::scene::representation::{RepStyle, Representation};
+use mdsurf::scene::{LayerResult, RepRequest, SceneBackend, SceneEngine};
+use mdsurf::surface::{CpuEngine, Preset, RadiusSet, SurfaceParams};
+
+use crate::data_support::data;
+
+const CHAIN_A: &str = "protein and chain A";
+const CHAIN_B: &str = "protein and chain B";
+
+fn dimer() -> (Topology, Arc<Frame>) {
+    let traj = mdsurf::io::open(&data("1hpv.pdb"), None).expect("open 1hpv");
+    let frame = traj.read_frame(0).expect("frame 0");
+    (traj.topology().clone(), Arc::new(frame))
+}
+
+/// The surface representation `selection` with the defaults, or under the SES preset.
+fn rep(selection: &str, ses: bool) -> Representation {
+    let mut rep = Representation::new("shown", selection, RepStyle::Surface);
+    if ses {
+        rep.set_params(&Preset::Ses.apply(SurfaceParams::default()));
+        rep.radii = RadiusSet::Ses;
+        rep.vertices = Preset::Ses.vertices();
+    }
+    rep
+}
+
+/// The scene's layer of `rep` on frame 0, with its topology atoms.
+fn shown_layer(
+    topology: &Topology,
+    frame: &Arc<Frame>,
+    rep: Representation,
+) -> (Arc<LayerResult>, Vec<u32>) {
+    let mut scene = SceneEngine::new(SceneBackend::Host(Box::new(CpuEngine::new())));
+    let reps = [RepRequest { id: 1, rep }];
+    let computed = scene
+        .frame(topology, 0, frame, &reps)
+        .expect("the frame computes");
+    let layer = computed.layers[0].clone();
+    let atoms = scene.layer(1).expect("bound").atoms(frame);
+    (layer, atoms)
+}
+
+/// The interface of `sides` measured on its own and with `shown` offered.
+fn both_ways(
+    topology: &Topology,
+    frame: &Frame,
+    sides: [&str; 2],
+    base: &Representation,
+    shown: (&LayerResult, &[u32]),
+) -> (InterfaceFrame, InterfaceFrame) {
+    let overrides = RadiusOverrides::default();
+    let mut own = Interface::new(topology, sides, base, &overrides, None).expect("sides bind");
+    let alone = own
+        .measure(topology, frame, CONTACT_THRESHOLD)
+        .expect("measured");
+    let offered = [ShownSurface {
+        layer: shown.0,
+        atoms: shown.1,
+    }];
+    let mut taking = Interface::new(topology, sides, base, &overrides, None).expect("sides bind");
+    let taken = taking
+        .measure_on(topology, frame, CONTACT_THRESHOLD, &offered)
+        .expect("measured");
+    (alone, taken)
+}
+
+/// Every number of `got` within `rel` of `want` (relative to the largest area of its kind).
+fn close(want: &InterfaceResult, got: &InterfaceResult, rel: f64, what: &str) {
+    let totals = [
+        (want.area_a, got.area_a),
+        (want.area_b, got.area_b),
+        (want.area_complex, got.area_complex),
+        (want.buried, got.buried),
+    ];
+    for (k, (w, g)) in totals.into_iter().enumerate() {
+        assert!(
+            (w - g).abs() <= rel * want.area_complex,
+            "{what}: total {k}: {g} vs {w}"
+        );
+    }
+    for (w, g) in [
+        (&want.atoms_a_alone, &got.atoms_a_alone),
+        (&want.atoms_b_alone, &got.atoms_b_alone),
+        (&want.atoms_a_complex, &got.atoms_a_complex),
+        (&want.atoms_b_complex, &got.atoms_b_complex),
+    ] {
+        assert_eq!(w.len(), g.len(), "{what}");
+        let largest = w.iter().fold(0.0f64, |m, &x| m.max(x));
+        for (i, (w, g)) in w.iter().zip(g).enumerate() {
+            assert!(
+                (w - g).abs() <= rel * largest,
+                "{what}: atom {i}: {g} vs {w}"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_frames_surface_of_both_chains_is_the_complex() {
+    let (topology, frame) = dimer();
+    for ses in [false, true] {
+        let base = rep("all", ses);
+        let (layer, atoms) = shown_layer(&topology, &frame, rep("protein", ses));
+        // Chain A's atoms come first in the file: the complex is the same sum, bit for bit.
+        let (alone, taken) = both_ways(
+            &topology,
+            &frame,
+            [CHAIN_A, CHAIN_B],
+            &base,
+            (&layer, &atoms),
+        );
+        assert!(!alone.complex_shown);
+        assert!(taken.complex_shown, "ses {ses}: the shown surface is taken");
+        assert_eq!(alone.result, taken.result, "ses {ses}");
+        assert_eq!(alone.contacts, taken.contacts, "ses {ses}");
+        assert!(
+            alone.result.buried > 500.0,
+            "ses {ses}: {}",
+            alone.result.buried
+        );
+        // B first: the same surfaces, A's per-atom areas now in another order of the sum.
+        let (alone, taken) = both_ways(
+            &topology,
+            &frame,
+            [CHAIN_B, CHAIN_A],
+            &base,
+            (&layer, &atoms),
+        );
+        assert!(taken.complex_shown, "ses {ses}: B first");
+        close(
+            &alone.result,
+            &taken.result,
+            1e-6,
+            &format!("ses {ses}, B first"),
+        );
+    }
+}
+
+#[test]
+fn a_surface_of_other_atoms_radii_or_parameters_is_not_taken() {
+    let (topology, frame) = dimer();
+    let base = rep("all", false);
+    let sides = [CHAIN_A, CHAIN_B];
+    // One atom short of the complex.
+    let fewer = rep("protein and not (chain B and resid 99 and name O)", false);
+    // The complex's atoms, but the SES preset's radii and parameters.
+    let other_params = rep("protein", true);
+    // The complex under another spacing.
+    let spacing = Representation {
+        spacing: 0.8,
+        ..rep("protein", false)
+    };
+    for (what, shown) in [
+        ("fewer atoms", fewer),
+        ("ses", other_params),
+        ("spacing", spacing),
+    ] {
+        let (layer, atoms) = shown_layer(&topology, &frame, shown);
+        let (alone, taken) = both_ways(&topology, &frame, sides, &base, (&layer, &atoms));
+        assert!(!taken.complex_shown, "{what}: not taken");
+        assert_eq!(alone.result, taken.result, "{what}");
+    }
+}
