@@ -3,6 +3,9 @@
 //! bound to the topology, with the radii and surface parameters of a representation), and a
 //! frame is measured on the Gaussian surface ([`measure::interface`], CPU engine) or, with a
 //! probe radius, on the probe's solvent-excluded surface ([`measure::ses_probe_interface`]).
+//! When the frame already has the surface of both sides together ([`ShownSurface`], such as
+//! the `--select` surface of `mdsurf surface`), that surface is the complex and only the two
+//! sides are computed ([`measure::interface_on`]).
 
 use glam::Vec3;
 
