@@ -85,9 +85,17 @@ impl MeasureArgs {
     }
 
     /// True when the frame's surfaces must keep their meshes: measured, or one of them may be
-    /// the interface's complex (a Gaussian interface takes it instead of computing it again).
+    /// the complex of a Gaussian interface whose contact residues are listed (their per-atom
+    /// areas are weighed on its mesh).
     pub fn keeps_meshes(&self) -> bool {
-        self.needs_meshes() || (self.interface.is_some() && self.interface_probe.is_none())
+        self.needs_meshes()
+            || (self.interface.is_some() && self.interface_probe.is_none() && self.lists_contacts())
+    }
+
+    /// True when a table lists the interface's contact residues (`--interface-csv` or
+    /// `--interface-residues`).
+    pub fn lists_contacts(&self) -> bool {
+        self.interface_csv.is_some() || self.interface_residues.is_some()
     }
 
     /// True when cavities are found and tracked (`--cavities` or `--cavity-events`).
@@ -149,8 +157,9 @@ fn parse_probe(s: &str) -> Result<f32, super::arg_error::ArgError> {
 /// The two sides of `--interface`, bound to the topology, and the CSV rows so far.
 struct Interface {
     sides: SceneInterface,
-    /// Contact threshold in Å².
-    threshold: f64,
+    /// Contact threshold in Å², when a table lists the contact residues (otherwise they are
+    /// not looked for, nor the per-atom areas they need weighed).
+    threshold: Option<f64>,
     rows: InterfaceCsv,
     residues: ContactCsv,
 }
@@ -207,7 +216,7 @@ impl Measurer {
                     .map_err(|e| anyhow!("--interface: {e}"))?;
                 Some(Interface {
                     sides,
-                    threshold: args.contact_threshold,
+                    threshold: args.lists_contacts().then_some(args.contact_threshold),
                     rows: InterfaceCsv::new(),
                     residues: ContactCsv::new(),
                 })

@@ -1,6 +1,7 @@
 //! The area buried between two groups of atoms, A and B: `(area(A) + area(B) - area(A and B)) /
-//! 2`, all three surfaces on the union's grid so that the grid's sampling cancels, and the
-//! residues that lose area from alone to the complex.
+//! 2`, all three surfaces on the union's grid so that the grid's sampling cancels (each side on
+//! the box of that grid's samples around it), and the residues that lose area from alone to the
+//! complex. The complex may be a surface the caller already has ([`interface_on`]).
 
 use glam::Vec3;
 
@@ -23,7 +24,8 @@ pub struct InterfaceResult {
     /// Buried area in Å²: `(area_a + area_b - area_complex) / 2` (the area each side loses,
     /// averaged; some papers report twice this).
     pub buried: f64,
-    /// Area of each atom of A alone (Å², in A's order).
+    /// Area of each atom of A alone (Å², in A's order; this and the three below are empty when
+    /// the per-atom areas were not asked for).
     pub atoms_a_alone: Vec<f64>,
     /// Area of each atom of B alone (Å², in B's order).
     pub atoms_b_alone: Vec<f64>,
@@ -47,12 +49,13 @@ pub fn interface(
     b: &AtomSet<'_>,
     params: &SurfaceParams,
 ) -> Result<InterfaceResult, MeasureError> {
-    interface_with(engine, a, b, None, params)
+    interface_with(engine, a, b, None, params, true)
 }
 
 /// [`interface`], the complex with `complex_radii` (Å, `a`'s atoms then `b`'s) instead of each
 /// side's own: radii that follow each atom's surroundings (the SES preset's exposure) are then
 /// counted over the complex for the complex, as a surface of both sides together has them.
+/// Without `per_atom` the per-atom areas are not weighed (their vectors are empty).
 /// Fails as [`interface`] does, or when `complex_radii` has another length.
 pub fn interface_with(
     engine: &mut dyn SurfaceEngine,
@@ -60,6 +63,7 @@ pub fn interface_with(
     b: &AtomSet<'_>,
     complex_radii: Option<&[f32]>,
     params: &SurfaceParams,
+    per_atom: bool,
 ) -> Result<InterfaceResult, MeasureError> {
     a.validate()?;
     b.validate()?;
@@ -83,8 +87,10 @@ pub fn interface_with(
     let mut fallback = None;
     let engine = grid_engine(engine, &mut fallback);
     engine.set_grid(None);
+    engine.set_keep_mesh(per_atom);
+    let output = engine.compute(&union, params);
     engine.set_keep_mesh(true);
-    let output = engine.compute(&union, params)?;
+    let output = output?;
     let a_at: Vec<u32> = (0..a.len() as u32).collect();
     let b_at: Vec<u32> = (a.len() as u32..union.len() as u32).collect();
     let complex = Complex {
@@ -93,7 +99,7 @@ pub fn interface_with(
         a_at: &a_at,
         b_at: &b_at,
     };
-    interface_on(engine, a, b, &complex, params)
+    interface_on(engine, a, b, &complex, params, per_atom)
 }
 
 /// A surface of both sides together computed elsewhere, such as the frame's own surface of the
@@ -111,10 +117,11 @@ pub struct Complex<'a> {
 }
 
 /// [`interface`] with the complex's surface already computed (`complex`, under the same
-/// `params` and vertex mode as `engine`'s): A and B are computed on its grid. Bitwise the same
-/// density as [`interface_with`] computes when `complex` came from the same engine with the
-/// atoms in the same order; another order sums each sample's Gaussians in another order (the
-/// same to rounding).
+/// `params` and vertex mode as `engine`'s): A and B are computed on the part of its grid that
+/// holds each ([`lattice_part`]). Bitwise what [`interface_with`] computes when `complex` came
+/// from the same engine with the atoms in the same order; another order sums each sample's
+/// Gaussians in another order (the same to rounding). Without `per_atom` the per-atom areas
+/// are not weighed (their vectors are empty; the contact residues need them).
 ///
 /// Fails as [`interface`] does, when the index maps do not fit, or when `complex` has no mesh.
 pub fn interface_on(
@@ -123,30 +130,44 @@ pub fn interface_on(
     b: &AtomSet<'_>,
     complex: &Complex<'_>,
     params: &SurfaceParams,
+    per_atom: bool,
 ) -> Result<InterfaceResult, MeasureError> {
     a.validate()?;
     b.validate()?;
     params.validate()?;
-    complex.check(a.len(), b.len())?;
+    complex.check(a.len(), b.len(), per_atom)?;
     let [a, b] = [a, b].map(|s| AtomSet {
         colours: None,
         ..*s
     });
     let mut fallback = None;
     let engine = grid_engine(engine, &mut fallback);
-    engine.set_keep_mesh(true);
+    // Per-atom areas are weighed on the meshes; the areas alone need none.
+    engine.set_keep_mesh(per_atom);
     let measure = engine.vertices().effective(params);
-    engine.set_grid(Some(complex.output.grid));
     let alone = |engine: &mut dyn SurfaceEngine, set: &AtomSet<'_>| -> Result<_, MeasureError> {
+        engine.set_grid(Some(lattice_part(&complex.output.grid, set, params)));
         let out: SurfaceOutput = engine.compute(set, params)?;
-        let areas = atom_areas_of(&out, set, &measure)?;
+        let areas = match per_atom {
+            true => atom_areas_of(&out, set, &measure)?,
+            false => Vec::new(),
+        };
         Ok((out.area, areas))
     };
     let both = (|| Ok::<_, MeasureError>((alone(engine, &a)?, alone(engine, &b)?)))();
     engine.set_grid(None);
+    engine.set_keep_mesh(true);
     let ((area_a, atoms_a_alone), (area_b, atoms_b_alone)) = both?;
-    let in_complex = atom_areas_of(complex.output, &complex.atoms, &measure)?;
-    let pick = |at: &[u32]| -> Vec<f64> { at.iter().map(|&i| in_complex[i as usize]).collect() };
+    let in_complex = match per_atom {
+        true => atom_areas_of(complex.output, &complex.atoms, &measure)?,
+        false => Vec::new(),
+    };
+    let pick = |at: &[u32]| -> Vec<f64> {
+        match per_atom {
+            true => at.iter().map(|&i| in_complex[i as usize]).collect(),
+            false => Vec::new(),
+        }
+    };
     let area_complex = complex.output.area;
     Ok(InterfaceResult {
         grid: complex.output.grid,
@@ -163,8 +184,9 @@ pub fn interface_on(
 
 impl Complex<'_> {
     /// Fails unless the maps give each of A's `a_len` and B's `b_len` atoms its own atom of
-    /// the complex, and every atom of the complex is one of them, or when the mesh is not kept.
-    fn check(&self, a_len: usize, b_len: usize) -> Result<(), MeasureError> {
+    /// the complex, and every atom of the complex is one of them, or when the mesh is needed
+    /// (`per_atom`) and was not kept.
+    fn check(&self, a_len: usize, b_len: usize, per_atom: bool) -> Result<(), MeasureError> {
         let n = self.atoms.len();
         for (what, at, len) in [
             ("complex atoms of A", self.a_at, a_len),
@@ -196,10 +218,43 @@ impl Complex<'_> {
             };
             *slot = true;
         }
-        if self.output.counts_without_mesh.is_some() {
+        if per_atom && self.output.counts_without_mesh.is_some() {
             return Err(MeasureError::NoMesh);
         }
         Ok(())
+    }
+}
+
+/// The part of `grid` (its own samples, a box of them) that holds `set`'s atoms padded as
+/// [`GridSpec::for_atoms`] pads them: a side's surface computed there samples the density at the
+/// complex's own points (to rounding: the corner moves by whole samples), without the samples
+/// far from its atoms.
+fn lattice_part(grid: &GridSpec, set: &AtomSet<'_>, params: &SurfaceParams) -> GridSpec {
+    let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let (lo, hi) = set
+        .positions
+        .iter()
+        .fold(far, |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let max_radius = set.radii.iter().fold(0.0f32, |m, &r| m.max(r));
+    let h = grid.spacing;
+    let pad = params.cutoff() * params.radius_scale * max_radius + h;
+    let mut origin = grid.origin;
+    let mut dims = grid.dims;
+    for axis in 0..3 {
+        let last = grid.dims[axis].saturating_sub(1) as f32;
+        // The samples at or just past the padded box (`check_forced_grid` allows rounding).
+        let first = ((lo[axis] - pad - grid.origin[axis]) / h).floor();
+        let end = ((hi[axis] + pad - grid.origin[axis]) / h).ceil();
+        let (first, end) = (first.clamp(0.0, last), end.clamp(0.0, last));
+        if end > first {
+            origin[axis] = grid.origin[axis] + first * h;
+            dims[axis] = (end - first) as u32 + 1;
+        }
+    }
+    GridSpec {
+        origin,
+        spacing: h,
+        dims,
     }
 }
 

@@ -163,17 +163,19 @@ impl Interface {
         frame: &Frame,
         threshold: f64,
     ) -> Result<InterfaceFrame, InterfaceError> {
-        self.measure_on(topology, frame, threshold, &[])
+        self.measure_on(topology, frame, Some(threshold), &[])
     }
 
     /// [`Interface::measure`], taking the complex from `shown` when one of them is the surface
     /// of both sides together ([`ShownSurface`]) instead of computing it again: the result is
-    /// the same (to rounding when its atoms are in another order than A's then B's).
+    /// the same (to rounding when its atoms are in another order than A's then B's). With no
+    /// `threshold` the contact residues are not looked for: the Gaussian surfaces' per-atom
+    /// areas are not weighed (empty in the result) and `contacts` is empty.
     pub fn measure_on(
         &mut self,
         topology: &Topology,
         frame: &Frame,
-        threshold: f64,
+        threshold: Option<f64>,
         shown: &[ShownSurface<'_>],
     ) -> Result<InterfaceFrame, InterfaceError> {
         let [a, b] = &mut self.sides;
@@ -199,7 +201,10 @@ impl Interface {
                     sets: [&sa, &sb],
                     complex_radii: radii.as_deref(),
                 };
-                match shown.iter().find_map(|s| self.complex_in(s, &sides)) {
+                match shown
+                    .iter()
+                    .find_map(|s| self.complex_in(s, &sides, threshold.is_some()))
+                {
                     Some((a_at, b_at, layer)) => {
                         complex_shown = true;
                         let complex = Complex {
@@ -212,7 +217,14 @@ impl Interface {
                             a_at: &a_at,
                             b_at: &b_at,
                         };
-                        measure::interface_on(&mut self.engine, &sa, &sb, &complex, &self.params)?
+                        measure::interface_on(
+                            &mut self.engine,
+                            &sa,
+                            &sb,
+                            &complex,
+                            &self.params,
+                            threshold.is_some(),
+                        )?
                     }
                     None => measure::interface_with(
                         &mut self.engine,
@@ -220,12 +232,15 @@ impl Interface {
                         &sb,
                         radii.as_deref(),
                         &self.params,
+                        threshold.is_some(),
                     )?,
                 }
             }
         };
-        let contacts =
-            measure::contact_residues(topology, Some(&ia), Some(&ib), &result, threshold)?;
+        let contacts = match threshold {
+            Some(t) => measure::contact_residues(topology, Some(&ia), Some(&ib), &result, t)?,
+            None => Vec::new(),
+        };
         Ok(InterfaceFrame {
             result,
             contacts,
@@ -245,11 +260,13 @@ struct Sides<'a> {
 impl Interface {
     /// Where each atom of A and of B is in `shown`'s particles, when `shown` is the surface of
     /// exactly these atoms, at the same positions with the complex's radii, computed with this
-    /// interface's parameters and vertex mode, closed (not periodic) and with its mesh.
+    /// interface's parameters and vertex mode, closed (not periodic), with its mesh when the
+    /// per-atom areas are weighed (`per_atom`).
     fn complex_in<'s>(
         &self,
         shown: &ShownSurface<'s>,
         sides: &Sides<'_>,
+        per_atom: bool,
     ) -> Option<(Vec<u32>, Vec<u32>, &'s LayerResult)> {
         let layer = shown.layer;
         let particles = &layer.particles;
@@ -257,7 +274,7 @@ impl Interface {
             && layer.is_surface()
             && !layer.beads
             && layer.closed
-            && layer.output.counts_without_mesh.is_none()
+            && (!per_atom || layer.output.counts_without_mesh.is_none())
             && layer.rep.params() == self.params
             && layer.rep.vertices == self.engine.vertices()
             && particles.positions.len() == shown.atoms.len()

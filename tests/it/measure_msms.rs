@@ -85,6 +85,7 @@ fn buried_against_msms(complex: &str, vertices: VertexMode) -> (f64, f64, f64) {
         &set(&b, &rb),
         Some(&complex_radii),
         &params,
+        true,
     )
     .expect("interface");
     let msms = num(&row[10]);
