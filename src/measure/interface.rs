@@ -1,7 +1,6 @@
 //! The area buried between two groups of atoms, A and B: `(area(A) + area(B) - area(A and B)) /
-//! 2`, all three surfaces on the union's grid so that the grid's sampling cancels (each side on
-//! the box of that grid's samples around it), and the residues that lose area from alone to the
-//! complex. The complex may be a surface the caller already has ([`interface_on`]).
+//! 2`, all three surfaces on the union's grid so that the grid's sampling cancels, and the
+//! residues that lose area from alone to the complex. The complex may be a surface the caller already has ([`interface_on`]).
 
 use glam::Vec3;
 
@@ -117,8 +116,8 @@ pub struct Complex<'a> {
 }
 
 /// [`interface`] with the complex's surface already computed (`complex`, under the same
-/// `params` and vertex mode as `engine`'s): A and B are computed on the part of its grid that
-/// holds each ([`lattice_part`]). Bitwise what [`interface_with`] computes when `complex` came
+/// `params` and vertex mode as `engine`'s): A and B are computed on its grid. Bitwise what
+/// [`interface_with`] computes when `complex` came
 /// from the same engine with the atoms in the same order; another order sums each sample's
 /// Gaussians in another order (the same to rounding). Without `per_atom` the per-atom areas
 /// are not weighed (their vectors are empty; the contact residues need them).
@@ -145,8 +144,8 @@ pub fn interface_on(
     // Per-atom areas are weighed on the meshes; the areas alone need none.
     engine.set_keep_mesh(per_atom);
     let measure = engine.vertices().effective(params);
+    engine.set_grid(Some(complex.output.grid));
     let alone = |engine: &mut dyn SurfaceEngine, set: &AtomSet<'_>| -> Result<_, MeasureError> {
-        engine.set_grid(Some(lattice_part(&complex.output.grid, set, params)));
         let out: SurfaceOutput = engine.compute(set, params)?;
         let areas = match per_atom {
             true => atom_areas_of(&out, set, &measure)?,
@@ -222,39 +221,6 @@ impl Complex<'_> {
             return Err(MeasureError::NoMesh);
         }
         Ok(())
-    }
-}
-
-/// The part of `grid` (its own samples, a box of them) that holds `set`'s atoms padded as
-/// [`GridSpec::for_atoms`] pads them: a side's surface computed there samples the density at the
-/// complex's own points (to rounding: the corner moves by whole samples), without the samples
-/// far from its atoms.
-fn lattice_part(grid: &GridSpec, set: &AtomSet<'_>, params: &SurfaceParams) -> GridSpec {
-    let far = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    let (lo, hi) = set
-        .positions
-        .iter()
-        .fold(far, |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-    let max_radius = set.radii.iter().fold(0.0f32, |m, &r| m.max(r));
-    let h = grid.spacing;
-    let pad = params.cutoff() * params.radius_scale * max_radius + h;
-    let mut origin = grid.origin;
-    let mut dims = grid.dims;
-    for axis in 0..3 {
-        let last = grid.dims[axis].saturating_sub(1) as f32;
-        // The samples at or just past the padded box (`check_forced_grid` allows rounding).
-        let first = ((lo[axis] - pad - grid.origin[axis]) / h).floor();
-        let end = ((hi[axis] + pad - grid.origin[axis]) / h).ceil();
-        let (first, end) = (first.clamp(0.0, last), end.clamp(0.0, last));
-        if end > first {
-            origin[axis] = grid.origin[axis] + first * h;
-            dims[axis] = (end - first) as u32 + 1;
-        }
-    }
-    GridSpec {
-        origin,
-        spacing: h,
-        dims,
     }
 }
 

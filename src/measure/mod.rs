@@ -24,8 +24,7 @@
 //!   [`ExposureTable::SAMPLES`] residues of that name in the structure the table is built from.
 //!   1 is as exposed as an isolated residue; values a little above 1 are possible.
 //! - **Buried area** ([`interface()`]): `(area(A) + area(B) - area(A and B)) / 2`, the three
-//!   surfaces on the union's grid ([`SurfaceEngine::set_grid`](crate::surface::SurfaceEngine::set_grid);
-//!   each side on the box of its samples around that side).
+//!   surfaces on the union's grid ([`SurfaceEngine::set_grid`](crate::surface::SurfaceEngine::set_grid)).
 //!   Contact residues ([`contact_residues`]) lose more than a threshold (default 1 Å²) of area
 //!   from alone to the complex.
 //! - **Cavities** ([`cavities()`]): the mesh's connected components (triangles sharing a vertex);

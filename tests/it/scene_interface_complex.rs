@@ -12,7 +12,7 @@ use mdsurf::model::{Frame, RadiusOverrides, Topology};
 use mdsurf::scene::interface::{Interface, InterfaceFrame, ShownSurface};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, RepRequest, SceneBackend, SceneEngine};
-use mdsurf::surface::{AtomSet, CpuEngine, Preset, RadiusSet, SurfaceEngine, SurfaceParams};
+use mdsurf::surface::{CpuEngine, Preset, RadiusSet, SurfaceParams};
 
 use crate::data_support::data;
 
@@ -210,60 +210,9 @@ fn without_contacts_the_areas_are_the_same_and_no_atom_is_weighed() {
     }
 }
 
-/// The sides are computed on the part of the complex's grid around each: their areas are those
-/// on the whole grid, to rounding.
-#[test]
-fn each_side_on_its_part_of_the_complexs_grid_has_its_area_on_the_whole_grid() {
-    let (topology, frame) = dimer();
-    for ses in [false, true] {
-        let base = rep("all", ses);
-        let overrides = RadiusOverrides::default();
-        let mut sides =
-            Interface::new(&topology, [CHAIN_A, CHAIN_B], &base, &overrides, None).expect("bind");
-        let r = sides
-            .measure_on(&topology, &frame, None, &[])
-            .expect("measured")
-            .result;
-        for (selection, area) in [(CHAIN_A, r.area_a), (CHAIN_B, r.area_b)] {
-            let (positions, radii) = side_atoms(&topology, &frame, selection, &base);
-            let mut engine = CpuEngine::new().with_vertices(base.vertices);
-            assert!(engine.set_grid(Some(r.grid)));
-            let atoms = AtomSet {
-                positions: &positions,
-                radii: &radii,
-                colours: None,
-            };
-            let whole = engine
-                .compute(&atoms, &base.params())
-                .expect("on the whole grid");
-            assert!(
-                (whole.area - area).abs() <= 1e-6 * whole.area,
-                "ses {ses}, {selection}: {area} vs {} on the whole grid",
-                whole.area
-            );
-        }
-    }
-}
-
 /// The number of atoms `selection` picks.
 fn atoms_of(topology: &Topology, selection: &str) -> usize {
     let (_, frame) = dimer();
     let rep = rep(selection, false);
     shown_layer(topology, &frame, rep).1.len()
-}
-
-/// The positions and radii (Å) a side `selection` has alone, as its own surface layer.
-fn side_atoms(
-    topology: &Topology,
-    frame: &Arc<Frame>,
-    selection: &str,
-    base: &Representation,
-) -> (Vec<glam::Vec3>, Vec<f32>) {
-    let mut side = base.clone();
-    side.selection = selection.into();
-    let (layer, _) = shown_layer(topology, frame, side);
-    (
-        layer.particles.positions.clone(),
-        layer.particles.radii.to_vec(),
-    )
 }
