@@ -51,7 +51,8 @@ pub struct MeasureArgs {
     #[arg(long, value_name = "A", value_parser = parse_probe)]
     pub cavity_probe: Option<f32>,
     /// Buried area between two selections, (area(A) + area(B) - area(A or B)) / 2, the three
-    /// surfaces on one grid (CPU engine, the command's H, R, I and quality). Under --preset ses
+    /// surfaces on one grid (CPU engine, the command's H, R, I and quality; the --select
+    /// surface is the complex when it holds exactly both sides). Under --preset ses
     /// it is within 2 % of MSMS's buried SES on a large interface (1hpv) but 11 to 20 % above
     /// it on small ones (1a28, 7ddo); --interface-probe 1.4 measures the SES itself.
     #[arg(long, num_args = 2, value_names = ["SEL_A", "SEL_B"])]
