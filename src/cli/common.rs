@@ -213,8 +213,15 @@ impl ParamArgs {
 
     /// Sets how the vertices of `reps` are placed: by [`ParamArgs::vertex_mode`], except that
     /// representations from a state file (`from_state`) keep their own unless `--vertices` or
-    /// `--preset` is given.
-    pub fn apply_vertices(&self, reps: &mut [Representation], from_state: bool) {
+    /// `--preset` is given. A `--preset` also gives a state file's representations its R, I,
+    /// quality and radii (each keeps its H), as it gives them to the command's own.
+    pub fn apply_to_reps(&self, reps: &mut [Representation], from_state: bool) {
+        if from_state && let Some(preset) = self.preset {
+            for rep in reps.iter_mut() {
+                rep.set_params(&preset.apply(rep.params()));
+                rep.radii = preset.radius_set();
+            }
+        }
         if from_state && self.vertices.is_none() && self.preset.is_none() {
             return;
         }

@@ -104,7 +104,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         super::render_script::apply_rep_flags(&args, &mut choice.reps, &options);
     }
     args.params
-        .apply_vertices(&mut choice.reps, choice.state.is_some());
+        .apply_to_reps(&mut choice.reps, choice.state.is_some());
     let gpu = HeadlessGpu::new().map_err(|e| anyhow!("{e} ({SOFTWARE_ADAPTER})"))?;
     let renderer = Renderer::new(&gpu.device);
     // The GPU engine computes on the render device and its buffers are drawn in place, as in

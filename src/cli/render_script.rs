@@ -80,7 +80,7 @@ pub(crate) fn run(
                 &particles,
                 true,
             )?;
-            args.params.apply_vertices(&mut choice.reps, false);
+            args.params.apply_to_reps(&mut choice.reps, false);
             apply_rep_flags(args, &mut choice.reps, &particles);
             Some(choice.reps)
         }

@@ -147,8 +147,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         args.quiet,
     )?;
     let mut reps = choice.reps.clone();
-    args.params
-        .apply_vertices(&mut reps, choice.state.is_some());
+    args.params.apply_to_reps(&mut reps, choice.state.is_some());
     // Only visible surface representations are computed.
     reps.retain(|r| r.style.is_surface());
     let mut engine = host_scene(args.backend, reader.chain(), args.quiet)?;

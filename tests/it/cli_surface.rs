@@ -398,3 +398,59 @@ fn ses_preset_notes_a_too_coarse_spacing() {
     let fine = run_at("1");
     assert!(!fine.contains("too coarse"), "{fine}");
 }
+
+/// `--preset ses` gives a state file's representations its R, I, quality and radii as it gives
+/// them to `--select` (before, they got only its vertices): the state's surface of chain A of
+/// 1hpv has the area of `--select "chain A" --preset ses`, and not the one without the preset.
+#[test]
+fn a_preset_applies_to_the_state_files_representations() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("two.toml"),
+        "version = 1\n\n[[representation]]\nname = \"a\"\nselection = \"protein and chain A\"\n\
+         style = \"surface\"\n\n[[representation]]\nname = \"b\"\nselection = \"protein and chain B\"\n\
+         style = \"surface\"\n",
+    )
+    .unwrap();
+    let pdb = data("1hpv.pdb");
+    let area_of = |args: &[&str], stats: &str, rep: &str| -> f64 {
+        let mut all = vec![
+            "surface",
+            pdb.as_str(),
+            "--backend",
+            "cpu",
+            "-q",
+            "--stats",
+            stats,
+        ];
+        all.extend_from_slice(args);
+        let run = mdsurf(dir.path(), &all);
+        assert_eq!(run.code, 0, "{all:?}: {}", run.stderr);
+        let csv = Csv::read(&dir.path().join(stats));
+        let reps = csv.text_col("rep");
+        let at = reps
+            .iter()
+            .position(|r| r == rep)
+            .expect("the representation's row");
+        csv.col("area_A2")[at]
+    };
+    let state_ses = area_of(
+        &["--state", "two.toml", "--preset", "ses"],
+        "state_ses.csv",
+        "a",
+    );
+    let select_ses = area_of(
+        &["--select", "protein and chain A", "--preset", "ses"],
+        "select_ses.csv",
+        "selection",
+    );
+    let state_plain = area_of(&["--state", "two.toml"], "state.csv", "a");
+    assert!(
+        (state_ses - select_ses).abs() <= 1e-9 * select_ses,
+        "state {state_ses} vs select {select_ses} Å²"
+    );
+    assert!(
+        (state_ses - state_plain).abs() > 0.01 * state_plain,
+        "the preset changes the state's surface: {state_ses} vs {state_plain} Å²"
+    );
+}
