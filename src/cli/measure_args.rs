@@ -330,9 +330,12 @@ impl Measurer {
             }
         }
         if let Some(interface) = self.interface.as_mut() {
-            // The frame's surfaces, one of which may be the interface's complex.
+            // The frame's surfaces, one of which may be the interface's complex: those of the
+            // CPU engine, which the interface's sides are computed with (another engine's
+            // vertices and sums could differ from theirs by more than rounding).
             let mut atoms = Vec::new();
-            for layer in computed.surfaces().filter(|l| !l.beads) {
+            let same_engine = scene.name() == "cpu";
+            for layer in computed.surfaces().filter(|l| same_engine && !l.beads) {
                 if let Ok(Some(indices)) = layer_atoms(scene, layer, frame) {
                     atoms.push((layer, indices));
                 }
