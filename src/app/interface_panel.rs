@@ -4,14 +4,18 @@
 //! contact residues and the buried area against frame. The surfaces take the selected
 //! representation's parameters, or, with the probe switch, the 1.4 Å probe's solvent-excluded
 //! surface (`--interface-probe 1.4`, MSMS's buried SES area). Changing a selection, the switch or
-//! the file starts the table again.
+//! the file starts the table again. "Export CSV…" writes the measured frames as
+//! `mdsurf surface --interface-csv` writes them.
 
 use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, TryRecvError, channel};
 use std::time::Duration;
 
-use crate::measure::{CONTACT_THRESHOLD, Side};
+use crate::export::ExportError;
+use crate::export::atomic::write_atomic;
+use crate::measure::{CONTACT_THRESHOLD, InterfaceCsv, Side};
 use crate::scene::interface::Interface;
 
 use super::state::AppCore;
@@ -33,6 +37,8 @@ pub struct InterfaceRow {
     /// Contact residues of A, then of B, in topology order: label (`A:LEU23`) and the area it
     /// loses from alone to the complex (Å²).
     pub contacts: [Vec<(String, f64)>; 2],
+    /// This frame's row of `mdsurf surface --interface-csv` (with its newline).
+    pub csv_row: String,
 }
 
 /// What the section holds between frames.
@@ -53,6 +59,10 @@ pub struct InterfaceDraft {
     measured_for: Option<(String, String, bool, usize)>,
     /// The frame being measured and where its result comes.
     job: Option<(usize, Receiver<Result<InterfaceRow, String>>)>,
+    /// Where the export dialog's answer comes, while it is open.
+    export: Option<Receiver<Option<PathBuf>>>,
+    /// What the last export did, one line.
+    pub exported: Option<String>,
 }
 
 impl Default for InterfaceDraft {
@@ -66,6 +76,8 @@ impl Default for InterfaceDraft {
             error: None,
             measured_for: None,
             job: None,
+            export: None,
+            exported: None,
         }
     }
 }
@@ -74,6 +86,39 @@ impl InterfaceDraft {
     /// True while a frame is being measured.
     pub fn busy(&self) -> bool {
         self.job.is_some()
+    }
+
+    /// Writes the measured frames to `path` atomically, in frame order, as `mdsurf surface
+    /// --interface-csv` writes them; returns how many. A file that cannot be written is left
+    /// as it was.
+    pub fn write_csv(&self, path: &Path) -> Result<usize, ExportError> {
+        write_atomic(path, |w| {
+            writeln!(w, "{}", InterfaceCsv::new().header())?;
+            for row in self.rows.values() {
+                w.write_all(row.csv_row.as_bytes())?;
+            }
+            Ok(())
+        })?;
+        Ok(self.rows.len())
+    }
+
+    /// Writes the rows where the export dialog says, once it has answered.
+    fn finish_export(&mut self) {
+        let Some(receiver) = &self.export else {
+            return;
+        };
+        let answer = match receiver.try_recv() {
+            Ok(answer) => answer,
+            Err(TryRecvError::Empty) => return,
+            Err(TryRecvError::Disconnected) => None,
+        };
+        self.export = None;
+        if let Some(path) = answer {
+            self.exported = Some(match self.write_csv(&path) {
+                Ok(n) => format!("wrote {n} frame(s) to {}", path.display()),
+                Err(e) => e.to_string(),
+            });
+        }
     }
 
     /// Takes a finished job's result, forgets the rows when the settings or the file changed,
@@ -132,6 +177,8 @@ impl InterfaceDraft {
                 let m = sides
                     .measure(topology, &data, CONTACT_THRESHOLD)
                     .map_err(|e| format!("frame {frame}: {e}"))?;
+                let mut csv = InterfaceCsv::new();
+                csv.push(frame, data.time_ps, topology, &m.result, &m.contacts);
                 let labels = |side: Side| -> Vec<(String, f64)> {
                     m.contacts
                         .iter()
@@ -145,6 +192,7 @@ impl InterfaceDraft {
                     area_ab: m.result.area_complex,
                     buried: m.result.buried,
                     contacts: [labels(Side::A), labels(Side::B)],
+                    csv_row: csv.rows().to_string(),
                 })
             })();
             let _ = sender.send(measured);
@@ -210,6 +258,28 @@ fn interface_body(ui: &mut egui::Ui, core: &AppCore, draft: &mut InterfaceDraft)
     }
     if !draft.rows.is_empty() {
         buried_plot(ui, &draft.rows, current, core.timeline.len);
+    }
+    draft.finish_export();
+    let can_export = !draft.rows.is_empty() && draft.export.is_none();
+    if ui
+        .add_enabled(can_export, egui::Button::new("Export CSV…"))
+        .on_hover_text("The measured frames, as mdsurf surface --interface-csv writes them")
+        .clicked()
+    {
+        let (sender, receiver) = channel();
+        let ctx = ui.ctx().clone();
+        std::thread::spawn(move || {
+            let path = rfd::FileDialog::new()
+                .add_filter("CSV", &["csv"])
+                .set_file_name("interface.csv")
+                .save_file();
+            let _ = sender.send(path);
+            ctx.request_repaint();
+        });
+        draft.export = Some(receiver);
+    }
+    if let Some(line) = &draft.exported {
+        ui.label(line);
     }
 }
 

@@ -304,6 +304,16 @@ impl InterfaceCsv {
     pub fn write(&self, path: &Path, first_line: Option<&str>) -> Result<(), ExportError> {
         self.0.write(path, first_line)
     }
+
+    /// The column line.
+    pub fn header(&self) -> &'static str {
+        self.0.header
+    }
+
+    /// The rows so far, each ending in a newline.
+    pub fn rows(&self) -> &str {
+        &self.0.rows
+    }
 }
 
 /// The residues an interface buries, one row per contact residue and frame:

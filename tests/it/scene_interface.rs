@@ -118,6 +118,45 @@ fn interface_panel_measures_each_frame_shown() {
         h.query_by_label_contains("frame 1: buried 0.0 Å²")
             .is_some()
     );
+    // Export: the measured frames as `surface --interface-csv` writes them; frame 0 is the
+    // command line's row on the same file.
+    assert!(h.query_by_label("Export CSV…").is_some());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("window.csv");
+    assert_eq!(h.state().1.write_csv(&path).expect("written"), 2);
+    let text = std::fs::read_to_string(&path).expect("read back");
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert_eq!(
+        lines[0],
+        "frame,time_ps,area_a_A2,area_b_A2,area_ab_A2,buried_A2,contacts_a,contacts_b"
+    );
+    assert!(lines[2].starts_with("1,"), "{}", lines[2]);
+    let pdb = data("1hpv.pdb").display().to_string();
+    let run = crate::cli_common::mdsurf(
+        dir.path(),
+        &[
+            "surface",
+            &pdb,
+            "--backend",
+            "cpu",
+            "-q",
+            "--select",
+            "protein",
+            "--interface",
+            SIDES[0],
+            SIDES[1],
+            "--interface-csv",
+            "cli.csv",
+        ],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let cli = std::fs::read_to_string(dir.path().join("cli.csv")).expect("the CLI's table");
+    assert_eq!(
+        cli.lines().nth(1),
+        Some(lines[1]),
+        "the window's frame 0 is the CLI's"
+    );
     // The probe's SES: the table starts again; MSMS buries 1,193.0 Å² on frame 0.
     h.get_by_label(&format!("on the {WATER_PROBE} Å probe's surface (as MSMS)"))
         .click();
