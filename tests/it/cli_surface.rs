@@ -316,22 +316,9 @@ fn ses_preset_refines_vertices_unless_told_otherwise() {
     let dir = tempfile::tempdir().unwrap();
     let pdb = data("1hpv.pdb");
     let area_with = |extra: &[&str], stats: &str| {
-        let mut args = vec![
-            "surface",
-            &pdb,
-            "--select",
-            "protein",
-            "--backend",
-            "cpu",
-            "--preset",
-            "ses",
-            "--stats",
-            stats,
-        ];
+        let mut args = vec!["--select", "protein", "--preset", "ses"];
         args.extend_from_slice(extra);
-        let run = mdsurf(dir.path(), &args);
-        assert_eq!(run.code, 0, "{}", run.stderr);
-        let csv = Csv::read(&dir.path().join(stats));
+        let csv = surface_stats(dir.path(), &pdb, &args, stats);
         (csv.col("area_A2")[0], csv.col("triangles")[0])
     };
     let (preset, tris) = area_with(&[], "preset.csv");
@@ -414,24 +401,9 @@ fn a_preset_applies_to_the_state_files_representations() {
     .unwrap();
     let pdb = data("1hpv.pdb");
     let area_of = |args: &[&str], stats: &str, rep: &str| -> f64 {
-        let mut all = vec![
-            "surface",
-            pdb.as_str(),
-            "--backend",
-            "cpu",
-            "-q",
-            "--stats",
-            stats,
-        ];
-        all.extend_from_slice(args);
-        let run = mdsurf(dir.path(), &all);
-        assert_eq!(run.code, 0, "{all:?}: {}", run.stderr);
-        let csv = Csv::read(&dir.path().join(stats));
+        let csv = surface_stats(dir.path(), &pdb, args, stats);
         let reps = csv.text_col("rep");
-        let at = reps
-            .iter()
-            .position(|r| r == rep)
-            .expect("the representation's row");
+        let at = reps.iter().position(|r| r == rep).expect("the row");
         csv.col("area_A2")[at]
     };
     let state_ses = area_of(
@@ -453,4 +425,14 @@ fn a_preset_applies_to_the_state_files_representations() {
         (state_ses - state_plain).abs() > 0.01 * state_plain,
         "the preset changes the state's surface: {state_ses} vs {state_plain} Å²"
     );
+}
+
+/// `mdsurf surface INPUT --backend cpu -q --stats STATS ARGS...` run in `dir`, which must
+/// succeed; its stats table.
+fn surface_stats(dir: &std::path::Path, input: &str, args: &[&str], stats: &str) -> Csv {
+    let mut all = vec!["surface", input, "--backend", "cpu", "-q", "--stats", stats];
+    all.extend_from_slice(args);
+    let run = mdsurf(dir, &all);
+    assert_eq!(run.code, 0, "{all:?}: {}", run.stderr);
+    Csv::read(&dir.join(stats))
 }
