@@ -64,9 +64,7 @@ pub fn interface_with(
     params: &SurfaceParams,
     per_atom: bool,
 ) -> Result<InterfaceResult, MeasureError> {
-    a.validate()?;
-    b.validate()?;
-    params.validate()?;
+    check_inputs(a, b, params)?;
     let (positions, mut radii) = union_of(a, b);
     if let Some(own) = complex_radii {
         if own.len() != radii.len() {
@@ -131,9 +129,7 @@ pub fn interface_on(
     params: &SurfaceParams,
     per_atom: bool,
 ) -> Result<InterfaceResult, MeasureError> {
-    a.validate()?;
-    b.validate()?;
-    params.validate()?;
+    check_inputs(a, b, params)?;
     complex.check(a.len(), b.len(), per_atom)?;
     let [a, b] = [a, b].map(|s| AtomSet {
         colours: None,
@@ -235,6 +231,17 @@ fn grid_engine<'e>(
     } else {
         fallback.insert(CpuEngine::new().with_vertices(engine.vertices()))
     }
+}
+
+/// Fails on invalid atoms of either side or invalid parameters.
+fn check_inputs(
+    a: &AtomSet<'_>,
+    b: &AtomSet<'_>,
+    params: &SurfaceParams,
+) -> Result<(), MeasureError> {
+    a.validate()?;
+    b.validate()?;
+    Ok(params.validate()?)
 }
 
 /// The positions (Å) and radii (Å) of `a`'s atoms followed by `b`'s: the complex.
