@@ -342,7 +342,11 @@ impl Measurer {
             }
             let shown: Vec<ShownSurface<'_>> = atoms
                 .iter()
-                .map(|(layer, atoms)| ShownSurface { layer, atoms })
+                .map(|(layer, atoms)| ShownSurface {
+                    layer,
+                    atoms,
+                    particles: scene.layer(layer.id).and_then(|l| l.particles()),
+                })
                 .collect();
             let line = interface
                 .frame(topology, frame, computed.time_ps, index, &shown)

@@ -13,7 +13,7 @@ use crate::measure::interface::Complex;
 use crate::measure::{
     self, ContactResidue, InterfaceResult, MeasureError, ProbeOptions, ResidueNames,
 };
-use crate::model::{Frame, RadiusOverrides, Topology};
+use crate::model::{Frame, Particles, RadiusOverrides, Topology};
 use crate::surface::{AtomSet, CpuEngine, SurfaceEngine, SurfaceParams};
 
 use super::frame::LayerResult;
@@ -75,6 +75,10 @@ pub struct ShownSurface<'a> {
     pub layer: &'a LayerResult,
     /// The topology atoms of its particles, ascending.
     pub atoms: &'a [u32],
+    /// Its particles ([`Layer::particles`]), when known: radii that follow exposure are then
+    /// the complex's when the particles' own radii, heavy atoms and model are the sides', and
+    /// the complex's radii need not be counted to check them.
+    pub particles: Option<&'a Particles>,
 }
 
 /// Two selections to measure the interface of.
@@ -195,16 +199,26 @@ impl Interface {
             )?,
             None => {
                 let (sa, sb) = (fa.atom_set(), fb.atom_set());
-                let radii = complex_radii(&fa, &fb);
-                let sides = Sides {
+                let per_atom = threshold.is_some();
+                let mut radii = None;
+                let mut sides = Sides {
                     atoms: [&ia, &ib],
                     sets: [&sa, &sb],
-                    complex_radii: radii.as_deref(),
+                    radii: Radii::SameExposure([&fa, &fb]),
                 };
-                match shown
+                // First without counting the complex's radii (a shown surface whose particles
+                // prove them), then with them counted.
+                let mut found = shown
                     .iter()
-                    .find_map(|s| self.complex_in(s, &sides, threshold.is_some()))
-                {
+                    .find_map(|s| self.complex_in(s, &sides, per_atom));
+                if found.is_none() {
+                    radii = complex_radii(&fa, &fb);
+                    sides.radii = Radii::Bits(radii.as_deref());
+                    found = shown
+                        .iter()
+                        .find_map(|s| self.complex_in(s, &sides, per_atom));
+                }
+                match found {
                     Some((a_at, b_at, layer)) => {
                         complex_shown = true;
                         let complex = Complex {
@@ -249,19 +263,29 @@ impl Interface {
     }
 }
 
-/// One frame's two sides: their topology atoms, their engine inputs and the complex's radii
-/// (A's atoms then B's; `None`: each side's own).
+/// One frame's two sides: their topology atoms, their engine inputs and how a shown surface's
+/// radii are checked against the complex's.
 struct Sides<'a> {
     atoms: [&'a [u32]; 2],
     sets: [&'a AtomSet<'a>; 2],
-    complex_radii: Option<&'a [f32]>,
+    radii: Radii<'a>,
+}
+
+/// How a shown surface's radii are checked against the complex's.
+enum Radii<'a> {
+    /// Bit for bit against the complex's radii (A's atoms then B's; `None`: each side's own).
+    Bits(Option<&'a [f32]>),
+    /// The sides' frames: radii that follow exposure are the complex's when the shown
+    /// particles' own radii, heavy atoms and model are the sides' (the same atoms at the same
+    /// positions count the same neighbours); fixed radii are compared bit for bit.
+    SameExposure([&'a LayerFrame; 2]),
 }
 
 impl Interface {
     /// Where each atom of A and of B is in `shown`'s particles, when `shown` is the surface of
     /// exactly these atoms, at the same positions with the complex's radii, computed with this
-    /// interface's parameters and vertex mode, closed (not periodic), with its mesh when the
-    /// per-atom areas are weighed (`per_atom`).
+    /// interface's parameters and vertex mode, closed (not periodic), computed on the host, with
+    /// its mesh when the per-atom areas are weighed (`per_atom`).
     fn complex_in<'s>(
         &self,
         shown: &ShownSurface<'s>,
@@ -274,6 +298,7 @@ impl Interface {
             && layer.is_surface()
             && !layer.beads
             && layer.closed
+            && layer.gpu_surface.is_none()
             && (!per_atom || layer.output.counts_without_mesh.is_none())
             && layer.rep.params() == self.params
             && layer.rep.vertices == self.engine.vertices()
@@ -283,24 +308,47 @@ impl Interface {
         if !fits {
             return None;
         }
+        // Per side: its frame's particles when the shown particles' exposure is to be matched.
+        let exposure = match &sides.radii {
+            Radii::SameExposure(frames) => {
+                let own = shown.particles?;
+                let model = own.exposure().map(|(m, _)| m);
+                let same = frames
+                    .iter()
+                    .all(|f| f.particles.exposure().map(|(m, _)| m) == model);
+                if !same {
+                    return None;
+                }
+                model.map(|_| (own, *frames))
+            }
+            Radii::Bits(_) => None,
+        };
         let mut k = 0;
-        let mut place = |atoms: &[u32], set: &AtomSet<'_>| -> Option<Vec<u32>> {
+        let mut place = |side: usize| -> Option<Vec<u32>> {
+            let (atoms, set) = (sides.atoms[side], sides.sets[side]);
             let mut at = Vec::with_capacity(atoms.len());
             for (i, &atom) in atoms.iter().enumerate() {
                 let j = shown.atoms.binary_search(&atom).ok()?;
-                let radius = sides.complex_radii.map_or(set.radii[i], |r| r[k]);
+                let same_radius = match (&exposure, &sides.radii) {
+                    (Some((own, frames)), _) => {
+                        let theirs = &frames[side].particles;
+                        let (heavy, their_heavy) = (own.exposure()?.1, theirs.exposure()?.1);
+                        own.radii()[j].to_bits() == theirs.radii()[i].to_bits()
+                            && heavy[j] == their_heavy[i]
+                    }
+                    (None, Radii::Bits(Some(r))) => particles.radii[j].to_bits() == r[k].to_bits(),
+                    (None, _) => particles.radii[j].to_bits() == set.radii[i].to_bits(),
+                };
                 k += 1;
-                let same = particles.positions[j] == set.positions[i]
-                    && particles.radii[j].to_bits() == radius.to_bits();
-                if !same {
+                if !(same_radius && particles.positions[j] == set.positions[i]) {
                     return None;
                 }
                 at.push(j as u32);
             }
             Some(at)
         };
-        let a_at = place(sides.atoms[0], sides.sets[0])?;
-        let b_at = place(sides.atoms[1], sides.sets[1])?;
+        let a_at = place(0)?;
+        let b_at = place(1)?;
         Some((a_at, b_at, layer))
     }
 }

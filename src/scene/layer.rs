@@ -127,6 +127,14 @@ impl Layer {
         self.rep = rep;
     }
 
+    /// The particles of the last frame, once one was built (their own radii, before any
+    /// exposure, and which are heavy atoms).
+    pub fn particles(&self) -> Option<&Particles> {
+        self.built
+            .as_ref()
+            .map(|(_, particles, _)| particles.as_ref())
+    }
+
     /// True when the selection depends on positions (re-evaluated every frame).
     pub fn is_dynamic(&self) -> bool {
         self.selection.is_dynamic()

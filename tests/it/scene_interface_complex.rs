@@ -8,7 +8,7 @@
 use std::sync::Arc;
 
 use mdsurf::measure::{CONTACT_THRESHOLD, InterfaceResult};
-use mdsurf::model::{Frame, RadiusOverrides, Topology};
+use mdsurf::model::{Frame, Particles, RadiusOverrides, Topology};
 use mdsurf::scene::interface::{Interface, InterfaceFrame, ShownSurface};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, RepRequest, SceneBackend, SceneEngine};
@@ -36,20 +36,49 @@ fn rep(selection: &str, ses: bool) -> Representation {
     rep
 }
 
-/// The scene's layer of `rep` on frame 0, with its topology atoms.
-fn shown_layer(
+/// A scene's layer on frame 0, with its topology atoms and particles.
+struct Shown {
+    layer: Arc<LayerResult>,
+    atoms: Vec<u32>,
+    particles: Particles,
+}
+
+impl Shown {
+    /// The surface as offered to the interface, with its particles or without them (then the
+    /// complex's radii are counted to check its own).
+    fn offer(&self, with_particles: bool) -> ShownSurface<'_> {
+        ShownSurface {
+            layer: &self.layer,
+            atoms: &self.atoms,
+            particles: with_particles.then_some(&self.particles),
+        }
+    }
+}
+
+/// The scene's layer of `rep` on frame 0 (radii overridden by `overrides`).
+fn shown_with(
     topology: &Topology,
     frame: &Arc<Frame>,
     rep: Representation,
-) -> (Arc<LayerResult>, Vec<u32>) {
+    overrides: &RadiusOverrides,
+) -> Shown {
     let mut scene = SceneEngine::new(SceneBackend::Host(Box::new(CpuEngine::new())));
+    scene.reset(topology, overrides);
     let reps = [RepRequest { id: 1, rep }];
     let computed = scene
         .frame(topology, 0, frame, &reps)
         .expect("the frame computes");
-    let layer = computed.layers[0].clone();
-    let atoms = scene.layer(1).expect("bound").atoms(frame);
-    (layer, atoms)
+    let bound = scene.layer(1).expect("bound");
+    Shown {
+        layer: computed.layers[0].clone(),
+        atoms: bound.atoms(frame),
+        particles: bound.particles().expect("built").clone(),
+    }
+}
+
+/// The scene's layer of `rep` on frame 0.
+fn shown_layer(topology: &Topology, frame: &Arc<Frame>, rep: Representation) -> Shown {
+    shown_with(topology, frame, rep, &RadiusOverrides::default())
 }
 
 /// The interface of `sides` measured on its own and with `shown` offered.
@@ -58,17 +87,14 @@ fn both_ways(
     frame: &Frame,
     sides: [&str; 2],
     base: &Representation,
-    shown: (&LayerResult, &[u32]),
+    shown: ShownSurface<'_>,
 ) -> (InterfaceFrame, InterfaceFrame) {
     let overrides = RadiusOverrides::default();
     let mut own = Interface::new(topology, sides, base, &overrides, None).expect("sides bind");
     let alone = own
         .measure(topology, frame, CONTACT_THRESHOLD)
         .expect("measured");
-    let offered = [ShownSurface {
-        layer: shown.0,
-        atoms: shown.1,
-    }];
+    let offered = [shown];
     let mut taking = Interface::new(topology, sides, base, &overrides, None).expect("sides bind");
     let taken = taking
         .measure_on(topology, frame, Some(CONTACT_THRESHOLD), &offered)
@@ -110,40 +136,33 @@ fn close(want: &InterfaceResult, got: &InterfaceResult, rel: f64, what: &str) {
 #[test]
 fn the_frames_surface_of_both_chains_is_the_complex() {
     let (topology, frame) = dimer();
-    for ses in [false, true] {
+    for (ses, with_particles) in [(false, false), (false, true), (true, false), (true, true)] {
+        let what = format!("ses {ses}, particles {with_particles}");
         let base = rep("all", ses);
-        let (layer, atoms) = shown_layer(&topology, &frame, rep("protein", ses));
+        let shown = shown_layer(&topology, &frame, rep("protein", ses));
         // Chain A's atoms come first in the file: the complex is the same sum, bit for bit.
-        let (alone, taken) = both_ways(
-            &topology,
-            &frame,
-            [CHAIN_A, CHAIN_B],
-            &base,
-            (&layer, &atoms),
-        );
+        let sides = [CHAIN_A, CHAIN_B];
+        let offered = shown.offer(with_particles);
+        let (alone, taken) = both_ways(&topology, &frame, sides, &base, offered);
         assert!(!alone.complex_shown);
-        assert!(taken.complex_shown, "ses {ses}: the shown surface is taken");
-        assert_eq!(alone.result, taken.result, "ses {ses}");
-        assert_eq!(alone.contacts, taken.contacts, "ses {ses}");
+        assert!(taken.complex_shown, "{what}: the shown surface is taken");
+        assert_eq!(alone.result, taken.result, "{what}");
+        assert_eq!(alone.contacts, taken.contacts, "{what}");
         assert!(
             alone.result.buried > 500.0,
-            "ses {ses}: {}",
+            "{what}: {}",
             alone.result.buried
         );
         // B first: the same surfaces, A's per-atom areas now in another order of the sum.
-        let (alone, taken) = both_ways(
-            &topology,
-            &frame,
-            [CHAIN_B, CHAIN_A],
-            &base,
-            (&layer, &atoms),
-        );
-        assert!(taken.complex_shown, "ses {ses}: B first");
+        let sides = [CHAIN_B, CHAIN_A];
+        let offered = shown.offer(with_particles);
+        let (alone, taken) = both_ways(&topology, &frame, sides, &base, offered);
+        assert!(taken.complex_shown, "{what}: B first");
         close(
             &alone.result,
             &taken.result,
             1e-6,
-            &format!("ses {ses}, B first"),
+            &format!("{what}, B first"),
         );
     }
 }
@@ -151,7 +170,6 @@ fn the_frames_surface_of_both_chains_is_the_complex() {
 #[test]
 fn a_surface_of_other_atoms_radii_or_parameters_is_not_taken() {
     let (topology, frame) = dimer();
-    let base = rep("all", false);
     let sides = [CHAIN_A, CHAIN_B];
     // One atom short of the complex.
     let fewer = rep("protein and not (chain B and resid 99 and name O)", false);
@@ -162,15 +180,32 @@ fn a_surface_of_other_atoms_radii_or_parameters_is_not_taken() {
         spacing: 0.8,
         ..rep("protein", false)
     };
-    for (what, shown) in [
-        ("fewer atoms", fewer),
-        ("ses", other_params),
-        ("spacing", spacing),
+    let complex_atoms = shown_layer(&topology, &frame, rep("protein", false))
+        .atoms
+        .len();
+    let plain = RadiusOverrides::default();
+    // Under the preset, the complex with its own radius for N: radii that follow exposure from
+    // other radii (the particles' own radii differ from the sides').
+    let own_n = RadiusOverrides::parse_all(&["N=1.4"]).expect("an override");
+    for (what, shown, ses, overrides) in [
+        ("fewer atoms", fewer, false, &plain),
+        ("ses", other_params, false, &plain),
+        ("spacing", spacing, false, &plain),
+        ("other radii", rep("protein", true), true, &own_n),
     ] {
-        let (layer, atoms) = shown_layer(&topology, &frame, shown);
-        let (alone, taken) = both_ways(&topology, &frame, sides, &base, (&layer, &atoms));
-        assert!(!taken.complex_shown, "{what}: not taken");
-        assert_eq!(alone.result, taken.result, "{what}");
+        let base = rep("all", ses);
+        let shown = shown_with(&topology, &frame, shown, overrides);
+        let missing = if what == "fewer atoms" { 1 } else { 0 };
+        assert_eq!(shown.atoms.len() + missing, complex_atoms, "{what}");
+        for with_particles in [false, true] {
+            let offered = shown.offer(with_particles);
+            let (alone, taken) = both_ways(&topology, &frame, sides, &base, offered);
+            assert!(
+                !taken.complex_shown,
+                "{what}, particles {with_particles}: not taken"
+            );
+            assert_eq!(alone.result, taken.result, "{what}");
+        }
     }
 }
 
@@ -178,11 +213,8 @@ fn a_surface_of_other_atoms_radii_or_parameters_is_not_taken() {
 fn without_contacts_the_areas_are_the_same_and_no_atom_is_weighed() {
     let (topology, frame) = dimer();
     let base = rep("all", false);
-    let (layer, atoms) = shown_layer(&topology, &frame, rep("protein", false));
-    let offered = [ShownSurface {
-        layer: &layer,
-        atoms: &atoms,
-    }];
+    let shown = shown_layer(&topology, &frame, rep("protein", false));
+    let offered = [shown.offer(true)];
     let overrides = RadiusOverrides::default();
     let mut sides =
         Interface::new(&topology, [CHAIN_A, CHAIN_B], &base, &overrides, None).expect("bind");
@@ -214,5 +246,5 @@ fn without_contacts_the_areas_are_the_same_and_no_atom_is_weighed() {
 fn atoms_of(topology: &Topology, selection: &str) -> usize {
     let (_, frame) = dimer();
     let rep = rep(selection, false);
-    shown_layer(topology, &frame, rep).1.len()
+    shown_layer(topology, &frame, rep).atoms.len()
 }
