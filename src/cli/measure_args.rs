@@ -320,9 +320,19 @@ impl Measurer {
         quiet: bool,
     ) -> Result<()> {
         let index = computed.frame;
+        // Each surface's topology atoms, found once for the measurements and the interface.
+        let layers: Vec<(&LayerResult, Result<Option<Vec<u32>>>)> =
+            if self.args.needs_meshes() || self.interface.is_some() {
+                computed
+                    .surfaces()
+                    .map(|layer| (layer, layer_atoms(scene, layer, frame)))
+                    .collect()
+            } else {
+                Vec::new()
+            };
         if self.args.needs_meshes() {
-            for layer in computed.surfaces() {
-                let atoms = layer_atoms(scene, layer, frame)?;
+            for (layer, atoms) in &layers {
+                let atoms = atoms.as_ref().map_err(|e| anyhow!("{e:#}"))?;
                 self.surface(topology, index, layer, atoms.as_deref())
                     .with_context(|| {
                         format!("frame {index}: representation '{}'", layer.rep.name)
@@ -333,19 +343,17 @@ impl Measurer {
             // The frame's surfaces, one of which may be the interface's complex: those of the
             // CPU engine, which the interface's sides are computed with (another engine's
             // vertices and sums could differ from theirs by more than rounding).
-            let mut atoms = Vec::new();
             let same_engine = scene.name() == "cpu";
-            for layer in computed.surfaces().filter(|l| same_engine && !l.beads) {
-                if let Ok(Some(indices)) = layer_atoms(scene, layer, frame) {
-                    atoms.push((layer, indices));
-                }
-            }
-            let shown: Vec<ShownSurface<'_>> = atoms
+            let shown: Vec<ShownSurface<'_>> = layers
                 .iter()
-                .map(|(layer, atoms)| ShownSurface {
-                    layer,
-                    atoms,
-                    particles: scene.layer(layer.id).and_then(|l| l.particles()),
+                .filter(|_| same_engine)
+                .filter_map(|(layer, atoms)| match atoms {
+                    Ok(Some(atoms)) => Some(ShownSurface {
+                        layer,
+                        atoms,
+                        particles: scene.layer(layer.id).and_then(|l| l.particles()),
+                    }),
+                    _ => None,
                 })
                 .collect();
             let line = interface

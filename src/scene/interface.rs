@@ -237,7 +237,7 @@ impl Interface {
                             &sb,
                             &complex,
                             &self.params,
-                            threshold.is_some(),
+                            per_atom,
                         )?
                     }
                     None => measure::interface_with(
@@ -246,7 +246,7 @@ impl Interface {
                         &sb,
                         radii.as_deref(),
                         &self.params,
-                        threshold.is_some(),
+                        per_atom,
                     )?,
                 }
             }
@@ -308,18 +308,28 @@ impl Interface {
         if !fits {
             return None;
         }
-        // Per side: its frame's particles when the shown particles' exposure is to be matched.
+        // With radii that follow exposure, the shown particles' own radii and heavy atoms, and
+        // each side's, to compare instead of the counted radii.
         let exposure = match &sides.radii {
             Radii::SameExposure(frames) => {
                 let own = shown.particles?;
                 let model = own.exposure().map(|(m, _)| m);
-                let same = frames
+                if frames
                     .iter()
-                    .all(|f| f.particles.exposure().map(|(m, _)| m) == model);
-                if !same {
+                    .any(|f| f.particles.exposure().map(|(m, _)| m) != model)
+                {
                     return None;
                 }
-                model.map(|_| (own, *frames))
+                match model {
+                    Some(_) => Some((
+                        own_radii_and_heavy(own)?,
+                        [
+                            own_radii_and_heavy(&frames[0].particles)?,
+                            own_radii_and_heavy(&frames[1].particles)?,
+                        ],
+                    )),
+                    None => None,
+                }
             }
             Radii::Bits(_) => None,
         };
@@ -330,11 +340,10 @@ impl Interface {
             for (i, &atom) in atoms.iter().enumerate() {
                 let j = shown.atoms.binary_search(&atom).ok()?;
                 let same_radius = match (&exposure, &sides.radii) {
-                    (Some((own, frames)), _) => {
-                        let theirs = &frames[side].particles;
-                        let (heavy, their_heavy) = (own.exposure()?.1, theirs.exposure()?.1);
-                        own.radii()[j].to_bits() == theirs.radii()[i].to_bits()
-                            && heavy[j] == their_heavy[i]
+                    (Some(((own_radii, own_heavy), theirs)), _) => {
+                        let (their_radii, their_heavy) = theirs[side];
+                        own_radii[j].to_bits() == their_radii[i].to_bits()
+                            && own_heavy[j] == their_heavy[i]
                     }
                     (None, Radii::Bits(Some(r))) => particles.radii[j].to_bits() == r[k].to_bits(),
                     (None, _) => particles.radii[j].to_bits() == set.radii[i].to_bits(),
@@ -351,6 +360,12 @@ impl Interface {
         let b_at = place(1)?;
         Some((a_at, b_at, layer))
     }
+}
+
+/// `particles`' own radii (Å, before exposure) and which are heavy atoms, when their radii
+/// follow exposure.
+fn own_radii_and_heavy(particles: &Particles) -> Option<(&[f32], &[bool])> {
+    Some((particles.radii(), particles.exposure()?.1))
 }
 
 /// The complex's radii (Å, A's atoms then B's) when they follow exposure: each atom's
