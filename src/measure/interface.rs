@@ -120,7 +120,8 @@ pub struct Complex<'a> {
 /// Gaussians in another order (the same to rounding). Without `per_atom` the per-atom areas
 /// are not weighed (their vectors are empty; the contact residues need them).
 ///
-/// Fails as [`interface`] does, when the index maps do not fit, or when `complex` has no mesh.
+/// Fails as [`interface`] does, when the index maps do not fit, or when the per-atom areas
+/// are asked for and `complex` has no mesh.
 pub fn interface_on(
     engine: &mut dyn SurfaceEngine,
     a: &AtomSet<'_>,
