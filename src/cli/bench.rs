@@ -192,7 +192,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 results.push(d);
             } else if let Some(sparse_ms) = sparse_ms {
                 progress(&args, &format!("{label} on the dense cpu engine"));
-                let mut dense = BenchEngine::Cpu(CpuEngine::dense());
+                let mut dense = BenchEngine::Cpu(Box::new(CpuEngine::dense()));
                 dense.engine().set_vertices(mode);
                 let mut d = time_case(&mut source, &mut dense, &params, &args)
                     .map_err(|e| anyhow!("{label} on dense cpu: {e:#}"))?;

@@ -304,7 +304,7 @@ pub enum BenchBackend {
 /// An engine being benchmarked; the GPU one also reports its memory.
 pub enum BenchEngine {
     /// The CPU reference engine.
-    Cpu(CpuEngine),
+    Cpu(Box<CpuEngine>),
     /// The wgpu compute engine.
     Gpu(Box<GpuEngine>),
 }
@@ -313,7 +313,7 @@ impl BenchEngine {
     /// The engine to compute with.
     pub fn engine(&mut self) -> &mut dyn SurfaceEngine {
         match self {
-            BenchEngine::Cpu(e) => e,
+            BenchEngine::Cpu(e) => e.as_mut(),
             BenchEngine::Gpu(e) => e.as_mut(),
         }
     }
@@ -339,7 +339,7 @@ impl BenchEngine {
 pub fn engines_for(backend: BenchBackend) -> Result<Vec<BenchEngine>> {
     let mut engines = Vec::new();
     if backend != BenchBackend::Gpu {
-        engines.push(BenchEngine::Cpu(CpuEngine::new()));
+        engines.push(BenchEngine::Cpu(Box::new(CpuEngine::new())));
     }
     if backend == BenchBackend::Cpu {
         return Ok(engines);

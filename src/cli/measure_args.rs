@@ -89,8 +89,19 @@ impl MeasureArgs {
     /// the complex of a Gaussian interface whose contact residues are listed (their per-atom
     /// areas are weighed on its mesh).
     pub fn keeps_meshes(&self) -> bool {
-        self.needs_meshes()
-            || (self.interface.is_some() && self.interface_probe.is_none() && self.lists_contacts())
+        self.needs_meshes() || (self.gaussian_interface() && self.lists_contacts())
+    }
+
+    /// True when the frame's surfaces keep their sampled density: one of them may be the
+    /// complex of a Gaussian interface, whose larger side is then its density less the other
+    /// side's ([`mdsurf::measure::interface_on`]).
+    pub fn keeps_density(&self) -> bool {
+        self.gaussian_interface()
+    }
+
+    /// True when `--interface` measures on the Gaussian surface (not `--interface-probe`).
+    fn gaussian_interface(&self) -> bool {
+        self.interface.is_some() && self.interface_probe.is_none()
     }
 
     /// True when a table lists the interface's contact residues (`--interface-csv` or

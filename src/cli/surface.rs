@@ -155,6 +155,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         // Without -o or a measurement of the mesh only area, volume and counts are reported:
         // the mesh need not be built.
         e.set_keep_mesh(output.is_some() || args.measure.keeps_meshes());
+        e.set_keep_density(args.measure.keeps_density());
         if reader.chain().periodic().is_none() {
             set_vertex_mode(e.as_mut(), args.params.vertex_mode());
         }

@@ -7,7 +7,9 @@ use glam::Vec3;
 use super::residues::residue_areas;
 use super::{MeasureError, ResidueArea, atom_areas_of};
 use crate::model::Topology;
-use crate::surface::{AtomSet, CpuEngine, GridSpec, SurfaceEngine, SurfaceOutput, SurfaceParams};
+use crate::surface::{
+    AtomSet, CpuEngine, GridSpec, KeptDensity, SurfaceEngine, SurfaceOutput, SurfaceParams,
+};
 
 /// Areas of A, B and the complex, on one grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -85,8 +87,11 @@ pub fn interface_with(
     let engine = grid_engine(engine, &mut fallback);
     engine.set_grid(None);
     engine.set_keep_mesh(per_atom);
+    // The complex's density, where the engine keeps it, spares sampling one side.
+    engine.set_keep_density(true);
     let output = engine.compute(&union, params);
     engine.set_keep_mesh(true);
+    engine.set_keep_density(false);
     let output = output?;
     let a_at: Vec<u32> = (0..a.len() as u32).collect();
     let b_at: Vec<u32> = (a.len() as u32..union.len() as u32).collect();
@@ -114,7 +119,10 @@ pub struct Complex<'a> {
 }
 
 /// [`interface`] with the complex's surface already computed (`complex`, under the same
-/// `params` and vertex mode as `engine`'s): A and B are computed on its grid. Bitwise what
+/// `params` and vertex mode as `engine`'s): A and B are computed on its grid. When the complex
+/// kept its density ([`SurfaceOutput::density`]) and the sides have its radii, the side with
+/// more atoms is the complex's density less the other's (to rounding the same; bitwise where
+/// no atom of the other side reaches). Bitwise what
 /// [`interface_with`] computes when `complex` came
 /// from the same engine with the atoms in the same order; another order sums each sample's
 /// Gaussians in another order (the same to rounding). Without `per_atom` the per-atom areas
@@ -142,18 +150,24 @@ pub fn interface_on(
     engine.set_keep_mesh(per_atom);
     let measure = engine.vertices().effective(params);
     engine.set_grid(Some(complex.output.grid));
-    let alone = |engine: &mut dyn SurfaceEngine, set: &AtomSet<'_>| -> Result<_, MeasureError> {
-        let out: SurfaceOutput = engine.compute(set, params)?;
-        let areas = match per_atom {
-            true => atom_areas_of(&out, set, &measure)?,
-            false => Vec::new(),
-        };
-        Ok((out.area, areas))
-    };
-    let both = (|| Ok::<_, MeasureError>((alone(engine, &a)?, alone(engine, &b)?)))();
+    let whole = complex
+        .output
+        .density
+        .as_deref()
+        .filter(|_| complex.holds_sides(&a, &b));
+    let sides = sides_on_grid(engine, [&a, &b], whole, params);
     engine.set_grid(None);
     engine.set_keep_mesh(true);
-    let ((area_a, atoms_a_alone), (area_b, atoms_b_alone)) = both?;
+    engine.set_keep_density(false);
+    let [out_a, out_b] = sides?;
+    let weigh = |out: &SurfaceOutput, set: &AtomSet<'_>| -> Result<Vec<f64>, MeasureError> {
+        match per_atom {
+            true => atom_areas_of(out, set, &measure),
+            false => Ok(Vec::new()),
+        }
+    };
+    let (area_a, atoms_a_alone) = (out_a.area, weigh(&out_a, &a)?);
+    let (area_b, atoms_b_alone) = (out_b.area, weigh(&out_b, &b)?);
     let in_complex = match per_atom {
         true => atom_areas_of(complex.output, &complex.atoms, &measure)?,
         false => Vec::new(),
@@ -179,6 +193,23 @@ pub fn interface_on(
 }
 
 impl Complex<'_> {
+    /// True when every atom of `a` and `b` is its atom of the complex, at the same position
+    /// with the same radius (bit for bit), so that the complex's density is the sum of the
+    /// sides'. Radii that follow exposure differ between a side and the complex at the
+    /// contact.
+    fn holds_sides(&self, a: &AtomSet<'_>, b: &AtomSet<'_>) -> bool {
+        let n = self.atoms.len();
+        [(a, self.a_at), (b, self.b_at)].iter().all(|(side, at)| {
+            side.len() == at.len()
+                && at.iter().enumerate().all(|(i, &j)| {
+                    let j = j as usize;
+                    j < n
+                        && self.atoms.positions[j] == side.positions[i]
+                        && self.atoms.radii[j].to_bits() == side.radii[i].to_bits()
+                })
+        })
+    }
+
     /// Fails unless the maps give each of A's `a_len` and B's `b_len` atoms its own atom of
     /// the complex, and every atom of the complex is one of them, or when the mesh is needed
     /// (`per_atom`) and was not kept.
@@ -219,6 +250,37 @@ impl Complex<'_> {
         }
         Ok(())
     }
+}
+
+/// The surfaces of `sides` (A, B) on the engine's grid. With `whole`, the complex's density
+/// on that grid with each side's atoms and radii, the side with fewer atoms is sampled (its
+/// density kept) and the other is the complex less it
+/// ([`SurfaceEngine::compute_difference`]), which saves sampling its Gaussians; the engine
+/// computes it from its atoms when it cannot.
+fn sides_on_grid(
+    engine: &mut dyn SurfaceEngine,
+    sides: [&AtomSet<'_>; 2],
+    whole: Option<&KeptDensity>,
+    params: &SurfaceParams,
+) -> Result<[SurfaceOutput; 2], MeasureError> {
+    let sampled = usize::from(sides[1].len() < sides[0].len());
+    engine.set_keep_density(whole.is_some());
+    let first = engine.compute(sides[sampled], params);
+    engine.set_keep_density(false);
+    let first = first?;
+    let other = sides[1 - sampled];
+    let difference = match (whole, first.density.as_deref()) {
+        (Some(whole), Some(minus)) => engine.compute_difference(other, params, whole, minus),
+        _ => None,
+    };
+    let second = match difference {
+        Some(second) => second?,
+        None => engine.compute(other, params)?,
+    };
+    Ok(match sampled {
+        0 => [first, second],
+        _ => [second, first],
+    })
 }
 
 /// `engine` when it can compute on a given grid ([`SurfaceEngine::set_grid`]), otherwise a

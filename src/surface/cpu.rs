@@ -3,6 +3,7 @@
 //! stage. It is the oracle the GPU engine is tested against and the engine on machines without
 //! a GPU.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -13,8 +14,9 @@ use super::brick_mc::march_bricks;
 use super::bricks::{self, BrickScratch, BrickStats, BrickVolume};
 use super::marching_cubes::{McScratch, VertexData, march_dense};
 use super::{
-    AtomSet, DensityVolume, GridSpec, Mesh, MeshCounts, StageTimings, SurfaceEngine, SurfaceError,
-    SurfaceOutput, SurfaceParams, VertexMode, available_memory_bytes, curved, density,
+    AtomSet, DensityVolume, GridSpec, KeptDensity, Mesh, MeshCounts, StageTimings, SurfaceEngine,
+    SurfaceError, SurfaceOutput, SurfaceParams, VertexMode, available_memory_bytes, curved,
+    density,
 };
 
 /// Grid samples up to which the default engine computes dense (a 64³ grid; 1hpv at H = 1 Å has
@@ -58,6 +60,23 @@ pub struct CpuEngine {
     vertices: VertexMode,
     /// The grid every surface uses instead of its atoms' own ([`SurfaceEngine::set_grid`]).
     forced_grid: Option<GridSpec>,
+    /// Whether dense surfaces keep a copy of their density ([`SurfaceEngine::set_keep_density`]).
+    keep_density: bool,
+    /// The densities kept last, whose buffers later copies reuse once no output holds them
+    /// ([`CpuEngine::keep_copy`]).
+    kept: Vec<Arc<KeptDensity>>,
+}
+
+/// Copies of the density a CPU engine keeps for reuse ([`CpuEngine::keep_copy`]).
+const KEPT_BUFFERS: usize = 3;
+
+/// Where a surface's density comes from.
+#[derive(Clone, Copy)]
+enum DensityFrom<'a> {
+    /// Its atoms' Gaussians, sampled.
+    Atoms,
+    /// A kept density less another, on the same grid ([`SurfaceEngine::compute_difference`]).
+    Difference(&'a KeptDensity, &'a KeptDensity),
 }
 
 impl std::fmt::Debug for CpuEngine {
@@ -175,6 +194,10 @@ impl SurfaceEngine for CpuEngine {
         self.measure_only = !keep;
     }
 
+    fn set_keep_density(&mut self, keep: bool) {
+        self.keep_density = keep;
+    }
+
     fn vertices(&self) -> VertexMode {
         self.vertices
     }
@@ -189,22 +212,85 @@ impl SurfaceEngine for CpuEngine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
     ) -> Result<SurfaceOutput, SurfaceError> {
-        // Called from outside the thread pool, the whole frame runs on one of its threads: its
-        // dozen parallel stages then start from inside the pool instead of each waking the
-        // pool from outside and putting the caller to sleep until it finishes.
-        if rayon::current_thread_index().is_none() {
-            return rayon::scope(|_| self.compute_in_pool(atoms, params));
-        }
-        self.compute_in_pool(atoms, params)
+        self.compute_from(atoms, params, DensityFrom::Atoms)
+    }
+
+    fn compute_difference(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        whole: &KeptDensity,
+        minus: &KeptDensity,
+    ) -> Option<Result<SurfaceOutput, SurfaceError>> {
+        let effective = self.vertices.effective(params);
+        let grid = match self.plan(atoms, &effective) {
+            Ok(grid) => grid,
+            Err(e) => return Some(Err(e)),
+        };
+        let fits = self.dense_for(&grid)
+            && atoms.colours.is_none()
+            && whole.fits(&grid, &effective)
+            && minus.fits(&grid, &effective);
+        fits.then(|| self.compute_from(atoms, params, DensityFrom::Difference(whole, minus)))
     }
 }
 
 impl CpuEngine {
-    /// [`SurfaceEngine::compute`], run on a thread of the pool.
+    /// The surface of `atoms` with its density from `from`, run on a thread of the pool.
+    fn compute_from(
+        &mut self,
+        atoms: &AtomSet<'_>,
+        params: &SurfaceParams,
+        from: DensityFrom<'_>,
+    ) -> Result<SurfaceOutput, SurfaceError> {
+        // Called from outside the thread pool, the whole frame runs on one of its threads: its
+        // dozen parallel stages then start from inside the pool instead of each waking the
+        // pool from outside and putting the caller to sleep until it finishes.
+        if rayon::current_thread_index().is_none() {
+            return rayon::scope(|_| self.compute_in_pool(atoms, params, from));
+        }
+        self.compute_in_pool(atoms, params, from)
+    }
+
+    /// A copy of the dense volume's density, sampled on `grid` under `params`, in the buffer
+    /// of an earlier copy that no output holds any more: its pages are mapped already, where
+    /// a new buffer would fault them in again (which costs more than the copy). A scene keeps
+    /// its last result while the next frame is computed, so up to [`KEPT_BUFFERS`] copies
+    /// are kept for reuse.
+    fn keep_copy(&mut self, grid: GridSpec, params: &SurfaceParams) -> Arc<KeptDensity> {
+        let free = self
+            .kept
+            .iter()
+            .position(|k| Arc::strong_count(k) == 1 && Arc::weak_count(k) == 0);
+        let mut kept = match free {
+            Some(i) => self.kept.swap_remove(i),
+            None => {
+                if self.kept.len() >= KEPT_BUFFERS {
+                    self.kept.remove(0);
+                }
+                Arc::new(KeptDensity {
+                    grid,
+                    params: *params,
+                    values: Vec::new(),
+                })
+            }
+        };
+        if let Some(k) = Arc::get_mut(&mut kept) {
+            k.grid = grid;
+            k.params = *params;
+            k.values.clear();
+            k.values.extend_from_slice(&self.volume.values);
+        }
+        self.kept.push(Arc::clone(&kept));
+        kept
+    }
+
+    /// [`CpuEngine::compute_from`] on a thread of the pool.
     fn compute_in_pool(
         &mut self,
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
+        from: DensityFrom<'_>,
     ) -> Result<SurfaceOutput, SurfaceError> {
         // Refined vertices run at quality max (grid and refinement, issue 33).
         let params = &self.vertices.effective(params);
@@ -223,19 +309,45 @@ impl CpuEngine {
             VertexData::Full
         };
         let field;
+        let mut kept = None;
         let (bin_ms, density_ms, t) = if self.dense_for(&grid) {
             let t = Instant::now();
-            let bins = bin_atoms(atoms, params, &grid, density::slab_planes(&grid));
+            // A difference needs the atoms binned only for refined vertices' analytic density.
+            let bins = (matches!(from, DensityFrom::Atoms) || refined)
+                .then(|| bin_atoms(atoms, params, &grid, density::slab_planes(&grid)));
             let bin_ms = ms(t);
             let t = Instant::now();
             // Free a brick store a previous sparse call may have left.
             if self.bricks.stored_bytes() > 0 {
                 *self.bricks = BrickVolume::default();
             }
-            density::compute_binned_into(&bins, params, &grid, with_colour, &mut self.volume);
+            match (from, &bins) {
+                (DensityFrom::Difference(whole, minus), _) => {
+                    whole.difference_into(minus, &mut self.volume.values);
+                    self.volume.colours = None;
+                }
+                // Sampled atoms are always binned (above).
+                (DensityFrom::Atoms, bins) => {
+                    if let Some(bins) = bins {
+                        density::compute_binned_into(
+                            bins,
+                            params,
+                            &grid,
+                            with_colour,
+                            &mut self.volume,
+                        )
+                    }
+                }
+            }
+            if self.keep_density {
+                kept = Some(self.keep_copy(grid, params));
+            }
             let density_ms = ms(t);
             let t = Instant::now();
-            field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
+            field = match (refined, &bins) {
+                (true, Some(bins)) => Some(AnalyticField::new(&bins.atoms, &grid)),
+                _ => None,
+            };
             drop(bins);
             let iso = params.isovalue;
             march_dense(&grid, &self.volume, iso, field.as_ref(), data, &mut self.mc);
@@ -296,6 +408,7 @@ impl CpuEngine {
                 mc_ms,
             },
             counts_without_mesh,
+            density: kept,
         })
     }
 }

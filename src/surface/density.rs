@@ -117,15 +117,12 @@ pub(crate) fn fill_binned_into(
     let plane = nx * ny;
     let slab_len = (plane * bins.slab_planes as usize).max(1);
     let total = plane * nz;
-    if out.values.len() != total {
-        out.values = Vec::new();
-        out.values = vec![0.0f32; total];
-    }
-    if !with_colour {
-        out.colours = None;
-    } else if out.colours.as_ref().is_none_or(|c| c.len() != total) {
-        out.colours = None;
-        out.colours = Some(vec![[0.0f32; 3]; total]);
+    // Every sample is written below (each slab is zeroed first, colours assigned).
+    fit_len(&mut out.values, total, 0.0);
+    match (with_colour, &mut out.colours) {
+        (false, colours) => *colours = None,
+        (true, Some(colours)) => fit_len(colours, total, [0.0; 3]),
+        (true, colours) => *colours = Some(vec![[0.0f32; 3]; total]),
     }
     let inv_iso = 1.0 / iso;
     let values = &mut out.values;
@@ -161,6 +158,20 @@ pub(crate) fn fill_binned_into(
                     }
                 })
             }),
+    }
+}
+
+/// Makes `buffer` `len` long, keeping its memory when it holds that many and is not more than
+/// twice too large. On a trajectory the grid changes size from frame to frame: a new buffer
+/// would fault its pages in again (about 0.3 ms of a 1.5 ms frame for 200,000 samples).
+/// Contents are left to the caller to overwrite.
+fn fit_len<T: Copy>(buffer: &mut Vec<T>, len: usize, zero: T) {
+    if buffer.capacity() >= len && buffer.capacity() <= 2 * len {
+        buffer.truncate(len);
+        buffer.resize(len, zero);
+    } else {
+        *buffer = Vec::new();
+        *buffer = vec![zero; len];
     }
 }
 

@@ -1,10 +1,12 @@
 //! The interface every surface engine offers (the CPU reference here, the GPU engine in
 //! [`crate::gpu`]): atoms in, mesh plus measurements and stage timings out.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use super::scan::first_failing;
-use super::{GridSpec, Mesh, SurfaceError, SurfaceParams, VertexMode};
+use super::{GridSpec, KeptDensity, Mesh, SurfaceError, SurfaceParams, VertexMode};
 
 /// The particles one surface is built from. All slices have the same length.
 #[derive(Debug, Clone, Copy)]
@@ -115,6 +117,9 @@ pub struct SurfaceOutput {
     /// Set when the engine measured the surface without keeping its mesh (see
     /// [`SurfaceEngine::set_keep_mesh`]); `mesh` is then empty.
     pub counts_without_mesh: Option<MeshCounts>,
+    /// The density at every sample of `grid`, when the engine was asked to keep it
+    /// ([`SurfaceEngine::set_keep_density`]) and sampled the whole grid.
+    pub density: Option<Arc<KeptDensity>>,
 }
 
 /// Size of a mesh that was measured but not kept.
@@ -167,6 +172,29 @@ pub trait SurfaceEngine {
     /// `--stats` and no `-o`); see [`SurfaceOutput::counts_without_mesh`]. An engine that always
     /// builds the mesh ignores it. Default: the mesh is kept.
     fn set_keep_mesh(&mut self, _keep: bool) {}
+
+    /// With `true`, later surfaces keep their sampled density in
+    /// [`SurfaceOutput::density`] where the engine samples the whole grid (the CPU engine's
+    /// dense path), for [`SurfaceEngine::compute_difference`]. An engine that cannot ignores
+    /// it. Default: not kept.
+    fn set_keep_density(&mut self, _keep: bool) {}
+
+    /// The surface of `atoms` computed from the density `whole` less `minus` instead of from
+    /// its atoms' Gaussians. Both were kept ([`SurfaceEngine::set_keep_density`]) on the grid
+    /// this engine gives `atoms` (force it with [`SurfaceEngine::set_grid`]) under `params`:
+    /// when `whole` is the density of `atoms` together with the atoms `minus` is the density
+    /// of, the result is [`SurfaceEngine::compute`]'s to rounding (refined vertices are placed
+    /// on `atoms`' own analytic density). `None` when this engine cannot, or the densities do
+    /// not fit that grid and parameters, or `atoms` carry colours: then call `compute`.
+    fn compute_difference(
+        &mut self,
+        _atoms: &AtomSet<'_>,
+        _params: &SurfaceParams,
+        _whole: &KeptDensity,
+        _minus: &KeptDensity,
+    ) -> Option<Result<SurfaceOutput, SurfaceError>> {
+        None
+    }
 
     /// Sets how later surfaces place their vertices and normals (issue 13); an engine that
     /// cannot refine keeps interpolating and reports so through [`SurfaceEngine::vertices`].

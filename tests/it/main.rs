@@ -94,6 +94,7 @@ mod shaders_validate;
 mod surface_analytic;
 mod surface_bricks;
 mod surface_density;
+mod surface_difference;
 mod surface_errors;
 mod surface_invariance;
 mod surface_periodic;

@@ -12,7 +12,7 @@ use mdsurf::model::{Frame, Particles, RadiusOverrides, Topology};
 use mdsurf::scene::interface::{Interface, InterfaceFrame, ShownSurface};
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::{LayerResult, RepRequest, SceneBackend, SceneEngine};
-use mdsurf::surface::{CpuEngine, Preset, RadiusSet, SurfaceParams};
+use mdsurf::surface::{CpuEngine, Preset, RadiusSet, SurfaceEngine, SurfaceParams};
 
 use crate::data_support::data;
 
@@ -55,14 +55,18 @@ impl Shown {
     }
 }
 
-/// The scene's layer of `rep` on frame 0 (radii overridden by `overrides`).
+/// The scene's layer of `rep` on frame 0 (radii overridden by `overrides`), its sampled
+/// density kept when `keep_density` (as `mdsurf surface --interface` keeps it).
 fn shown_with(
     topology: &Topology,
     frame: &Arc<Frame>,
     rep: Representation,
     overrides: &RadiusOverrides,
+    keep_density: bool,
 ) -> Shown {
-    let mut scene = SceneEngine::new(SceneBackend::Host(Box::new(CpuEngine::new())));
+    let mut engine = CpuEngine::new();
+    engine.set_keep_density(keep_density);
+    let mut scene = SceneEngine::new(SceneBackend::Host(Box::new(engine)));
     scene.reset(topology, overrides);
     let reps = [RepRequest { id: 1, rep }];
     let computed = scene
@@ -78,7 +82,7 @@ fn shown_with(
 
 /// The scene's layer of `rep` on frame 0.
 fn shown_layer(topology: &Topology, frame: &Arc<Frame>, rep: Representation) -> Shown {
-    shown_with(topology, frame, rep, &RadiusOverrides::default())
+    shown_with(topology, frame, rep, &RadiusOverrides::default(), true)
 }
 
 /// The interface of `sides` measured on its own and with `shown` offered.
@@ -168,6 +172,48 @@ fn the_frames_surface_of_both_chains_is_the_complex() {
 }
 
 #[test]
+fn a_complex_without_its_density_gives_the_same_areas_to_rounding() {
+    // With the complex's density the larger side is the complex less the smaller (at the
+    // defaults; the preset's radii differ between a side and the complex at the contact, so
+    // there both sides are sampled either way); without it both sides are sampled.
+    let (topology, frame) = dimer();
+    let base = rep("all", false);
+    let plain = RadiusOverrides::default();
+    let kept = shown_with(&topology, &frame, rep("protein", false), &plain, true);
+    let sampled = shown_with(&topology, &frame, rep("protein", false), &plain, false);
+    assert!(kept.layer.output.density.is_some());
+    assert!(sampled.layer.output.density.is_none());
+    let (_, by_difference) = both_ways(
+        &topology,
+        &frame,
+        [CHAIN_A, CHAIN_B],
+        &base,
+        kept.offer(true),
+    );
+    let (_, by_sampling) = both_ways(
+        &topology,
+        &frame,
+        [CHAIN_A, CHAIN_B],
+        &base,
+        sampled.offer(true),
+    );
+    assert!(by_difference.complex_shown && by_sampling.complex_shown);
+    let (d, s) = (&by_difference.result, &by_sampling.result);
+    // The side that was sampled either way is the same bits; the other differs in rounding.
+    let same = [d.area_a == s.area_a, d.area_b == s.area_b];
+    assert_eq!(same.iter().filter(|&&x| x).count(), 1, "{same:?}");
+    assert!(d != s, "the difference is not the sampled side's bits");
+    close(s, d, 1e-6, "by difference");
+    let residues = |f: &InterfaceFrame| -> Vec<(String, u32)> {
+        f.contacts
+            .iter()
+            .map(|c| (format!("{:?}", c.side), c.residue.residue))
+            .collect()
+    };
+    assert_eq!(residues(&by_difference), residues(&by_sampling));
+}
+
+#[test]
 fn a_surface_of_other_atoms_radii_or_parameters_is_not_taken() {
     let (topology, frame) = dimer();
     let sides = [CHAIN_A, CHAIN_B];
@@ -194,7 +240,7 @@ fn a_surface_of_other_atoms_radii_or_parameters_is_not_taken() {
         ("other radii", rep("protein", true), true, &own_n),
     ] {
         let base = rep("all", ses);
-        let shown = shown_with(&topology, &frame, shown, overrides);
+        let shown = shown_with(&topology, &frame, shown, overrides, true);
         let missing = if what == "fewer atoms" { 1 } else { 0 };
         assert_eq!(shown.atoms.len() + missing, complex_atoms, "{what}");
         for with_particles in [false, true] {

@@ -194,6 +194,7 @@ impl SurfaceEngine for GpuEngine {
             volume: stats.volume,
             timings: stats.timings,
             counts_without_mesh,
+            density: None,
         })
     }
 }

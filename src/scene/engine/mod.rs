@@ -509,6 +509,7 @@ impl SceneEngine {
                     vertices: stats.vertex_count as usize,
                     triangles: stats.triangle_count as usize,
                 }),
+                density: None,
             };
             result.gpu_surface = Some(surface);
             result.gpu_work = Some(work);

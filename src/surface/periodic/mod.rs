@@ -434,6 +434,7 @@ pub(super) fn periodic_output(
         area: area * images,
         volume: volume * images,
         counts_without_mesh: None,
+        density: None,
         timings,
     }
 }

@@ -1,0 +1,150 @@
+//! A surface computed from a kept density less another ([`SurfaceEngine::compute_difference`],
+//! which spares the interface sampling one side): it is the surface sampled from its own atoms
+//! to rounding, bit for bit where the subtracted atoms do not reach, and the engine declines
+//! densities of another grid, other parameters or atoms with colours.
+
+use glam::Vec3;
+use mdsurf::surface::{
+    AtomSet, CpuEngine, SurfaceEngine, SurfaceOutput, SurfaceParams, VertexMode,
+};
+
+use crate::surface_common::Rng;
+
+/// `count` atoms of radius 1.2 to 2 Å scattered in a 12 Å cube whose corner is at `corner`.
+fn blob(count: usize, corner: Vec3, rng: &mut Rng) -> (Vec<Vec3>, Vec<f32>) {
+    let positions = (0..count)
+        .map(|_| corner + Vec3::new(rng.next(), rng.next(), rng.next()) * 12.0)
+        .collect();
+    let radii = (0..count).map(|_| 1.2 + 0.8 * rng.next()).collect();
+    (positions, radii)
+}
+
+/// Side A, side B and both together (A's atoms first), B's corner at `offset` from A's.
+fn two_blobs(offset: Vec3) -> [(Vec<Vec3>, Vec<f32>); 3] {
+    let mut rng = Rng(0x5eed_d1ff);
+    let a = blob(60, Vec3::ZERO, &mut rng);
+    let b = blob(90, offset, &mut rng);
+    let both = (
+        a.0.iter().chain(&b.0).copied().collect(),
+        a.1.iter().chain(&b.1).copied().collect(),
+    );
+    [a, b, both]
+}
+
+fn set(atoms: &(Vec<Vec3>, Vec<f32>)) -> AtomSet<'_> {
+    AtomSet {
+        positions: &atoms.0,
+        radii: &atoms.1,
+        colours: None,
+    }
+}
+
+/// B's surface on the complex's grid, sampled and by difference (complex less A).
+fn b_both_ways(
+    offset: Vec3,
+    params: &SurfaceParams,
+    mode: VertexMode,
+) -> (SurfaceOutput, SurfaceOutput) {
+    let [a, b, both] = two_blobs(offset);
+    let mut engine = CpuEngine::new().with_vertices(mode);
+    engine.set_keep_density(true);
+    let complex = engine.compute(&set(&both), params).expect("complex");
+    engine.set_grid(Some(complex.grid));
+    let side_a = engine.compute(&set(&a), params).expect("side A");
+    engine.set_keep_density(false);
+    let sampled = engine.compute(&set(&b), params).expect("side B");
+    let whole = complex
+        .density
+        .as_deref()
+        .expect("the complex keeps its density");
+    let minus = side_a.density.as_deref().expect("side A keeps its density");
+    let by_difference = engine
+        .compute_difference(&set(&b), params, whole, minus)
+        .expect("a dense grid takes the difference")
+        .expect("side B by difference");
+    assert!(sampled.density.is_none(), "not kept once switched off");
+    (sampled, by_difference)
+}
+
+#[test]
+fn a_side_by_difference_is_the_side_sampled_to_rounding() {
+    for mode in [VertexMode::Interpolated, VertexMode::Refined] {
+        let params = SurfaceParams::default();
+        // Overlapping blobs: B's density is the complex's less A's where both reach.
+        let (sampled, by_difference) = b_both_ways(Vec3::new(8.0, 2.0, 0.0), &params, mode);
+        assert_eq!(sampled.grid, by_difference.grid);
+        let rel = (sampled.area - by_difference.area).abs() / sampled.area;
+        assert!(
+            rel < 1e-6,
+            "{mode:?}: area {} vs {}",
+            by_difference.area,
+            sampled.area
+        );
+        let rel = (sampled.volume - by_difference.volume).abs() / sampled.volume;
+        assert!(rel < 1e-6, "{mode:?}: volume {rel}");
+        assert_eq!(
+            sampled.triangle_count(),
+            by_difference.triangle_count(),
+            "{mode:?}"
+        );
+        // Blobs farther apart than the Gaussians reach: A's density is exactly 0 at B.
+        let (sampled, by_difference) = b_both_ways(Vec3::new(40.0, 0.0, 0.0), &params, mode);
+        assert_eq!(
+            sampled.area.to_bits(),
+            by_difference.area.to_bits(),
+            "{mode:?}"
+        );
+        assert_eq!(sampled.mesh, by_difference.mesh, "{mode:?}");
+    }
+}
+
+#[test]
+fn densities_of_another_grid_parameters_or_coloured_atoms_are_declined() {
+    let params = SurfaceParams::default();
+    let [a, b, both] = two_blobs(Vec3::new(8.0, 2.0, 0.0));
+    let mut engine = CpuEngine::new();
+    engine.set_keep_density(true);
+    let complex = engine.compute(&set(&both), &params).expect("complex");
+    let whole = complex.density.as_deref().expect("kept");
+    // A on its own grid, not the complex's.
+    let own_grid = engine.compute(&set(&a), &params).expect("A");
+    engine.set_grid(Some(complex.grid));
+    let minus = engine
+        .compute(&set(&a), &params)
+        .expect("A on the complex's grid");
+    let minus = minus.density.as_deref().expect("kept");
+    let other_grid = own_grid.density.as_deref().expect("kept");
+    assert!(
+        engine
+            .compute_difference(&set(&b), &params, whole, other_grid)
+            .is_none(),
+        "another grid"
+    );
+    let coarser = SurfaceParams {
+        isovalue: 0.6,
+        ..params
+    };
+    assert!(
+        engine
+            .compute_difference(&set(&b), &coarser, whole, minus)
+            .is_none(),
+        "other parameters"
+    );
+    let colours = vec![[0.5f32; 3]; b.0.len()];
+    let coloured = AtomSet {
+        colours: Some(&colours),
+        ..set(&b)
+    };
+    assert!(
+        engine
+            .compute_difference(&coloured, &params, whole, minus)
+            .is_none(),
+        "colours"
+    );
+    assert!(
+        engine
+            .compute_difference(&set(&b), &params, whole, minus)
+            .is_some(),
+        "the complex's grid and parameters"
+    );
+}
