@@ -31,6 +31,11 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
+mod active;
+mod difference;
+
+use active::LayerMasks;
+
 use super::bin::{AtomBins, sample_range};
 use super::density::{SampleLattice, fill_planes};
 use super::mc_vertex::{edge_t, lerp_colour};
@@ -483,47 +488,21 @@ impl LayerCtx<'_> {
                 }
             }
         }
-        // The 9 samples 8 bi ..= 8 bi + 8 of row (j, kk).
-        let mask9 = |kk: usize, j: usize, bi: usize| -> u32 {
-            let q = (kk * ny + j) * bx + bi;
-            let next = if bi + 1 < bx { masks[q + 1] & 1 } else { 0 };
-            u32::from(masks[q]) | u32::from(next) << 8
+        let layer_masks = LayerMasks {
+            masks: &masks,
+            dims: [nx, ny],
+            bdims: [bx, by],
+            planes: np,
         };
-
-        // Active bricks: the 9^3 footprint holds samples on both sides of I.
-        layer.row_start.clear();
-        layer.cols.clear();
-        layer.row_start.push(0);
-        let kmax = np - 1; // last temp plane of the footprint
-        for bj in 0..by {
-            for bi in 0..bx {
-                let touched = |occ: &[u8]| {
-                    (bj..=(bj + 1).min(by - 1))
-                        .any(|y| (bi..=(bi + 1).min(bx - 1)).any(|x| occ[y * bx + x] != 0))
-                };
-                if !(touched(occ_k) || occ_up.is_some_and(touched)) {
-                    continue; // every footprint sample is 0 < I
-                }
-                let (i0, i1) = (bi * BRICK, (bi * BRICK + BRICK).min(nx - 1));
-                let (j0, j1) = (bj * BRICK, (bj * BRICK + BRICK).min(ny - 1));
-                let full = (1u32 << (i1 - i0 + 1)) - 1;
-                let (mut any, mut all) = (false, true);
-                for kk in 0..=kmax.min(BRICK) {
-                    for j in j0..=j1 {
-                        let m = mask9(kk, j, bi) & full;
-                        any |= m != 0;
-                        all &= m == full;
-                    }
-                    if any && !all {
-                        break;
-                    }
-                }
-                if any && !all {
-                    layer.cols.push(bi as u32);
-                }
-            }
-            layer.row_start.push(layer.cols.len() as u32);
-        }
+        let mask9 = |kk: usize, j: usize, bi: usize| layer_masks.mask9(kk, j, bi);
+        let touched = |bi: usize, bj: usize| {
+            let near = |occ: &[u8]| {
+                (bj..=(bj + 1).min(by - 1))
+                    .any(|y| (bi..=(bi + 1).min(bx - 1)).any(|x| occ[y * bx + x] != 0))
+            };
+            near(occ_k) || occ_up.is_some_and(near)
+        };
+        layer_masks.find_active(touched, layer);
 
         // Vertex colours in the order Marching Cubes visits the crossed edges: plane by plane,
         // row by row, active bricks by x, points by x, axes x, y, z.

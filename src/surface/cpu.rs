@@ -12,6 +12,7 @@ use super::analytic::AnalyticField;
 use super::bin::{bin_atoms, bin_atoms_overlapping};
 use super::brick_mc::march_bricks;
 use super::bricks::{self, BrickScratch, BrickStats, BrickVolume};
+use super::kept_density::{KeptSamples, dense_difference_into};
 use super::marching_cubes::{McScratch, VertexData, march_dense};
 use super::{
     AtomSet, DensityVolume, GridSpec, KeptDensity, Mesh, MeshCounts, StageTimings, SurfaceEngine,
@@ -75,8 +76,11 @@ const KEPT_BUFFERS: usize = 3;
 enum DensityFrom<'a> {
     /// Its atoms' Gaussians, sampled.
     Atoms,
-    /// A kept density less another, on the same grid ([`SurfaceEngine::compute_difference`]).
-    Difference(&'a KeptDensity, &'a KeptDensity),
+    /// A kept dense density less another, on the same grid
+    /// ([`SurfaceEngine::compute_difference`]).
+    DenseDifference(&'a [f32], &'a [f32]),
+    /// Kept sparse bricks less others, on the same grid.
+    BrickDifference(&'a BrickVolume, &'a BrickVolume),
 }
 
 impl std::fmt::Debug for CpuEngine {
@@ -227,11 +231,18 @@ impl SurfaceEngine for CpuEngine {
             Ok(grid) => grid,
             Err(e) => return Some(Err(e)),
         };
-        let fits = self.dense_for(&grid)
-            && atoms.colours.is_none()
-            && whole.fits(&grid, &effective)
-            && minus.fits(&grid, &effective);
-        fits.then(|| self.compute_from(atoms, params, DensityFrom::Difference(whole, minus)))
+        if atoms.colours.is_some()
+            || !whole.fits(&grid, &effective)
+            || !minus.fits(&grid, &effective)
+        {
+            return None;
+        }
+        // Kept as this engine's path stores this grid.
+        let from = match self.dense_for(&grid) {
+            true => DensityFrom::DenseDifference(whole.dense()?, minus.dense()?),
+            false => DensityFrom::BrickDifference(whole.bricks()?, minus.bricks()?),
+        };
+        Some(self.compute_from(atoms, params, from))
     }
 }
 
@@ -252,12 +263,17 @@ impl CpuEngine {
         self.compute_in_pool(atoms, params, from)
     }
 
-    /// A copy of the dense volume's density, sampled on `grid` under `params`, in the buffer
-    /// of an earlier copy that no output holds any more: its pages are mapped already, where
-    /// a new buffer would fault them in again (which costs more than the copy). A scene keeps
-    /// its last result while the next frame is computed, so up to [`KEPT_BUFFERS`] copies
-    /// are kept for reuse.
-    fn keep_copy(&mut self, grid: GridSpec, params: &SurfaceParams) -> Arc<KeptDensity> {
+    /// A copy of the density just computed (dense volume or bricks, as `dense` says), sampled
+    /// on `grid` under `params`, in the buffers of an earlier copy that no output holds any
+    /// more: their pages are mapped already, where new buffers would fault them in again
+    /// (which costs more than the copy). A scene keeps its last result while the next frame
+    /// is computed, so up to [`KEPT_BUFFERS`] copies are kept for reuse.
+    fn keep_copy(
+        &mut self,
+        grid: GridSpec,
+        params: &SurfaceParams,
+        dense: bool,
+    ) -> Arc<KeptDensity> {
         let free = self
             .kept
             .iter()
@@ -271,15 +287,22 @@ impl CpuEngine {
                 Arc::new(KeptDensity {
                     grid,
                     params: *params,
-                    values: Vec::new(),
+                    samples: KeptSamples::Dense(Vec::new()),
                 })
             }
         };
         if let Some(k) = Arc::get_mut(&mut kept) {
             k.grid = grid;
             k.params = *params;
-            k.values.clear();
-            k.values.extend_from_slice(&self.volume.values);
+            match (&mut k.samples, dense) {
+                (KeptSamples::Dense(values), true) => {
+                    values.clear();
+                    values.extend_from_slice(&self.volume.values);
+                }
+                (KeptSamples::Bricks(bricks), false) => bricks.copy_from(&self.bricks),
+                (samples, true) => *samples = KeptSamples::Dense(self.volume.values.clone()),
+                (samples, false) => *samples = KeptSamples::Bricks((*self.bricks).clone()),
+            }
         }
         self.kept.push(Arc::clone(&kept));
         kept
@@ -313,7 +336,11 @@ impl CpuEngine {
         let (bin_ms, density_ms, t) = if self.dense_for(&grid) {
             let t = Instant::now();
             // A difference needs the atoms binned only for refined vertices' analytic density.
-            let bins = (matches!(from, DensityFrom::Atoms) || refined)
+            let difference = match from {
+                DensityFrom::DenseDifference(whole, minus) => Some((whole, minus)),
+                _ => None,
+            };
+            let bins = (difference.is_none() || refined)
                 .then(|| bin_atoms(atoms, params, &grid, density::slab_planes(&grid)));
             let bin_ms = ms(t);
             let t = Instant::now();
@@ -321,13 +348,13 @@ impl CpuEngine {
             if self.bricks.stored_bytes() > 0 {
                 *self.bricks = BrickVolume::default();
             }
-            match (from, &bins) {
-                (DensityFrom::Difference(whole, minus), _) => {
-                    whole.difference_into(minus, &mut self.volume.values);
+            match (difference, &bins) {
+                (Some((whole, minus)), _) => {
+                    dense_difference_into(whole, minus, &mut self.volume.values);
                     self.volume.colours = None;
                 }
                 // Sampled atoms are always binned (above).
-                (DensityFrom::Atoms, bins) => {
+                (None, bins) => {
                     if let Some(bins) = bins {
                         density::compute_binned_into(
                             bins,
@@ -340,7 +367,7 @@ impl CpuEngine {
                 }
             }
             if self.keep_density {
-                kept = Some(self.keep_copy(grid, params));
+                kept = Some(self.keep_copy(grid, params, true));
             }
             let density_ms = ms(t);
             let t = Instant::now();
@@ -358,14 +385,39 @@ impl CpuEngine {
             self.volume = DensityVolume::default();
             let t = Instant::now();
             let planes = bricks::slab_planes(&grid);
-            let bins = bin_atoms_overlapping(atoms, params, &grid, planes, 1);
+            // A difference needs the atoms binned only for refined vertices' analytic density.
+            let difference = match from {
+                DensityFrom::BrickDifference(whole, minus) => Some((whole, minus)),
+                _ => None,
+            };
+            let bins = (difference.is_none() || refined)
+                .then(|| bin_atoms_overlapping(atoms, params, &grid, planes, 1));
             let bin_ms = ms(t);
             let t = Instant::now();
-            self.bricks
-                .compute(&bins, params, &grid, with_colour, &mut self.brick_scratch);
+            match (difference, &bins) {
+                (Some((whole, minus)), _) => self.bricks.difference_of(whole, minus),
+                // Sampled atoms are always binned (above).
+                (None, bins) => {
+                    if let Some(bins) = bins {
+                        self.bricks.compute(
+                            bins,
+                            params,
+                            &grid,
+                            with_colour,
+                            &mut self.brick_scratch,
+                        );
+                    }
+                }
+            }
+            if self.keep_density {
+                kept = Some(self.keep_copy(grid, params, false));
+            }
             let density_ms = ms(t);
             let t = Instant::now();
-            field = refined.then(|| AnalyticField::new(&bins.atoms, &grid));
+            field = match (refined, &bins) {
+                (true, Some(bins)) => Some(AnalyticField::new(&bins.atoms, &grid)),
+                _ => None,
+            };
             drop(bins);
             march_bricks(&self.bricks, field.as_ref(), data, &mut self.mc);
             self.last_bricks = Some(self.bricks.stats());

@@ -1,7 +1,8 @@
 //! A surface computed from a kept density less another ([`SurfaceEngine::compute_difference`],
-//! which spares the interface sampling one side): it is the surface sampled from its own atoms
-//! to rounding, bit for bit where the subtracted atoms do not reach, and the engine declines
-//! densities of another grid, other parameters or atoms with colours.
+//! which spares the interface sampling one side), on the dense path and on sparse bricks: it is
+//! the surface sampled from its own atoms to rounding, bit for bit where the subtracted atoms
+//! do not reach, and the engine declines densities of another grid, other parameters, another
+//! storage or atoms with colours.
 
 use glam::Vec3;
 use mdsurf::surface::{
@@ -39,14 +40,23 @@ fn set(atoms: &(Vec<Vec3>, Vec<f32>)) -> AtomSet<'_> {
     }
 }
 
+/// The default engine (dense on these small grids) or one on sparse bricks.
+fn engine(bricks: bool) -> CpuEngine {
+    match bricks {
+        true => CpuEngine::bricks(),
+        false => CpuEngine::new(),
+    }
+}
+
 /// B's surface on the complex's grid, sampled and by difference (complex less A).
 fn b_both_ways(
     offset: Vec3,
     params: &SurfaceParams,
     mode: VertexMode,
+    bricks: bool,
 ) -> (SurfaceOutput, SurfaceOutput) {
     let [a, b, both] = two_blobs(offset);
-    let mut engine = CpuEngine::new().with_vertices(mode);
+    let mut engine = engine(bricks).with_vertices(mode);
     engine.set_keep_density(true);
     let complex = engine.compute(&set(&both), params).expect("complex");
     engine.set_grid(Some(complex.grid));
@@ -68,34 +78,68 @@ fn b_both_ways(
 
 #[test]
 fn a_side_by_difference_is_the_side_sampled_to_rounding() {
-    for mode in [VertexMode::Interpolated, VertexMode::Refined] {
+    for (mode, bricks) in [
+        (VertexMode::Interpolated, false),
+        (VertexMode::Refined, false),
+        (VertexMode::Interpolated, true),
+        (VertexMode::Refined, true),
+    ] {
         let params = SurfaceParams::default();
+        let mode_bricks = format!("{mode:?}, bricks {bricks}");
         // Overlapping blobs: B's density is the complex's less A's where both reach.
-        let (sampled, by_difference) = b_both_ways(Vec3::new(8.0, 2.0, 0.0), &params, mode);
+        let (sampled, by_difference) = b_both_ways(Vec3::new(8.0, 2.0, 0.0), &params, mode, bricks);
         assert_eq!(sampled.grid, by_difference.grid);
         let rel = (sampled.area - by_difference.area).abs() / sampled.area;
         assert!(
             rel < 1e-6,
-            "{mode:?}: area {} vs {}",
+            "{mode_bricks}: area {} vs {}",
             by_difference.area,
             sampled.area
         );
         let rel = (sampled.volume - by_difference.volume).abs() / sampled.volume;
-        assert!(rel < 1e-6, "{mode:?}: volume {rel}");
+        assert!(rel < 1e-6, "{mode_bricks}: volume {rel}");
         assert_eq!(
             sampled.triangle_count(),
             by_difference.triangle_count(),
-            "{mode:?}"
+            "{mode_bricks}"
         );
         // Blobs farther apart than the Gaussians reach: A's density is exactly 0 at B.
-        let (sampled, by_difference) = b_both_ways(Vec3::new(40.0, 0.0, 0.0), &params, mode);
+        let (sampled, by_difference) =
+            b_both_ways(Vec3::new(40.0, 0.0, 0.0), &params, mode, bricks);
         assert_eq!(
             sampled.area.to_bits(),
             by_difference.area.to_bits(),
-            "{mode:?}"
+            "{mode_bricks}"
         );
-        assert_eq!(sampled.mesh, by_difference.mesh, "{mode:?}");
+        assert_eq!(sampled.mesh, by_difference.mesh, "{mode_bricks}");
     }
+}
+
+#[test]
+fn a_density_kept_dense_is_declined_by_an_engine_on_bricks() {
+    let params = SurfaceParams::default();
+    let [a, b, both] = two_blobs(Vec3::new(8.0, 2.0, 0.0));
+    let mut dense = CpuEngine::new();
+    dense.set_keep_density(true);
+    let complex = dense.compute(&set(&both), &params).expect("complex");
+    dense.set_grid(Some(complex.grid));
+    let side_a = dense.compute(&set(&a), &params).expect("A");
+    let mut on_bricks = CpuEngine::bricks();
+    on_bricks.set_grid(Some(complex.grid));
+    let (whole, minus) = (
+        complex.density.expect("kept"),
+        side_a.density.expect("kept"),
+    );
+    assert!(
+        on_bricks
+            .compute_difference(&set(&b), &params, &whole, &minus)
+            .is_none()
+    );
+    assert!(
+        dense
+            .compute_difference(&set(&b), &params, &whole, &minus)
+            .is_some()
+    );
 }
 
 #[test]
