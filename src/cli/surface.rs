@@ -155,7 +155,10 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         // Without -o or a measurement of the mesh only area, volume and counts are reported:
         // the mesh need not be built.
         e.set_keep_mesh(output.is_some() || args.measure.keeps_meshes());
-        e.set_keep_density(args.measure.keeps_density());
+        // The interface splits the complex's density only where each side has its radius in
+        // the complex; radii that follow exposure differ at the contact.
+        let fixed_radii = args.params.radius_set().exposure().is_none();
+        e.set_keep_density(args.measure.keeps_density() && fixed_radii);
         if reader.chain().periodic().is_none() {
             set_vertex_mode(e.as_mut(), args.params.vertex_mode());
         }
