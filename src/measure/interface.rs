@@ -87,8 +87,9 @@ pub fn interface_with(
     let engine = grid_engine(engine, &mut fallback);
     engine.set_grid(None);
     engine.set_keep_mesh(per_atom);
-    // The complex's density, where the engine keeps it, spares sampling one side.
-    engine.set_keep_density(true);
+    // The complex's density, where the engine keeps it, spares sampling one side; not with
+    // radii of its own (they differ from the sides' at the contact).
+    engine.set_keep_density(complex_radii.is_none());
     let output = engine.compute(&union, params);
     engine.set_keep_mesh(true);
     engine.set_keep_density(false);
