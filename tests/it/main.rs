@@ -36,6 +36,7 @@ mod export_gltf_anim;
 mod gpu_double_buffer;
 mod gpu_exposure;
 mod gpu_frames;
+mod gpu_measure;
 mod gpu_parity;
 mod gpu_plan_memory;
 mod gpu_refine;
