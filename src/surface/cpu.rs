@@ -70,6 +70,9 @@ pub struct CpuEngine {
 
 /// Copies of the density a CPU engine keeps for reuse ([`CpuEngine::keep_copy`]).
 const KEPT_BUFFERS: usize = 3;
+/// A kept copy of the density may take at most one part in this many of the memory available
+/// ([`CpuEngine::can_keep`]); with [`KEPT_BUFFERS`] of them, at most 3/16.
+const KEPT_MEMORY_SHARE: u64 = 16;
 
 /// Where a surface's density comes from.
 #[derive(Clone, Copy)]
@@ -263,6 +266,14 @@ impl CpuEngine {
         self.compute_in_pool(atoms, params, from)
     }
 
+    /// True when a copy of `bytes` fits in a [`KEPT_MEMORY_SHARE`] of the memory available
+    /// (or of the engine's limit): on a very large grid the difference is not worth the risk,
+    /// and the interface samples both sides instead.
+    fn can_keep(&self, bytes: u64) -> bool {
+        let available = self.memory_limit.unwrap_or_else(available_memory_bytes);
+        bytes.saturating_mul(KEPT_MEMORY_SHARE) <= available
+    }
+
     /// A copy of the density just computed (dense volume or bricks, as `dense` says), sampled
     /// on `grid` under `params`, in the buffers of an earlier copy that no output holds any
     /// more: their pages are mapped already, where new buffers would fault them in again
@@ -366,7 +377,7 @@ impl CpuEngine {
                     }
                 }
             }
-            if self.keep_density {
+            if self.keep_density && self.can_keep(self.volume.values.len() as u64 * 4) {
                 kept = Some(self.keep_copy(grid, params, true));
             }
             let density_ms = ms(t);
@@ -409,7 +420,7 @@ impl CpuEngine {
                     }
                 }
             }
-            if self.keep_density {
+            if self.keep_density && self.can_keep(self.bricks.stored_bytes()) {
                 kept = Some(self.keep_copy(grid, params, false));
             }
             let density_ms = ms(t);

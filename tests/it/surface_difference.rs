@@ -192,3 +192,35 @@ fn densities_of_another_grid_parameters_or_coloured_atoms_are_declined() {
         "the complex's grid and parameters"
     );
 }
+
+#[test]
+fn an_engine_short_of_memory_keeps_no_density_and_the_interface_samples_both_sides() {
+    let params = SurfaceParams::default();
+    let [a, b, both] = two_blobs(Vec3::new(8.0, 2.0, 0.0));
+    let grid = CpuEngine::new()
+        .compute(&set(&both), &params)
+        .expect("complex")
+        .grid;
+    // Enough to compute this grid (5 bytes a sample), not to keep a 4-byte copy as well.
+    let mut short = CpuEngine::with_memory_limit(grid.voxel_count() * 8);
+    short.set_keep_density(true);
+    let complex = short.compute(&set(&both), &params).expect("complex");
+    assert!(complex.density.is_none(), "a copy is not kept");
+    let mut roomy = CpuEngine::new();
+    roomy.set_keep_density(true);
+    assert!(
+        roomy
+            .compute(&set(&both), &params)
+            .expect("complex")
+            .density
+            .is_some()
+    );
+    // The buried area without the complex's density is the one with both sides sampled.
+    let on_short = mdsurf::measure::interface(&mut short, &set(&a), &set(&b), &params)
+        .expect("the interface computes without a kept density");
+    let on_roomy = mdsurf::measure::interface(&mut roomy, &set(&a), &set(&b), &params)
+        .expect("the interface computes by difference");
+    assert!(on_roomy.buried > 10.0, "{}", on_roomy.buried);
+    let rel = (on_short.buried - on_roomy.buried).abs() / on_roomy.area_complex;
+    assert!(rel < 1e-6, "{} vs {}", on_short.buried, on_roomy.buried);
+}
