@@ -147,8 +147,9 @@ pub fn interface_on(
     });
     let mut fallback = None;
     let engine = grid_engine(engine, &mut fallback);
-    // Per-atom areas are weighed on the meshes; the areas alone need none.
+    // Per-atom areas are weighed on the meshes (their positions); the areas alone need none.
     engine.set_keep_mesh(per_atom);
+    engine.set_mesh_positions_only(true);
     let measure = engine.vertices().effective(params);
     engine.set_grid(Some(complex.output.grid));
     let whole = complex
@@ -159,6 +160,7 @@ pub fn interface_on(
     let sides = sides_on_grid(engine, [&a, &b], whole, params);
     engine.set_grid(None);
     engine.set_keep_mesh(true);
+    engine.set_mesh_positions_only(false);
     engine.set_keep_density(false);
     let [out_a, out_b] = sides?;
     let weigh = |out: &SurfaceOutput, set: &AtomSet<'_>| -> Result<Vec<f64>, MeasureError> {

@@ -61,6 +61,9 @@ pub struct CpuEngine {
     vertices: VertexMode,
     /// The grid every surface uses instead of its atoms' own ([`SurfaceEngine::set_grid`]).
     forced_grid: Option<GridSpec>,
+    /// Whether kept meshes hold positions and triangles only
+    /// ([`SurfaceEngine::set_mesh_positions_only`]).
+    positions_only: bool,
     /// Whether dense surfaces keep a copy of their density ([`SurfaceEngine::set_keep_density`]).
     keep_density: bool,
     /// The densities kept last, whose buffers later copies reuse once no output holds them
@@ -201,6 +204,10 @@ impl SurfaceEngine for CpuEngine {
         self.measure_only = !keep;
     }
 
+    fn set_mesh_positions_only(&mut self, only: bool) {
+        self.positions_only = only;
+    }
+
     fn set_keep_density(&mut self, keep: bool) {
         self.keep_density = keep;
     }
@@ -335,9 +342,12 @@ impl CpuEngine {
         // A surface that is only measured (not refined, see below) needs no vertex colours;
         // they do not move the vertices.
         let measured_only = self.measure_only && !refined;
-        let with_colour = atoms.colours.is_some() && !measured_only;
+        // A mesh kept with positions only needs no colours or normals either (refined
+        // vertices come with their normals from the field).
+        let positions_only = measured_only || (self.positions_only && !refined);
+        let with_colour = atoms.colours.is_some() && !positions_only;
         // Nor normals: area and volume read positions only.
-        let data = if measured_only {
+        let data = if positions_only {
             VertexData::PositionsOnly
         } else {
             VertexData::Full

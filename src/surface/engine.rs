@@ -173,6 +173,11 @@ pub trait SurfaceEngine {
     /// builds the mesh ignores it. Default: the mesh is kept.
     fn set_keep_mesh(&mut self, _keep: bool) {}
 
+    /// With `true`, later surfaces whose mesh is kept keep only its positions and triangles
+    /// (no normals or colours), where the engine can: for meshes that are only measured, such
+    /// as the interface's sides weighed per atom. Default: the whole mesh.
+    fn set_mesh_positions_only(&mut self, _only: bool) {}
+
     /// With `true`, later surfaces keep their sampled density in
     /// [`SurfaceOutput::density`] where the engine samples the whole grid (the CPU engine's
     /// dense path), for [`SurfaceEngine::compute_difference`]. An engine that cannot ignores

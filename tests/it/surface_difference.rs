@@ -2,7 +2,8 @@
 //! which spares the interface sampling one side), on the dense path and on sparse bricks: it is
 //! the surface sampled from its own atoms to rounding, bit for bit where the subtracted atoms
 //! do not reach, and the engine declines densities of another grid, other parameters, another
-//! storage or atoms with colours.
+//! storage or atoms with colours; a mesh kept with positions only (for weighing) has the whole
+//! mesh's positions and triangles.
 
 use glam::Vec3;
 use mdsurf::surface::{
@@ -223,4 +224,21 @@ fn an_engine_short_of_memory_keeps_no_density_and_the_interface_samples_both_sid
     assert!(on_roomy.buried > 10.0, "{}", on_roomy.buried);
     let rel = (on_short.buried - on_roomy.buried).abs() / on_roomy.area_complex;
     assert!(rel < 1e-6, "{} vs {}", on_short.buried, on_roomy.buried);
+}
+
+#[test]
+fn a_mesh_kept_with_positions_only_has_the_whole_meshs_positions_and_triangles() {
+    // The interface's sides keep their meshes only to weigh them per atom.
+    let params = SurfaceParams::default();
+    let [_, _, both] = two_blobs(Vec3::new(8.0, 2.0, 0.0));
+    for bricks in [false, true] {
+        let whole = engine(bricks).compute(&set(&both), &params).expect("whole");
+        let mut lean = engine(bricks);
+        lean.set_mesh_positions_only(true);
+        let lean = lean.compute(&set(&both), &params).expect("positions only");
+        assert_eq!(whole.mesh.positions, lean.mesh.positions, "bricks {bricks}");
+        assert_eq!(whole.mesh.indices, lean.mesh.indices, "bricks {bricks}");
+        assert_eq!(whole.area.to_bits(), lean.area.to_bits(), "bricks {bricks}");
+        assert!(!whole.mesh.normals.is_empty() && lean.mesh.normals.is_empty());
+    }
 }
