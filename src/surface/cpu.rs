@@ -76,6 +76,8 @@ const KEPT_BUFFERS: usize = 3;
 /// A kept copy of the density may take at most one part in this many of the memory available
 /// ([`CpuEngine::can_keep`]); with [`KEPT_BUFFERS`] of them, at most 3/16.
 const KEPT_MEMORY_SHARE: u64 = 16;
+/// Copies up to this size (bytes) are kept without checking the memory available.
+const KEPT_WITHOUT_CHECK: u64 = 64 << 20;
 
 /// Where a surface's density comes from.
 #[derive(Clone, Copy)]
@@ -277,6 +279,10 @@ impl CpuEngine {
     /// (or of the engine's limit): on a very large grid the difference is not worth the risk,
     /// and the interface samples both sides instead.
     fn can_keep(&self, bytes: u64) -> bool {
+        // Small copies go without reading the system's memory (a file read per frame).
+        if bytes <= KEPT_WITHOUT_CHECK && self.memory_limit.is_none() {
+            return true;
+        }
         let available = self.memory_limit.unwrap_or_else(available_memory_bytes);
         bytes.saturating_mul(KEPT_MEMORY_SHARE) <= available
     }
