@@ -64,7 +64,7 @@ pub struct CpuEngine {
     /// Whether kept meshes hold positions and triangles only
     /// ([`SurfaceEngine::set_mesh_positions_only`]).
     positions_only: bool,
-    /// Whether dense surfaces keep a copy of their density ([`SurfaceEngine::set_keep_density`]).
+    /// Whether surfaces keep a copy of their density ([`SurfaceEngine::set_keep_density`]).
     keep_density: bool,
     /// The densities kept last, whose buffers later copies reuse once no output holds them
     /// ([`CpuEngine::keep_copy`]).
