@@ -1,6 +1,7 @@
 //! The area buried between two groups of atoms, A and B: `(area(A) + area(B) - area(A and B)) /
 //! 2`, all three surfaces on the union's grid so that the grid's sampling cancels, and the
-//! residues that lose area from alone to the complex. The complex may be a surface the caller already has ([`interface_on`]).
+//! residues that lose area from alone to the complex. The complex may be a surface the caller
+//! already has ([`interface_on`]).
 
 use glam::Vec3;
 
@@ -163,25 +164,25 @@ pub fn interface_on(
     engine.set_mesh_positions_only(false);
     engine.set_keep_density(false);
     let [out_a, out_b] = sides?;
-    let weigh = |out: &SurfaceOutput, set: &AtomSet<'_>| -> Result<Vec<f64>, MeasureError> {
-        match per_atom {
-            true => atom_areas_of(out, set, &measure),
-            false => Ok(Vec::new()),
-        }
-    };
-    let (area_a, atoms_a_alone) = (out_a.area, weigh(&out_a, &a)?);
-    let (area_b, atoms_b_alone) = (out_b.area, weigh(&out_b, &b)?);
-    let in_complex = match per_atom {
-        true => atom_areas_of(complex.output, &complex.atoms, &measure)?,
-        false => Vec::new(),
-    };
-    let pick = |at: &[u32]| -> Vec<f64> {
-        match per_atom {
-            true => at.iter().map(|&i| in_complex[i as usize]).collect(),
-            false => Vec::new(),
-        }
-    };
-    let area_complex = complex.output.area;
+    // Per atom: A and B alone, then each side's atoms in the complex.
+    let mut per_atom_areas: [Vec<f64>; 4] = Default::default();
+    if per_atom {
+        let in_complex = atom_areas_of(complex.output, &complex.atoms, &measure)?;
+        let pick = |at: &[u32]| at.iter().map(|&i| in_complex[i as usize]).collect();
+        per_atom_areas = [
+            atom_areas_of(&out_a, &a, &measure)?,
+            atom_areas_of(&out_b, &b, &measure)?,
+            pick(complex.a_at),
+            pick(complex.b_at),
+        ];
+    }
+    let [
+        atoms_a_alone,
+        atoms_b_alone,
+        atoms_a_complex,
+        atoms_b_complex,
+    ] = per_atom_areas;
+    let (area_a, area_b, area_complex) = (out_a.area, out_b.area, complex.output.area);
     Ok(InterfaceResult {
         grid: complex.output.grid,
         area_a,
@@ -190,8 +191,8 @@ pub fn interface_on(
         buried: 0.5 * (area_a + area_b - area_complex),
         atoms_a_alone,
         atoms_b_alone,
-        atoms_a_complex: pick(complex.a_at),
-        atoms_b_complex: pick(complex.b_at),
+        atoms_a_complex,
+        atoms_b_complex,
     })
 }
 

@@ -228,7 +228,7 @@ impl SurfaceEngine for CpuEngine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
     ) -> Result<SurfaceOutput, SurfaceError> {
-        self.compute_from(atoms, params, DensityFrom::Atoms)
+        self.compute_from(atoms, params, DensityFrom::Atoms, None)
     }
 
     fn compute_difference(
@@ -254,25 +254,28 @@ impl SurfaceEngine for CpuEngine {
             true => DensityFrom::DenseDifference(whole.dense()?, minus.dense()?),
             false => DensityFrom::BrickDifference(whole.bricks()?, minus.bricks()?),
         };
-        Some(self.compute_from(atoms, params, from))
+        Some(self.compute_from(atoms, params, from, Some(grid)))
     }
 }
 
 impl CpuEngine {
-    /// The surface of `atoms` with its density from `from`, run on a thread of the pool.
+    /// The surface of `atoms` with its density from `from`, run on a thread of the pool, on
+    /// `planned` ([`CpuEngine::plan`] of these atoms under the effective parameters) when the
+    /// caller planned it already.
     fn compute_from(
         &mut self,
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
         from: DensityFrom<'_>,
+        planned: Option<GridSpec>,
     ) -> Result<SurfaceOutput, SurfaceError> {
         // Called from outside the thread pool, the whole frame runs on one of its threads: its
         // dozen parallel stages then start from inside the pool instead of each waking the
         // pool from outside and putting the caller to sleep until it finishes.
         if rayon::current_thread_index().is_none() {
-            return rayon::scope(|_| self.compute_in_pool(atoms, params, from));
+            return rayon::scope(|_| self.compute_in_pool(atoms, params, from, planned));
         }
-        self.compute_in_pool(atoms, params, from)
+        self.compute_in_pool(atoms, params, from, planned)
     }
 
     /// True when a copy of `bytes` fits in a [`KEPT_MEMORY_SHARE`] of the memory available
@@ -287,17 +290,21 @@ impl CpuEngine {
         bytes.saturating_mul(KEPT_MEMORY_SHARE) <= available
     }
 
-    /// A copy of the density just computed (dense volume or bricks, as `dense` says), sampled
-    /// on `grid` under `params`, in the buffers of an earlier copy that no output holds any
-    /// more: their pages are mapped already, where new buffers would fault them in again
-    /// (which costs more than the copy). A scene keeps its last result while the next frame
-    /// is computed, so up to [`KEPT_BUFFERS`] copies are kept for reuse.
-    fn keep_copy(
-        &mut self,
-        grid: GridSpec,
-        params: &SurfaceParams,
-        dense: bool,
-    ) -> Arc<KeptDensity> {
+    /// When asked to ([`SurfaceEngine::set_keep_density`]) and it fits ([`CpuEngine::can_keep`]),
+    /// a copy of the density just computed on `grid` under `params` (the dense volume or the
+    /// bricks, as this engine's path for `grid` stores it), in the buffers of an earlier copy
+    /// that no output holds any more: their pages are mapped already, where new buffers would
+    /// fault them in again (which costs more than the copy). A scene keeps its last result
+    /// while the next frame is computed, so up to [`KEPT_BUFFERS`] copies are kept for reuse.
+    fn keep_copy(&mut self, grid: GridSpec, params: &SurfaceParams) -> Option<Arc<KeptDensity>> {
+        let dense = self.dense_for(&grid);
+        let bytes = match dense {
+            true => self.volume.values.len() as u64 * 4,
+            false => self.bricks.stored_bytes(),
+        };
+        if !self.keep_density || !self.can_keep(bytes) {
+            return None;
+        }
         let free = self
             .kept
             .iter()
@@ -329,7 +336,7 @@ impl CpuEngine {
             }
         }
         self.kept.push(Arc::clone(&kept));
-        kept
+        Some(kept)
     }
 
     /// [`CpuEngine::compute_from`] on a thread of the pool.
@@ -338,10 +345,14 @@ impl CpuEngine {
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
         from: DensityFrom<'_>,
+        planned: Option<GridSpec>,
     ) -> Result<SurfaceOutput, SurfaceError> {
         // Refined vertices run at quality max (grid and refinement, issue 33).
         let params = &self.vertices.effective(params);
-        let grid = self.plan(atoms, params)?;
+        let grid = match planned {
+            Some(grid) => grid,
+            None => self.plan(atoms, params)?,
+        };
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
 
         let refined = self.vertices == VertexMode::Refined;
@@ -359,7 +370,7 @@ impl CpuEngine {
             VertexData::Full
         };
         let field;
-        let mut kept = None;
+        let kept;
         let (bin_ms, density_ms, t) = if self.dense_for(&grid) {
             let t = Instant::now();
             // A difference needs the atoms binned only for refined vertices' analytic density.
@@ -380,22 +391,12 @@ impl CpuEngine {
                     dense_difference_into(whole, minus, &mut self.volume.values);
                     self.volume.colours = None;
                 }
-                // Sampled atoms are always binned (above).
-                (None, bins) => {
-                    if let Some(bins) = bins {
-                        density::compute_binned_into(
-                            bins,
-                            params,
-                            &grid,
-                            with_colour,
-                            &mut self.volume,
-                        )
-                    }
+                (None, Some(bins)) => {
+                    density::compute_binned_into(bins, params, &grid, with_colour, &mut self.volume)
                 }
+                (None, None) => {} // sampled atoms are always binned (above)
             }
-            if self.keep_density && self.can_keep(self.volume.values.len() as u64 * 4) {
-                kept = Some(self.keep_copy(grid, params, true));
-            }
+            kept = self.keep_copy(grid, params);
             let density_ms = ms(t);
             let t = Instant::now();
             field = match (refined, &bins) {
@@ -423,22 +424,13 @@ impl CpuEngine {
             let t = Instant::now();
             match (difference, &bins) {
                 (Some((whole, minus)), _) => self.bricks.difference_of(whole, minus),
-                // Sampled atoms are always binned (above).
-                (None, bins) => {
-                    if let Some(bins) = bins {
-                        self.bricks.compute(
-                            bins,
-                            params,
-                            &grid,
-                            with_colour,
-                            &mut self.brick_scratch,
-                        );
-                    }
+                (None, Some(bins)) => {
+                    self.bricks
+                        .compute(bins, params, &grid, with_colour, &mut self.brick_scratch)
                 }
+                (None, None) => {} // sampled atoms are always binned (above)
             }
-            if self.keep_density && self.can_keep(self.bricks.stored_bytes()) {
-                kept = Some(self.keep_copy(grid, params, false));
-            }
+            kept = self.keep_copy(grid, params);
             let density_ms = ms(t);
             let t = Instant::now();
             field = match (refined, &bins) {
