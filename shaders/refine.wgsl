@@ -1,12 +1,13 @@
 // Refined vertices (issue 13): after a slab's emission, one thread per active cell moves the
 // vertices on the cell point's own crossed edges (the ones emit.wgsl wrote) onto the level set
 // of the exact Gaussian sum and sets their normals to its normalised -gradient. Twin of
-// crate::surface::analytic::AnalyticField::refine_edge: the same safeguarded Newton / regula
-// falsi on the edge from the linear estimate, bracketed by the slab's samples, the same
-// fallback projection along the gradient when the sum has no root on the edge, the same
-// constants. Atoms count out to REFINE_REACH alpha, the cutoff the grid was sampled with (refined
-// frames run at quality max, issue 33), found through the binning's cells. Colours are left as emitted (the linear parameter, as on the CPU), and
-// so is the normal where the gradient vanishes. Rust side: src/gpu/mc.rs (Refine).
+// crate::surface::analytic::AnalyticField::refine_edge: the same safeguarded Newton on the edge
+// from the linear estimate (the bracket halved where a step leaves it or is more than half the
+// step before), the same fallback projection along the gradient when that does not converge,
+// the same constants. Atoms count out to REFINE_REACH alpha, the cutoff the grid was sampled
+// with (refined frames run at quality max, issue 33), found through the binning's cells.
+// Colours are left as emitted (the linear parameter, as on the CPU), and so is the normal where
+// the gradient vanishes. Rust side: src/gpu/mc.rs (Refine).
 
 // SlabUniform (twin of crate::gpu::types::SlabUniform) comes from slab_uniform.wgsl, and
 // field_eval and field_project from field.wgsl, both prepended by src/gpu/shaders.rs.
@@ -14,7 +15,7 @@
 
 // Twins of crate::surface::analytic::{REFINE_ITERATIONS, PROJECT_ITERATIONS} (REFINE_REACH and
 // REFINE_STEP are in field.wgsl).
-const REFINE_ITERATIONS: u32 = 8u;
+const REFINE_ITERATIONS: u32 = 16u;
 const PROJECT_ITERATIONS: u32 = 4u;
 
 // Bindings (group 0) are named once in src/gpu/layout.rs (`layout::refine`). Eight storage
@@ -58,50 +59,46 @@ fn refine_vertex(id: u32, p0: vec3<u32>, axis: u32) {
     }
     var lo = 0.0;
     var hi = 1.0;
-    var flo = va - iso;
-    var fhi = vb - iso;
-    let lo_inside = flo >= 0.0;
+    let lo_inside = va >= iso;
     var g = vec3<f32>(0.0);
-    var f_last = 0.0;
+    var last_step = 1.0;
+    var found = false;
     for (var it = 0u; it < REFINE_ITERATIONS; it++) {
         let e = field_eval(pa + t * dir);
         g = e.xyz;
         let f = e.w - iso;
-        f_last = f;
         if (f == 0.0) {
+            found = true;
             break;
         }
         if ((f >= 0.0) == lo_inside) {
             lo = t;
-            flo = f;
         } else {
             hi = t;
-            fhi = f;
         }
         let df = dot(g, dir);
         var newton = -1.0;
         if (df != 0.0) {
             newton = t - f / df;
         }
-        if (df != 0.0 && newton >= lo && newton <= hi) {
-            let done = abs(newton - t) * len < REFINE_STEP;
+        let step = abs(newton - t);
+        if (df != 0.0 && newton >= lo && newton <= hi && step <= 0.5 * last_step) {
             t = newton;
-            if (done) {
+            last_step = step;
+            if (step * len < REFINE_STEP) {
+                found = true;
                 break;
             }
         } else {
-            if (flo != fhi) {
-                t = clamp(lo - flo * (hi - lo) / (fhi - flo), lo, hi);
-            } else {
-                t = 0.5 * (lo + hi);
-            }
+            t = 0.5 * (lo + hi);
+            last_step = 0.5 * (hi - lo);
             if ((hi - lo) * len < REFINE_STEP) {
+                found = true;
                 break;
             }
         }
     }
     var pos = pa + t * dir;
-    let found = abs(f_last) * len <= 0.1 * REFINE_STEP * length(g) * len + 1e-4;
     if (!found) {
         let q = field_project(pos, iso, 0.5 * len, PROJECT_ITERATIONS, REFINE_STEP);
         if (q.ok) {

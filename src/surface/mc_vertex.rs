@@ -154,7 +154,7 @@ pub fn edge_geometry_refined(
     b[axis] += 1;
     let (va, vb) = (value(a), value(b));
     let t = edge_t(va, vb, iso);
-    let (position, normal) = field.refine_edge(point(grid, a), point(grid, b), va, vb, iso, t);
+    let (position, normal) = field.refine_edge(point(grid, a), point(grid, b), va, iso, t);
     match normal {
         Some(normal) => (position, normal, t),
         None => {
