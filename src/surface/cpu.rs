@@ -16,8 +16,7 @@ use super::kept_density::{KeptSamples, dense_difference_into};
 use super::marching_cubes::{McScratch, VertexData, march_dense};
 use super::{
     AtomSet, DensityVolume, GridSpec, KeptDensity, Mesh, MeshCounts, StageTimings, SurfaceEngine,
-    SurfaceError, SurfaceOutput, SurfaceParams, VertexMode, available_memory_bytes, curved,
-    density,
+    SurfaceError, SurfaceOutput, SurfaceParams, VertexMode, curved, density, memory,
 };
 
 /// Grid samples up to which the default engine computes dense (a 64³ grid; 1hpv at H = 1 Å has
@@ -76,8 +75,6 @@ const KEPT_BUFFERS: usize = 3;
 /// A kept copy of the density may take at most one part in this many of the memory available
 /// ([`CpuEngine::can_keep`]); with [`KEPT_BUFFERS`] of them, at most 3/16.
 const KEPT_MEMORY_SHARE: u64 = 16;
-/// Copies up to this size (bytes) are kept without checking the memory available.
-const KEPT_WITHOUT_CHECK: u64 = 64 << 20;
 
 /// Where a surface's density comes from.
 #[derive(Clone, Copy)]
@@ -181,7 +178,7 @@ impl CpuEngine {
         };
         // The sparse path stores at most the density of every sample (colours go per vertex).
         let needed = grid.estimated_bytes(self.dense_for(&grid) && atoms.colours.is_some());
-        let available = self.memory_limit.unwrap_or_else(available_memory_bytes);
+        let available = memory::memory_for(needed, self.memory_limit);
         if needed > available {
             return Err(SurfaceError::GridTooLarge {
                 dims: grid.dims.map(u64::from),
@@ -282,11 +279,7 @@ impl CpuEngine {
     /// (or of the engine's limit): on a very large grid the difference is not worth the risk,
     /// and the interface samples both sides instead.
     fn can_keep(&self, bytes: u64) -> bool {
-        // Small copies go without reading the system's memory (a file read per frame).
-        if bytes <= KEPT_WITHOUT_CHECK && self.memory_limit.is_none() {
-            return true;
-        }
-        let available = self.memory_limit.unwrap_or_else(available_memory_bytes);
+        let available = memory::memory_for(bytes, self.memory_limit);
         bytes.saturating_mul(KEPT_MEMORY_SHARE) <= available
     }
 
