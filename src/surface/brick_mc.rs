@@ -41,11 +41,7 @@ pub(super) fn march_bricks(
     }
     let layers = nz - 1;
     let threads = rayon::current_num_threads().max(1);
-    // About eight slabs per thread, but at least two brick layers each: a slab starts by
-    // flagging and numbering two planes, which on small grids costs as much as marching one.
-    let bricks_per_slab = (vol.bdims[2] / (8 * threads)).clamp(2, 8);
-    let planes = bricks_per_slab * BRICK;
-    let slabs = layers.div_ceil(planes);
+    let ranges = slab_ranges(vol, layers, threads, field.is_some());
     let ctx = Ctx {
         vol,
         iso: vol.iso,
@@ -53,12 +49,53 @@ pub(super) fn march_bricks(
         data,
         tables: McTables::get(),
     };
-    scratch.slabs.resize_with(slabs, SlabMesh::default);
+    scratch.slabs.resize_with(ranges.len(), SlabMesh::default);
     scratch
         .slabs
         .par_iter_mut()
-        .enumerate()
-        .for_each(|(s, out)| ctx.slab(s * planes, ((s + 1) * planes).min(layers), out));
+        .zip(&ranges)
+        .for_each(|(out, &(c0, c1))| ctx.slab(c0, c1, out));
+}
+
+/// The slabs of [`march_bricks`]: ranges `c0..c1` of its `layers` cell layers along z, whole
+/// brick layers each, holding about equal shares of the active bricks, about eight slabs per
+/// thread. Each slab has at least two brick layers (a slab starts by flagging and numbering
+/// two planes, which on small grids costs as much as marching one), or one with `refined`
+/// vertices, whose root finding makes an active brick far costlier. Shares of the work rather
+/// than of the grid keep the threads busy when the surface fills only part of it, as a side of
+/// an interface does on the complex's grid (7ddo's spike RBD under the SES preset, on two
+/// cores: 16.6 ms of Marching Cubes per frame with slabs of two brick layers each, 14.4 ms
+/// with these, 14.5 ms on its own grid). The mesh does not depend on where the slabs end.
+fn slab_ranges(
+    vol: &BrickVolume,
+    layers: usize,
+    threads: usize,
+    refined: bool,
+) -> Vec<(usize, usize)> {
+    let per_layer: Vec<usize> = (0..vol.bdims[2])
+        .map(|bk| {
+            (0..vol.bdims[1])
+                .map(|bj| vol.active_row(bk, bj).len())
+                .sum()
+        })
+        .collect();
+    let share = per_layer.iter().sum::<usize>().div_ceil(8 * threads).max(1);
+    let least = if refined { 1 } else { 2 };
+    let mut ranges = Vec::new();
+    let (mut start, mut held, mut held_layers) = (0, 0, 0);
+    for (bk, &active) in per_layer.iter().enumerate() {
+        let end = ((bk + 1) * BRICK).min(layers);
+        held += active;
+        held_layers += 1;
+        if end > start && (end == layers || (held >= share && held_layers >= least)) {
+            ranges.push((start, end));
+            (start, held, held_layers) = (end, 0, 0);
+        }
+        if end == layers {
+            break;
+        }
+    }
+    ranges
 }
 
 struct Ctx<'a> {
