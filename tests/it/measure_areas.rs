@@ -239,6 +239,15 @@ fn measure_residue_areas_follow_msms_ses_on_1hpv() {
     assert!(r >= 0.9, "Pearson r = {r:.4}");
 }
 
+/// One protein of `tests/data/msms_residue_ses.csv`: its name, file and mdsurf selection, and
+/// MSMS's residues in file order (name, SES area in Å²).
+struct ReferenceProtein {
+    name: String,
+    file: String,
+    selection: String,
+    residues: Vec<(String, f64)>,
+}
+
 /// The check on every protein in `tests/data`: per-residue areas of `--preset ses`
 /// against MSMS's analytical SES per residue (its atoms' `-af` areas summed;
 /// `tests/data/msms_residue_ses.csv`, `scripts/measure_reference.py`), Pearson r >= 0.9 on
@@ -248,15 +257,19 @@ fn measure_residue_areas_follow_msms_ses_on_1hpv() {
 fn measure_residue_areas_follow_msms_ses_on_every_protein() {
     let text = std::fs::read_to_string(format!("{DATA}msms_residue_ses.csv"))
         .expect("tests/data/msms_residue_ses.csv (scripts/measure_reference.py writes it)");
-    // Per protein, in file order: (file, selection, MSMS's residue names and areas in Å²).
-    let mut proteins: Vec<(String, String, String, Vec<(String, f64)>)> = Vec::new();
+    let mut proteins: Vec<ReferenceProtein> = Vec::new();
     for line in text.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
         let area: f64 = f[7].parse().expect("an area");
-        if proteins.last().is_none_or(|p| p.0 != f[0]) {
-            proteins.push((f[0].into(), f[1].into(), f[2].into(), Vec::new()));
+        if proteins.last().is_none_or(|p| p.name != f[0]) {
+            proteins.push(ReferenceProtein {
+                name: f[0].into(),
+                file: f[1].into(),
+                selection: f[2].into(),
+                residues: Vec::new(),
+            });
         }
-        let residues = &mut proteins.last_mut().expect("a protein").3;
+        let residues = &mut proteins.last_mut().expect("a protein").residues;
         residues.push((f[6].into(), area));
     }
     assert_eq!(proteins.len(), 20, "proteins in the reference");
@@ -264,7 +277,13 @@ fn measure_residue_areas_follow_msms_ses_on_every_protein() {
     let mut engine = CpuEngine::new().with_vertices(Preset::Ses.vertices());
     let measured = engine.vertices().effective(&params);
     let mut misses = Vec::new();
-    for (name, file, selection, reference) in &proteins {
+    for ReferenceProtein {
+        name,
+        file,
+        selection,
+        residues: reference,
+    } in &proteins
+    {
         let (top, idx, pos, radii) = selected_atoms(file, selection, Some(Preset::Ses));
         let atoms = set(&pos, &radii);
         let out = engine.compute(&atoms, &params).expect("surface");
