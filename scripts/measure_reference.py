@@ -35,9 +35,7 @@ analytical SES area (they sum to the SES area of ses_reference.csv's 1hpv row, 8
 this script sums them per residue (chain, residue number, name).
 """
 
-import bz2
 import csv
-import gzip
 import os
 import subprocess
 import tempfile
@@ -186,26 +184,11 @@ def write_cavities():
 
 
 def write_residues():
-    atoms = [a for a in s.read_atoms(os.path.join(s.DATA, "1hpv.pdb")) if s.is_amino(a[0])]
+    atoms = [a for a in s.read_atom_rows(os.path.join(s.DATA, "1hpv.pdb")) if s.is_amino(a[0])]
     residues = {}
-    with tempfile.TemporaryDirectory() as tmp:
-        xyzr = os.path.join(tmp, "atoms.xyzr")
-        write_xyzr(xyzr, atoms)
-        subprocess.run(
-            [s.msms_binary(), "-if", xyzr, "-af", os.path.join(tmp, "atoms"),
-             "-probe_radius", "1.4", "-density", "1.0"],
-            capture_output=True, text=True, check=True,
-        )
-        with open(os.path.join(tmp, "atoms.area")) as f:
-            rows = [line.split() for line in f.read().splitlines()[1:] if line.strip()]
-    assert len(rows) == len(atoms), "MSMS gave areas for other atoms"
-    # Residue number from the PDB columns 23-26, which read_atoms does not keep.
-    with open(os.path.join(s.DATA, "1hpv.pdb")) as f:
-        numbers = [int(l[22:26]) for l in f if l.startswith(("ATOM", "HETATM"))
-                   and s.is_amino(l[17:21])]
-    for (resname, _, _, _, _, chain), number, row in zip(atoms, numbers, rows):
-        key = (chain, number, resname.strip())
-        residues[key] = residues.get(key, 0.0) + float(row[1])
+    for atom, area in zip(atoms, msms_atom_areas([a[:6] for a in atoms])):
+        key = (atom[5], int(atom[6]), atom[0].strip())
+        residues[key] = residues.get(key, 0.0) + area
     with open(OUT, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["chain", "resid", "resname", "ses_area_A2"])
@@ -213,40 +196,6 @@ def write_residues():
             w.writerow([chain, number, resname, f"{area:.3f}"])
     print(f"wrote {OUT}: {len(residues)} residues, {sum(residues.values()):.1f} Å² "
           f"(MSMS {s.msms_version()})")
-
-
-def residue_numbers(path):
-    """Residue number (with insertion code) of every atom of `path`, in the order and over the
-    atoms of ses_reference.read_atoms (the first model)."""
-    opener = gzip.open if path.endswith(".gz") else bz2.open if path.endswith(".bz2") else open
-    with opener(path, "rt") as f:
-        lines = f.read().splitlines()
-    if ".gro" in path:
-        n = int(lines[1].split()[0])
-        return [line[0:5].strip() for line in lines[2 : 2 + n]]
-    if ".cif" in path:
-        columns = [l.strip()[len("_atom_site."):] for l in lines if l.startswith("_atom_site.")]
-        at = {c: k for k, c in enumerate(columns)}
-        number = at.get("auth_seq_id", at["label_seq_id"])
-        numbers, first_model = [], None
-        for line in lines:
-            if not line.startswith(("ATOM", "HETATM")):
-                continue
-            t = line.split()
-            model = t[at["pdbx_PDB_model_num"]] if "pdbx_PDB_model_num" in at else "1"
-            first_model = first_model or model
-            if model != first_model:
-                break
-            code = t[at["pdbx_PDB_ins_code"]] if "pdbx_PDB_ins_code" in at else "?"
-            numbers.append(t[number] + ("" if code in "?." else code))
-        return numbers
-    numbers = []
-    for line in lines:
-        if line.startswith(("ATOM", "HETATM")):
-            numbers.append(line[22:27].strip())
-        elif line.startswith("ENDMDL"):
-            break
-    return numbers
 
 
 def write_residues_all():
@@ -257,14 +206,12 @@ def write_residues_all():
     for name, file, chain, _ in s.PROTEINS:
         if name in ("1hpv_A", "1hpv_B"):
             continue
-        path = os.path.join(s.DATA, file)
-        numbers = residue_numbers(path)
-        picked = [(a, n) for a, n in zip(s.read_atoms(path), numbers)
+        picked = [a for a in s.read_atom_rows(os.path.join(s.DATA, file))
                   if s.is_amino(a[0]) and chain in (None, a[5])]
-        areas = msms_atom_areas([a for a, _ in picked])
+        areas = msms_atom_areas([a[:6] for a in picked])
         residues = []
-        for (atom, number), area in zip(picked, areas):
-            key = (atom[5], number, atom[0].strip())
+        for atom, area in zip(picked, areas):
+            key = (atom[5], atom[6], atom[0].strip())
             if not residues or residues[-1][0] != key:
                 residues.append([key, 0.0])
             residues[-1][1] += area

@@ -165,6 +165,12 @@ def element(name):
 def read_atoms(path):
     """(resname, atom name, x, y, z in Å, chain) of every atom of a PDB, mmCIF or GRO file
     (the first model)."""
+    return [row[:6] for row in read_atom_rows(path)]
+
+
+def read_atom_rows(path):
+    """read_atoms's rows with each atom's residue number (text, with the insertion code where
+    the file has one) after the chain."""
     opener = gzip.open if path.endswith(".gz") else bz2.open if path.endswith(".bz2") else open
     with opener(path, "rt") as f:
         lines = f.read().splitlines()
@@ -180,6 +186,7 @@ def read_atoms(path):
                     10 * float(line[28:36]),
                     10 * float(line[36:44]),
                     "",
+                    line[0:5].strip(),
                 )
             )
     elif ".cif" in path:
@@ -187,6 +194,7 @@ def read_atoms(path):
         # files quotes a value with a space in it).
         columns = [l.strip()[len("_atom_site."):] for l in lines if l.startswith("_atom_site.")]
         at = {c: k for k, c in enumerate(columns)}
+        number = at.get("auth_seq_id", at["label_seq_id"])
         first_model = None
         for line in lines:
             if not line.startswith(("ATOM", "HETATM")):
@@ -196,6 +204,7 @@ def read_atoms(path):
             first_model = first_model or model
             if model != first_model:
                 break
+            code = t[at["pdbx_PDB_ins_code"]] if "pdbx_PDB_ins_code" in at else "?"
             atoms.append(
                 (
                     t[at["label_comp_id"]],
@@ -204,6 +213,7 @@ def read_atoms(path):
                     float(t[at["Cartn_y"]]),
                     float(t[at["Cartn_z"]]),
                     t[at.get("auth_asym_id", at["label_asym_id"])],
+                    t[number] + ("" if code in "?." else code),
                 )
             )
     else:
@@ -217,6 +227,7 @@ def read_atoms(path):
                         float(line[38:46]),
                         float(line[46:54]),
                         line[21],
+                        line[22:27].strip(),
                     )
                 )
             elif line.startswith("ENDMDL"):

@@ -156,30 +156,33 @@ fn compare(
     cc.len()
 }
 
-#[test]
-fn measurements_agree_between_engines_at_the_defaults() {
-    let Some(mut gpu) = crate::gpu_support::engine() else {
-        return;
-    };
+/// [`compare`] on 1hpv's protein and 1a28's two chains under `preset`: the worst deviations and
+/// the number of cavities compared; `None` without a GPU adapter (`gpu_support::engine`
+/// panics instead under `REQUIRE_GPU=1`).
+fn compare_proteins(preset: Option<Preset>) -> Option<(Worst, usize)> {
+    let mut gpu = crate::gpu_support::engine()?;
     let mut worst = Worst::default();
     let mut compared = 0;
     for (file, selection) in [("1hpv.pdb", "protein"), ("1a28.pdb.gz", "protein")] {
-        compared += compare(&mut gpu, file, selection, None, &mut worst);
+        compared += compare(&mut gpu, file, selection, preset, &mut worst);
     }
+    Some((worst, compared))
+}
+
+#[test]
+fn measurements_agree_between_engines_at_the_defaults() {
+    let Some((worst, compared)) = compare_proteins(None) else {
+        return;
+    };
     assert!(compared >= 3, "{compared} cavities compared");
     worst.hold(1e-6, &[("cavity volume", 2e-6)], "defaults");
 }
 
 #[test]
 fn measurements_agree_between_engines_under_the_ses_preset() {
-    let Some(mut gpu) = crate::gpu_support::engine() else {
+    let Some((worst, compared)) = compare_proteins(Some(Preset::Ses)) else {
         return;
     };
-    let mut worst = Worst::default();
-    let mut compared = 0;
-    for (file, selection) in [("1hpv.pdb", "protein"), ("1a28.pdb.gz", "protein")] {
-        compared += compare(&mut gpu, file, selection, Some(Preset::Ses), &mut worst);
-    }
     assert!(compared >= 10, "{compared} cavities compared");
     let bounds = [
         ("atom area", 3e-5),
