@@ -1,15 +1,21 @@
 //! The area buried between two groups of atoms, A and B: `(area(A) + area(B) - area(A and B)) /
 //! 2`, all three surfaces on the union's grid so that the grid's sampling cancels, and the
 //! residues that lose area from alone to the complex. The complex may be a surface the caller
-//! already has ([`interface_on`]).
+//! already has ([`interface_on`]). With refined vertices the sides take the complex's vertices
+//! and sharp triangles where no atom that differs reaches them
+//! ([`crate::surface::analytic::RefinedReuse`]), which spares most of their root finding.
+
+use std::sync::Arc;
 
 use glam::Vec3;
 
 use super::residues::residue_areas;
 use super::{MeasureError, ResidueArea, atom_areas_of};
 use crate::model::Topology;
+use crate::surface::analytic::{RefinedReuse, ReusableSurface};
 use crate::surface::{
     AtomSet, CpuEngine, GridSpec, KeptDensity, SurfaceEngine, SurfaceOutput, SurfaceParams,
+    VertexMode,
 };
 
 /// Areas of A, B and the complex, on one grid.
@@ -35,6 +41,10 @@ pub struct InterfaceResult {
     pub atoms_a_complex: Vec<f64>,
     /// Area of each atom of B in the complex (Å²).
     pub atoms_b_complex: Vec<f64>,
+    /// For A and for B, the refined vertices and the sharp triangles its surface took from the
+    /// complex's instead of solving and measuring them again
+    /// ([`crate::surface::analytic::RefinedReuse`]; zeros with interpolated vertices).
+    pub reused: [(usize, usize); 2],
 }
 
 /// The buried area between `a` and `b` under `params`, with per-atom areas alone and in the
@@ -158,7 +168,10 @@ pub fn interface_on(
         .density
         .as_deref()
         .filter(|_| complex.holds_sides(&a, &b));
-    let sides = sides_on_grid(engine, [&a, &b], whole, params);
+    let reuse = complex.refined_reuse(engine, [&a, &b], &measure);
+    let counters = reuse.clone();
+    let sides = sides_on_grid(engine, [&a, &b], whole, params, reuse);
+    engine.set_refined_reuse(None);
     engine.set_grid(None);
     engine.set_keep_mesh(true);
     engine.set_mesh_positions_only(false);
@@ -193,10 +206,60 @@ pub fn interface_on(
         atoms_b_alone,
         atoms_a_complex,
         atoms_b_complex,
+        reused: counters.map(|r| r.map_or((0, 0), |r| r.taken())),
     })
 }
 
 impl Complex<'_> {
+    /// For each side, the complex's refined vertices it may take
+    /// ([`crate::surface::analytic::RefinedReuse`]): the atoms that differ are the other
+    /// side's and this side's whose radius or position is not its complex atom's, each with
+    /// the longer of its cutoffs under `measure` (the effective parameters). `None` for both
+    /// when the engine does not refine or cannot take them, or the complex has no normals.
+    fn refined_reuse(
+        &self,
+        engine: &mut dyn SurfaceEngine,
+        sides: [&AtomSet<'_>; 2],
+        measure: &SurfaceParams,
+    ) -> [Option<Arc<RefinedReuse>>; 2] {
+        if engine.vertices() != VertexMode::Refined || !engine.set_refined_reuse(None) {
+            return [None, None];
+        }
+        let Some(vertices) = ReusableSurface::new(
+            &self.output.mesh,
+            self.output.sharp.as_deref(),
+            &self.output.grid,
+            measure.isovalue,
+        ) else {
+            return [None, None];
+        };
+        let vertices = Arc::new(vertices);
+        let cut = |radius: f32| measure.cutoff() * measure.radius_scale * radius;
+        let maps = [self.a_at, self.b_at];
+        [0, 1].map(|s| {
+            let (side, at, other) = (sides[s], maps[s], maps[1 - s]);
+            let mut changed: Vec<(Vec3, f32)> = other
+                .iter()
+                .map(|&j| {
+                    let j = j as usize;
+                    (self.atoms.positions[j], cut(self.atoms.radii[j]))
+                })
+                .collect();
+            for (i, &j) in at.iter().enumerate() {
+                let j = j as usize;
+                let (p, r) = (side.positions[i], side.radii[i]);
+                let (pc, rc) = (self.atoms.positions[j], self.atoms.radii[j]);
+                if p != pc {
+                    changed.push((p, cut(r)));
+                    changed.push((pc, cut(rc)));
+                } else if r.to_bits() != rc.to_bits() {
+                    changed.push((p, cut(r.max(rc))));
+                }
+            }
+            Some(Arc::new(RefinedReuse::new(Arc::clone(&vertices), &changed)))
+        })
+    }
+
     /// True when every atom of `a` and `b` is its atom of the complex, at the same position
     /// with the same radius (bit for bit), so that the complex's density is the sum of the
     /// sides'. Radii that follow exposure differ between a side and the complex at the
@@ -256,7 +319,8 @@ impl Complex<'_> {
     }
 }
 
-/// The surfaces of `sides` (A, B) on the engine's grid. With `whole`, the complex's density
+/// The surfaces of `sides` (A, B) on the engine's grid, each taking the complex's refined
+/// vertices where its `reuse` allows. With `whole`, the complex's density
 /// on that grid with each side's atoms and radii, the side with fewer atoms is sampled (its
 /// density kept) and the other is the complex less it
 /// ([`SurfaceEngine::compute_difference`]), which saves sampling its Gaussians; the engine
@@ -266,13 +330,16 @@ fn sides_on_grid(
     sides: [&AtomSet<'_>; 2],
     whole: Option<&KeptDensity>,
     params: &SurfaceParams,
+    mut reuse: [Option<Arc<RefinedReuse>>; 2],
 ) -> Result<[SurfaceOutput; 2], MeasureError> {
     let sampled = usize::from(sides[1].len() < sides[0].len());
     engine.set_keep_density(whole.is_some());
+    engine.set_refined_reuse(reuse[sampled].take());
     let first = engine.compute(sides[sampled], params);
     engine.set_keep_density(false);
     let first = first?;
     let other = sides[1 - sampled];
+    engine.set_refined_reuse(reuse[1 - sampled].take());
     let difference = match (whole, first.density.as_deref()) {
         (Some(whole), Some(minus)) => engine.compute_difference(other, params, whole, minus),
         _ => None,

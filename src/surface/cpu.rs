@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::analytic::AnalyticField;
-use super::bin::{bin_atoms, bin_atoms_overlapping};
+use super::analytic::{AnalyticField, RefinedReuse};
+use super::bin::{PreparedAtom, bin_atoms, bin_atoms_overlapping};
 use super::brick_mc::march_bricks;
 use super::bricks::{self, BrickScratch, BrickStats, BrickVolume};
 use super::kept_density::{KeptSamples, dense_difference_into};
@@ -68,6 +68,9 @@ pub struct CpuEngine {
     /// The densities kept last, whose buffers later copies reuse once no output holds them
     /// ([`CpuEngine::keep_copy`]).
     kept: Vec<Arc<KeptDensity>>,
+    /// Another surface's refined vertices later surfaces may take
+    /// ([`SurfaceEngine::set_refined_reuse`]).
+    reuse: Option<Arc<RefinedReuse>>,
 }
 
 /// Copies of the density a CPU engine keeps for reuse ([`CpuEngine::keep_copy`]).
@@ -220,6 +223,11 @@ impl SurfaceEngine for CpuEngine {
         true
     }
 
+    fn set_refined_reuse(&mut self, reuse: Option<Arc<RefinedReuse>>) -> bool {
+        self.reuse = reuse;
+        true
+    }
+
     fn compute(
         &mut self,
         atoms: &AtomSet<'_>,
@@ -273,6 +281,22 @@ impl CpuEngine {
             return rayon::scope(|_| self.compute_in_pool(atoms, params, from, planned));
         }
         self.compute_in_pool(atoms, params, from, planned)
+    }
+
+    /// The exact Gaussian sum of `atoms` on `grid` for refined vertices, taking vertices from
+    /// the engine's [`RefinedReuse`] when it was refined on this grid at this isovalue.
+    fn field_of(
+        &self,
+        atoms: &[PreparedAtom],
+        grid: &GridSpec,
+        params: &SurfaceParams,
+    ) -> AnalyticField {
+        let reuse = self
+            .reuse
+            .as_ref()
+            .filter(|r| r.fits(grid, params.isovalue))
+            .cloned();
+        AnalyticField::new(atoms, grid).with_reuse(reuse)
     }
 
     /// True when a copy of `bytes` fits in a [`KEPT_MEMORY_SHARE`] of the memory available
@@ -393,7 +417,7 @@ impl CpuEngine {
             let density_ms = ms(t);
             let t = Instant::now();
             field = match (refined, &bins) {
-                (true, Some(bins)) => Some(AnalyticField::new(&bins.atoms, &grid)),
+                (true, Some(bins)) => Some(self.field_of(&bins.atoms, &grid, params)),
                 _ => None,
             };
             drop(bins);
@@ -427,7 +451,7 @@ impl CpuEngine {
             let density_ms = ms(t);
             let t = Instant::now();
             field = match (refined, &bins) {
-                (true, Some(bins)) => Some(AnalyticField::new(&bins.atoms, &grid)),
+                (true, Some(bins)) => Some(self.field_of(&bins.atoms, &grid, params)),
                 _ => None,
             };
             drop(bins);
@@ -436,26 +460,32 @@ impl CpuEngine {
             (bin_ms, density_ms, t)
         };
         // Refined vertices are measured on the assembled mesh (curvature needs its edges).
-        let (mesh, area, enclosed, counts_without_mesh) = if measured_only {
+        let (mesh, area, enclosed, counts_without_mesh, sharp) = if measured_only {
             let m = self.mc.measure();
             let counts = MeshCounts {
                 vertices: m.vertices,
                 triangles: m.triangles,
             };
-            (Mesh::default(), m.area, m.volume, Some(counts))
+            (Mesh::default(), m.area, m.volume, Some(counts), None)
         } else {
             let mesh = self.mc.merge();
-            let (area, enclosed) = match &field {
-                Some(field) => curved::curved_area_volume(
-                    &mesh,
-                    Some(curved::OnField {
+            // Refined surfaces record their sharp triangles, which an interface's sides on
+            // their grid may take (`SurfaceOutput::sharp`).
+            let (area, enclosed, sharp) = match &field {
+                Some(field) => {
+                    let on = curved::OnField {
                         field,
                         iso: params.isovalue,
-                    }),
-                ),
-                None => mesh.area_and_volume(),
+                    };
+                    let measured = curved::curved_measure(&mesh, Some(on), true);
+                    (measured.area, measured.volume, measured.sharp.map(Arc::new))
+                }
+                None => {
+                    let (area, volume) = mesh.area_and_volume();
+                    (area, volume, None)
+                }
             };
-            (mesh, area, enclosed, None)
+            (mesh, area, enclosed, None, sharp)
         };
         let mc_ms = ms(t);
 
@@ -473,6 +503,7 @@ impl CpuEngine {
             },
             counts_without_mesh,
             density: kept,
+            sharp,
         })
     }
 }

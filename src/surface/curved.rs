@@ -91,16 +91,65 @@ pub struct OnField<'a> {
 /// normals) triangulates, with the curvature correction of the module docs; with `on`, its sharp
 /// triangles (see [`SHARP_COS`]) measured on the Gaussian sum instead.
 pub fn curved_area_volume(mesh: &Mesh, on: Option<OnField<'_>>) -> (f64, f64) {
+    let measured = curved_measure(mesh, on, false);
+    (measured.area, measured.volume)
+}
+
+/// A sharp triangle measured on the Gaussian sum ([`sharp_area_volume`]): its corners (Å, in
+/// the mesh's order), its area (Å²) and its signed volume about [`SharpTriangles::centre`] (Å³).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SharpTriangle {
+    /// The corners, mesh vertices, in the triangle's order (Å).
+    pub corners: [Vec3; 3],
+    /// Area of the piece of the level set over the triangle (Å²).
+    pub area: f64,
+    /// Its signed volume about the centre (Å³).
+    pub volume: f64,
+}
+
+/// The sharp triangles of a refined surface as measured with it, for another surface on the
+/// same grid to take where its sum is the same ([`super::analytic::RefinedReuse`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SharpTriangles {
+    /// The point the volumes are about (Å): the centre of the mesh's bounding box.
+    pub centre: Vec3,
+    /// The triangles, in mesh order.
+    pub triangles: Vec<SharpTriangle>,
+}
+
+/// What [`curved_measure`] found.
+#[derive(Debug, Clone, Default)]
+pub struct CurvedMeasure {
+    /// Area in Å².
+    pub area: f64,
+    /// Enclosed volume in Å³.
+    pub volume: f64,
+    /// The sharp triangles measured on the sum, when asked to record them.
+    pub sharp: Option<SharpTriangles>,
+}
+
+/// [`curved_area_volume`], recording the sharp triangles measured on the sum when `record`.
+/// When `on`'s field takes another surface's results ([`AnalyticField::reused_sharp`]), the
+/// volume is about that surface's centre and a sharp triangle it measured, where no atom that
+/// differs reaches, is taken instead of measured again.
+pub fn curved_measure(mesh: &Mesh, on: Option<OnField<'_>>, record: bool) -> CurvedMeasure {
     let Some((lo, hi)) = mesh.bounds() else {
-        return (0.0, 0.0);
+        return CurvedMeasure::default();
     };
-    let centre = 0.5 * (lo + hi);
+    let centre = on
+        .and_then(|on| on.field.reused_centre())
+        .unwrap_or(0.5 * (lo + hi));
     const CHUNK: usize = 3 * 256;
     let (pos, nrm) = (&mesh.positions, &mesh.normals);
     if nrm.len() != pos.len() {
-        return mesh.area_and_volume();
+        let (area, volume) = mesh.area_and_volume();
+        return CurvedMeasure {
+            area,
+            volume,
+            sharp: None,
+        };
     }
-    let partial: Vec<(f64, f64)> = mesh
+    let partial: Vec<((f64, f64), Vec<SharpTriangle>)> = mesh
         .indices
         .par_chunks(CHUNK)
         .map(|chunk| {
@@ -110,14 +159,26 @@ pub fn curved_area_volume(mesh: &Mesh, on: Option<OnField<'_>>) -> (f64, f64) {
                 (lifted_midpoint(pos[a] - centre, pos[b] - centre, nrm[a], nrm[b])).as_dvec3()
             };
             let mut acc = (0.0f64, 0.0f64);
+            let mut sharp_here = Vec::new();
             for t in chunk.chunks_exact(3) {
                 let [ia, ib, ic] = [t[0], t[1], t[2]].map(|i| i as usize);
                 let sharp = on.filter(|_| is_sharp(nrm[ia], nrm[ib], nrm[ic]));
-                let measured =
-                    sharp.and_then(|on| sharp_area_volume(on, [pos[ia], pos[ib], pos[ic]], centre));
+                let corners = [pos[ia], pos[ib], pos[ic]];
+                let measured = sharp.and_then(|on| {
+                    on.field
+                        .reused_sharp(corners)
+                        .or_else(|| sharp_area_volume(on, corners, centre))
+                });
                 if let Some((a, v)) = measured {
                     acc.0 += a;
                     acc.1 += v;
+                    if record {
+                        sharp_here.push(SharpTriangle {
+                            corners,
+                            area: a,
+                            volume: v,
+                        });
+                    }
                     continue;
                 }
                 let [a, b, c] = [ia, ib, ic].map(|i| (pos[i] - centre).as_dvec3());
@@ -129,12 +190,21 @@ pub fn curved_area_volume(mesh: &Mesh, on: Option<OnField<'_>>) -> (f64, f64) {
                 acc.0 += a1 + (a1 - a0) / 3.0;
                 acc.1 += v1 + (v1 - v0) / 3.0;
             }
-            acc
+            (acc, sharp_here)
         })
         .collect();
-    partial
+    let (area, volume) = partial
         .iter()
-        .fold((0.0, 0.0), |(a, v), (pa, pv)| (a + pa, v + pv))
+        .fold((0.0, 0.0), |(a, v), ((pa, pv), _)| (a + pa, v + pv));
+    let sharp = record.then(|| SharpTriangles {
+        centre,
+        triangles: partial.into_iter().flat_map(|(_, t)| t).collect(),
+    });
+    CurvedMeasure {
+        area,
+        volume,
+        sharp,
+    }
 }
 
 /// True when the unit normals of a triangle's corners turn by more than 60° between two of

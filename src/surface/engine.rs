@@ -120,6 +120,10 @@ pub struct SurfaceOutput {
     /// The density at every sample of `grid`, when the engine was asked to keep it
     /// ([`SurfaceEngine::set_keep_density`]) and sampled the whole grid.
     pub density: Option<Arc<KeptDensity>>,
+    /// A refined surface's sharp triangles as it measured them on the Gaussian sum
+    /// ([`crate::surface::curved::SharpTriangles`]), for the sides of an interface on its grid
+    /// to take; `None` from engines that do not record them.
+    pub sharp: Option<Arc<crate::surface::curved::SharpTriangles>>,
 }
 
 /// Size of a mesh that was measured but not kept.
@@ -208,6 +212,18 @@ pub trait SurfaceEngine {
     /// How this engine places vertices and normals.
     fn vertices(&self) -> VertexMode {
         VertexMode::Interpolated
+    }
+
+    /// With `Some`, later refined surfaces take their vertices from another surface's on the
+    /// same grid where no atom that differs between the two reaches
+    /// ([`crate::surface::analytic::RefinedReuse`]; the interface's sides take the complex's);
+    /// `None` solves every vertex. Returns `false` when this engine cannot (the default; then
+    /// nothing changes).
+    fn set_refined_reuse(
+        &mut self,
+        _reuse: Option<Arc<crate::surface::analytic::RefinedReuse>>,
+    ) -> bool {
+        false
     }
 
     /// Makes later surfaces use `grid` (origin, spacing and sample counts) instead of the grid

@@ -154,7 +154,11 @@ pub fn edge_geometry_refined(
     b[axis] += 1;
     let (va, vb) = (value(a), value(b));
     let t = edge_t(va, vb, iso);
-    let (position, normal) = field.refine_edge(point(grid, a), point(grid, b), va, iso, t);
+    let (pa, pb) = (point(grid, a), point(grid, b));
+    if let Some((position, normal)) = field.reused_vertex(index(grid, a), axis, pa, pb) {
+        return (position, normal, t);
+    }
+    let (position, normal) = field.refine_edge(pa, pb, va, iso, t);
     match normal {
         Some(normal) => (position, normal, t),
         None => {

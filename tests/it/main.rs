@@ -44,6 +44,7 @@ mod gpu_sparse;
 mod gpu_stages;
 mod gpu_steady;
 mod gpu_table1;
+mod interface_reuse;
 mod io_bad;
 mod io_contained;
 mod io_data;

@@ -195,6 +195,7 @@ impl SurfaceEngine for GpuEngine {
             timings: stats.timings,
             counts_without_mesh,
             density: None,
+            sharp: None,
         })
     }
 }

@@ -510,6 +510,7 @@ impl SceneEngine {
                     triangles: stats.triangle_count as usize,
                 }),
                 density: None,
+                sharp: None,
             };
             result.gpu_surface = Some(surface);
             result.gpu_work = Some(work);

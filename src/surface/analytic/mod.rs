@@ -32,15 +32,19 @@
 //! normalised) and [`AnalyticField::project`] (a point moved onto the surface along the
 //! gradient, for [`super::curved`]).
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use super::bin::PreparedAtom;
 use super::{GridSpec, Quality, SurfaceParams};
 
 mod near;
+mod reuse;
 
 pub use near::exp_fast;
 use near::*;
+pub use reuse::{RefinedReuse, ReusableSurface};
 
 /// How Marching Cubes places its vertices and normals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -115,6 +119,8 @@ pub struct AnalyticField {
     /// Cell edge in Å (the largest cutoff).
     cell: f32,
     dims: [i32; 3],
+    /// Another surface's vertices this one may take instead of solving ([`RefinedReuse`]).
+    reuse: Option<Arc<RefinedReuse>>,
 }
 
 impl AnalyticField {
@@ -137,6 +143,7 @@ impl AnalyticField {
             origin: grid.origin,
             cell,
             dims,
+            reuse: None,
         };
         let cells: Vec<usize> = atoms
             .iter()
@@ -166,6 +173,41 @@ impl AnalyticField {
             fill[c] += 1;
         }
         field
+    }
+
+    /// This field, taking vertices from `reuse` where its rule allows
+    /// ([`AnalyticField::reused_vertex`]).
+    pub fn with_reuse(mut self, reuse: Option<Arc<RefinedReuse>>) -> AnalyticField {
+        self.reuse = reuse;
+        self
+    }
+
+    /// The vertex (position in Å, unit normal) another surface found on the grid edge from
+    /// sample `start` (linear index, at `pa`) along `axis` to `pb`, when this field was given
+    /// one ([`AnalyticField::with_reuse`]) and no atom that differs between the two reaches
+    /// the edge: the vertex [`AnalyticField::refine_edge`] would find there.
+    #[inline]
+    pub fn reused_vertex(
+        &self,
+        start: usize,
+        axis: usize,
+        pa: Vec3,
+        pb: Vec3,
+    ) -> Option<(Vec3, Vec3)> {
+        self.reuse.as_ref()?.vertex(start, axis, pa, pb)
+    }
+
+    /// The area (Å²) and volume about [`AnalyticField::reused_centre`] (Å³) another surface
+    /// measured for the sharp triangle with these `corners` (Å, in order), when this field was
+    /// given one and no atom that differs reaches the triangle.
+    #[inline]
+    pub fn reused_sharp(&self, corners: [Vec3; 3]) -> Option<(f64, f64)> {
+        self.reuse.as_ref()?.sharp(corners)
+    }
+
+    /// The point the reused sharp triangles' volumes are about (Å), when there are any.
+    pub fn reused_centre(&self) -> Option<Vec3> {
+        self.reuse.as_ref()?.centre()
     }
 
     fn cell_of(&self, p: Vec3) -> [i32; 3] {

@@ -435,6 +435,7 @@ pub(super) fn periodic_output(
         volume: volume * images,
         counts_without_mesh: None,
         density: None,
+        sharp: None,
         timings,
     }
 }
