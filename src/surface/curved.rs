@@ -129,7 +129,7 @@ pub struct CurvedMeasure {
 }
 
 /// [`curved_area_volume`], recording the sharp triangles measured on the sum when `record`.
-/// When `on`'s field takes another surface's results ([`AnalyticField::reused_sharp`]), the
+/// When `on`'s field takes another surface's results ([`AnalyticField::reuse`]), the
 /// volume is about that surface's centre and a sharp triangle it measured, where no atom that
 /// differs reaches, is taken instead of measured again.
 pub fn curved_measure(mesh: &Mesh, on: Option<OnField<'_>>, record: bool) -> CurvedMeasure {
@@ -137,7 +137,7 @@ pub fn curved_measure(mesh: &Mesh, on: Option<OnField<'_>>, record: bool) -> Cur
         return CurvedMeasure::default();
     };
     let centre = on
-        .and_then(|on| on.field.reused_centre())
+        .and_then(|on| on.field.reuse()?.centre())
         .unwrap_or(0.5 * (lo + hi));
     const CHUNK: usize = 3 * 256;
     let (pos, nrm) = (&mesh.positions, &mesh.normals);
@@ -166,7 +166,8 @@ pub fn curved_measure(mesh: &Mesh, on: Option<OnField<'_>>, record: bool) -> Cur
                 let corners = [pos[ia], pos[ib], pos[ic]];
                 let measured = sharp.and_then(|on| {
                     on.field
-                        .reused_sharp(corners)
+                        .reuse()
+                        .and_then(|r| r.sharp(corners))
                         .or_else(|| sharp_area_volume(on, corners, centre))
                 });
                 if let Some((a, v)) = measured {

@@ -155,7 +155,10 @@ pub fn edge_geometry_refined(
     let (va, vb) = (value(a), value(b));
     let t = edge_t(va, vb, iso);
     let (pa, pb) = (point(grid, a), point(grid, b));
-    if let Some((position, normal)) = field.reused_vertex(index(grid, a), axis, pa, pb) {
+    let reused = field
+        .reuse()
+        .and_then(|r| r.vertex(index(grid, a), axis, pa, pb));
+    if let Some((position, normal)) = reused {
         return (position, normal, t);
     }
     let (position, normal) = field.refine_edge(pa, pb, va, iso, t);

@@ -175,39 +175,18 @@ impl AnalyticField {
         field
     }
 
-    /// This field, taking vertices from `reuse` where its rule allows
-    /// ([`AnalyticField::reused_vertex`]).
+    /// This field, taking vertices and sharp triangles from `reuse` where its rule allows
+    /// ([`RefinedReuse::vertex`], [`RefinedReuse::sharp`]).
     pub fn with_reuse(mut self, reuse: Option<Arc<RefinedReuse>>) -> AnalyticField {
         self.reuse = reuse;
         self
     }
 
-    /// The vertex (position in Å, unit normal) another surface found on the grid edge from
-    /// sample `start` (linear index, at `pa`) along `axis` to `pb`, when this field was given
-    /// one ([`AnalyticField::with_reuse`]) and no atom that differs between the two reaches
-    /// the edge: the vertex [`AnalyticField::refine_edge`] would find there.
+    /// The other surface this field takes vertices and sharp triangles from, when it was
+    /// given one ([`AnalyticField::with_reuse`]).
     #[inline]
-    pub fn reused_vertex(
-        &self,
-        start: usize,
-        axis: usize,
-        pa: Vec3,
-        pb: Vec3,
-    ) -> Option<(Vec3, Vec3)> {
-        self.reuse.as_ref()?.vertex(start, axis, pa, pb)
-    }
-
-    /// The area (Å²) and volume about [`AnalyticField::reused_centre`] (Å³) another surface
-    /// measured for the sharp triangle with these `corners` (Å, in order), when this field was
-    /// given one and no atom that differs reaches the triangle.
-    #[inline]
-    pub fn reused_sharp(&self, corners: [Vec3; 3]) -> Option<(f64, f64)> {
-        self.reuse.as_ref()?.sharp(corners)
-    }
-
-    /// The point the reused sharp triangles' volumes are about (Å), when there are any.
-    pub fn reused_centre(&self) -> Option<Vec3> {
-        self.reuse.as_ref()?.centre()
+    pub fn reuse(&self) -> Option<&RefinedReuse> {
+        self.reuse.as_deref()
     }
 
     fn cell_of(&self, p: Vec3) -> [i32; 3] {

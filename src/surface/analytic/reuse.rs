@@ -324,13 +324,13 @@ impl RefinedReuse {
     }
 
     /// The point the other surface's sharp volumes are about (Å), when it recorded them.
-    pub(crate) fn centre(&self) -> Option<Vec3> {
+    pub fn centre(&self) -> Option<Vec3> {
         self.surface.centre
     }
 
     /// Area (Å²) and volume about [`RefinedReuse::centre`] (Å³) of the other surface's sharp
     /// triangle with these `corners` (Å, in order), when the rule of the module docs allows.
-    pub(crate) fn sharp(&self, corners: [Vec3; 3]) -> Option<(f64, f64)> {
+    pub fn sharp(&self, corners: [Vec3; 3]) -> Option<(f64, f64)> {
         if self.surface.sharp.is_empty() {
             return None;
         }
@@ -360,13 +360,7 @@ impl RefinedReuse {
 
     /// The complex's vertex (position in Å, unit normal) on the edge from sample `start`
     /// (linear index, at `pa`) along `axis` to `pb`, when the rule of the module docs allows.
-    pub(crate) fn vertex(
-        &self,
-        start: usize,
-        axis: usize,
-        pa: Vec3,
-        pb: Vec3,
-    ) -> Option<(Vec3, Vec3)> {
+    pub fn vertex(&self, start: usize, axis: usize, pa: Vec3, pb: Vec3) -> Option<(Vec3, Vec3)> {
         let found = self.surface.get(3 * start as u64 + axis as u64)?;
         if self.changed.near(0.5 * (pa + pb), self.spacing) {
             return None;
