@@ -44,11 +44,16 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 use super::super::curved::SharpTriangles;
+use super::super::memory::memory_for;
 use super::super::{GridSpec, Mesh};
 
 /// Clearance beyond the rule's distances that a changed atom must keep (Å): covers the f32
 /// rounding of the distances and cutoffs compared.
 const CLEARANCE_SLACK: f32 = 0.01;
+
+/// The tables of a [`ReusableSurface`] may take at most one part in this many of the memory
+/// available (a side that takes nothing is only slower).
+pub const MEMORY_SHARE: u64 = 16;
 
 /// A sharp triangle's reach beyond its centroid, in grid spacings: its radius plus its longest
 /// edge, each at most a cell's diagonal (`sqrt(3) H`).
@@ -78,7 +83,8 @@ pub struct ReusableSurface {
 impl ReusableSurface {
     /// The vertices of `mesh` (refined on `grid` at isovalue `iso`, with unit normals) that lie
     /// strictly inside a grid edge, by edge, and its `sharp` triangles as its measure recorded
-    /// them. `None` when the mesh has no normal per vertex.
+    /// them. `None` when the mesh has no normal per vertex, or when the tables would take more
+    /// than a [`MEMORY_SHARE`] of the memory available (then every vertex is solved).
     pub fn new(
         mesh: &Mesh,
         sharp: Option<&SharpTriangles>,
@@ -88,13 +94,18 @@ impl ReusableSurface {
         if mesh.normals.len() != mesh.positions.len() {
             return None;
         }
+        let capacity = (2 * mesh.positions.len()).next_power_of_two().max(16);
+        let sharp_count = sharp.map_or(0, |s| s.triangles.len());
+        let bytes = (capacity * 12 + mesh.positions.len() * 24 + sharp_count * 64) as u64;
+        if bytes.saturating_mul(MEMORY_SHARE) > memory_for(bytes, None) {
+            return None;
+        }
         let by_corners = sharp.map_or_else(HashMap::new, |s| {
             s.triangles
                 .iter()
                 .map(|t| (corner_bits(t.corners), (t.area, t.volume)))
                 .collect()
         });
-        let capacity = (2 * mesh.positions.len()).next_power_of_two().max(16);
         let mut table = ReusableSurface {
             grid: *grid,
             iso,
