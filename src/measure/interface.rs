@@ -41,10 +41,19 @@ pub struct InterfaceResult {
     pub atoms_a_complex: Vec<f64>,
     /// Area of each atom of B in the complex (Å²).
     pub atoms_b_complex: Vec<f64>,
-    /// For A and for B, the refined vertices and the sharp triangles its surface took from the
-    /// complex's instead of solving and measuring them again
-    /// ([`crate::surface::analytic::RefinedReuse`]; zeros with interpolated vertices).
-    pub reused: [(usize, usize); 2],
+    /// For A and for B, what its surface took from the complex's instead of computing it
+    /// again.
+    pub taken: [TakenFromComplex; 2],
+}
+
+/// What one side of an interface took from the complex's surface where the two are the same.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TakenFromComplex {
+    /// Refined vertices taken instead of solved ([`crate::surface::analytic::RefinedReuse`];
+    /// 0 with interpolated vertices).
+    pub vertices: usize,
+    /// Sharp triangles taken instead of measured on the Gaussian sum.
+    pub sharp_triangles: usize,
 }
 
 /// The buried area between `a` and `b` under `params`, with per-atom areas alone and in the
@@ -168,7 +177,8 @@ pub fn interface_on(
         .density
         .as_deref()
         .filter(|_| complex.holds_sides(&a, &b));
-    let reuse = complex.refined_reuse(engine, [&a, &b], &measure);
+    let changed = complex.changed_atoms([&a, &b], &measure);
+    let reuse = complex.refined_reuse(engine, &changed, &measure);
     let counters = reuse.clone();
     let sides = sides_on_grid(engine, [&a, &b], whole, params, reuse);
     engine.set_refined_reuse(None);
@@ -206,34 +216,25 @@ pub fn interface_on(
         atoms_b_alone,
         atoms_a_complex,
         atoms_b_complex,
-        reused: counters.map(|r| r.map_or((0, 0), |r| r.taken())),
+        taken: counters.map(|r| {
+            let (vertices, sharp_triangles) = r.map_or((0, 0), |r| r.taken());
+            TakenFromComplex {
+                vertices,
+                sharp_triangles,
+            }
+        }),
     })
 }
 
 impl Complex<'_> {
-    /// For each side, the complex's refined vertices it may take
-    /// ([`crate::surface::analytic::RefinedReuse`]): the atoms that differ are the other
-    /// side's and this side's whose radius or position is not its complex atom's, each with
-    /// the longer of its cutoffs under `measure` (the effective parameters). `None` for both
-    /// when the engine does not refine or cannot take them, or the complex has no normals.
-    fn refined_reuse(
+    /// For each side, the atoms whose terms differ between it and the complex: the other
+    /// side's, and this side's whose radius or position is not its complex atom's, each with
+    /// the longer of its cutoffs under `measure` (the effective parameters; Å).
+    fn changed_atoms(
         &self,
-        engine: &mut dyn SurfaceEngine,
         sides: [&AtomSet<'_>; 2],
         measure: &SurfaceParams,
-    ) -> [Option<Arc<RefinedReuse>>; 2] {
-        if engine.vertices() != VertexMode::Refined || !engine.set_refined_reuse(None) {
-            return [None, None];
-        }
-        let Some(vertices) = ReusableSurface::new(
-            &self.output.mesh,
-            self.output.sharp.as_deref(),
-            &self.output.grid,
-            measure.isovalue,
-        ) else {
-            return [None, None];
-        };
-        let vertices = Arc::new(vertices);
+    ) -> [Vec<(Vec3, f32)>; 2] {
         let cut = |radius: f32| measure.cutoff() * measure.radius_scale * radius;
         let maps = [self.a_at, self.b_at];
         [0, 1].map(|s| {
@@ -256,7 +257,37 @@ impl Complex<'_> {
                     changed.push((p, cut(r.max(rc))));
                 }
             }
-            Some(Arc::new(RefinedReuse::new(Arc::clone(&vertices), &changed)))
+            changed
+        })
+    }
+
+    /// For each side, the complex's refined vertices and sharp triangles it may take
+    /// ([`crate::surface::analytic::RefinedReuse`]) given its `changed` atoms
+    /// ([`Complex::changed_atoms`]). `None` for both when the engine does not refine or cannot
+    /// take them, or the complex has no normals.
+    fn refined_reuse(
+        &self,
+        engine: &mut dyn SurfaceEngine,
+        changed: &[Vec<(Vec3, f32)>; 2],
+        measure: &SurfaceParams,
+    ) -> [Option<Arc<RefinedReuse>>; 2] {
+        if engine.vertices() != VertexMode::Refined || !engine.set_refined_reuse(None) {
+            return [None, None];
+        }
+        let Some(vertices) = ReusableSurface::new(
+            &self.output.mesh,
+            self.output.sharp.as_deref(),
+            &self.output.grid,
+            measure.isovalue,
+        ) else {
+            return [None, None];
+        };
+        let vertices = Arc::new(vertices);
+        [0, 1].map(|s| {
+            Some(Arc::new(RefinedReuse::new(
+                Arc::clone(&vertices),
+                &changed[s],
+            )))
         })
     }
 

@@ -60,8 +60,8 @@ pub use csv::{
     AtomCsv, CavityCsv, CavityEventCsv, ContactCsv, InterfaceCsv, ResidueCsv, lining_residues,
 };
 pub use interface::{
-    CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, contact_residues, interface,
-    interface_on, interface_with,
+    CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, TakenFromComplex, contact_residues,
+    interface, interface_on, interface_with,
 };
 pub use probe_cavities::{
     ProbeOptions, probe_cavities, probe_cavity_walls, ses_probe_cavities, ses_probe_cavity_walls,

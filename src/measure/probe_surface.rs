@@ -95,7 +95,7 @@ pub fn probe_interface(
         atoms_b_alone: alone_b.atom_areas,
         atoms_a_complex,
         atoms_b_complex,
-        reused: [(0, 0); 2],
+        taken: Default::default(),
     })
 }
 

@@ -19,6 +19,7 @@ pub(crate) mod mesh;
 pub(crate) mod params;
 pub mod periodic;
 pub(crate) mod preset;
+pub mod same_grid;
 pub(crate) mod scan;
 pub mod tables;
 

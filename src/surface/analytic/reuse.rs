@@ -26,10 +26,9 @@
 //! that the two sum alike (its area moves by the rounding of the coordinates relative to
 //! that centre, about 1e-8).
 //!
-//! The complex's vertices are found by position: a vertex on a grid edge has its two other
-//! coordinates exactly on the grid's sample planes ([`GridSpec::point`]'s arithmetic), the
-//! third strictly between the edge's ends. A vertex on a sample (all three on planes) or moved
-//! off its edge (the refinement's rare fallback) is left out; the side solves those itself.
+//! The complex's vertices are found by the grid edge they lie on
+//! ([`crate::surface::same_grid::EdgeTable`]); one on a sample or off its edge is left out and
+//! the side solves it itself.
 //!
 //! Cost: one table entry per vertex of the complex (a few hundred microseconds on a 30,000-
 //! vertex frame) and, per crossed edge of a side, one lookup and a test against the changed
@@ -45,11 +44,8 @@ use glam::Vec3;
 
 use super::super::curved::SharpTriangles;
 use super::super::memory::memory_for;
+use super::super::same_grid::{ChangedAtoms, EdgeTable};
 use super::super::{GridSpec, Mesh};
-
-/// Clearance beyond the rule's distances that a changed atom must keep (Å): covers the f32
-/// rounding of the distances and cutoffs compared.
-const CLEARANCE_SLACK: f32 = 0.01;
 
 /// The tables of a [`ReusableSurface`] may take at most one part in this many of the memory
 /// available (a side that takes nothing is only slower).
@@ -72,10 +68,8 @@ pub struct ReusableSurface {
     sharp: HashMap<[u32; 9], (f64, f64)>,
     /// The point the sharp triangles' volumes are about (Å); `None` without them.
     centre: Option<Vec3>,
-    /// Edge keys, `u64::MAX` where empty; length a power of two.
-    keys: Vec<u64>,
-    /// Vertex index of each key.
-    slots: Vec<u32>,
+    /// The vertices by grid edge.
+    table: EdgeTable,
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
 }
@@ -94,9 +88,9 @@ impl ReusableSurface {
         if mesh.normals.len() != mesh.positions.len() {
             return None;
         }
-        let capacity = (2 * mesh.positions.len()).next_power_of_two().max(16);
         let sharp_count = sharp.map_or(0, |s| s.triangles.len());
-        let bytes = (capacity * 12 + mesh.positions.len() * 24 + sharp_count * 64) as u64;
+        let bytes = EdgeTable::bytes_for(mesh.positions.len())
+            + (mesh.positions.len() * 24 + sharp_count * 64) as u64;
         if bytes.saturating_mul(MEMORY_SHARE) > memory_for(bytes, None) {
             return None;
         }
@@ -106,62 +100,20 @@ impl ReusableSurface {
                 .map(|t| (corner_bits(t.corners), (t.area, t.volume)))
                 .collect()
         });
-        let mut table = ReusableSurface {
+        Some(ReusableSurface {
             grid: *grid,
             iso,
             sharp: by_corners,
             centre: sharp.map(|s| s.centre),
-            keys: vec![u64::MAX; capacity],
-            slots: vec![0; capacity],
+            table: EdgeTable::new(&mesh.positions, grid),
             positions: mesh.positions.clone(),
             normals: mesh.normals.clone(),
-        };
-        for (i, p) in mesh.positions.iter().enumerate() {
-            if let Some(key) = edge_key(grid, *p) {
-                table.insert(key, i as u32);
-            }
-        }
-        Some(table)
+        })
     }
 
     /// The grid and isovalue the vertices were refined on.
     pub fn fits(&self, grid: &GridSpec, iso: f32) -> bool {
         self.grid == *grid && self.iso.to_bits() == iso.to_bits()
-    }
-
-    fn home(&self, key: u64) -> usize {
-        // Fibonacci hashing into the power-of-two table.
-        let shift = 64 - self.keys.len().trailing_zeros();
-        (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize
-    }
-
-    fn insert(&mut self, key: u64, vertex: u32) {
-        let mask = self.keys.len() - 1;
-        let mut at = self.home(key);
-        loop {
-            if self.keys[at] == u64::MAX || self.keys[at] == key {
-                // A key seen twice (two vertices on one edge cannot come from Marching Cubes)
-                // keeps its first vertex.
-                if self.keys[at] == u64::MAX {
-                    self.keys[at] = key;
-                    self.slots[at] = vertex;
-                }
-                return;
-            }
-            at = (at + 1) & mask;
-        }
-    }
-
-    fn get(&self, key: u64) -> Option<usize> {
-        let mask = self.keys.len() - 1;
-        let mut at = self.home(key);
-        loop {
-            match self.keys[at] {
-                k if k == key => return Some(self.slots[at] as usize),
-                u64::MAX => return None,
-                _ => at = (at + 1) & mask,
-            }
-        }
     }
 }
 
@@ -171,124 +123,6 @@ fn corner_bits(corners: [Vec3; 3]) -> [u32; 9] {
     [
         c[0][0], c[0][1], c[0][2], c[1][0], c[1][1], c[1][2], c[2][0], c[2][1], c[2][2],
     ]
-}
-
-/// The key of the grid edge `p` (Å) lies strictly inside, when two of its coordinates are
-/// exactly on sample planes and the third between two samples.
-fn edge_key(grid: &GridSpec, p: Vec3) -> Option<u64> {
-    let (o, h) = (grid.origin, grid.spacing);
-    let mut index = [0u32; 3];
-    let mut along = None;
-    for axis in 0..3 {
-        let n = grid.dims[axis];
-        let f = (p[axis] - o[axis]) / h;
-        if !f.is_finite() || f < 0.0 || f > (n - 1) as f32 {
-            return None;
-        }
-        let nearest = f.round() as u32;
-        if o[axis] + h * nearest as f32 == p[axis] {
-            index[axis] = nearest;
-            continue;
-        }
-        if along.is_some() {
-            return None;
-        }
-        // The edge's start: the last sample plane at or below p (f rounded may be off by one).
-        let mut start = (f.floor() as u32).min(n.saturating_sub(2));
-        if o[axis] + h * start as f32 > p[axis] {
-            start = start.checked_sub(1)?;
-        } else if o[axis] + h * (start + 1) as f32 <= p[axis] {
-            start += 1;
-        }
-        let (lo, hi) = (o[axis] + h * start as f32, o[axis] + h * (start + 1) as f32);
-        if !(lo < p[axis] && p[axis] < hi) || start + 1 >= n {
-            return None;
-        }
-        index[axis] = start;
-        along = Some(axis);
-    }
-    let axis = along?;
-    Some(3 * grid.index(index[0], index[1], index[2]) as u64 + axis as u64)
-}
-
-/// Atoms whose terms differ between a side and the complex, binned by position for the test of
-/// the module docs.
-#[derive(Debug)]
-struct ChangedAtoms {
-    origin: Vec3,
-    /// Cell edge (Å): at least every atom's cutoff plus the largest clearance asked, so a
-    /// point's 27 cells hold every atom that can reach it.
-    cell: f32,
-    dims: [i32; 3],
-    /// `start[c]..start[c + 1]` are cell `c`'s atoms in `atoms`.
-    start: Vec<u32>,
-    /// Position (Å) and cutoff plus [`CLEARANCE_SLACK`] (Å) of each atom, by cell.
-    atoms: Vec<(Vec3, f32)>,
-}
-
-impl ChangedAtoms {
-    /// `atoms` (position and cutoff, Å) binned for tests at up to `extra` Å beyond a cutoff.
-    fn new(grid: &GridSpec, atoms: &[(Vec3, f32)], extra: f32) -> ChangedAtoms {
-        let cell = atoms
-            .iter()
-            .map(|&(_, cut)| cut + extra + CLEARANCE_SLACK)
-            .fold(grid.spacing, f32::max);
-        let extent = grid.spacing * Vec3::from(grid.dims.map(|d| d as f32));
-        let dims = [0, 1, 2].map(|a| ((extent[a] / cell).ceil() as i32).clamp(1, 1024));
-        let mut changed = ChangedAtoms {
-            origin: grid.origin,
-            cell,
-            dims,
-            start: vec![0; (dims[0] * dims[1] * dims[2]) as usize + 1],
-            atoms: vec![(Vec3::ZERO, 0.0); atoms.len()],
-        };
-        let cells: Vec<usize> = atoms.iter().map(|(p, _)| changed.cell_of(*p)).collect();
-        for &c in &cells {
-            changed.start[c + 1] += 1;
-        }
-        for c in 1..changed.start.len() {
-            changed.start[c] += changed.start[c - 1];
-        }
-        let mut fill = changed.start.clone();
-        for (&(p, cut), &c) in atoms.iter().zip(&cells) {
-            changed.atoms[fill[c] as usize] = (p, cut + CLEARANCE_SLACK);
-            fill[c] += 1;
-        }
-        changed
-    }
-
-    fn cell_coords(&self, p: Vec3) -> [i32; 3] {
-        let c = (p - self.origin) / self.cell;
-        // Cells past the grid hold the atoms beyond it (they are clamped in).
-        [0, 1, 2].map(|a| (c[a].floor() as i32).clamp(0, self.dims[a] - 1))
-    }
-
-    fn cell_of(&self, p: Vec3) -> usize {
-        let [x, y, z] = self.cell_coords(p);
-        (x + self.dims[0] * (y + self.dims[1] * z)) as usize
-    }
-
-    /// True when some atom is closer to `mid` (Å) than its cutoff plus `extra` (Å, at most the
-    /// `extra` the atoms were binned for) plus [`CLEARANCE_SLACK`].
-    fn near(&self, mid: Vec3, extra: f32) -> bool {
-        let [cx, cy, cz] = self.cell_coords(mid);
-        let [nx, ny, nz] = self.dims;
-        for z in (cz - 1).max(0)..=(cz + 1).min(nz - 1) {
-            for y in (cy - 1).max(0)..=(cy + 1).min(ny - 1) {
-                let row = nx * (y + ny * z);
-                let first = (row + (cx - 1).max(0)) as usize;
-                let last = (row + (cx + 1).min(nx - 1)) as usize;
-                let run = self.start[first] as usize..self.start[last + 1] as usize;
-                if self.atoms[run].iter().any(|(p, cut)| {
-                    let r = cut + extra;
-                    (mid - *p).length_squared() < r * r
-                }) {
-                    return true;
-                }
-            }
-        }
-        false
-    }
 }
 
 /// What a side of an interface may take from the complex: its vertices by edge and the atoms
@@ -372,7 +206,7 @@ impl RefinedReuse {
     /// The complex's vertex (position in Å, unit normal) on the edge from sample `start`
     /// (linear index, at `pa`) along `axis` to `pb`, when the rule of the module docs allows.
     pub fn vertex(&self, start: usize, axis: usize, pa: Vec3, pb: Vec3) -> Option<(Vec3, Vec3)> {
-        let found = self.surface.get(3 * start as u64 + axis as u64)?;
+        let found = self.surface.table.on_edge(start, axis)?;
         if self.changed.near(0.5 * (pa + pb), self.spacing) {
             return None;
         }
@@ -391,33 +225,6 @@ mod tests {
             spacing: 0.7,
             dims: [9, 8, 7],
         }
-    }
-
-    #[test]
-    fn a_vertex_inside_an_edge_finds_that_edge_and_no_other_point_does() {
-        let g = grid();
-        for (i, j, k, axis) in [(0, 0, 0, 0), (3, 4, 5, 1), (7, 6, 5, 2), (2, 7, 0, 0)] {
-            let a = g.point(i, j, k);
-            let mut b_idx = [i, j, k];
-            b_idx[axis] += 1;
-            let b = g.point(b_idx[0], b_idx[1], b_idx[2]);
-            for t in [1e-3, 0.25, 0.5, 0.999] {
-                let p = a + t * (b - a);
-                let key = edge_key(&g, p).expect("a point inside an edge");
-                assert_eq!(key, 3 * g.index(i, j, k) as u64 + axis as u64, "t = {t}");
-            }
-            // On a sample: ambiguous, left out.
-            assert_eq!(edge_key(&g, a), None);
-        }
-        // Off every edge, or outside the grid.
-        assert_eq!(
-            edge_key(&g, g.point(2, 2, 2) + Vec3::new(0.1, 0.1, 0.0)),
-            None
-        );
-        assert_eq!(
-            edge_key(&g, g.point(0, 0, 0) - Vec3::new(0.2, 0.0, 0.0)),
-            None
-        );
     }
 
     #[test]
