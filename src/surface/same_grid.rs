@@ -214,10 +214,12 @@ impl ChangedAtoms {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn grid() -> GridSpec {
+    /// A small grid off the origin, with a spacing that is not a power of two (shared with the
+    /// tests of [`crate::surface::analytic::RefinedReuse`]).
+    pub(crate) fn grid() -> GridSpec {
         GridSpec {
             origin: Vec3::new(-3.7, 1.3, 10.1),
             spacing: 0.7,

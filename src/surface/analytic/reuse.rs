@@ -218,14 +218,7 @@ impl RefinedReuse {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn grid() -> GridSpec {
-        GridSpec {
-            origin: Vec3::new(-3.7, 1.3, 10.1),
-            spacing: 0.7,
-            dims: [9, 8, 7],
-        }
-    }
+    use crate::surface::same_grid::tests::grid;
 
     #[test]
     fn a_changed_atom_blocks_the_edges_it_can_reach() {
