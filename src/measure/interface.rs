@@ -177,8 +177,7 @@ pub fn interface_on(
         .density
         .as_deref()
         .filter(|_| complex.holds_sides(&a, &b));
-    let changed = complex.changed_atoms([&a, &b], &measure);
-    let reuse = complex.refined_reuse(engine, &changed, &measure);
+    let reuse = complex.refined_reuse(engine, [&a, &b], &measure);
     let counters = reuse.clone();
     let sides = sides_on_grid(engine, [&a, &b], whole, params, reuse);
     engine.set_refined_reuse(None);
@@ -262,13 +261,13 @@ impl Complex<'_> {
     }
 
     /// For each side, the complex's refined vertices and sharp triangles it may take
-    /// ([`crate::surface::analytic::RefinedReuse`]) given its `changed` atoms
+    /// ([`crate::surface::analytic::RefinedReuse`]) given its changed atoms
     /// ([`Complex::changed_atoms`]). `None` for both when the engine does not refine or cannot
     /// take them, or the complex has no normals.
     fn refined_reuse(
         &self,
         engine: &mut dyn SurfaceEngine,
-        changed: &[Vec<(Vec3, f32)>; 2],
+        sides: [&AtomSet<'_>; 2],
         measure: &SurfaceParams,
     ) -> [Option<Arc<RefinedReuse>>; 2] {
         if engine.vertices() != VertexMode::Refined || !engine.set_refined_reuse(None) {
@@ -283,6 +282,7 @@ impl Complex<'_> {
             return [None, None];
         };
         let vertices = Arc::new(vertices);
+        let changed = self.changed_atoms(sides, measure);
         [0, 1].map(|s| {
             Some(Arc::new(RefinedReuse::new(
                 Arc::clone(&vertices),
