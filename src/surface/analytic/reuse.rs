@@ -35,10 +35,9 @@
 //! atoms of the 27 cells around it; a hit saves the gather and the Newton steps, most of a
 //! refined surface's time.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
-
-use std::collections::HashMap;
 
 use glam::Vec3;
 
@@ -131,8 +130,6 @@ fn corner_bits(corners: [Vec3; 3]) -> [u32; 9] {
 pub struct RefinedReuse {
     surface: Arc<ReusableSurface>,
     changed: ChangedAtoms,
-    /// Grid spacing H (Å).
-    spacing: f32,
     /// Vertices taken.
     taken: AtomicUsize,
     /// Sharp triangles taken.
@@ -144,15 +141,19 @@ impl RefinedReuse {
     /// atoms: position (Å) and cutoff (Å, the longer of the two surfaces' where an atom is in
     /// both).
     pub fn new(surface: Arc<ReusableSurface>, changed: &[(Vec3, f32)]) -> RefinedReuse {
-        let spacing = surface.grid.spacing;
-        let changed = ChangedAtoms::new(&surface.grid, changed, SHARP_REACH_SPACINGS * spacing);
+        let sharp_reach = SHARP_REACH_SPACINGS * surface.grid.spacing;
+        let changed = ChangedAtoms::new(&surface.grid, changed, sharp_reach);
         RefinedReuse {
             surface,
             changed,
-            spacing,
             taken: AtomicUsize::new(0),
             taken_sharp: AtomicUsize::new(0),
         }
+    }
+
+    /// The grid spacing H (Å).
+    fn spacing(&self) -> f32 {
+        self.surface.grid.spacing
     }
 
     /// True when the surface was refined on `grid` at isovalue `iso`.
@@ -195,7 +196,7 @@ impl RefinedReuse {
         let reach = radius + longest;
         // Past the reach the changed atoms were binned for (not a Marching Cubes triangle), or
         // not finite: measured again.
-        let binned = reach.is_finite() && reach <= SHARP_REACH_SPACINGS * self.spacing;
+        let binned = reach.is_finite() && reach <= SHARP_REACH_SPACINGS * self.spacing();
         if !binned || self.changed.near(centroid, reach) {
             return None;
         }
@@ -207,7 +208,7 @@ impl RefinedReuse {
     /// (linear index, at `pa`) along `axis` to `pb`, when the rule of the module docs allows.
     pub fn vertex(&self, start: usize, axis: usize, pa: Vec3, pb: Vec3) -> Option<(Vec3, Vec3)> {
         let found = self.surface.table.on_edge(start, axis)?;
-        if self.changed.near(0.5 * (pa + pb), self.spacing) {
+        if self.changed.near(0.5 * (pa + pb), self.spacing()) {
             return None;
         }
         self.taken.fetch_add(1, Ordering::Relaxed);
