@@ -25,7 +25,8 @@ use mdsurf::surface::{AtomSet, CpuEngine, RadiusSet, SurfaceParams, VertexMode};
 #[derive(clap::Args, Debug, Clone)]
 pub struct MeasureArgs {
     /// Area per residue (Å²) and exposure (area over the residue type's area alone) of every
-    /// surface representation and frame: frame,rep,chain,resid,resname,area_A2,exposure.
+    /// surface representation and frame: frame,rep,chain,resid,resname,area_A2,exposure,residue
+    /// (residue: its index in the file from 0, as `residue N` selects it).
     #[arg(long, value_name = "FILE.csv")]
     pub per_residue: Option<PathBuf>,
     /// Area per atom (Å²): frame,rep,serial,name,chain,resid,resname,area_A2.
@@ -63,8 +64,9 @@ pub struct MeasureArgs {
     #[arg(long, value_name = "FILE.csv", requires = "interface")]
     pub interface_csv: Option<PathBuf>,
     /// The contact residues of every frame, one row each:
-    /// frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2 (side A
-    /// or B; buried = the residue's area alone minus in the complex).
+    /// frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2,residue
+    /// (side A or B; buried = the residue's area alone minus in the complex; residue: its index
+    /// in the file from 0).
     #[arg(long, value_name = "FILE.csv", requires = "interface")]
     pub interface_residues: Option<PathBuf>,
     /// A residue is a contact when it loses more than this area in Å² from alone to the

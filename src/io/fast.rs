@@ -442,6 +442,7 @@ pub(crate) fn empty_topology(n: usize) -> Topology {
         residue_names: Labels::filled("", n),
         residue_ids: vec![0; n],
         residue_index: vec![u32::MAX; n],
+        residue_copies: Vec::new(),
         chains: Labels::filled("", n),
         segments: Labels::filled("", n),
         b_factors: vec![0.0; n],

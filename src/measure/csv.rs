@@ -43,14 +43,18 @@ impl Table {
     }
 }
 
-/// Per-residue areas: `frame,rep,chain,resid,resname,area_A2,exposure` (exposure empty when
-/// no table or the table lacks the residue's name).
+/// Per-residue areas: `frame,rep,chain,resid,resname,area_A2,exposure,residue` (exposure empty
+/// when no table or the table lacks the residue's name; `residue` the residue's index in the
+/// topology from 0, which `residue N` selects and which tells apart residues that share chain,
+/// number and name, as a GRO file's monomers do).
 #[derive(Debug, Clone)]
 pub struct ResidueCsv(Table);
 
 impl Default for ResidueCsv {
     fn default() -> Self {
-        ResidueCsv(Table::new("frame,rep,chain,resid,resname,area_A2,exposure"))
+        ResidueCsv(Table::new(
+            "frame,rep,chain,resid,resname,area_A2,exposure,residue",
+        ))
     }
 }
 
@@ -77,11 +81,12 @@ impl ResidueCsv {
                 .map_or(String::new(), |e| format!("{e:.4}"));
             let _ = writeln!(
                 self.0.rows,
-                "{frame},{rep},{},{},{},{:.3},{e}",
+                "{frame},{rep},{},{},{},{:.3},{e},{}",
                 field(names.chain_or_segment()),
                 names.resid,
                 field(names.resname.trim()),
-                r.area
+                r.area,
+                r.residue
             );
         }
     }
@@ -317,16 +322,17 @@ impl InterfaceCsv {
 }
 
 /// The residues an interface buries, one row per contact residue and frame:
-/// `frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2`, side `A`
-/// or `B` (the two selections in the order given), `buried_A2` = alone minus in the complex
-/// (the residue's own loss, not halved), `time_ps` empty when the frame has no time.
+/// `frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2,residue`,
+/// side `A` or `B` (the two selections in the order given), `buried_A2` = alone minus in the
+/// complex (the residue's own loss, not halved), `time_ps` empty when the frame has no time,
+/// `residue` as in [`ResidueCsv`].
 #[derive(Debug, Clone)]
 pub struct ContactCsv(Table);
 
 impl Default for ContactCsv {
     fn default() -> Self {
         ContactCsv(Table::new(
-            "frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2",
+            "frame,time_ps,side,chain,resid,resname,area_alone_A2,area_complex_A2,buried_A2,residue",
         ))
     }
 }
@@ -354,13 +360,14 @@ impl ContactCsv {
             };
             let _ = writeln!(
                 self.0.rows,
-                "{frame},{time},{side},{},{},{},{:.3},{:.3},{:.3}",
+                "{frame},{time},{side},{},{},{},{:.3},{:.3},{:.3},{}",
                 field(names.chain_or_segment()),
                 names.resid,
                 field(names.resname.trim()),
                 c.residue.area,
                 c.area_complex,
-                c.buried
+                c.buried,
+                c.residue.residue
             );
         }
     }

@@ -45,6 +45,9 @@ impl<'t> ResidueNames<'t> {
             resname: text(&topology.residue_names),
             atom_name: text(&topology.names),
             serial: (topology.serials.get(atom).copied()).unwrap_or(atom as i64 + 1),
+            copy: (topology.residue_index.get(atom))
+                .and_then(|&r| topology.residue_copies.get(r as usize).copied())
+                .unwrap_or(0),
         }
     }
 }
@@ -65,6 +68,9 @@ pub struct ResidueNames<'t> {
     /// That atom's serial number as written in the file (its place from 1 when the file has
     /// none).
     pub serial: i64,
+    /// Which copy the residue is of those sharing its chain (else segment), number and name,
+    /// from 1; 0 when it is the only one ([`Topology::residue_copies`]).
+    pub copy: u32,
 }
 
 impl<'t> ResidueNames<'t> {
@@ -87,11 +93,16 @@ impl<'t> ResidueNames<'t> {
             && self.resid == 0
     }
 
-    /// `A:LEU12` (chain, else segment, then name and number; `LEU12` with neither); for an
-    /// atom in no residue ([`Self::is_anonymous`]) the atom's name and serial, `O@340`.
+    /// `A:LEU12` (chain, else segment, then name and number; `LEU12` with neither), and
+    /// `#2` after it for the second of residues that share all three (`PHE9#1` and `PHE9#2`:
+    /// the two monomers of a dimer in a GRO file, which has no chains); for an atom in no
+    /// residue ([`Self::is_anonymous`]) the atom's name and serial, `O@340`.
     pub fn label(&self) -> String {
         if self.is_anonymous() {
             format!("{}@{}", self.atom_name.trim(), self.serial)
+        } else if self.copy > 0 {
+            let label = residue_label(self.chain, self.segment, self.resname, self.resid);
+            format!("{label}#{}", self.copy)
         } else {
             residue_label(self.chain, self.segment, self.resname, self.resid)
         }
@@ -314,6 +325,30 @@ impl ExposureTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn residues_that_share_their_names_are_labelled_by_copy() {
+        // Two monomers of a GRO file (no chains), and a lipid numbered on its own.
+        let mut top = Topology::of_residues(&[
+            (9, "PHE"),
+            (10, "TRP"),
+            (9, "PHE"),
+            (10, "TRP"),
+            (297, "POPE"),
+        ]);
+        top.number_residue_runs(&[0, 1, 2, 3, 4]);
+        let labels: Vec<String> = (0..5)
+            .map(|a| ResidueNames::of_atom(&top, a).label())
+            .collect();
+        assert_eq!(
+            labels,
+            ["PHE9#1", "TRP10#1", "PHE9#2", "TRP10#2", "POPE297"]
+        );
+        top.chains.set(0, "A");
+        top.number_residue_copies();
+        assert_eq!(ResidueNames::of_atom(&top, 0).label(), "A:PHE9");
+        assert_eq!(ResidueNames::of_atom(&top, 2).label(), "PHE9");
+    }
 
     #[test]
     fn atoms_in_no_residue_are_labelled_by_name_and_serial() {

@@ -68,6 +68,12 @@ pub struct Topology {
     pub residue_ids: Vec<i64>,
     /// Index of each atom's residue, counting residues in file order from 0.
     pub residue_index: Vec<u32>,
+    /// Which copy each residue (by [`Topology::residue_index`]) is of the residues that share
+    /// its chain (else segment), number and name, from 1 in file order; 0 when no other
+    /// residue shares them (and for atoms in no residue). A GRO file, which has no chains,
+    /// numbers both monomers of a dimer alike: their residues are copies 1 and 2. Set by
+    /// [`Topology::number_residue_copies`].
+    pub residue_copies: Vec<u32>,
     /// Chain or segment identifier of each atom (empty when the file has none).
     pub chains: Labels,
     /// Segment name of each atom (PDB columns 73-76, PSF segid; empty when the file has none).

@@ -2,6 +2,8 @@
 //! runs of atoms, never grouped by residue number alone (see
 //! [`Topology::number_residue_runs`]).
 
+use std::collections::HashMap;
+
 use super::Topology;
 
 impl Topology {
@@ -27,6 +29,52 @@ impl Topology {
             }
             self.residue_index[i] = next;
         }
+        self.number_residue_copies();
+    }
+
+    /// Sets [`Topology::residue_copies`] from [`Topology::residue_index`]: residues sharing
+    /// chain (else segment), number and name are numbered 1, 2, … in file order, the rest 0.
+    /// Residues that name nothing (no chain, segment or name and number 0: the particles of a
+    /// LAMMPS dump or an XYZ file) are left at 0.
+    pub fn number_residue_copies(&mut self) {
+        let mut firsts: Vec<usize> = Vec::new();
+        for (i, &r) in self.residue_index.iter().enumerate() {
+            if r as usize == firsts.len() {
+                firsts.push(i);
+            } else if r as usize > firsts.len() {
+                // Not numbered in runs from 0: no copies are told apart.
+                self.residue_copies.clear();
+                return;
+            }
+        }
+        fn text(labels: &crate::model::Labels, atom: usize) -> &str {
+            labels.get(atom).unwrap_or("").trim()
+        }
+        // Per (chain or segment, number, name): how many so far, and the first one's index.
+        let mut seen: HashMap<(&str, i64, &str), (u32, usize)> = HashMap::new();
+        let mut copies = vec![0u32; firsts.len()];
+        for (residue, &atom) in firsts.iter().enumerate() {
+            let chain = text(&self.chains, atom);
+            let place = if chain.is_empty() {
+                text(&self.segments, atom)
+            } else {
+                chain
+            };
+            let number = self.residue_ids.get(atom).copied().unwrap_or(0);
+            let name = text(&self.residue_names, atom);
+            if place.is_empty() && name.is_empty() && number == 0 {
+                continue;
+            }
+            let entry = seen.entry((place, number, name)).or_insert((0, residue));
+            entry.0 += 1;
+            if entry.0 == 2 {
+                copies[entry.1] = 1;
+            }
+            if entry.0 >= 2 {
+                copies[residue] = entry.0;
+            }
+        }
+        self.residue_copies = copies;
     }
 }
 
@@ -58,5 +106,32 @@ mod tests {
         assert_eq!(top.residue_index, vec![0, 0, 1, 2]);
         top.number_residue_runs(&[u32::MAX; 4]);
         assert_eq!(top.residue_index, vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn residues_that_share_chain_number_and_name_are_numbered_as_copies() {
+        // Two monomers of a chainless file (GRO), a lipid of their own, and a particle that
+        // names nothing twice.
+        let mut top = Topology::of_residues(&[
+            (7, "TYR"),
+            (7, "TYR"),
+            (8, "ASP"),
+            (297, "POPE"),
+            (7, "TYR"),
+            (8, "ASP"),
+            (0, ""),
+            (0, ""),
+        ]);
+        top.number_residue_runs(&[0, 0, 1, 2, 3, 4, u32::MAX, u32::MAX]);
+        assert_eq!(top.residue_index, vec![0, 0, 1, 2, 3, 4, 5, 6]);
+        assert_eq!(top.residue_copies, vec![1, 1, 0, 2, 2, 0, 0]);
+        // A chain tells the monomers apart.
+        top.chains = crate::model::Labels::filled("A", 8);
+        top.chains.set(4, "B");
+        top.chains.set(5, "B");
+        top.chains.set(6, "");
+        top.chains.set(7, "");
+        top.number_residue_copies();
+        assert_eq!(top.residue_copies, vec![0, 0, 0, 0, 0, 0, 0]);
     }
 }

@@ -338,3 +338,101 @@ fn files_without_residues_label_atoms_and_refuse_per_residue_areas() {
         assert!((1..=4500).contains(&serial), "{label}");
     }
 }
+
+/// YiiP's GRO file has no chains and numbers both monomers of the dimer alike: the tables tell
+/// their residues apart by `residue` (the index `residue N` selects) and the labels by copy
+/// (`PHE9#1`, `PHE9#2`), so that no two rows of a frame share a key and no contact list names a
+/// residue twice.
+#[test]
+fn residues_that_share_chain_number_and_name_are_told_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let gro = data("YiiP_lipids.gro.gz");
+    let run = mdsurf(
+        dir.path(),
+        &[
+            "surface",
+            &gro,
+            "--select",
+            "protein or resname POPE POPG",
+            "--backend",
+            "cpu",
+            "--per-residue",
+            "res.csv",
+            "--interface",
+            "protein",
+            "resname POPE POPG",
+            "--interface-csv",
+            "if.csv",
+            "--interface-residues",
+            "contacts.csv",
+            "-q",
+        ],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let residues = Csv::read(&dir.path().join("res.csv"));
+    let (chain, resid, name) = (
+        residues.text_col("chain"),
+        residues.text_col("resid"),
+        residues.text_col("resname"),
+    );
+    let index = residues.text_col("residue");
+    let mut by_key: HashMap<(String, String, String), Vec<String>> = HashMap::new();
+    for k in 0..index.len() {
+        let key = (chain[k].clone(), resid[k].clone(), name[k].clone());
+        by_key.entry(key).or_default().push(index[k].clone());
+    }
+    let shared = by_key.values().filter(|v| v.len() == 2).count();
+    assert!(
+        shared > 200,
+        "only {shared} residues shared by both monomers"
+    );
+    let distinct: BTreeSet<&String> = index.iter().collect();
+    assert_eq!(distinct.len(), index.len(), "a residue index appears twice");
+    // A residue index selects its residue: the second TYR7's index holds a TYR numbered 7.
+    let second = &by_key[&(String::new(), "7".into(), "TYR".into())][1];
+    let one = mdsurf(
+        dir.path(),
+        &[
+            "surface",
+            &gro,
+            "--select",
+            &format!("residue {second}"),
+            "--backend",
+            "cpu",
+            "--per-residue",
+            "one.csv",
+            "-q",
+        ],
+    );
+    assert_eq!(one.code, 0, "{}", one.stderr);
+    let one = Csv::read(&dir.path().join("one.csv"));
+    assert_eq!(one.text_col("resname"), ["TYR"]);
+    assert_eq!(one.text_col("resid"), ["7"]);
+    assert_eq!(&one.text_col("residue")[0], second);
+
+    // Contact lists: each residue once, the monomers' copies by number.
+    let interface = Csv::read(&dir.path().join("if.csv"));
+    let listed = interface.text_col("contacts_a");
+    let labels: Vec<&str> = listed[0].split(' ').collect();
+    let once: BTreeSet<&&str> = labels.iter().collect();
+    assert_eq!(once.len(), labels.len(), "a label twice in {labels:?}");
+    assert!(labels.iter().any(|l| l.ends_with("#1")), "{labels:?}");
+    assert!(labels.iter().any(|l| l.ends_with("#2")), "{labels:?}");
+    let contacts = Csv::read(&dir.path().join("contacts.csv"));
+    let keys: Vec<(String, String)> = contacts
+        .text_col("side")
+        .into_iter()
+        .zip(contacts.text_col("residue"))
+        .collect();
+    let distinct: BTreeSet<&(String, String)> = keys.iter().collect();
+    assert_eq!(distinct.len(), keys.len(), "a contact residue twice");
+    assert_eq!(
+        contacts
+            .text_col("side")
+            .iter()
+            .filter(|s| *s == "A")
+            .count(),
+        labels.len(),
+        "the contact table and list name the same residues of A"
+    );
+}

@@ -164,11 +164,15 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     csv.write(&path, None).expect("write");
     let text = std::fs::read_to_string(&path).expect("read");
     let lines: Vec<&str> = text.lines().collect();
-    assert_eq!(lines[0], "frame,rep,chain,resid,resname,area_A2,exposure");
+    assert_eq!(
+        lines[0],
+        "frame,rep,chain,resid,resname,area_A2,exposure,residue"
+    );
     assert_eq!(lines.len(), 1 + 198 + 1);
     assert!(lines[1].starts_with("0,protein,A,1,PRO,"), "{}", lines[1]);
     assert!(lines[199].starts_with("1,\"a, \"\"b\"\"\",A,1,PRO,"));
-    assert!(lines[199].ends_with(','), "no exposure without a table");
+    let first = format!(",,{}", residues[0].residue);
+    assert!(lines[199].ends_with(&first), "no exposure without a table");
     let mut atoms_csv = AtomCsv::new();
     atoms_csv
         .push(0, "protein", &top, Some(&idx), &areas)

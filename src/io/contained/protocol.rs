@@ -330,8 +330,11 @@ pub(super) fn decode_topology(r: &mut Reader<'_>) -> Result<Topology, Garbage> {
         residue_ids: r.i64s()?,
         serials: r.i64s()?,
         residue_index: r.u32s()?,
+        residue_copies: Vec::new(),
         bonds: Vec::new(),
     };
+    // Derived from the fields above, so not sent.
+    t.number_residue_copies();
     let bonds = r.u32s()?;
     r.end()?;
     if bonds.len() % 2 != 0 || bonds.iter().any(|&a| a as usize >= n) {
