@@ -326,9 +326,12 @@ fn convert_topology(top: &chemfiles::Topology) -> Topology {
         let id = residue.id().unwrap_or(r as i64 + 1);
         let chain = residue_chain(&residue);
         let segment = residue_string(&residue, &["segname"]);
+        // chemfiles' PDB and mmCIF readers keep a residue's insertion code as a property.
+        let code = residue_string(&residue, &["insertion_code"]);
         for a in residue.atoms().into_iter().filter(|&a| a < n) {
             out.residue_names.set(a, &name);
             out.residue_ids[a] = id;
+            out.insertion_codes.set(a, &code);
             out.chains.set(a, &chain);
             out.segments.set(a, &segment);
             chem_residue[a] = r as u32;

@@ -441,6 +441,7 @@ pub(crate) fn empty_topology(n: usize) -> Topology {
         radii: vec![0.0; n],
         residue_names: Labels::filled("", n),
         residue_ids: vec![0; n],
+        insertion_codes: Labels::filled("", n),
         residue_index: vec![u32::MAX; n],
         residue_copies: Vec::new(),
         chains: Labels::filled("", n),

@@ -42,6 +42,7 @@ impl<'t> ResidueNames<'t> {
             chain: text(&topology.chains),
             segment: text(&topology.segments),
             resid: topology.residue_ids.get(atom).copied().unwrap_or(0),
+            insertion_code: text(&topology.insertion_codes),
             resname: text(&topology.residue_names),
             atom_name: text(&topology.names),
             serial: (topology.serials.get(atom).copied()).unwrap_or(atom as i64 + 1),
@@ -61,6 +62,8 @@ pub struct ResidueNames<'t> {
     pub segment: &'t str,
     /// Residue number as written in the file.
     pub resid: i64,
+    /// Insertion code (`A` of 52A; empty when none).
+    pub insertion_code: &'t str,
     /// Residue name (`LEU`).
     pub resname: &'t str,
     /// Name of the atom the names were read from (`CA`).
@@ -93,18 +96,21 @@ impl<'t> ResidueNames<'t> {
             && self.resid == 0
     }
 
-    /// `A:LEU12` (chain, else segment, then name and number; `LEU12` with neither), and
+    /// `A:LEU12` (chain, else segment, then name, number and insertion code, `A:SER52A`;
+    /// `LEU12` with neither chain nor segment), and
     /// `#2` after it for the second of residues that share all three (`PHE9#1` and `PHE9#2`:
     /// the two monomers of a dimer in a GRO file, which has no chains); for an atom in no
     /// residue ([`Self::is_anonymous`]) the atom's name and serial, `O@340`.
     pub fn label(&self) -> String {
         if self.is_anonymous() {
             format!("{}@{}", self.atom_name.trim(), self.serial)
-        } else if self.copy > 0 {
-            let label = residue_label(self.chain, self.segment, self.resname, self.resid);
-            format!("{label}#{}", self.copy)
         } else {
-            residue_label(self.chain, self.segment, self.resname, self.resid)
+            let label = residue_label(self.chain, self.segment, self.resname, self.resid);
+            let code = self.insertion_code.trim();
+            match self.copy {
+                0 => format!("{label}{code}"),
+                copy => format!("{label}{code}#{copy}"),
+            }
         }
     }
 }
@@ -348,6 +354,13 @@ mod tests {
         top.number_residue_copies();
         assert_eq!(ResidueNames::of_atom(&top, 0).label(), "A:PHE9");
         assert_eq!(ResidueNames::of_atom(&top, 2).label(), "PHE9");
+        // An insertion code follows the number, before the copy.
+        top.insertion_codes = crate::model::Labels::filled("", 5);
+        top.insertion_codes.set(1, "A");
+        top.insertion_codes.set(3, "A");
+        top.number_residue_copies();
+        assert_eq!(ResidueNames::of_atom(&top, 1).label(), "TRP10A#1");
+        assert_eq!(ResidueNames::of_atom(&top, 3).label(), "TRP10A#2");
     }
 
     #[test]

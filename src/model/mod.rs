@@ -66,6 +66,9 @@ pub struct Topology {
     pub residue_names: Labels,
     /// Residue number of each atom as written in the file.
     pub residue_ids: Vec<i64>,
+    /// PDB insertion code of each atom's residue (`A` of residue 52A, as antibodies' Kabat
+    /// numbering has them; empty when none or the file has no such column).
+    pub insertion_codes: Labels,
     /// Index of each atom's residue, counting residues in file order from 0.
     pub residue_index: Vec<u32>,
     /// Which copy each residue (by [`Topology::residue_index`]) is of the residues that share
@@ -177,6 +180,7 @@ impl Topology {
         for v in [
             &mut self.elements,
             &mut self.residue_names,
+            &mut self.insertion_codes,
             &mut self.chains,
             &mut self.segments,
         ] {

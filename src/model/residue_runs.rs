@@ -8,7 +8,7 @@ use super::Topology;
 
 impl Topology {
     /// Sets [`Topology::residue_index`]: a new residue starts at every atom whose (residue
-    /// number, name, chain, segment) or `group` (the reader's own residue of each atom) differs
+    /// number, insertion code, name, chain, segment) or `group` (the reader's own residue of each atom) differs
     /// from the previous atom's; atoms whose `group` is `u32::MAX` (in no residue) are residues
     /// of their own, as are atoms past the end of `group`.
     pub fn number_residue_runs(&mut self, group: &[u32]) {
@@ -22,6 +22,7 @@ impl Topology {
                 && group(i) == group(i - 1)
                 && self.residue_ids[i] == self.residue_ids[i - 1]
                 && self.residue_names[i] == self.residue_names[i - 1]
+                && self.insertion_codes.get(i) == self.insertion_codes.get(i - 1)
                 && self.chains[i] == self.chains[i - 1]
                 && self.segments[i] == self.segments[i - 1];
             if i > 0 && !same {
@@ -33,7 +34,8 @@ impl Topology {
     }
 
     /// Sets [`Topology::residue_copies`] from [`Topology::residue_index`]: residues sharing
-    /// chain (else segment), number and name are numbered 1, 2, … in file order, the rest 0.
+    /// chain (else segment), number, insertion code and name are numbered 1, 2, … in file
+    /// order, the rest 0.
     /// Residues that name nothing (no chain, segment or name and number 0: the particles of a
     /// LAMMPS dump or an XYZ file) are left at 0.
     pub fn number_residue_copies(&mut self) {
@@ -50,8 +52,9 @@ impl Topology {
         fn text(labels: &crate::model::Labels, atom: usize) -> &str {
             labels.get(atom).unwrap_or("").trim()
         }
-        // Per (chain or segment, number, name): how many so far, and the first one's index.
-        let mut seen: HashMap<(&str, i64, &str), (u32, usize)> = HashMap::new();
+        // Per (chain or segment, number, insertion code, name): how many so far, and the first
+        // one's index.
+        let mut seen: HashMap<(&str, i64, &str, &str), (u32, usize)> = HashMap::new();
         let mut copies = vec![0u32; firsts.len()];
         for (residue, &atom) in firsts.iter().enumerate() {
             let chain = text(&self.chains, atom);
@@ -65,7 +68,8 @@ impl Topology {
             if place.is_empty() && name.is_empty() && number == 0 {
                 continue;
             }
-            let entry = seen.entry((place, number, name)).or_insert((0, residue));
+            let code = text(&self.insertion_codes, atom);
+            let entry = (seen.entry((place, number, code, name))).or_insert((0, residue));
             entry.0 += 1;
             if entry.0 == 2 {
                 copies[entry.1] = 1;

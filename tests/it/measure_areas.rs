@@ -425,3 +425,35 @@ fn measure_interface_of_the_1hpv_dimer_names_contact_residues() {
     assert!(contacts.iter().all(|c| c.buried > 1.0));
     assert!(contact_residues(&top, Some(&a_idx), Some(&b_idx), &r, f64::NAN).is_err());
 }
+
+/// OmpK36 (1osm) numbers a loop 163, 163A to 163J in chain A: each residue is its own, and
+/// its label carries the insertion code (`A:GLY163C`), so no two residues of a chain share a
+/// label.
+#[test]
+fn measure_labels_carry_insertion_codes() {
+    let traj = mdsurf::io::open(&data("1osm.pdb.gz"), None).expect("open");
+    let top = traj.topology();
+    let mut firsts = Vec::new();
+    for a in 0..top.len() {
+        if a == 0 || top.residue_index[a] != top.residue_index[a - 1] {
+            firsts.push(a);
+        }
+    }
+    let labels: Vec<String> = firsts
+        .iter()
+        .map(|&a| mdsurf::measure::ResidueNames::of_atom(top, a).label())
+        .collect();
+    let loop_a: Vec<&str> = labels
+        .iter()
+        .map(String::as_str)
+        .filter(|l| l.starts_with("A:") && l.contains("163"))
+        .collect();
+    assert_eq!(loop_a.len(), 11, "{loop_a:?}");
+    assert!(
+        loop_a.contains(&"A:VAL163A") && loop_a.contains(&"A:GLY163J"),
+        "{loop_a:?}"
+    );
+    let distinct: std::collections::BTreeSet<&String> = labels.iter().collect();
+    assert_eq!(distinct.len(), labels.len(), "two residues share a label");
+    assert!(labels.len() > 150, "{} residues", labels.len());
+}

@@ -286,6 +286,7 @@ pub(super) fn encode_topology(t: &Topology) -> Vec<u8> {
         &t.chains,
         &t.segments,
         &t.types,
+        &t.insertion_codes,
     ] {
         w.labels(labels);
     }
@@ -322,6 +323,7 @@ pub(super) fn decode_topology(r: &mut Reader<'_>) -> Result<Topology, Garbage> {
         chains: r.labels(None)?,
         segments: r.labels(None)?,
         types: r.labels(None)?,
+        insertion_codes: r.labels(None)?,
         radii: r.f32s()?,
         b_factors: r.f32s()?,
         occupancies: r.f32s()?,

@@ -273,10 +273,16 @@ impl Reader {
             let name = top.residue_names.intern(&residue.name);
             let chain = top.chains.intern(&residue.chain);
             let segment = top.segments.intern(&residue.segment);
+            let code = match residue.key.2 {
+                b' ' | 0 => String::new(),
+                c => char::from(c).to_string(),
+            };
+            let code = top.insertion_codes.intern(&code);
             for &a in &residue.atoms {
                 let a = a as usize;
                 top.residue_names.set_id(a, name);
                 top.residue_ids[a] = residue.key.1;
+                top.insertion_codes.set_id(a, code);
                 top.chains.set_id(a, chain);
                 top.segments.set_id(a, segment);
             }
