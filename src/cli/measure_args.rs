@@ -29,7 +29,7 @@ pub struct MeasureArgs {
     /// (residue: its index in the file from 0, as `residue N` selects it).
     #[arg(long, value_name = "FILE.csv")]
     pub per_residue: Option<PathBuf>,
-    /// Area per atom (Å²): frame,rep,serial,name,chain,resid,resname,area_A2.
+    /// Area per atom (Å²): frame,rep,serial,name,chain,resid,resname,area_A2,residue.
     #[arg(long, value_name = "FILE.csv")]
     pub per_atom: Option<PathBuf>,
     /// Enclosed cavities of every surface representation, tracked over frames:

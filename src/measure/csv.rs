@@ -98,14 +98,15 @@ impl ResidueCsv {
     }
 }
 
-/// Per-atom areas: `frame,rep,serial,name,chain,resid,resname,area_A2`.
+/// Per-atom areas: `frame,rep,serial,name,chain,resid,resname,area_A2,residue` (`chain` the
+/// chain, else the segment, and `residue` the residue's index, as in [`ResidueCsv`]).
 #[derive(Debug, Clone)]
 pub struct AtomCsv(Table);
 
 impl Default for AtomCsv {
     fn default() -> Self {
         AtomCsv(Table::new(
-            "frame,rep,serial,name,chain,resid,resname,area_A2",
+            "frame,rep,serial,name,chain,resid,resname,area_A2,residue",
         ))
     }
 }
@@ -129,17 +130,18 @@ impl AtomCsv {
     ) -> Result<(), MeasureError> {
         let indices = topology_atoms(topology, atom_indices, atom_areas.len(), "atom areas")?;
         let rep = field(rep);
-        let text = |l: &crate::model::Labels, i: usize| field(l.get(i).unwrap_or("").trim());
         for (&atom, area) in indices.iter().zip(atom_areas) {
             let i = atom as usize;
+            let names = ResidueNames::of_atom(topology, i);
             let _ = writeln!(
                 self.0.rows,
-                "{frame},{rep},{},{},{},{},{},{area:.3}",
-                topology.serials.get(i).copied().unwrap_or(i as i64 + 1),
-                text(&topology.names, i),
-                text(&topology.chains, i),
-                topology.residue_ids.get(i).copied().unwrap_or(0),
-                text(&topology.residue_names, i),
+                "{frame},{rep},{},{},{},{},{},{area:.3},{}",
+                names.serial,
+                field(names.atom_name.trim()),
+                field(names.chain_or_segment()),
+                names.resid,
+                field(names.resname.trim()),
+                topology.residue_index.get(i).copied().unwrap_or(0),
             );
         }
         Ok(())

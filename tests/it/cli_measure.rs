@@ -401,6 +401,8 @@ fn residues_that_share_chain_number_and_name_are_told_apart() {
             "cpu",
             "--per-residue",
             "one.csv",
+            "--per-atom",
+            "one_atoms.csv",
             "-q",
         ],
     );
@@ -409,6 +411,9 @@ fn residues_that_share_chain_number_and_name_are_told_apart() {
     assert_eq!(one.text_col("resname"), ["TYR"]);
     assert_eq!(one.text_col("resid"), ["7"]);
     assert_eq!(&one.text_col("residue")[0], second);
+    let atoms = Csv::read(&dir.path().join("one_atoms.csv"));
+    assert!(atoms.rows.len() > 10, "a tyrosine's atoms");
+    assert!(atoms.text_col("residue").iter().all(|r| r == second));
 
     // Contact lists: each residue once, the monomers' copies by number.
     let interface = Csv::read(&dir.path().join("if.csv"));
