@@ -139,13 +139,13 @@ pub fn scene_residues(
     let (mut labels, mut chains, mut resids, mut resnames) = (vec![], vec![], vec![], vec![]);
     for &atom in &first {
         let i = atom as usize;
-        let (chain, segment) = (text(&top.chains, i), text(&top.segments, i));
+        let names = measure::ResidueNames::of_atom(top, i);
         let (resid, resname) = (
             top.residue_ids.get(i).copied().unwrap_or(0),
             text(&top.residue_names, i),
         );
-        labels.push(measure::ResidueNames::of_atom(top, i).label());
-        chains.push(if chain.is_empty() { segment } else { chain });
+        labels.push(names.label());
+        chains.push(names.chain_or_segment().to_string());
         resids.push(resid);
         resnames.push(resname);
     }

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 
 use super::MeasureError;
-use crate::model::Topology;
+use crate::model::{Topology, chain_or_segment};
 use crate::surface::{AtomSet, SurfaceEngine, SurfaceParams};
 
 /// The area of one residue of a surface. Its names are the topology's, read on demand
@@ -79,21 +79,13 @@ pub struct ResidueNames<'t> {
 impl<'t> ResidueNames<'t> {
     /// The chain, else the segment, trimmed (empty with neither).
     pub fn chain_or_segment(&self) -> &'t str {
-        let chain = self.chain.trim();
-        if chain.is_empty() {
-            self.segment.trim()
-        } else {
-            chain
-        }
+        chain_or_segment(self.chain, self.segment)
     }
 
     /// True for an atom in no residue: no chain, segment or residue name, and number 0 (every
     /// atom of a LAMMPS dump or an XYZ file, which name no residues).
     pub fn is_anonymous(&self) -> bool {
-        [self.chain, self.segment, self.resname]
-            .iter()
-            .all(|s| s.trim().is_empty())
-            && self.resid == 0
+        self.chain_or_segment().is_empty() && self.resname.trim().is_empty() && self.resid == 0
     }
 
     /// `A:LEU12` (chain, else segment, then name, number and insertion code, `A:SER52A`;
@@ -117,11 +109,7 @@ impl<'t> ResidueNames<'t> {
 
 /// `A:LEU12`: the chain (else the segment) and a colon when there is one, then name and number.
 pub fn residue_label(chain: &str, segment: &str, resname: &str, resid: i64) -> String {
-    let chain = if chain.trim().is_empty() {
-        segment.trim()
-    } else {
-        chain.trim()
-    };
+    let chain = chain_or_segment(chain, segment);
     if chain.is_empty() {
         format!("{}{resid}", resname.trim())
     } else {

@@ -30,6 +30,7 @@ pub use colour_map::ColourMap;
 pub use labels::Labels;
 pub use particles::{ParticleOptions, Particles};
 pub use radii::{RadiusOverride, RadiusOverrides};
+pub use residue_runs::chain_or_segment;
 pub use residues::ResidueClass;
 
 /// Why particles could not be built from a topology and frame.

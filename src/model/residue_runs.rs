@@ -6,6 +6,15 @@ use std::collections::HashMap;
 
 use super::Topology;
 
+/// The name a residue's place goes by: its chain, else its segment, trimmed (empty with
+/// neither). Labels, tables and the copies of [`Topology::residue_copies`] all use it.
+pub fn chain_or_segment<'a>(chain: &'a str, segment: &'a str) -> &'a str {
+    match chain.trim() {
+        "" => segment.trim(),
+        chain => chain,
+    }
+}
+
 impl Topology {
     /// Sets [`Topology::residue_index`]: a new residue starts at every atom whose (residue
     /// number, insertion code, name, chain, segment) or `group` (the reader's own residue of each atom) differs
@@ -57,12 +66,7 @@ impl Topology {
         let mut seen: HashMap<(&str, i64, &str, &str), (u32, usize)> = HashMap::new();
         let mut copies = vec![0u32; firsts.len()];
         for (residue, &atom) in firsts.iter().enumerate() {
-            let chain = text(&self.chains, atom);
-            let place = if chain.is_empty() {
-                text(&self.segments, atom)
-            } else {
-                chain
-            };
+            let place = chain_or_segment(text(&self.chains, atom), text(&self.segments, atom));
             let number = self.residue_ids.get(atom).copied().unwrap_or(0);
             let name = text(&self.residue_names, atom);
             if place.is_empty() && name.is_empty() && number == 0 {
