@@ -112,7 +112,7 @@ fn measured(
 
 /// Per-atom areas (Å², summing to the surface's area) of `measured`.
 fn atom_areas(m: &Measured) -> Result<Vec<f64>, MeasureError> {
-    let params = m.layer.rep.vertices.effective(&m.layer.rep.params());
+    let params = m.layer.measured_params();
     measure::atom_areas_of(&m.layer.output, &m.atom_set(), &params)
 }
 
@@ -232,7 +232,7 @@ pub fn scene_residue_areas(
             let residues =
                 measure::residue_areas(&core.topology, Some(&m.atoms), &areas).map_err(err)?;
             if table.is_none() {
-                let params = m.layer.rep.vertices.effective(&m.layer.rep.params());
+                let params = m.layer.measured_params();
                 let built = ExposureTable::from_isolated_residues(
                     &mut CpuEngine::new(),
                     &core.topology,
@@ -306,7 +306,7 @@ pub fn scene_cavities(
         for &index in &frames {
             let m = measured(core, index, &reader, &req)?;
             let err = |e| measure_err(&what, index, e);
-            let params = m.layer.rep.vertices.effective(&m.layer.rep.params());
+            let params = m.layer.measured_params();
             let found = match probe {
                 Some(probe) => {
                     let probe_options = ProbeOptions {
@@ -322,7 +322,7 @@ pub fn scene_cavities(
                         &probe_options,
                     )
                 }
-                None => measure::cavities(&m.layer.output.mesh, &m.atom_set(), &params, &options),
+                None => measure::cavities_of(&m.layer.output, &m.atom_set(), &params, &options),
             }
             .map_err(err)?;
             let tracked = tracker.update(index, &found);

@@ -416,7 +416,7 @@ impl Measurer {
                     };
                     measure::ses_probe_cavities(topology, atom_indices, &atoms, &probe_options)?
                 }
-                None => measure::cavities(&layer.output.mesh, &atoms, &params, &options)?,
+                None => measure::cavities_of(&layer.output, &atoms, &params, &options)?,
             };
             let tracked = self
                 .trackers
@@ -494,7 +494,7 @@ fn measured_atoms(layer: &LayerResult) -> (AtomSet<'_>, SurfaceParams) {
         radii: &p.radii,
         colours: None,
     };
-    (atoms, layer.rep.vertices.effective(&layer.rep.params()))
+    (atoms, layer.measured_params())
 }
 
 /// The topology atoms behind `layer`'s particles (`None`: every atom); beads have none.

@@ -5,7 +5,8 @@ use glam::{DVec3, Vec3};
 
 use super::MeasureError;
 use super::cells::{Batch, CellList, nearest};
-use crate::surface::{AtomSet, Mesh, SurfaceParams};
+use crate::surface::periodic::TriclinicCell;
+use crate::surface::{AtomSet, Mesh, SurfaceOutput, SurfaceParams};
 
 /// One connected component of a mesh (triangles sharing vertices).
 #[derive(Debug, Clone, PartialEq)]
@@ -181,6 +182,25 @@ pub struct Cavity {
     pub vertex_count: usize,
     /// Atoms (indices into the atom set) lining it, ascending.
     pub lining_atoms: Vec<u32>,
+    /// The periodic cell it lies in, for a periodic surface's cavity (its centroid is in the
+    /// cell, and tracking compares centroids by their nearest images); `None` in open space.
+    pub cell: Option<TriclinicCell>,
+}
+
+impl Cavity {
+    /// Distance (Å) between this cavity's centroid and `other`'s, by their nearest images when
+    /// either lies in a periodic cell.
+    pub fn centroid_distance(&self, other: &Cavity) -> f64 {
+        let d = other.centroid - self.centroid;
+        match self.cell.or(other.cell) {
+            None => d.length(),
+            Some(cell) => {
+                let m = cell.matrix();
+                let f = m.inverse() * d;
+                (m * (f - f.round())).length()
+            }
+        }
+    }
 }
 
 /// The cavities of `mesh` (computed from `atoms` under `params`, the parameters the engine
@@ -196,14 +216,7 @@ pub fn cavities(
 ) -> Result<Vec<Cavity>, MeasureError> {
     params.validate()?;
     atoms.validate()?;
-    for (name, value) in [
-        ("minimum cavity volume", options.min_volume),
-        ("lining fraction", f64::from(options.lining_fraction)),
-    ] {
-        if !(value.is_finite() && value >= 0.0) || (name == "lining fraction" && value > 1.0) {
-            return Err(MeasureError::InvalidOption { name, value });
-        }
-    }
+    options.validate()?;
     let parts = components(mesh)?;
     let cells = CellList::new(atoms, params);
     // Candidate voids and a point on each; they count when inside an outer component.
@@ -224,36 +237,85 @@ pub fn cavities(
         }
     }
     let mut out = Vec::new();
-    let mut batch = Batch::default();
     for (c, _) in voids.iter().zip(&enclosed).filter(|(_, e)| **e) {
-        let mut lining = Vec::new();
-        let mut here: Vec<(u32, f32)> = Vec::new();
-        let mut radius = 0.0f64;
-        for &v in &c.vertices {
-            let p: Vec3 = mesh.positions[v as usize];
-            radius = radius.max(p.as_dvec3().distance(c.centroid));
-            here.clear();
-            cells.gather(p, p, &mut batch);
-            batch.for_each_gaussian(p, |a, w| here.push((a, w)));
-            let largest = here.iter().fold(0.0f32, |m, &(_, w)| m.max(w));
-            if largest > 0.0 {
-                let floor = options.lining_fraction * largest;
-                lining.extend(here.iter().filter(|&&(_, w)| w >= floor).map(|&(a, _)| a));
-            } else {
-                lining.push(nearest(atoms.positions, p));
-            }
-        }
-        lining.sort_unstable();
-        lining.dedup();
+        let wall = c.vertices.iter().map(|&v| mesh.positions[v as usize]);
         out.push(Cavity {
             volume: -c.volume,
             area: c.area,
             centroid: c.centroid,
-            radius,
+            radius: bounding_radius(wall.clone(), c.centroid),
             vertex_count: c.vertices.len(),
-            lining_atoms: lining,
+            lining_atoms: lining_atoms(wall, atoms, &cells, options.lining_fraction),
+            cell: None,
         });
     }
     out.sort_by(|a, b| b.volume.total_cmp(&a.volume));
     Ok(out)
+}
+
+/// [`cavities()`] of a computed surface: of its mesh, or of one cell's periodic surface
+/// ([`super::periodic_cavities`]). Fails as they do, or when the engine did not keep the mesh.
+pub fn cavities_of(
+    output: &SurfaceOutput,
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+    options: &CavityOptions,
+) -> Result<Vec<Cavity>, MeasureError> {
+    if output.counts_without_mesh.is_some() {
+        return Err(MeasureError::NoMesh);
+    }
+    match &output.periodic {
+        Some(seams) => super::periodic_cavities(&output.mesh, seams, atoms, params, options),
+        None => cavities(&output.mesh, atoms, params, options),
+    }
+}
+
+impl CavityOptions {
+    /// Checks the minimum volume (finite, at least 0) and the lining fraction (0 to 1).
+    pub(crate) fn validate(&self) -> Result<(), MeasureError> {
+        for (name, value) in [
+            ("minimum cavity volume", self.min_volume),
+            ("lining fraction", f64::from(self.lining_fraction)),
+        ] {
+            if !(value.is_finite() && value >= 0.0) || (name == "lining fraction" && value > 1.0) {
+                return Err(MeasureError::InvalidOption { name, value });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The largest distance (Å) from `centroid` to a point of `wall`.
+pub(crate) fn bounding_radius(wall: impl Iterator<Item = Vec3>, centroid: DVec3) -> f64 {
+    wall.map(|p| p.as_dvec3().distance(centroid))
+        .fold(0.0, f64::max)
+}
+
+/// The atoms (indices into `atoms`, which `cells` bins) lining a cavity whose wall has the
+/// vertices `wall`: at some vertex, the atom's Gaussian is at least `fraction` of the largest
+/// Gaussian there (the nearest atom where none reaches). Ascending, without repeats.
+pub(crate) fn lining_atoms(
+    wall: impl Iterator<Item = Vec3>,
+    atoms: &AtomSet<'_>,
+    cells: &CellList,
+    fraction: f32,
+) -> Vec<u32> {
+    let mut batch = Batch::default();
+    let mut lining = Vec::new();
+    let mut here: Vec<(u32, f32)> = Vec::new();
+    for p in wall {
+        here.clear();
+        cells.gather(p, p, &mut batch);
+        batch.for_each_gaussian(p, |a, w| here.push((a, w)));
+        let largest = here.iter().fold(0.0f32, |m, &(_, w)| m.max(w));
+        if largest > 0.0 {
+            let floor = fraction * largest;
+            lining.extend(here.iter().filter(|&&(_, w)| w >= floor).map(|&(a, _)| a));
+        } else {
+            lining.push(nearest(atoms.positions, p));
+        }
+    }
+    lining.sort_unstable();
+    lining.dedup();
+    lining
 }

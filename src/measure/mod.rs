@@ -48,6 +48,7 @@ mod grid_balls;
 mod grid_flood;
 pub mod interface;
 mod lanes;
+pub(crate) mod periodic;
 pub(crate) mod probe_cavities;
 mod probe_small_voids;
 pub(crate) mod probe_surface;
@@ -55,7 +56,7 @@ pub(crate) mod residues;
 pub(crate) mod tracking;
 
 pub use areas::{atom_areas, atom_areas_of, vertex_areas};
-pub use cavities::{Cavity, CavityOptions, Component, cavities, components};
+pub use cavities::{Cavity, CavityOptions, Component, cavities, cavities_of, components};
 pub use csv::{
     AtomCsv, CavityCsv, CavityEventCsv, ContactCsv, InterfaceCsv, ResidueCsv, lining_residues,
 };
@@ -63,6 +64,7 @@ pub use interface::{
     CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, TakenFromComplex, contact_residues,
     interface, interface_on, interface_with,
 };
+pub use periodic::{periodic_atom_areas, periodic_cavities, periodic_cavity_walls};
 pub use probe_cavities::{
     ProbeOptions, probe_cavities, probe_cavity_walls, ses_probe_cavities, ses_probe_cavity_walls,
     ses_radius,

@@ -383,6 +383,7 @@ fn void_of(
         radius,
         vertex_count: mesh.positions.len(),
         lining_atoms: lining,
+        cell: None,
     };
     Ok((cavity, mesh))
 }

@@ -1,6 +1,6 @@
 //! Cavities followed from frame to frame: a cavity keeps its id while it overlaps its previous
 //! self, where two cavities overlap when their centroids are within the larger of their
-//! bounding radii ([`Cavity::radius`]). Each previous cavity hands its id to the largest (by
+//! bounding radii ([`Cavity::radius`]; in a periodic cell, by the centroids' nearest images). Each previous cavity hands its id to the largest (by
 //! volume) current cavity it overlaps; a current cavity handed several ids keeps the one of the
 //! largest previous cavity (a merge), one handed none gets a new id (a birth, or a split when it
 //! overlaps a previous cavity that chose another heir).
@@ -66,7 +66,7 @@ pub struct CavityTracker {
 
 /// True when `a` and `b` overlap (centroids within the larger bounding radius).
 fn overlap(a: &Cavity, b: &Cavity) -> bool {
-    a.centroid.distance(b.centroid) <= a.radius.max(b.radius)
+    a.centroid_distance(b) <= a.radius.max(b.radius)
 }
 
 impl CavityTracker {

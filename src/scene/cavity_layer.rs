@@ -23,6 +23,7 @@ use super::engine::SceneEngine;
 use super::frame::{LayerResult, RepId, SceneError, SceneFrame};
 use crate::measure::{self, Cavity, CavityOptions, CavityTracker, MeasureError};
 use crate::model::Topology;
+use crate::surface::periodic::PeriodicMesh;
 use crate::surface::{AtomSet, Mesh, SurfaceParams};
 
 /// Smallest cavity kept, in Å³ (as `surface --min-cavity-volume`'s default: smaller voids are
@@ -144,16 +145,22 @@ pub struct CavitySource {
 }
 
 /// Finds the cavities of `mesh`, the surface of `atoms` computed under `params` (the parameters
-/// the engine used), with their lining residues (labels from `topology`) and their walls.
+/// the engine used; `periodic` for a periodic surface's mesh), with their lining residues
+/// (labels from `topology`) and their walls.
 pub fn find_cavities(
     topology: &Topology,
     source: &CavitySource,
-    mesh: &Mesh,
+    (mesh, periodic): (&Mesh, Option<&PeriodicMesh>),
     atoms: &AtomSet<'_>,
     params: &SurfaceParams,
 ) -> Result<CavityLayer, MeasureError> {
     if let Some(probe) = source.probe {
         return find_probe_cavities(topology, source, atoms, probe);
+    }
+    if let Some(seams) = periodic {
+        let options = cavity_options();
+        let found = measure::periodic_cavity_walls(mesh, seams, atoms, params, &options)?;
+        return layer_of_walls(topology, source, found, true);
     }
     let cavities = measure::cavities(mesh, atoms, params, &cavity_options())?;
     let lining = lining_labels(topology, source, &cavities)?;
@@ -189,18 +196,34 @@ fn find_probe_cavities(
     } else {
         measure::ses_probe_cavity_walls(topology, source.subset.as_deref(), atoms, &options)?
     };
+    layer_of_walls(topology, source, found, false)
+}
+
+/// The layer of cavities found with their walls, each wall in its cavity's colour; `turn`
+/// reverses walls that face into their voids (a surface's own triangles).
+fn layer_of_walls(
+    topology: &Topology,
+    source: &CavitySource,
+    found: Vec<(Cavity, Mesh)>,
+    turn: bool,
+) -> Result<CavityLayer, MeasureError> {
     let mut out = Mesh::default();
     let mut wall_vertices = Vec::with_capacity(found.len());
     for (k, (_, wall)) in found.iter().enumerate() {
         let start = out.positions.len();
         let first = start as u32;
         out.positions.extend_from_slice(&wall.positions);
-        out.normals.extend_from_slice(&wall.normals);
+        let sign = if turn { -1.0 } else { 1.0 };
+        out.normals.extend(wall.normals.iter().map(|&n| n * sign));
         out.colours.extend(std::iter::repeat_n(
             cavity_rgb(k as u64 + 1),
             wall.positions.len(),
         ));
-        out.indices.extend(wall.indices.iter().map(|i| i + first));
+        for t in wall.indices.chunks_exact(3) {
+            // Reversed winding where the wall faced into the void: it now faces out of it.
+            let [a, b, d] = [t[0], t[1], t[2]].map(|i| i + first);
+            out.indices.extend(if turn { [a, d, b] } else { [a, b, d] });
+        }
         wall_vertices.push(start..out.positions.len());
     }
     let cavities: Vec<Cavity> = found.into_iter().map(|(cavity, _)| cavity).collect();
@@ -263,8 +286,9 @@ impl SceneEngine {
             radii: &p.radii,
             colours: None,
         };
-        let params = result.rep.vertices.effective(&result.rep.params());
-        find_cavities(topology, source, mesh, &atoms, &params)
+        let params = result.measured_params();
+        let periodic = result.output.periodic.as_deref();
+        find_cavities(topology, source, (mesh, periodic), &atoms, &params)
             .map(|c| Some(Arc::new(c)))
             .map_err(|source| SceneError::Cavities {
                 frame: index,

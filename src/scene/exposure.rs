@@ -15,6 +15,7 @@ use std::collections::HashMap;
 use super::frame::SceneError;
 use crate::measure::{self, ExposureTable, MeasureError};
 use crate::model::{ColourMap, Topology};
+use crate::surface::periodic::PeriodicMesh;
 use crate::surface::{AtomSet, CpuEngine, Mesh, SurfaceParams};
 
 /// The scene error of representation `rep`'s exposure colours failing in frame `frame`.
@@ -36,7 +37,8 @@ pub(crate) struct ExposureColouring {
 impl ExposureColouring {
     /// The colour of each atom of `atoms` (the topology atoms `atom_indices`, all of them for
     /// `None`) through `map`, from the surface `mesh` computed with `params` (the effective
-    /// ones, see [`crate::surface::VertexMode::effective`]) whose area is `area` Å².
+    /// ones, see [`crate::surface::VertexMode::effective`]) whose area is `area` Å² (a
+    /// periodic surface's with its `seams`: its area over the images shown).
     ///
     /// Fails on mismatched lengths or indices (see [`measure::atom_areas`]) or when an
     /// isolated residue's surface fails.
@@ -46,7 +48,7 @@ impl ExposureColouring {
         atom_indices: Option<&[u32]>,
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
-        (mesh, area): (&Mesh, f64),
+        (mesh, area, seams): (&Mesh, f64, Option<&PeriodicMesh>),
         map: ColourMap,
     ) -> Result<Vec<[f32; 3]>, MeasureError> {
         let plain = AtomSet {
@@ -63,7 +65,13 @@ impl ExposureColouring {
                 params,
             )?),
         };
-        let mut areas = measure::atom_areas(mesh, &plain, params)?;
+        let (mut areas, area) = match seams {
+            Some(s) => (
+                measure::periodic_atom_areas(mesh, s, &plain, params)?,
+                area / f64::from(s.replicate.count()),
+            ),
+            None => (measure::atom_areas(mesh, &plain, params)?, area),
+        };
         // Shares of the triangle area, scaled to the surface's area (the same to rounding with
         // interpolated vertices; the curved area with refined ones), as `--per-residue` does.
         let sum: f64 = areas.iter().sum();

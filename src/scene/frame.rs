@@ -77,6 +77,17 @@ pub struct LayerResult {
 }
 
 impl LayerResult {
+    /// The parameters the surface was computed with, which measurements on it take: refined
+    /// vertices run at quality max ([`crate::surface::VertexMode::effective`]); the periodic
+    /// engine interpolates, with the representation's own.
+    pub fn measured_params(&self) -> crate::surface::SurfaceParams {
+        let params = self.rep.params();
+        match self.output.periodic {
+            Some(_) => params,
+            None => self.rep.vertices.effective(&params),
+        }
+    }
+
     /// Triangles of the surface (from the GPU counters when the mesh stayed on the GPU).
     pub fn triangle_count(&self) -> usize {
         match &self.gpu_surface {

@@ -504,6 +504,7 @@ impl CpuEngine {
             counts_without_mesh,
             density: kept,
             sharp,
+            periodic: None,
         })
     }
 }

@@ -124,6 +124,9 @@ pub struct SurfaceOutput {
     /// ([`crate::surface::curved::SharpTriangles`]), for the sides of an interface on its grid
     /// to take; `None` from engines that do not record them.
     pub sharp: Option<Arc<crate::surface::curved::SharpTriangles>>,
+    /// A periodic surface's cell, images and face seams (the periodic engine's; `None` from
+    /// the others), which measurements on its open mesh need.
+    pub periodic: Option<Arc<crate::surface::periodic::PeriodicMesh>>,
 }
 
 /// Size of a mesh that was measured but not kept.

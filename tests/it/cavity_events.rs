@@ -298,6 +298,7 @@ fn cavity(x: f64, radius: f64, volume: f64) -> Cavity {
         radius,
         vertex_count: 0,
         lining_atoms: Vec::new(),
+        cell: None,
     }
 }
 

@@ -203,6 +203,7 @@ fn blob(volume: f64, centre: [f64; 3], radius: f64) -> Cavity {
         radius,
         vertex_count: 0,
         lining_atoms: Vec::new(),
+        cell: None,
     }
 }
 

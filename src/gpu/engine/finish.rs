@@ -196,6 +196,7 @@ impl SurfaceEngine for GpuEngine {
             counts_without_mesh,
             density: None,
             sharp: None,
+            periodic: None,
         })
     }
 }

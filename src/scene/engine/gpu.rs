@@ -85,7 +85,7 @@ impl SceneEngine {
                 subset.as_deref(),
                 &atoms,
                 &params,
-                (&mesh, stats.area),
+                (&mesh, stats.area, None),
                 map,
             )
             .map_err(exposure_failed(index, &rep.name))?;

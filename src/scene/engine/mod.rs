@@ -367,14 +367,45 @@ impl SceneEngine {
                 source,
             };
             if let Some(replicate) = self.replicate {
+                let periodic_failed = |source| SceneError::Periodic {
+                    frame: index,
+                    rep: rep.name.clone(),
+                    source,
+                };
+                let (cell, params) = (frame.cell.as_ref(), rep.params());
+                // A surface coloured by exposure is coloured in its second pass, as below.
+                let map = exposure_map(rep, lf.particles.is_beads());
+                let first = AtomSet {
+                    colours: atoms.colours.filter(|_| map.is_none()),
+                    ..atoms
+                };
                 result.output = self
                     .periodic
-                    .compute_in_cell(frame.cell.as_ref(), &atoms, &rep.params(), replicate)
-                    .map_err(|source| SceneError::Periodic {
-                        frame: index,
-                        rep: rep.name.clone(),
-                        source,
-                    })?;
+                    .compute_in_cell(cell, &first, &params, replicate)
+                    .map_err(periodic_failed)?;
+                if let Some(map) = map {
+                    let out = &result.output;
+                    let colours = slot
+                        .exposure
+                        .colours(
+                            topology,
+                            lf.particles.subset(),
+                            &atoms,
+                            &params,
+                            (&out.mesh, out.area, out.periodic.as_deref()),
+                            map,
+                        )
+                        .map_err(exposure_failed(index, &rep.name))?;
+                    let coloured = AtomSet {
+                        colours: Some(&colours),
+                        ..atoms
+                    };
+                    result.output = self
+                        .periodic
+                        .compute_in_cell(cell, &coloured, &params, replicate)
+                        .map_err(periodic_failed)?;
+                    result.particles.colours = Arc::new(colours);
+                }
                 slot.sent = None;
             } else {
                 let changes = match slot.sent.take() {
@@ -402,7 +433,7 @@ impl SceneEngine {
                                     lf.particles.subset(),
                                     &atoms,
                                     &e.vertices().effective(&params),
-                                    (&result.output.mesh, result.output.area),
+                                    (&result.output.mesh, result.output.area, None),
                                     map,
                                 )
                                 .map_err(exposure_failed(index, &rep.name))?;
@@ -511,6 +542,7 @@ impl SceneEngine {
                 }),
                 density: None,
                 sharp: None,
+                periodic: None,
             };
             result.gpu_surface = Some(surface);
             result.gpu_work = Some(work);

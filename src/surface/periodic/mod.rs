@@ -24,9 +24,11 @@ pub(crate) mod cell;
 pub mod density;
 pub(crate) mod mc;
 pub mod measure;
+pub mod seams;
 pub(crate) mod triclinic;
 
 pub use cell::{PeriodicCell, TriclinicCell};
+pub use seams::{FaceTwin, PeriodicMesh};
 
 use std::fmt;
 use std::time::Instant;
@@ -264,10 +266,27 @@ impl PeriodicEngine {
         let area = mesh.area();
         let volume = measure::box_volume(&mesh, &grid, &self.volume.values, params.isovalue, 0);
         check_replicas(mesh.positions.len(), replicate, "box")?;
+        // The upper faces' coordinate as Marching Cubes computes it, `(N + 0) h`.
+        let top = Vec3::from_array(std::array::from_fn(|k| {
+            (dims[k] as f32 + 0.0) * grid.spacing[k]
+        }));
+        let extent = grid.extent();
+        let (face_twins, unmatched) = seams::face_twins(&mesh.positions, top);
+        let seams = PeriodicMesh {
+            cell: TriclinicCell {
+                origin: pbox.origin,
+                rows: [Vec3::X * extent.x, Vec3::Y * extent.y, Vec3::Z * extent.z],
+            },
+            replicate,
+            cell_vertices: mesh.positions.len() as u32,
+            cell_triangles: mesh.triangle_count() as u32,
+            face_twins,
+            unmatched,
+        };
         for p in &mut mesh.positions {
             *p += pbox.origin;
         }
-        let mesh = replicate_mesh(mesh, grid.extent(), replicate);
+        let mesh = replicate_mesh(mesh, extent, replicate);
         let timings = StageTimings {
             exposure_ms: 0.0,
             upload_ms: 0.0,
@@ -280,13 +299,7 @@ impl PeriodicEngine {
             spacing: grid.spacing.max_element(),
             dims,
         };
-        Ok(periodic_output(
-            grid,
-            mesh,
-            [area, volume],
-            replicate,
-            timings,
-        ))
+        Ok(periodic_output(grid, mesh, [area, volume], seams, timings))
     }
 
     /// The surface of `atoms` in the triclinic `cell` (any cell, rectangular ones included,
@@ -419,15 +432,15 @@ pub(super) fn check_replicas(
 }
 
 /// A periodic surface's output: `[area, volume]` of one box or cell (Å², Å³) times the images
-/// shown.
+/// shown (`seams.replicate`).
 pub(super) fn periodic_output(
     grid: GridSpec,
     mesh: Mesh,
     [area, volume]: [f64; 2],
-    replicate: Replicate,
+    seams: PeriodicMesh,
     timings: StageTimings,
 ) -> SurfaceOutput {
-    let images = replicate.count() as f64;
+    let images = seams.replicate.count() as f64;
     SurfaceOutput {
         grid,
         mesh,
@@ -436,6 +449,7 @@ pub(super) fn periodic_output(
         counts_without_mesh: None,
         density: None,
         sharp: None,
+        periodic: Some(std::sync::Arc::new(seams)),
         timings,
     }
 }

@@ -343,6 +343,16 @@ pub fn compute(
     let volume = measure::box_volume(&index_mesh, &grid, &vol.values, params.isovalue, 0)
         * geo.jac.determinant().abs();
     super::check_replicas(index_mesh.positions.len(), replicate, "cell")?;
+    let top = Vec3::from_array(dims.map(|n| n as f32 + 0.0));
+    let (face_twins, unmatched) = super::seams::face_twins(&index_mesh.positions, top);
+    let seams = super::PeriodicMesh {
+        cell: *cell,
+        replicate,
+        cell_vertices: index_mesh.positions.len() as u32,
+        cell_triangles: index_mesh.triangle_count() as u32,
+        face_twins,
+        unmatched,
+    };
     let area = if replicate.is_one() {
         None
     } else {
@@ -366,7 +376,7 @@ pub fn compute(
         grid,
         mesh,
         [area, volume],
-        replicate,
+        seams,
         timings,
     ))
 }
