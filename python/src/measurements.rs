@@ -392,6 +392,9 @@ pub fn scene_interface(
         probe,
     )
     .map_err(|e| PyValueError::new_err(format!("interface: {e}")))?;
+    sides
+        .set_periodic(core.meshes.periodic().is_some())
+        .map_err(|e| PyValueError::new_err(format!("interface: {e}")))?;
     in_pool(py, || {
         let mut rows = Vec::with_capacity(frames.len());
         for &index in &frames {

@@ -173,6 +173,9 @@ impl InterfaceDraft {
                 let topology = source.topology();
                 let mut sides = Interface::new(topology, [&a, &b], &base, &overrides, probe)
                     .map_err(|e| e.to_string())?;
+                sides
+                    .set_periodic(source.periodic().is_some())
+                    .map_err(|e| e.to_string())?;
                 let data = source.read_frame(frame).map_err(|e| e.to_string())?;
                 let m = sides
                     .measure(topology, &data, CONTACT_THRESHOLD)

@@ -251,6 +251,24 @@ impl Measurer {
         })
     }
 
+    /// Makes the measurements follow periodic surfaces (`--periodic`): the interface's three
+    /// surfaces are then periodic in each frame's cell; the probes' surfaces are not, and are
+    /// refused.
+    pub fn set_periodic(&mut self, periodic: bool) -> Result<()> {
+        if periodic && self.args.cavity_probe.is_some() {
+            bail!(
+                "--cavity-probe finds a probe's cavities in open space, not in a periodic cell: leave out --cavity-probe (the periodic surface's own cavities are found) or --periodic"
+            );
+        }
+        if let Some(interface) = self.interface.as_mut() {
+            interface
+                .sides
+                .set_periodic(periodic)
+                .map_err(|e| anyhow!("--interface: {e}"))?;
+        }
+        Ok(())
+    }
+
     /// Writes the tables as the parts of chunk `header` (`FILE.part-IIII-of-NNNN.csv`, the
     /// header their first line), which `mdsurf merge FILE.csv` joins.
     pub fn set_part(&mut self, header: PartHeader) {

@@ -184,6 +184,7 @@ pub fn run(args: SurfaceArgs) -> Result<()> {
         args.params.radius_set(),
         args.params.vertex_mode(),
     )?;
+    measurer.set_periodic(reader.chain().periodic().is_some())?;
     // A .glb without {frame} takes every frame as an animation.
     let animate = output
         .as_ref()

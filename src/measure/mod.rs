@@ -64,7 +64,9 @@ pub use interface::{
     CONTACT_THRESHOLD, ContactResidue, InterfaceResult, Side, TakenFromComplex, contact_residues,
     interface, interface_on, interface_with,
 };
-pub use periodic::{periodic_atom_areas, periodic_cavities, periodic_cavity_walls};
+pub use periodic::{
+    periodic_atom_areas, periodic_cavities, periodic_cavity_walls, periodic_interface,
+};
 pub use probe_cavities::{
     ProbeOptions, probe_cavities, probe_cavity_walls, ses_probe_cavities, ses_probe_cavity_walls,
     ses_radius,

@@ -15,6 +15,9 @@
 //!   volume, area and centroid are those of the unwrapped sheet, the centroid moved into the
 //!   cell, and its lining atoms are found among the images as [`super::cavities()`] finds them.
 //!
+//! - **Buried area** ([`periodic_interface`]): the three surfaces of A, B and both, each
+//!   periodic in the frame's cell (whose grid they share), their areas per cell.
+//!
 //! Data flow: a periodic surface's mesh and its [`PeriodicMesh`] + the atoms and parameters it
 //! was computed from -> images of the atoms -> per-atom areas, or welded and unwrapped sheets
 //! -> [`Cavity`] rows, as the non-periodic measurements give them. Lengths in Å.
@@ -28,8 +31,10 @@ use super::cavities::{
     Cavity, CavityOptions, Component, bounding_radius, components, lining_atoms,
 };
 use super::cells::CellList;
-use super::{MeasureError, atom_areas};
-use crate::surface::periodic::{PeriodicMesh, TriclinicCell};
+use super::{InterfaceResult, MeasureError, atom_areas};
+use crate::surface::periodic::{
+    PeriodicCell, PeriodicEngine, PeriodicMesh, Replicate, TriclinicCell,
+};
 use crate::surface::{AtomSet, Mesh, SurfaceParams};
 
 /// Periodic images of a set of atoms, each with the atom it copies.
@@ -368,4 +373,77 @@ fn sheet_mesh(cell: &Mesh, welded: &Mesh, c: &Component, positions: Vec<Vec3>) -
         positions,
         indices,
     }
+}
+
+/// The buried area between `a` and `b` on periodic surfaces in `cell` (each of the three
+/// surfaces from the periodic engine, on the cell's grid, which the three share by
+/// construction), per cell: as [`super::interface_with`] defines it, with the complex's radii
+/// `complex_radii` (Å, `a`'s atoms then `b`'s; `None`: each side's own) and the per-atom
+/// areas over the atoms' images ([`periodic_atom_areas`]) when `per_atom`.
+///
+/// Fails on invalid atoms or parameters, radii of another length, or a grid the memory cannot
+/// hold.
+pub fn periodic_interface(
+    engine: &mut PeriodicEngine,
+    [a, b]: [&AtomSet<'_>; 2],
+    cell: &PeriodicCell,
+    complex_radii: Option<&[f32]>,
+    params: &SurfaceParams,
+    per_atom: bool,
+) -> Result<InterfaceResult, MeasureError> {
+    let [a, b] = [a, b].map(|s| AtomSet {
+        colours: None,
+        ..*s
+    });
+    a.validate()?;
+    b.validate()?;
+    params.validate()?;
+    let (positions, mut radii) = super::interface::union_of(&a, &b);
+    if let Some(own) = complex_radii {
+        if own.len() != radii.len() {
+            return Err(MeasureError::LengthMismatch {
+                what: "complex radii",
+                expected: radii.len(),
+                got: own.len(),
+            });
+        }
+        radii.copy_from_slice(own);
+    }
+    let union = AtomSet {
+        positions: &positions,
+        radii: &radii,
+        colours: None,
+    };
+    let one = Replicate::default();
+    let mut surface = |atoms: &AtomSet<'_>| engine.compute_cell(atoms, params, cell, one);
+    let [out_a, out_b, out_ab] = [surface(&a)?, surface(&b)?, surface(&union)?];
+    let mut per_atom_areas: [Vec<f64>; 4] = Default::default();
+    if per_atom {
+        let together = super::atom_areas_of(&out_ab, &union, params)?;
+        per_atom_areas = [
+            super::atom_areas_of(&out_a, &a, params)?,
+            super::atom_areas_of(&out_b, &b, params)?,
+            together[..a.len()].to_vec(),
+            together[a.len()..].to_vec(),
+        ];
+    }
+    let [
+        atoms_a_alone,
+        atoms_b_alone,
+        atoms_a_complex,
+        atoms_b_complex,
+    ] = per_atom_areas;
+    let (area_a, area_b, area_complex) = (out_a.area, out_b.area, out_ab.area);
+    Ok(InterfaceResult {
+        grid: out_ab.grid,
+        area_a,
+        area_b,
+        area_complex,
+        buried: 0.5 * (area_a + area_b - area_complex),
+        atoms_a_alone,
+        atoms_b_alone,
+        atoms_a_complex,
+        atoms_b_complex,
+        taken: Default::default(),
+    })
 }

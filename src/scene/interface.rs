@@ -5,7 +5,8 @@
 //! probe radius, on the probe's solvent-excluded surface ([`measure::ses_probe_interface`]).
 //! When the frame already has the surface of both sides together ([`ShownSurface`], such as
 //! the `--select` surface of `mdsurf surface`), that surface is the complex and only the two
-//! sides are computed ([`measure::interface_on`]).
+//! sides are computed ([`measure::interface_on`]). With periodic surfaces
+//! ([`Interface::set_periodic`]) the three are computed periodic in the frame's cell.
 
 use glam::Vec3;
 
@@ -14,6 +15,7 @@ use crate::measure::{
     self, ContactResidue, InterfaceResult, MeasureError, ProbeOptions, ResidueNames,
 };
 use crate::model::{Frame, Particles, RadiusOverrides, Topology};
+use crate::surface::periodic::{PeriodicCell, PeriodicEngine, PeriodicError};
 use crate::surface::{AtomSet, CpuEngine, SurfaceEngine, SurfaceParams};
 
 use super::frame::LayerResult;
@@ -52,6 +54,14 @@ pub enum InterfaceError {
     /// The surfaces could not be measured.
     #[error(transparent)]
     Measure(#[from] MeasureError),
+    /// The frame's cell cannot hold periodic surfaces.
+    #[error(transparent)]
+    Periodic(#[from] PeriodicError),
+    /// A probe was asked for with periodic surfaces.
+    #[error(
+        "the probe's surface (a probe radius) is measured in open space, not in a periodic cell: leave out the probe or the periodic surfaces"
+    )]
+    PeriodicProbe,
 }
 
 /// One frame's interface.
@@ -87,6 +97,9 @@ pub struct Interface {
     engine: CpuEngine,
     params: SurfaceParams,
     probe: Option<f32>,
+    /// The engine of periodic surfaces, when the three surfaces are periodic in each frame's
+    /// cell ([`Interface::set_periodic`]).
+    periodic: Option<PeriodicEngine>,
 }
 
 impl Interface {
@@ -113,7 +126,19 @@ impl Interface {
             engine: CpuEngine::new().with_vertices(base.vertices),
             params: base.params(),
             probe,
+            periodic: None,
         })
+    }
+
+    /// Measures the three surfaces periodic in each frame's cell (as `--periodic` computes
+    /// surfaces; [`measure::periodic_interface`]), or not. Fails with a probe, whose surface
+    /// is not periodic.
+    pub fn set_periodic(&mut self, periodic: bool) -> Result<(), InterfaceError> {
+        if periodic && self.probe.is_some() {
+            return Err(InterfaceError::PeriodicProbe);
+        }
+        self.periodic = periodic.then(PeriodicEngine::new);
+        Ok(())
     }
 
     /// The two selections' texts.
@@ -188,6 +213,20 @@ impl Interface {
         self.check_apart(topology, &ia, &ib)?;
         let mut complex_shown = false;
         let result = match self.probe {
+            None if self.periodic.is_some() => {
+                let cell = frame.cell.as_ref().ok_or(PeriodicError::NoBox)?;
+                let cell = PeriodicCell::from_cell(cell).map_err(PeriodicError::from)?;
+                let radii = complex_radii(&fa, &fb);
+                let engine = self.periodic.get_or_insert_with(PeriodicEngine::new);
+                measure::periodic_interface(
+                    engine,
+                    [&fa.atom_set(), &fb.atom_set()],
+                    &cell,
+                    radii.as_deref(),
+                    &self.params,
+                    threshold.is_some(),
+                )?
+            }
             Some(probe) => measure::ses_probe_interface(
                 topology,
                 (Some(&ia), &fa.atom_set()),

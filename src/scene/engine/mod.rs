@@ -191,6 +191,11 @@ impl SceneEngine {
         &mut self.backend
     }
 
+    /// The images shown when surfaces are periodic, `None` when they are not.
+    pub fn periodic(&self) -> Option<Replicate> {
+        self.replicate
+    }
+
     /// Makes surfaces periodic with `replicate` images (the CPU periodic engine), or not.
     pub fn set_periodic(&mut self, replicate: Option<Replicate>) {
         if self.replicate != replicate {
