@@ -72,6 +72,7 @@ mod live_imd_viewer;
 mod measure_areas;
 mod measure_cavities;
 mod measure_msms;
+mod measure_periodic;
 mod measure_probe_cavities;
 mod render_cli;
 mod render_gif;

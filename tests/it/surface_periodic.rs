@@ -21,12 +21,12 @@ use crate::cli_common::{Csv, Run, mdsurf};
 use crate::data_support::data;
 use crate::surface_common::sphere_radius;
 
-const ARGON: &str = "argon_npt_compressed.tng";
+pub(crate) const ARGON: &str = "argon_npt_compressed.tng";
 const WATER: &str = "spce_all_coords.lammpstrj.bz2";
-const BILAYER: &str = "martini_dppc_chol_bilayer.gro";
+pub(crate) const BILAYER: &str = "martini_dppc_chol_bilayer.gro";
 
 /// Radii from the topology, the first frame and its box.
-fn load(name: &str) -> (Vec<f32>, Frame, PeriodicBox) {
+pub(crate) fn load(name: &str) -> (Vec<f32>, Frame, PeriodicBox) {
     let t = mdsurf::io::open(&data(name), None).unwrap_or_else(|e| panic!("open {name}: {e}"));
     let f = t.read_frame(0).expect("frame 0");
     let cell = f.cell.expect("the file has a box");
@@ -34,7 +34,7 @@ fn load(name: &str) -> (Vec<f32>, Frame, PeriodicBox) {
     (t.topology().radii.clone(), f, pbox)
 }
 
-fn params(spacing: f32, radius_scale: f32) -> SurfaceParams {
+pub(crate) fn params(spacing: f32, radius_scale: f32) -> SurfaceParams {
     SurfaceParams {
         spacing,
         radius_scale,
@@ -78,7 +78,7 @@ fn periodic(
 }
 
 /// `positions` moved by `shift` (Å) and wrapped into the box `[0, L)`.
-fn shifted(positions: &[Vec3], shift: Vec3, l: Vec3) -> Vec<Vec3> {
+pub(crate) fn shifted(positions: &[Vec3], shift: Vec3, l: Vec3) -> Vec<Vec3> {
     positions
         .iter()
         .map(|&p| {
