@@ -87,17 +87,7 @@ pub fn interface_with(
     per_atom: bool,
 ) -> Result<InterfaceResult, MeasureError> {
     check_inputs(a, b, params)?;
-    let (positions, mut radii) = union_of(a, b);
-    if let Some(own) = complex_radii {
-        if own.len() != radii.len() {
-            return Err(MeasureError::LengthMismatch {
-                what: "complex radii",
-                expected: radii.len(),
-                got: own.len(),
-            });
-        }
-        radii.copy_from_slice(own);
-    }
+    let (positions, radii) = complex_of(a, b, complex_radii)?;
     let union = AtomSet {
         positions: &positions,
         radii: &radii,
@@ -414,6 +404,27 @@ pub(super) fn union_of(a: &AtomSet<'_>, b: &AtomSet<'_>) -> (Vec<Vec3>, Vec<f32>
     let positions = a.positions.iter().chain(b.positions).copied().collect();
     let radii = a.radii.iter().chain(b.radii).copied().collect();
     (positions, radii)
+}
+
+/// [`union_of`], with the radii `complex_radii` (Å, `a`'s atoms then `b`'s) when given. Fails
+/// when they are of another length.
+pub(super) fn complex_of(
+    a: &AtomSet<'_>,
+    b: &AtomSet<'_>,
+    complex_radii: Option<&[f32]>,
+) -> Result<(Vec<Vec3>, Vec<f32>), MeasureError> {
+    let (positions, mut radii) = union_of(a, b);
+    if let Some(own) = complex_radii {
+        if own.len() != radii.len() {
+            return Err(MeasureError::LengthMismatch {
+                what: "complex radii",
+                expected: radii.len(),
+                got: own.len(),
+            });
+        }
+        radii.copy_from_slice(own);
+    }
+    Ok((positions, radii))
 }
 
 /// Which group of an interface a residue belongs to.

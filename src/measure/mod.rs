@@ -37,8 +37,12 @@
 //!   cannot reach from outside (the SES's inner components), with Bondi's radii
 //!   ([`ses_probe_cavities`]); the same [`Cavity`] rows, so tracking and CSVs are shared.
 //! - **Tracking** ([`CavityTracker`]): a cavity keeps its id while its centroid and its previous
-//!   self's are within the larger of their bounding radii; births, deaths, merges and splits are
-//!   reported as [`CavityEvent`]s.
+//!   self's are within the larger of their bounding radii (by nearest images in a periodic
+//!   cell); births, deaths, merges and splits are reported as [`CavityEvent`]s.
+//! - **Periodic surfaces** ([`periodic`]): per-atom areas over the atoms' periodic images, per
+//!   cell; cavities of the mesh welded across the cell faces (finite sheets of negative volume);
+//!   the interface's three surfaces periodic in the frame's cell. [`atom_areas_of`] and
+//!   [`cavities_of`] choose by the output.
 
 pub(crate) mod areas;
 pub(crate) mod cavities;

@@ -398,17 +398,7 @@ pub fn periodic_interface(
     a.validate()?;
     b.validate()?;
     params.validate()?;
-    let (positions, mut radii) = super::interface::union_of(&a, &b);
-    if let Some(own) = complex_radii {
-        if own.len() != radii.len() {
-            return Err(MeasureError::LengthMismatch {
-                what: "complex radii",
-                expected: radii.len(),
-                got: own.len(),
-            });
-        }
-        radii.copy_from_slice(own);
-    }
+    let (positions, radii) = super::interface::complex_of(&a, &b, complex_radii)?;
     let union = AtomSet {
         positions: &positions,
         radii: &radii,

@@ -145,6 +145,34 @@ fn exposure_map(rep: &Representation, beads: bool) -> Option<ColourMap> {
     }
 }
 
+/// A host engine's surface of `atoms` (`compute`), coloured by exposure through `map` in a
+/// second pass: the first pass, uncoloured, gives the per-atom areas whose colours `colour`
+/// returns (when its mesh was kept), and the surface is computed again with them. Returns
+/// the surface and the colours of the second pass.
+fn host_surface(
+    atoms: AtomSet<'_>,
+    map: Option<ColourMap>,
+    mut compute: impl FnMut(&AtomSet<'_>) -> Result<SurfaceOutput, SceneError>,
+    colour: impl FnOnce(&SurfaceOutput, ColourMap) -> Result<Vec<[f32; 3]>, SceneError>,
+) -> Result<(SurfaceOutput, Option<Vec<[f32; 3]>>), SceneError> {
+    let first = AtomSet {
+        colours: atoms.colours.filter(|_| map.is_none()),
+        ..atoms
+    };
+    let output = compute(&first)?;
+    // Exposure colours need the mesh (kept unless only measured).
+    let Some(map) = map.filter(|_| output.counts_without_mesh.is_none()) else {
+        return Ok((output, None));
+    };
+    let colours = colour(&output, map)?;
+    let coloured = AtomSet {
+        colours: Some(&colours),
+        ..atoms
+    };
+    let output = compute(&coloured)?;
+    Ok((output, Some(colours)))
+}
+
 /// A representation's result while a frame is computed: reused as it was, or new (with a GPU
 /// submit still to collect).
 enum Entry {
@@ -378,37 +406,25 @@ impl SceneEngine {
                     source,
                 };
                 let (cell, params) = (frame.cell.as_ref(), rep.params());
-                // A surface coloured by exposure is coloured in its second pass, as below.
-                let map = exposure_map(rep, lf.particles.is_beads());
-                let first = AtomSet {
-                    colours: atoms.colours.filter(|_| map.is_none()),
-                    ..atoms
-                };
-                result.output = self
-                    .periodic
-                    .compute_in_cell(cell, &first, &params, replicate)
-                    .map_err(periodic_failed)?;
-                if let Some(map) = map {
-                    let out = &result.output;
-                    let colours = slot
-                        .exposure
-                        .colours(
-                            topology,
-                            lf.particles.subset(),
-                            &atoms,
-                            &params,
-                            (&out.mesh, out.area, out.periodic.as_deref()),
-                            map,
-                        )
-                        .map_err(exposure_failed(index, &rep.name))?;
-                    let coloured = AtomSet {
-                        colours: Some(&colours),
-                        ..atoms
-                    };
-                    result.output = self
-                        .periodic
-                        .compute_in_cell(cell, &coloured, &params, replicate)
-                        .map_err(periodic_failed)?;
+                let periodic = &mut self.periodic;
+                let (output, colours) = host_surface(
+                    atoms,
+                    exposure_map(rep, lf.particles.is_beads()),
+                    |a| {
+                        periodic
+                            .compute_in_cell(cell, a, &params, replicate)
+                            .map_err(periodic_failed)
+                    },
+                    |out, map| {
+                        let surface = (&out.mesh, out.area, out.periodic.as_deref());
+                        let subset = lf.particles.subset();
+                        (slot.exposure)
+                            .colours(topology, subset, &atoms, &params, surface, map)
+                            .map_err(exposure_failed(index, &rep.name))
+                    },
+                )?;
+                result.output = output;
+                if let Some(colours) = colours {
                     result.particles.colours = Arc::new(colours);
                 }
                 slot.sent = None;
@@ -421,33 +437,21 @@ impl SceneEngine {
                     SceneBackend::Host(e) => {
                         e.set_vertices(rep.vertices);
                         let params = rep.params();
-                        // A surface coloured by exposure is coloured in its second pass.
-                        let map = exposure_map(rep, lf.particles.is_beads());
-                        let first = AtomSet {
-                            colours: atoms.colours.filter(|_| map.is_none()),
-                            ..atoms
-                        };
-                        result.output = e.compute(&first, &params).map_err(surface_failed)?;
-                        // Exposure colours need the mesh (kept unless only measured).
-                        let map = map.filter(|_| result.output.counts_without_mesh.is_none());
-                        if let Some(map) = map {
-                            let colours = slot
-                                .exposure
-                                .colours(
-                                    topology,
-                                    lf.particles.subset(),
-                                    &atoms,
-                                    &e.vertices().effective(&params),
-                                    (&result.output.mesh, result.output.area, None),
-                                    map,
-                                )
-                                .map_err(exposure_failed(index, &rep.name))?;
-                            let coloured = AtomSet {
-                                colours: Some(&colours),
-                                ..atoms
-                            };
-                            result.output =
-                                e.compute(&coloured, &params).map_err(surface_failed)?;
+                        let effective = e.vertices().effective(&params);
+                        let (output, colours) = host_surface(
+                            atoms,
+                            exposure_map(rep, lf.particles.is_beads()),
+                            |a| e.compute(a, &params).map_err(surface_failed),
+                            |out, map| {
+                                let surface = (&out.mesh, out.area, None);
+                                let subset = lf.particles.subset();
+                                (slot.exposure)
+                                    .colours(topology, subset, &atoms, &effective, surface, map)
+                                    .map_err(exposure_failed(index, &rep.name))
+                            },
+                        )?;
+                        result.output = output;
+                        if let Some(colours) = colours {
                             result.particles.colours = Arc::new(colours);
                         }
                     }
