@@ -145,6 +145,9 @@ fn exposure_map(rep: &Representation, beads: bool) -> Option<ColourMap> {
     }
 }
 
+/// Linear RGB colour per atom (0 to 1).
+type AtomColours = Vec<[f32; 3]>;
+
 /// A host engine's surface of `atoms` (`compute`), coloured by exposure through `map` in a
 /// second pass: the first pass, uncoloured, gives the per-atom areas whose colours `colour`
 /// returns (when its mesh was kept), and the surface is computed again with them. Returns
@@ -153,8 +156,8 @@ fn host_surface(
     atoms: AtomSet<'_>,
     map: Option<ColourMap>,
     mut compute: impl FnMut(&AtomSet<'_>) -> Result<SurfaceOutput, SceneError>,
-    colour: impl FnOnce(&SurfaceOutput, ColourMap) -> Result<Vec<[f32; 3]>, SceneError>,
-) -> Result<(SurfaceOutput, Option<Vec<[f32; 3]>>), SceneError> {
+    colour: impl FnOnce(&SurfaceOutput, ColourMap) -> Result<AtomColours, SceneError>,
+) -> Result<(SurfaceOutput, Option<AtomColours>), SceneError> {
     let first = AtomSet {
         colours: atoms.colours.filter(|_| map.is_none()),
         ..atoms
