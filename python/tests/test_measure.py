@@ -150,6 +150,36 @@ def test_cavities_equal_cli(cli, adk, tmp_path):
     assert counts.max() >= 2
 
 
+def test_periodic_measurements_equal_cli(cli, data, tmp_path):
+    """A state file with periodic surfaces: the per-residue areas (over the periodic images,
+    per cell) and the interface's three periodic surfaces equal the command line's."""
+    gro = tmp_path / "bilayer.gro"
+    shutil.copy(data / "martini_dppc_chol_bilayer.gro", gro)
+    state = tmp_path / "periodic.toml"
+    state.write_text(
+        'version = 1\n\n[trajectory]\nperiodic = true\n\n[[representation]]\n'
+        'name = "lipids"\nselection = "resname DPPC CHOL"\nstyle = "surface"\n'
+    )
+    a, b = "resname DPPC", "resname CHOL"
+    run = run_cli(cli, tmp_path, gro, "--state", state, "--per-residue", "res.csv",
+                  "--stats", "s.csv", "--interface", a, b, "--interface-csv", "i.csv")
+    assert run.returncode == 0, run.stderr
+    rows, (stats,), (row,) = (rows_of(tmp_path / n) for n in ["res.csv", "s.csv", "i.csv"])
+    scene = mdsurf.Scene(universe(gro), state=str(state))
+    res = scene.per_residue_areas("lipids")
+    assert len(rows) == len(res.residues) == 450
+    for j, r in enumerate(rows):
+        assert close(res.area_A2[0, j], r["area_A2"], 3), (res.area_A2[0, j], r)
+    # Per cell: the rows sum to the periodic surface's area.
+    assert close(res.total_area_A2[0], stats["area_A2"], 4)
+    got = scene.interface(a, b)
+    for name in ["area_a_A2", "area_b_A2", "area_ab_A2", "buried_A2"]:
+        assert close(getattr(got, name)[0], row[name], 4), (name, getattr(got, name), row)
+    assert close(got.area_ab_A2[0], stats["area_A2"], 4)
+    with pytest.raises(ValueError, match="periodic"):
+        scene.interface(a, b, probe_A=1.4)
+
+
 def test_probe_cavities_equal_cli(cli, adk, tmp_path):
     gro, xtc = adk
     run = run_cli(cli, tmp_path, gro, xtc, "--select", "protein", "--frames", "0:2",

@@ -1,7 +1,8 @@
 //! `--color exposure` (issue 32): the picture `render` draws must be the one it draws when each
 //! atom is coloured by its residue's exposure as `surface --per-residue` writes it (through
 //! `--color data:FILE` with the same map and range 0 to 1), on the CPU and GPU engines, for two
-//! frames of a trajectory whose exposure changes; and bad options give one line.
+//! frames of a trajectory whose exposure changes, and on a periodic membrane; and bad options
+//! give one line.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -133,6 +134,48 @@ fn exposure_colours_are_the_per_residue_exposure_of_each_frame() {
     // The colours follow the frame: the two frames' exposure pictures differ.
     let between = differing_pixels(&pictures[0], &pictures[2]);
     assert!(between > 2000, "frames 0 and 97 differ in {between} pixels");
+}
+
+#[test]
+fn periodic_exposure_colours_are_the_periodic_per_residue_exposure() {
+    // The Martini bilayer, periodic: each lipid's exposure from its area over the images across
+    // the faces (before, a periodic surface stayed grey).
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = |name: &str| dir.path().join(name).display().to_string();
+    let top = data("martini_dppc_chol_bilayer.gro");
+    let top_s = top.display().to_string();
+    let common = [
+        "--periodic",
+        "--select",
+        "resname DPPC CHOL",
+        "--spacing",
+        "2",
+    ];
+    let res = d("res.csv");
+    let mut args = vec!["surface", &top_s, "--per-residue", &res, "-q"];
+    args.extend(common);
+    ok(&mdsurf(&args));
+    let atoms = d("atoms.csv");
+    atom_exposure_csv(&top, Path::new(&res), "0", Path::new(&atoms));
+    let data_scheme = format!("data:{atoms};range=0:1");
+    let mut pair = Vec::new();
+    for scheme in ["exposure", data_scheme.as_str()] {
+        let out = d(&format!("{}.png", pair.len()));
+        let mut args = vec!["render", &top_s, "--color", scheme, "--size", "240x200"];
+        args.extend(["--view", "0,0", "-o", &out, "-q"]);
+        args.extend(common);
+        ok(&mdsurf(&args));
+        pair.push(RgbaImage::read_png(Path::new(&out)).expect("png"));
+    }
+    let differ = differing_pixels(&pair[0], &pair[1]);
+    assert!(differ < 30, "{differ} pixels differ (exposure vs data)");
+    // Coloured, not grey: the membrane seen from above has channels far apart.
+    let coloured = pair[0]
+        .pixels
+        .chunks_exact(4)
+        .filter(|p| p[..3].iter().max().unwrap_or(&0) - p[..3].iter().min().unwrap_or(&0) > 40)
+        .count();
+    assert!(coloured > 5000, "{coloured} coloured pixels");
 }
 
 #[test]
