@@ -308,6 +308,7 @@ pub fn scene_cavities(
             let err = |e| measure_err(&what, index, e);
             let params = m.layer.measured_params();
             let found = match probe {
+                Some(_) if m.layer.output.periodic.is_some() => Err(MeasureError::PeriodicProbe),
                 Some(probe) => {
                     let probe_options = ProbeOptions {
                         probe,

@@ -178,6 +178,8 @@ def test_periodic_measurements_equal_cli(cli, data, tmp_path):
     assert close(got.area_ab_A2[0], stats["area_A2"], 4)
     with pytest.raises(ValueError, match="periodic"):
         scene.interface(a, b, probe_A=1.4)
+    with pytest.raises(ValueError, match="periodic"):
+        scene.cavities("lipids", probe_A=1.4)
 
 
 def test_probe_cavities_equal_cli(cli, adk, tmp_path):

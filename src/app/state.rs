@@ -510,9 +510,9 @@ impl AppCore {
         self.worker.is_busy()
     }
 
-    /// The grid the parameters `p` would need for representation `i`'s particles on screen,
-    /// and its size in bytes (density and colour volumes), or `None` before its first surface
-    /// (or when it is hidden or not a surface).
+    /// The grid the parameters `p` would need for representation `i`'s particles on screen
+    /// (a periodic surface's: its cell's), and its size in bytes (density and colour volumes),
+    /// or `None` before its first surface (or when it is hidden or not a surface).
     pub fn grid_estimate(&self, i: usize, p: &SurfaceParams) -> Option<(GridSpec, u64)> {
         let c = &self.shown.as_ref()?.computed;
         let id = *self.rep_ids.get(i)?;
@@ -520,7 +520,15 @@ impl AppCore {
         if l.particles.positions.is_empty() {
             return None;
         }
-        let grid = GridSpec::for_atoms(&l.particles.positions, &l.particles.radii, p).ok()?;
+        // A periodic surface samples its cell, whatever the atoms' box.
+        let grid = match l.output.periodic.as_deref() {
+            Some(seams) => GridSpec {
+                origin: seams.cell.origin,
+                spacing: p.spacing,
+                dims: seams.cell.samples(p.spacing),
+            },
+            None => GridSpec::for_atoms(&l.particles.positions, &l.particles.radii, p).ok()?,
+        };
         let bytes = crate::surface::estimate_grid_bytes(grid.dims.map(u64::from), true);
         Some((grid, bytes))
     }

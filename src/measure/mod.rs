@@ -112,6 +112,11 @@ pub enum MeasureError {
     /// The engine measured the surface without keeping its mesh.
     #[error("the surface was measured without keeping its mesh; per-atom areas need the mesh")]
     NoMesh,
+    /// A probe's surface or cavities were asked for on a periodic surface.
+    #[error(
+        "the probe's cavities and surface are found in open space, not in a periodic cell: turn off the probe or the periodic surface"
+    )]
+    PeriodicProbe,
     /// The probe cavities' grid would not fit in memory.
     #[error(
         "the cavity probe's {}x{}x{} grid at {spacing} Å needs {:.1} GB but only {:.1} GB is \

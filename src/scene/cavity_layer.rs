@@ -155,6 +155,9 @@ pub fn find_cavities(
     params: &SurfaceParams,
 ) -> Result<CavityLayer, MeasureError> {
     if let Some(probe) = source.probe {
+        if periodic.is_some() {
+            return Err(MeasureError::PeriodicProbe);
+        }
         return find_probe_cavities(topology, source, atoms, probe);
     }
     if let Some(seams) = periodic {

@@ -6,6 +6,7 @@
 
 use glam::{DVec3, Vec3};
 use mdsurf::measure::{self, CavityOptions, CavityTracker};
+use mdsurf::scene::cavity_layer::{CavitySource, find_cavities};
 use mdsurf::surface::periodic::density::PeriodicGrid;
 use mdsurf::surface::periodic::{PeriodicBox, PeriodicEngine, Replicate, TriclinicCell};
 use mdsurf::surface::{AtomSet, SurfaceOutput, SurfaceParams};
@@ -290,4 +291,39 @@ fn cli_measures_periodic_cavities_residues_and_interfaces_and_refuses_the_probes
         assert!(run.last_line().contains("periodic"), "{}", run.stderr);
         assert_eq!(run.stderr.trim().lines().count(), 1, "{}", run.stderr);
     }
+}
+
+#[test]
+fn the_windows_cavities_of_a_periodic_surface_have_walls_and_refuse_the_probe() {
+    let (radii, frame, pbox) = load(ARGON);
+    let p = params(1.0, 1.0);
+    let out = surface(&frame.positions, &radii, &p, &pbox, Replicate::default());
+    let t = mdsurf::io::open(&data(ARGON), None).expect("open");
+    let set = atoms(&frame.positions, &radii);
+    let mut source = CavitySource {
+        subset: None,
+        beads: false,
+        probe: None,
+    };
+    let seams = out.periodic.as_deref();
+    let layer = find_cavities(t.topology(), &source, (&out.mesh, seams), &set, &p).unwrap();
+    // The window keeps cavities of 1 Å³ or more.
+    let options = CavityOptions {
+        min_volume: 1.0,
+        ..CavityOptions::default()
+    };
+    let table = measure::cavities_of(&out, &set, &p, &options).unwrap();
+    assert_eq!(layer.cavities, table);
+    // Each wall is its cavity's sheet: its triangles' area is the cavity's.
+    assert_eq!(layer.wall_vertices.len(), table.len());
+    let wall_area: f64 = layer.mesh.area();
+    let areas: f64 = table.iter().map(|c| c.area).sum();
+    assert!(
+        (wall_area - areas).abs() < 1e-6 * areas,
+        "{wall_area} against {areas}"
+    );
+    source.probe = Some(1.4);
+    let refused = find_cavities(t.topology(), &source, (&out.mesh, seams), &set, &p);
+    let message = refused.err().expect("refused").to_string();
+    assert!(message.contains("periodic"), "{message}");
 }
