@@ -188,31 +188,48 @@ pub fn interface_on(
             pick(complex.b_at),
         ];
     }
-    let [
-        atoms_a_alone,
-        atoms_b_alone,
-        atoms_a_complex,
-        atoms_b_complex,
-    ] = per_atom_areas;
-    let (area_a, area_b, area_complex) = (out_a.area, out_b.area, complex.output.area);
-    Ok(InterfaceResult {
-        grid: complex.output.grid,
-        area_a,
-        area_b,
-        area_complex,
-        buried: 0.5 * (area_a + area_b - area_complex),
-        atoms_a_alone,
-        atoms_b_alone,
-        atoms_a_complex,
-        atoms_b_complex,
-        taken: counters.map(|r| {
-            let (vertices, sharp_triangles) = r.map_or((0, 0), |r| r.taken());
-            TakenFromComplex {
-                vertices,
-                sharp_triangles,
-            }
-        }),
-    })
+    let taken = counters.map(|r| {
+        let (vertices, sharp_triangles) = r.map_or((0, 0), |r| r.taken());
+        TakenFromComplex {
+            vertices,
+            sharp_triangles,
+        }
+    });
+    Ok(InterfaceResult::of(
+        [&out_a, &out_b, complex.output],
+        per_atom_areas,
+        taken,
+    ))
+}
+
+impl InterfaceResult {
+    /// The interface of the surfaces `[a, b, complex]` (their areas, the complex's grid), with
+    /// the per-atom areas `[a alone, b alone, a in the complex, b in the complex]` (empty when
+    /// not weighed) and what each side took from the complex.
+    pub(super) fn of(
+        [a, b, complex]: [&SurfaceOutput; 3],
+        per_atom: [Vec<f64>; 4],
+        taken: [TakenFromComplex; 2],
+    ) -> InterfaceResult {
+        let [
+            atoms_a_alone,
+            atoms_b_alone,
+            atoms_a_complex,
+            atoms_b_complex,
+        ] = per_atom;
+        InterfaceResult {
+            grid: complex.grid,
+            area_a: a.area,
+            area_b: b.area,
+            area_complex: complex.area,
+            buried: 0.5 * (a.area + b.area - complex.area),
+            atoms_a_alone,
+            atoms_b_alone,
+            atoms_a_complex,
+            atoms_b_complex,
+            taken,
+        }
+    }
 }
 
 impl Complex<'_> {

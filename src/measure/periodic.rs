@@ -417,23 +417,9 @@ pub fn periodic_interface(
             together[a.len()..].to_vec(),
         ];
     }
-    let [
-        atoms_a_alone,
-        atoms_b_alone,
-        atoms_a_complex,
-        atoms_b_complex,
-    ] = per_atom_areas;
-    let (area_a, area_b, area_complex) = (out_a.area, out_b.area, out_ab.area);
-    Ok(InterfaceResult {
-        grid: out_ab.grid,
-        area_a,
-        area_b,
-        area_complex,
-        buried: 0.5 * (area_a + area_b - area_complex),
-        atoms_a_alone,
-        atoms_b_alone,
-        atoms_a_complex,
-        atoms_b_complex,
-        taken: Default::default(),
-    })
+    Ok(InterfaceResult::of(
+        [&out_a, &out_b, &out_ab],
+        per_atom_areas,
+        Default::default(),
+    ))
 }
