@@ -23,7 +23,7 @@ use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::scene::{SceneCore, in_pool, scene_err};
+use crate::scene::{SceneCore, engine_mut, in_pool, scene_err};
 
 /// A measurement error of frame `index` as a one-line `ValueError` naming what was measured.
 fn measure_err(what: &str, index: usize, err: MeasureError) -> PyErr {
@@ -73,8 +73,7 @@ fn measured(
     req: &RepRequest,
 ) -> PyResult<Measured> {
     let frame = Arc::new(core.read(index, reader)?);
-    let computed = core
-        .meshes
+    let computed = engine_mut(&mut core.meshes)
         .frame(&core.topology, index, &frame, std::slice::from_ref(req))
         .map_err(scene_err)?;
     let name = &req.rep.name;
@@ -88,7 +87,7 @@ fn measured(
             "representation '{name}': per-atom, per-residue and cavity measurements need atoms, not beads"
         )));
     }
-    let atoms = match core.meshes.layer(req.id) {
+    let atoms = match engine_mut(&mut core.meshes).layer(req.id) {
         Some(bound) => bound.atoms(&frame),
         None => {
             return Err(PyValueError::new_err(format!(
@@ -394,7 +393,7 @@ pub fn scene_interface(
     )
     .map_err(|e| PyValueError::new_err(format!("interface: {e}")))?;
     sides
-        .set_periodic(core.meshes.periodic().is_some())
+        .set_periodic(engine_mut(&mut core.meshes).periodic().is_some())
         .map_err(|e| PyValueError::new_err(format!("interface: {e}")))?;
     in_pool(py, || {
         let mut rows = Vec::with_capacity(frames.len());

@@ -8,7 +8,7 @@
 //! through a callable.
 
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::Vec3;
 use mdsurf::model::sizing::fit_untyped_radii;
@@ -259,6 +259,12 @@ fn build_topology(c: Columns, first: &[Vec3]) -> PyResult<Topology> {
     Ok(top)
 }
 
+/// The engine in `slot`, reached through `&mut` without locking (a panic while it was held
+/// left it as it was; the engine checks its own state per frame).
+pub(crate) fn engine_mut(slot: &mut Mutex<SceneEngine>) -> &mut SceneEngine {
+    slot.get_mut().unwrap_or_else(PoisonError::into_inner)
+}
+
 /// One representation's numbers in one frame.
 type RepRow = (
     String,
@@ -272,13 +278,15 @@ type RepRow = (
 );
 
 /// See the module documentation; `mdsurf.Scene` documents the arguments.
-#[pyclass(unsendable, module = "mdsurf._mdsurf", name = "SceneCore")]
+#[pyclass(module = "mdsurf._mdsurf", name = "SceneCore")]
 pub struct SceneCore {
     pub(crate) topology: Topology,
-    engine: SceneEngine,
+    /// The engine of `frame`. In a mutex only so that the class is `Sync`, as Python may drop a
+    /// scene on any thread; `&mut self` reaches it without locking ([`engine_mut`]).
+    engine: Mutex<SceneEngine>,
     /// A second engine that keeps meshes, for the measurements of `crate::measurements` (the main
     /// one only measures area and volume, as `mdsurf surface` without mesh outputs).
-    pub(crate) meshes: SceneEngine,
+    pub(crate) meshes: Mutex<SceneEngine>,
     frames: TransformedFrames,
     pub(crate) reps: Vec<RepRequest>,
     /// The scene's surface parameters (those of `select` and `--interface`).
@@ -443,8 +451,8 @@ impl SceneCore {
             }
             Ok(SceneCore {
                 topology,
-                engine,
-                meshes,
+                engine: Mutex::new(engine),
+                meshes: Mutex::new(meshes),
                 frames,
                 reps: requests,
                 params,
@@ -501,8 +509,7 @@ impl SceneCore {
         let this = &mut *self;
         in_pool(py, || {
             let frame = Arc::new(this.read(index, &reader)?);
-            let computed = this
-                .engine
+            let computed = engine_mut(&mut this.engine)
                 .frame(&this.topology, index, &frame, &this.reps)
                 .map_err(scene_err)?;
             let rows = computed

@@ -308,3 +308,33 @@ def test_scene_leaves_the_trajectory_where_it_was(adk):
     scene = mdsurf.Scene(u, select="protein", smooth=2)
     assert u.trajectory.ts.frame == 5
     assert len(scene) == 10
+
+
+def test_scene_dropped_on_another_thread_is_freed(adk):
+    """A scene whose last reference goes on another thread (a worker, a garbage collection run
+    there) is dropped there like any Python object: no "unsendable ... dropped on another
+    thread" leak reported through `sys.unraisablehook`."""
+    import gc
+    import sys
+    import threading
+
+    _, _, u = adk
+    scene = mdsurf.Scene(u, select="protein")
+    assert scene[0]["selection"].area > 0
+    reported = []
+    previous = sys.unraisablehook
+    sys.unraisablehook = lambda info: reported.append(f"{info.exc_type.__name__}: {info.exc_value}")
+    try:
+        holder = [scene]
+        del scene
+
+        def drop():
+            holder.clear()
+            gc.collect()
+
+        worker = threading.Thread(target=drop)
+        worker.start()
+        worker.join()
+    finally:
+        sys.unraisablehook = previous
+    assert holder == [] and reported == [], reported
