@@ -15,6 +15,7 @@ mod scene;
 mod topology;
 
 use mdsurf::measure::ExposureTable;
+use mdsurf::model::pbc::PbcCell;
 use mdsurf::surface::{
     AtomSet, CpuEngine, Quality, SurfaceError, SurfaceOutput, SurfaceParams, VertexMode,
 };
@@ -315,9 +316,10 @@ fn atom_areas<'py>(
 /// name, the largest area (Å²) of its first residues each computed alone on the CPU (the rule of
 /// `mdsurf surface --per-residue`, `ExposureTable`), from `positions` (N, 3) in Å, `radii` (N,)
 /// in Å, `residue_of_atom` (N,) (indices into `residue_names`, residues in topology order) and
-/// the surface settings. Returns (names, areas).
+/// the surface settings; with `box_` (3, 3), the frame's box (rows a, b, c in Å), each residue
+/// is made whole in it first. Returns (names, areas).
 #[pyfunction]
-#[pyo3(signature = (positions, radii, residue_of_atom, residue_names, spacing, radius_scale, isovalue, quality, vertices))]
+#[pyo3(signature = (positions, radii, residue_of_atom, residue_names, spacing, radius_scale, isovalue, quality, vertices, box_ = None))]
 #[allow(clippy::too_many_arguments)]
 fn exposure_table(
     py: Python<'_>,
@@ -330,7 +332,9 @@ fn exposure_table(
     isovalue: f32,
     quality: &str,
     vertices: &str,
+    box_: Option<PyReadonlyArrayDyn<'_, f32>>,
 ) -> PyResult<(Vec<String>, Vec<f64>)> {
+    let cell = scene::cell_of(box_)?.and_then(|rows| PbcCell::new(&rows));
     let (params, _, vertices) =
         settings(spacing, radius_scale, isovalue, quality, "cpu", vertices)?;
     let positions = arrays::positions(&positions)?;
@@ -363,6 +367,7 @@ fn exposure_table(
             &mut CpuEngine::new(),
             residue_names.into_iter().zip(members),
             &set,
+            cell.as_ref(),
             &effective,
         )
     });

@@ -14,6 +14,7 @@ use mdsurf::measure::{
     self, CavityOptions, CavityTracker, ExposureTable, MeasureError, ProbeOptions, Side,
     lining_residues,
 };
+use mdsurf::model::pbc::PbcCell;
 use mdsurf::model::{Frame, RadiusOverrides};
 use mdsurf::scene::interface::{Interface, InterfaceError};
 use mdsurf::scene::representation::{RepStyle, Representation};
@@ -237,6 +238,7 @@ pub fn scene_residue_areas(
                     &core.topology,
                     Some(&m.atoms),
                     &m.atom_set(),
+                    PbcCell::of(&m.frame).as_ref(),
                     &params,
                 )
                 .map_err(err)?;

@@ -83,7 +83,7 @@ impl From<ReadError> for PyErr {
 }
 
 /// A (3, 3) box (rows a, b, c in Å), or `None` for no box (absent, or all zero).
-fn cell_of(cell: Option<PyReadonlyArrayDyn<'_, f32>>) -> PyResult<Option<[Vec3; 3]>> {
+pub(crate) fn cell_of(cell: Option<PyReadonlyArrayDyn<'_, f32>>) -> PyResult<Option<[Vec3; 3]>> {
     let Some(cell) = cell else {
         return Ok(None);
     };
@@ -533,8 +533,10 @@ impl SceneCore {
         })
     }
 
-    /// Frame `index` through the transformations: positions (N, 3) float32 in Å, and, when
-    /// `selection` is given, the indices of the atoms it picks in that frame (uint32).
+    /// Frame `index` through the transformations: positions (N, 3) float32 in Å, when
+    /// `selection` is given the indices of the atoms it picks in that frame (uint32), and the
+    /// frame's box after the transformations ((3, 3) float32, rows a, b, c in Å; `None`
+    /// without one).
     #[pyo3(signature = (index, reader, selection = None))]
     #[allow(clippy::type_complexity)]
     fn transformed<'py>(
@@ -543,7 +545,11 @@ impl SceneCore {
         index: usize,
         reader: Py<PyAny>,
         selection: Option<&str>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Option<Bound<'py, PyArray1<u32>>>)> {
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f32>>,
+        Option<Bound<'py, PyArray1<u32>>>,
+        Option<Bound<'py, PyArray2<f32>>>,
+    )> {
         let this = &mut *self;
         let (frame, indices) = in_pool(py, || {
             let frame = this.read(index, &reader)?;
@@ -554,7 +560,10 @@ impl SceneCore {
         })?;
         let rows: Vec<[f32; 3]> = frame.positions.iter().map(|p| p.to_array()).collect();
         let indices = indices.map(|i| PyArray1::from_vec(py, i));
-        Ok((arrays::array_f32(py, &rows), indices))
+        let cell = frame
+            .cell
+            .map(|rows| arrays::array_f32(py, &rows.map(|r| r.to_array())));
+        Ok((arrays::array_f32(py, &rows), indices, cell))
     }
 
     /// Checks that `selection` parses (a `ValueError` naming it otherwise) and whether it

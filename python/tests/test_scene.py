@@ -338,3 +338,26 @@ def test_scene_dropped_on_another_thread_is_freed(adk):
     finally:
         sys.unraisablehook = previous
     assert holder == [] and reported == [], reported
+
+
+def test_exposure_of_residues_split_by_the_box_is_against_whole_ones(adk):
+    """With ``whole=False`` the frames keep adk's split residues (9 of 214 in frame 0 span
+    more than half the box), but each residue alone, the exposure's denominator, is made whole
+    in the frame's box: the same table as with whole molecules, to the grid's placement."""
+    _, _, u = adk
+    tables = []
+    for whole in (True, False):
+        run = GaussianSurface(u, select="protein", per_residue=True, whole=whole).run(stop=1)
+        names, areas = run.results.residues.resnames, run._exposure_reference
+        tables.append({n: a for n, a in zip(names, areas) if np.isfinite(a)})
+    assert set(tables[0]) == set(tables[1]) and len(tables[0]) >= 19
+    for name, area in tables[0].items():
+        assert tables[1][name] == pytest.approx(area, rel=0.01), name
+    # The scene's own measurement path takes the same table.
+    for whole, table in zip((True, False), tables):
+        res = mdsurf.Scene(u, select="protein", whole=whole).per_residue_areas(frames=[0])
+        with np.errstate(invalid="ignore", divide="ignore"):  # 0 / 0 for buried residues
+            reference = res.area_A2[0] / res.exposure[0]
+        for name, value in zip(res.resnames, reference):
+            if np.isfinite(value):
+                assert value == pytest.approx(table[name], rel=1e-6), (whole, name)

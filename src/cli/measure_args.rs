@@ -15,6 +15,7 @@ use mdsurf::measure::{
     self, AtomCsv, CavityCsv, CavityEventCsv, CavityOptions, CavityTracker, ContactCsv,
     ExposureTable, InterfaceCsv, ResidueCsv,
 };
+use mdsurf::model::pbc::PbcCell;
 use mdsurf::model::{Frame, RadiusOverrides, Topology};
 use mdsurf::scene::interface::{Interface as SceneInterface, InterfaceFrame, ShownSurface};
 use mdsurf::scene::representation::{RepStyle, Representation};
@@ -298,6 +299,7 @@ impl Measurer {
                 &layer.rep.name,
                 indices.as_deref(),
                 &atoms,
+                PbcCell::of(frame),
                 &params,
             )
             .with_context(|| {
@@ -310,13 +312,15 @@ impl Measurer {
         Ok(())
     }
 
-    /// Builds representation `name`'s exposure table unless it has one.
+    /// Builds representation `name`'s exposure table unless it has one (residues made whole
+    /// in the frame's `cell`, if any).
     fn exposure_table(
         &mut self,
         topology: &Topology,
         name: &str,
         atom_indices: Option<&[u32]>,
         atoms: &AtomSet<'_>,
+        cell: Option<PbcCell>,
         params: &SurfaceParams,
     ) -> Result<()> {
         if self.exposure.contains_key(name) {
@@ -334,6 +338,7 @@ impl Measurer {
             topology,
             atom_indices,
             atoms,
+            cell.as_ref(),
             params,
         )?;
         self.exposure.insert(name.to_string(), table);
@@ -364,7 +369,7 @@ impl Measurer {
         if self.args.needs_meshes() {
             for (layer, atoms) in &layers {
                 let atoms = atoms.as_ref().map_err(|e| anyhow!("{e:#}"))?;
-                self.surface(topology, index, layer, atoms.as_deref())
+                self.surface(topology, (index, frame), layer, atoms.as_deref())
                     .with_context(|| {
                         format!("frame {index}: representation '{}'", layer.rep.name)
                     })?;
@@ -397,11 +402,12 @@ impl Measurer {
         Ok(())
     }
 
-    /// Per-atom, per-residue and cavity rows of one surface representation.
+    /// Per-atom, per-residue and cavity rows of one surface representation in frame `index`
+    /// (`frame`: its transformed coordinates).
     fn surface(
         &mut self,
         topology: &Topology,
-        index: usize,
+        (index, frame): (usize, &Frame),
         layer: &LayerResult,
         atom_indices: Option<&[u32]>,
     ) -> Result<()> {
@@ -414,7 +420,8 @@ impl Measurer {
                     .push(index, name, topology, atom_indices, &areas)?;
             }
             if self.args.per_residue.is_some() {
-                self.exposure_table(topology, name, atom_indices, &atoms, &params)?;
+                let cell = PbcCell::of(frame);
+                self.exposure_table(topology, name, atom_indices, &atoms, cell, &params)?;
                 let residues = measure::residue_areas(topology, atom_indices, &areas)?;
                 self.residues
                     .push(index, name, topology, &residues, self.exposure.get(name));

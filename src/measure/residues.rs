@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 
 use super::MeasureError;
+use crate::model::pbc::PbcCell;
 use crate::model::{Topology, chain_or_segment};
 use crate::surface::{AtomSet, SurfaceEngine, SurfaceParams};
 
@@ -197,6 +198,22 @@ pub fn residue_areas(
     Ok(found)
 }
 
+/// Moves each of `positions` (Å) after the first to its image nearest the first, where that
+/// image is nearer than the position itself.
+fn make_whole(positions: &mut [Vec3], cell: &PbcCell) {
+    let Some((first, rest)) = positions.split_first_mut() else {
+        return;
+    };
+    let first = *first;
+    for p in rest {
+        let d = *p - first;
+        let nearest = cell.min_image(d);
+        if nearest.length_squared() < d.length_squared() {
+            *p = first + nearest;
+        }
+    }
+}
+
 /// The largest area (Å²) a residue of each name has alone, the denominator of exposure.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ExposureTable {
@@ -217,8 +234,9 @@ impl ExposureTable {
 
     /// The table of a structure: for each residue name among the set's atoms, the largest
     /// surface area (`SurfaceOutput::area`, Å²) of the first [`Self::SAMPLES`] residues of
-    /// that name, each computed alone (its atoms in the set, their radii) with `engine` and
-    /// `params`. Build it once per representation (from its first frame) and reuse it.
+    /// that name, each computed alone (its atoms in the set, their radii, made whole in `cell`
+    /// when the frame has one) with `engine` and `params`. Build it once per representation
+    /// (from its first frame) and reuse it.
     ///
     /// Fails on mismatched lengths, indices past the topology, or a surface that fails.
     pub fn from_isolated_residues(
@@ -226,6 +244,7 @@ impl ExposureTable {
         topology: &Topology,
         atom_indices: Option<&[u32]>,
         atoms: &AtomSet<'_>,
+        cell: Option<&PbcCell>,
         params: &SurfaceParams,
     ) -> Result<ExposureTable, MeasureError> {
         atoms.validate()?;
@@ -246,18 +265,25 @@ impl ExposureTable {
                 .to_string();
             (name, set)
         });
-        Self::from_residue_members(engine, residues, atoms, params)
+        Self::from_residue_members(engine, residues, atoms, cell, params)
     }
 
     /// The table of residues given as (name, indices of their atoms in `atoms`), in the order
     /// whose first [`Self::SAMPLES`] of each name are computed alone (see
     /// [`Self::from_isolated_residues`], which gives the topology's residues in file order).
     ///
+    /// With a periodic `cell`, a residue is made whole before its surface is computed: each
+    /// atom is taken at its image nearest the residue's first atom (a residue split by a face
+    /// of the box, as trajectories written without whole molecules have them, would otherwise
+    /// count as two pieces, each with its own surface). A residue is far shorter than half a
+    /// box, so the nearest image is the bonded one.
+    ///
     /// Fails on an index past the set or a surface that fails.
     pub fn from_residue_members(
         engine: &mut dyn SurfaceEngine,
         residues: impl IntoIterator<Item = (String, Vec<usize>)>,
         atoms: &AtomSet<'_>,
+        cell: Option<&PbcCell>,
         params: &SurfaceParams,
     ) -> Result<ExposureTable, MeasureError> {
         atoms.validate()?;
@@ -284,6 +310,9 @@ impl ExposureTable {
             pos.clear();
             radii.clear();
             pos.extend(set.iter().map(|&k| atoms.positions[k]));
+            if let Some(cell) = cell {
+                make_whole(&mut pos, cell);
+            }
             radii.extend(set.iter().map(|&k| atoms.radii[k]));
             let alone = AtomSet {
                 positions: &pos,

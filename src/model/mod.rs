@@ -18,7 +18,7 @@ pub mod exposure;
 pub(crate) mod labels;
 pub(crate) mod lipid_like;
 pub(crate) mod particles;
-pub(crate) mod pbc;
+pub mod pbc;
 pub(crate) mod radii;
 mod residue_runs;
 pub(crate) mod residues;

@@ -14,6 +14,7 @@ use std::collections::HashMap;
 
 use super::frame::SceneError;
 use crate::measure::{self, ExposureTable, MeasureError};
+use crate::model::pbc::PbcCell;
 use crate::model::{ColourMap, Topology};
 use crate::surface::periodic::PeriodicMesh;
 use crate::surface::{AtomSet, CpuEngine, Mesh, SurfaceParams};
@@ -34,11 +35,24 @@ pub(crate) struct ExposureColouring {
     table: Option<ExposureTable>,
 }
 
+/// A representation's surface in one frame, as exposure colouring reads it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ColouredSurface<'a> {
+    /// The mesh (of every image shown, for a periodic surface).
+    pub mesh: &'a Mesh,
+    /// Its area (Å², `SurfaceOutput::area`; over the images shown).
+    pub area: f64,
+    /// A periodic surface's seams (`SurfaceOutput::periodic`).
+    pub seams: Option<&'a PeriodicMesh>,
+    /// The frame's periodic cell, if it has one: the isolated residues of the exposure table
+    /// are made whole in it (see [`ExposureTable::from_residue_members`]).
+    pub cell: Option<PbcCell>,
+}
+
 impl ExposureColouring {
     /// The colour of each atom of `atoms` (the topology atoms `atom_indices`, all of them for
-    /// `None`) through `map`, from the surface `mesh` computed with `params` (the effective
-    /// ones, see [`crate::surface::VertexMode::effective`]) whose area is `area` Å² (a
-    /// periodic surface's with its `seams`: its area over the images shown).
+    /// `None`) through `map`, from `surface`, computed with `params` (the effective ones, see
+    /// [`crate::surface::VertexMode::effective`]).
     ///
     /// Fails on mismatched lengths or indices (see [`measure::atom_areas`]) or when an
     /// isolated residue's surface fails.
@@ -48,7 +62,7 @@ impl ExposureColouring {
         atom_indices: Option<&[u32]>,
         atoms: &AtomSet<'_>,
         params: &SurfaceParams,
-        (mesh, area, seams): (&Mesh, f64, Option<&PeriodicMesh>),
+        surface: ColouredSurface<'_>,
         map: ColourMap,
     ) -> Result<Vec<[f32; 3]>, MeasureError> {
         let plain = AtomSet {
@@ -62,9 +76,13 @@ impl ExposureColouring {
                 topology,
                 atom_indices,
                 &plain,
+                surface.cell.as_ref(),
                 params,
             )?),
         };
+        let ColouredSurface {
+            mesh, area, seams, ..
+        } = surface;
         let (mut areas, area) = match seams {
             Some(s) => (
                 measure::periodic_atom_areas(mesh, s, &plain, params)?,

@@ -136,7 +136,7 @@ fn measure_atom_areas_sum_to_the_area_on_1hpv() {
     // Exposure: a residue never has much more area than alone.
     let mut engine = CpuEngine::new();
     let table =
-        ExposureTable::from_isolated_residues(&mut engine, &top, Some(&idx), &atoms, &params)
+        ExposureTable::from_isolated_residues(&mut engine, &top, Some(&idx), &atoms, None, &params)
             .expect("exposure table");
     assert_eq!(table.entries().count(), 20, "amino acids of 1hpv");
     for r in &residues {

@@ -168,7 +168,7 @@ class GaussianSurface(AnalysisBase):
         if self._select is not None:
             dynamic = core._core.check_selection(self._select)
             if not dynamic:
-                _, picked = core._core.transformed(0, core._reader, self._select)
+                _, picked, _ = core._core.transformed(0, core._reader, self._select)
                 if len(picked) == 0:
                     raise ValueError(f"selection '{self._select}' matches no atom")
         count = len(atomgroup) if self._select is None else atomgroup.universe.atoms.n_atoms
@@ -204,7 +204,7 @@ class GaussianSurface(AnalysisBase):
         the table of the trajectory's first frame (see ``per_residue``)."""
         trajectory = self._ag.universe.trajectory
         was = trajectory.ts.frame
-        positions, picked = core._core.transformed(0, core._reader, self._select)
+        positions, picked, box = core._core.transformed(0, core._reader, self._select)
         if trajectory.ts.frame != was:
             trajectory[was]
         if picked is None:
@@ -219,6 +219,7 @@ class GaussianSurface(AnalysisBase):
             owner.astype(np.uint32).tolist(),
             [str(n) for n in residues.resnames],
             *(v for k, v in self._settings.items() if k != "backend"),
+            box_=box,
         )
         table = dict(zip(names, areas))
         return np.array([table.get(str(n).strip(), np.nan) for n in residues.resnames])
@@ -251,7 +252,7 @@ class GaussianSurface(AnalysisBase):
         frame = self._ts.frame
         scene = self._scene()
         trajectory = self._ag.universe.trajectory
-        positions, picked = scene._core.transformed(frame, scene._reader, self._select)
+        positions, picked, _ = scene._core.transformed(frame, scene._reader, self._select)
         if trajectory.ts.frame != frame:
             trajectory[frame]  # smoothing read its neighbours: back to this frame
         if picked is None:

@@ -396,13 +396,13 @@ class Scene:
 
     def positions(self, i):
         """Frame ``i``'s positions (N, 3) in Å after the transformations."""
-        positions, _ = self._core.transformed(self._index(i), self._reader)
+        positions, _, _ = self._core.transformed(self._index(i), self._reader)
         return positions
 
     def select(self, selection, frame=0):
         """Indices (uint32) of the atoms ``selection`` (mdsurf's language) picks in ``frame``
         after the transformations."""
-        _, indices = self._core.transformed(self._index(frame), self._reader, str(selection))
+        _, indices, _ = self._core.transformed(self._index(frame), self._reader, str(selection))
         return indices
 
     def frame(self, i):

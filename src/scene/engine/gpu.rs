@@ -4,10 +4,10 @@
 
 use std::sync::Arc;
 
-use super::{SceneBackend, SceneEngine};
+use super::{ExposureRequest, SceneBackend, SceneEngine};
 use crate::gpu::{Changes, FrameStats, GpuEngine, GpuSurface};
-use crate::model::{ColourMap, Topology};
-use crate::scene::exposure::exposure_failed;
+use crate::model::Topology;
+use crate::scene::exposure::{ColouredSurface, exposure_failed};
 use crate::scene::frame::{LayerResult, RepId, SceneError, SceneFrame};
 use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceError};
 
@@ -42,9 +42,8 @@ impl SceneEngine {
         })
     }
 
-    /// Gives the GPU surface of `result` (its counters `stats`) exposure colours through `map`:
-    /// reads its mesh back, computes the colours of its atoms (topology atoms `subset`, all for
-    /// `None`), stores them in `result`'s particles and submits the colour pass again. Returns
+    /// Gives the GPU surface of `result` (its counters `stats`) the exposure colours of
+    /// `request`: reads its mesh back, computes the colours of its atoms, stores them in `result`'s particles and submits the colour pass again. Returns
     /// the engine's frame number to collect.
     pub(super) fn colour_by_exposure(
         &mut self,
@@ -52,9 +51,9 @@ impl SceneEngine {
         index: usize,
         result: &mut LayerResult,
         stats: &FrameStats,
-        map: ColourMap,
-        subset: Option<Vec<u32>>,
+        request: ExposureRequest,
     ) -> Result<u64, SceneError> {
+        let ExposureRequest { map, subset, cell } = request;
         let id = result.id;
         let rep = result.rep.clone();
         let surface_failed = |source| SceneError::Surface {
@@ -85,7 +84,12 @@ impl SceneEngine {
                 subset.as_deref(),
                 &atoms,
                 &params,
-                (&mesh, stats.area, None),
+                ColouredSurface {
+                    mesh: &mesh,
+                    area: stats.area,
+                    seams: None,
+                    cell,
+                },
                 map,
             )
             .map_err(exposure_failed(index, &rep.name))?;

@@ -36,12 +36,13 @@ mod gpu;
 use gpu::sibling_of;
 
 use super::cavity_layer::CavitySource;
-use super::exposure::{ExposureColouring, exposure_failed};
+use super::exposure::{ColouredSurface, ExposureColouring, exposure_failed};
 use super::frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
 use super::layer::{Layer, LayerFrame};
 use super::representation::Representation;
 use crate::gpu::exposure::runs_on_gpu;
 use crate::gpu::{Changes, GpuEngine, Work};
+use crate::model::pbc::PbcCell;
 use crate::model::{ColorScheme, ColourMap, Frame, RadiusOverrides, Topology};
 use crate::surface::periodic::PeriodicEngine;
 use crate::surface::{AtomSet, Mesh, MeshCounts, SurfaceEngine, SurfaceOutput};
@@ -131,9 +132,18 @@ struct Submitted {
     frame: u64,
     /// Which stages the submit ran.
     work: Work,
-    /// Exposure colours to give the surface once it is collected: the map and the topology
-    /// atoms of the particles (`None`: all).
-    exposure: Option<(ColourMap, Option<Vec<u32>>)>,
+    /// Exposure colours to give the surface once it is collected.
+    exposure: Option<ExposureRequest>,
+}
+
+/// A GPU surface's exposure colours, asked for when it is submitted.
+pub(super) struct ExposureRequest {
+    /// The colour map.
+    map: ColourMap,
+    /// The topology atoms of the particles (`None`: all).
+    subset: Option<Vec<u32>>,
+    /// The frame's periodic cell, if any (see [`ColouredSurface::cell`]).
+    cell: Option<PbcCell>,
 }
 
 /// The colour map of `rep`'s exposure colours, when its surface takes them (atoms, not
@@ -419,7 +429,12 @@ impl SceneEngine {
                             .map_err(periodic_failed)
                     },
                     |out, map| {
-                        let surface = (&out.mesh, out.area, out.periodic.as_deref());
+                        let surface = ColouredSurface {
+                            mesh: &out.mesh,
+                            area: out.area,
+                            seams: out.periodic.as_deref(),
+                            cell: PbcCell::of(frame),
+                        };
                         let subset = lf.particles.subset();
                         (slot.exposure)
                             .colours(topology, subset, &atoms, &params, surface, map)
@@ -446,7 +461,12 @@ impl SceneEngine {
                             exposure_map(rep, lf.particles.is_beads()),
                             |a| e.compute(a, &params).map_err(surface_failed),
                             |out, map| {
-                                let surface = (&out.mesh, out.area, None);
+                                let surface = ColouredSurface {
+                                    mesh: &out.mesh,
+                                    area: out.area,
+                                    seams: None,
+                                    cell: PbcCell::of(frame),
+                                };
                                 let subset = lf.particles.subset();
                                 (slot.exposure)
                                     .colours(topology, subset, &atoms, &effective, surface, map)
@@ -479,8 +499,13 @@ impl SceneEngine {
                         submitted = Some(Submitted {
                             frame: info.frame,
                             work: info.work,
-                            exposure: exposure_map(rep, lf.particles.is_beads())
-                                .map(|m| (m, lf.particles.subset().map(<[u32]>::to_vec))),
+                            exposure: exposure_map(rep, lf.particles.is_beads()).map(|map| {
+                                ExposureRequest {
+                                    map,
+                                    subset: lf.particles.subset().map(<[u32]>::to_vec),
+                                    cell: PbcCell::of(frame),
+                                }
+                            }),
                         });
                     }
                 }
@@ -526,10 +551,10 @@ impl SceneEngine {
         {
             let started = Instant::now();
             let mut finished = self.finish_gpu(id, (index, frame), &result);
-            if let (Ok((stats, _)), Some((map, subset))) = (&finished, exposure) {
+            if let (Ok((stats, _)), Some(request)) = (&finished, exposure) {
                 let stats = *stats;
                 finished = self
-                    .colour_by_exposure(topology, index, &mut result, &stats, map, subset)
+                    .colour_by_exposure(topology, index, &mut result, &stats, request)
                     .and_then(|frame| self.finish_gpu(id, (index, frame), &result));
             }
             let (stats, surface) = match finished {
