@@ -14,6 +14,7 @@ use glam::Vec3;
 use mdsurf::export::write_atomic;
 use mdsurf::measure;
 use mdsurf::model::Particles;
+use mdsurf::surface::periodic::{PeriodicEngine, Replicate};
 use mdsurf::surface::{CpuEngine, RadiusSet, StageTimings, SurfaceParams};
 use mdsurf::synthetic::SyntheticSystem;
 
@@ -103,7 +104,15 @@ pub fn run(args: BenchArgs) -> Result<()> {
             return Ok(());
         }
     }
-    let mut engines = engines_for(args.backend)?;
+    if args.periodic {
+        check_periodic(&args)?;
+    }
+    let backend = if args.periodic {
+        BenchBackend::Cpu
+    } else {
+        args.backend
+    };
+    let mut engines = engines_for(backend)?;
     for engine in &mut engines {
         if let BenchEngine::Gpu(gpu) = engine {
             gpu.set_options(mdsurf::gpu::EngineOptions {
@@ -332,7 +341,23 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
     Ok(cases)
 }
 
-/// Times one case on one engine: `warmup` untimed frames, then `repeats` timed ones.
+/// Refuses `--periodic` where it cannot apply: it times the file's case on the CPU periodic
+/// engine, whose vertices are interpolated.
+fn check_periodic(args: &BenchArgs) -> Result<()> {
+    if args.backend == BenchBackend::Gpu {
+        bail!("--periodic: the periodic surface is computed on the CPU (the GPU engine has no periodic path); use --backend cpu");
+    }
+    if !args.synthetic.is_empty() || !args.synthetic_shell.is_empty() || args.table1 {
+        bail!("--periodic times the file's case; synthetic systems and --table1 have no periodic box");
+    }
+    if args.params.vertex_mode() == VertexMode::Refined {
+        bail!("--periodic: the periodic engine interpolates its vertices (no --vertices refined or --preset ses)");
+    }
+    Ok(())
+}
+
+/// Times one case on one engine: `warmup` untimed frames, then `repeats` timed ones (with
+/// `--periodic`, on the CPU periodic engine in each frame's box instead of `engine`).
 fn time_case(
     source: &mut Source,
     engine: &mut BenchEngine,
@@ -352,10 +377,11 @@ fn time_case(
         BenchEngine::Cpu(_) => None,
     };
     let mut objects_after_first = None;
+    let mut periodic = args.periodic.then(PeriodicEngine::new);
     let single_frame = matches!(&*source, Source::Real(sys) if sys.len() == 1);
     for i in 0..total as usize {
         let t0 = Instant::now();
-        let read_ms = read_frame(source, i, &mut positions)?;
+        let (cell, read_ms) = read_frame(source, i, &mut positions)?;
         let t1 = Instant::now();
         // Radii that follow exposure (`--preset ses`): the GPU engine counts them on the
         // device from the particles' own radii; the CPU engine gets the host's.
@@ -392,7 +418,10 @@ fn time_case(
         if let (true, BenchEngine::Gpu(gpu)) = (single_frame, &mut *engine) {
             gpu.forget_inputs();
         }
-        let output = engine.engine().compute(&atoms, params)?;
+        let output = match periodic.as_mut() {
+            Some(p) => p.compute_in_cell(cell.as_ref(), &atoms, params, Replicate::default())?,
+            None => engine.engine().compute(&atoms, params)?,
+        };
         let compute_ms = ms_since(t1);
         let wall_ms = ms_since(t0);
         // What `surface --per-residue` adds to the frame (file cases; synthetic ones have no
@@ -425,7 +454,10 @@ fn time_case(
     let wall = median(walls);
     Ok(BenchResult {
         case: String::new(),
-        backend: engine.name().to_string(),
+        backend: match periodic {
+            Some(_) => format!("{} periodic", engine.name()),
+            None => engine.name().to_string(),
+        },
         gpu_bytes: engine.gpu_bytes(),
         atoms: positions.len(),
         spacing: params.spacing,
@@ -454,20 +486,26 @@ fn time_case(
     })
 }
 
-/// Reads (or generates) the positions of the `i`-th timed frame; returns the time in ms.
-fn read_frame(source: &mut Source, i: usize, out: &mut Vec<Vec3>) -> Result<f64> {
+/// Reads (or generates) the positions of the `i`-th timed frame; returns the frame's box
+/// (rows a, b, c in Å; synthetic systems have none) and the time in ms.
+fn read_frame(
+    source: &mut Source,
+    i: usize,
+    out: &mut Vec<Vec3>,
+) -> Result<(Option<[Vec3; 3]>, f64)> {
     match source {
         Source::Real(sys) => {
             let len = sys.len();
             if len == 0 {
                 bail!("{}: no frames", sys.frames_path.display());
             }
-            Ok(sys.read_positions(i % len, out)?.1)
+            let (frame, ms) = sys.read_positions(i % len, out)?;
+            Ok((frame.cell, ms))
         }
         Source::Synthetic(s) => {
             let t0 = Instant::now();
             s.frame_into(i, out);
-            Ok(ms_since(t0))
+            Ok((None, ms_since(t0)))
         }
     }
 }

@@ -64,6 +64,11 @@ pub struct BenchArgs {
     /// and a line with its share of the frame's compute.
     #[arg(long)]
     pub per_residue: bool,
+    /// Compute each frame's surface periodic in the frame's box, as `surface --periodic` does
+    /// (the CPU periodic engine, interpolated vertices; the file's case, not synthetic ones);
+    /// with --per-residue, the atoms' areas are weighed over their images that reach the cell.
+    #[arg(long)]
+    pub periodic: bool,
     /// Also write the table as CSV.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,

@@ -178,3 +178,46 @@ fn table1_needs_the_gpu_engine() {
     assert_eq!(run.stderr.lines().count(), 1, "{}", run.stderr);
     assert!(run.stderr.contains("--table1"), "{}", run.stderr);
 }
+
+#[test]
+fn bench_times_periodic_surfaces_and_their_per_residue_areas() {
+    let dir = tempfile::tempdir().unwrap();
+    let bilayer = data("martini_dppc_chol_bilayer.gro");
+    let args = [
+        "bench",
+        &*bilayer,
+        "--backend",
+        "cpu",
+        "--periodic",
+        "--per-residue",
+        "--repeats",
+        "1",
+        "--warmup",
+        "0",
+        "--csv",
+        "b.csv",
+    ];
+    let run = mdsurf(dir.path(), &args);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let csv = Csv::read(&dir.path().join("b.csv"));
+    assert_eq!(csv.rows.len(), 1, "{:?}", csv.rows);
+    assert_eq!(csv.text_col("backend"), ["cpu periodic"]);
+    // The cell's grid, ceil(L / H) samples per edge of the 114.03 x 114.03 x 106.91 Å box (an
+    // open-space grid would hold the atoms' box and its padding instead).
+    assert_eq!(csv.text_col("grid"), ["115x115x107"]);
+    assert!(csv.col("triangles")[0] > 1000.0);
+    assert!(csv.col("per_residue_ms")[0] > 0.0);
+    // Where it cannot apply: one line each.
+    for extra in [
+        ["--backend", "gpu"].as_slice(),
+        ["--preset", "ses"].as_slice(),
+        ["--synthetic", "5k"].as_slice(),
+    ] {
+        let mut args = vec!["bench", &*bilayer, "--periodic"];
+        args.extend_from_slice(extra);
+        let run = mdsurf(dir.path(), &args);
+        assert_eq!(run.code, 2, "{extra:?}: {}", run.stderr);
+        assert!(run.stderr.contains("--periodic"), "{}", run.stderr);
+        assert_eq!(run.stderr.trim().lines().count(), 1, "{}", run.stderr);
+    }
+}
