@@ -345,13 +345,19 @@ fn build_cases(args: &BenchArgs, params: SurfaceParams) -> Result<Vec<Case>> {
 /// engine, whose vertices are interpolated.
 fn check_periodic(args: &BenchArgs) -> Result<()> {
     if args.backend == BenchBackend::Gpu {
-        bail!("--periodic: the periodic surface is computed on the CPU (the GPU engine has no periodic path); use --backend cpu");
+        bail!(
+            "--periodic: the periodic surface is computed on the CPU (the GPU engine has no periodic path); use --backend cpu"
+        );
     }
     if !args.synthetic.is_empty() || !args.synthetic_shell.is_empty() || args.table1 {
-        bail!("--periodic times the file's case; synthetic systems and --table1 have no periodic box");
+        bail!(
+            "--periodic times the file's case; synthetic systems and --table1 have no periodic box"
+        );
     }
     if args.params.vertex_mode() == VertexMode::Refined {
-        bail!("--periodic: the periodic engine interpolates its vertices (no --vertices refined or --preset ses)");
+        bail!(
+            "--periodic: the periodic engine interpolates its vertices (no --vertices refined or --preset ses)"
+        );
     }
     Ok(())
 }
