@@ -192,7 +192,13 @@ pub fn scene_atom_areas<'py>(
             let m = measured(core, index, &reader, &req)?;
             let what = format!("representation '{rep}'");
             let areas = atom_areas(&m).map_err(|e| measure_err(&what, index, e))?;
-            rows.push((index, m.frame.time_ps, m.layer.output.area, m.atoms, areas));
+            rows.push((
+                index,
+                m.frame.time_ps,
+                m.layer.output.measured_area(),
+                m.atoms,
+                areas,
+            ));
         }
         Ok(rows)
     })?;
@@ -256,7 +262,7 @@ pub fn scene_residue_areas(
             rows.push((
                 index,
                 m.frame.time_ps,
-                m.layer.output.area,
+                m.layer.output.measured_area(),
                 residues.iter().map(|r| r.residue).collect(),
                 residues.iter().map(|r| r.area).collect(),
                 exposure,

@@ -18,6 +18,7 @@ use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
 use mdsurf::scene::{RepRequest, SceneBackend, SceneEngine, SceneError};
 use mdsurf::selection::{BoundSelection, Selection};
+use mdsurf::surface::periodic::Replicate;
 use mdsurf::surface::{CpuEngine, SurfaceEngine, SurfaceParams, VertexMode};
 use mdsurf::transform::{
     FitReference, TransformChain, TransformError, TransformOptions, TransformedFrames,
@@ -302,7 +303,8 @@ impl SceneCore {
     #[pyo3(signature = (
         columns, first, first_box, n_frames, reader, select = None, state = None,
         spacing = 1.0, radius_scale = 1.0, isovalue = 0.5, quality = "medium", vertices = None,
-        whole = None, center = None, fit = None, smooth = 0, file = "", surfaces = true
+        whole = None, center = None, fit = None, smooth = 0, periodic = false, replicate = None,
+        file = "", surfaces = true
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -323,6 +325,8 @@ impl SceneCore {
         center: Option<String>,
         fit: Option<String>,
         smooth: usize,
+        periodic: bool,
+        replicate: Option<[u32; 3]>,
         file: &str,
         surfaces: bool,
     ) -> PyResult<Self> {
@@ -362,7 +366,12 @@ impl SceneCore {
             let topology = build_topology(columns, &raw_first.positions)?;
             // The options as `TransformArgs::options` makes them: a state file's when no
             // transformation is asked for.
-            let asked = whole.is_some() || center.is_some() || fit.is_some() || smooth > 0;
+            let asked = whole.is_some()
+                || center.is_some()
+                || fit.is_some()
+                || smooth > 0
+                || periodic
+                || replicate.is_some();
             let options = match &state {
                 Some(s) if !asked => s.trajectory.transforms(),
                 _ => TransformOptions {
@@ -371,8 +380,8 @@ impl SceneCore {
                     fit,
                     fit_reference: FitReference::First,
                     smooth,
-                    periodic: false,
-                    replicate: Default::default(),
+                    periodic: periodic || replicate.is_some(),
+                    replicate: replicate.map(Replicate).unwrap_or_default(),
                 },
             };
             let chain = TransformChain::new(&options, &topology, &raw_first, None, file)

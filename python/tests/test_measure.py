@@ -195,6 +195,36 @@ def test_periodic_measurements_equal_cli(cli, data, tmp_path):
         scene.cavities("lipids", probe_A=1.4)
 
 
+def test_periodic_keywords_equal_cli(cli, data, tmp_path):
+    """``Scene(..., periodic=True)`` and ``replicate=`` are ``--periodic`` and ``--replicate``:
+    the same areas, per-residue areas per cell whatever the images shown, and one-line
+    errors."""
+    gro = tmp_path / "bilayer.gro"
+    shutil.copy(data / "martini_dppc_chol_bilayer.gro", gro)
+    lipids = "resname DPPC CHOL"
+    for flags, keywords in [
+        (["--periodic"], dict(periodic=True)),
+        (["--replicate", "2,2,1"], dict(replicate=(2, 2, 1))),
+    ]:
+        run = run_cli(cli, tmp_path, gro, "--select", lipids, *flags, "--stats", "s.csv",
+                      "--per-residue", "r.csv")
+        assert run.returncode == 0, run.stderr
+        (stats,), rows = rows_of(tmp_path / "s.csv"), rows_of(tmp_path / "r.csv")
+        scene = mdsurf.Scene(universe(gro), select=lipids, **keywords)
+        assert "periodic" in scene.transforms, scene.transforms
+        assert close(scene.run().area["selection"][0], stats["area_A2"], 4)
+        res = scene.per_residue_areas()
+        assert len(rows) == len(res.residues) == 450
+        for j, r in enumerate(rows):
+            assert close(res.area_A2[0, j], r["area_A2"], 3), (keywords, res.area_A2[0, j], r)
+        if "replicate" in keywords:
+            # Four images shown, the residues' areas still one cell's.
+            assert close(res.total_area_A2[0] * 4, stats["area_A2"], 3)
+    for bad in [(2, 2), (0, 1, 1)]:
+        with pytest.raises(ValueError, match="replicate"):
+            mdsurf.Scene(universe(gro), select=lipids, replicate=bad)
+
+
 def test_probe_cavities_equal_cli(cli, adk, tmp_path):
     gro, xtc = adk
     run = run_cli(cli, tmp_path, gro, xtc, "--select", "protein", "--frames", "0:2",

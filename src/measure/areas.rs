@@ -289,8 +289,8 @@ pub fn atom_areas(
 
 /// [`atom_areas`] of a computed surface, rescaled so that they sum to [`SurfaceOutput::area`]
 /// (the same, to rounding, with interpolated vertices; the curved area with refined ones).
-/// A periodic surface's are [`super::periodic_atom_areas`], per cell (summing to the area
-/// over the images shown). Fails as [`atom_areas`] does, or when the engine did not keep the
+/// A periodic surface's are [`super::periodic_atom_areas`], per cell (summing to
+/// [`SurfaceOutput::measured_area`], one cell's). Fails as [`atom_areas`] does, or when the engine did not keep the
 /// mesh.
 pub fn atom_areas_of(
     output: &SurfaceOutput,
@@ -300,13 +300,11 @@ pub fn atom_areas_of(
     if output.counts_without_mesh.is_some() {
         return Err(MeasureError::NoMesh);
     }
-    let (mut areas, area) = match &output.periodic {
-        Some(seams) => (
-            super::periodic_atom_areas(&output.mesh, seams, atoms, params)?,
-            output.area / f64::from(seams.replicate.count()),
-        ),
-        None => (atom_areas(&output.mesh, atoms, params)?, output.area),
+    let mut areas = match &output.periodic {
+        Some(seams) => super::periodic_atom_areas(&output.mesh, seams, atoms, params)?,
+        None => atom_areas(&output.mesh, atoms, params)?,
     };
+    let area = output.measured_area();
     let sum: f64 = areas.iter().sum();
     if sum > 0.0 && area.is_finite() {
         let scale = area / sum;

@@ -40,7 +40,8 @@ pub(crate) struct ExposureColouring {
 pub(crate) struct ColouredSurface<'a> {
     /// The mesh (of every image shown, for a periodic surface).
     pub mesh: &'a Mesh,
-    /// Its area (Å², `SurfaceOutput::area`; over the images shown).
+    /// The area (Å²) its per-atom areas sum to (`SurfaceOutput::measured_area`: one cell's
+    /// for a periodic surface).
     pub area: f64,
     /// A periodic surface's seams (`SurfaceOutput::periodic`).
     pub seams: Option<&'a PeriodicMesh>,
@@ -83,12 +84,9 @@ impl ExposureColouring {
         let ColouredSurface {
             mesh, area, seams, ..
         } = surface;
-        let (mut areas, area) = match seams {
-            Some(s) => (
-                measure::periodic_atom_areas(mesh, s, &plain, params)?,
-                area / f64::from(s.replicate.count()),
-            ),
-            None => (measure::atom_areas(mesh, &plain, params)?, area),
+        let mut areas = match seams {
+            Some(s) => measure::periodic_atom_areas(mesh, s, &plain, params)?,
+            None => measure::atom_areas(mesh, &plain, params)?,
         };
         // Shares of the triangle area, scaled to the surface's area (the same to rounding with
         // interpolated vertices; the curved area with refined ones), as `--per-residue` does.

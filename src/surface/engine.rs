@@ -139,6 +139,16 @@ pub struct MeshCounts {
 }
 
 impl SurfaceOutput {
+    /// The area (Å²) the surface's per-atom areas sum to ([`crate::measure::atom_areas_of`]):
+    /// [`Self::area`], or, for a periodic surface shown as several images, one cell's (the
+    /// area over the images shown).
+    pub fn measured_area(&self) -> f64 {
+        match &self.periodic {
+            Some(seams) => self.area / f64::from(seams.replicate.count()),
+            None => self.area,
+        }
+    }
+
     /// Vertices of the surface (kept or not).
     pub fn vertex_count(&self) -> usize {
         self.counts_without_mesh

@@ -35,7 +35,7 @@ class AtomAreas:
     ``names``, ``resids``, ``resnames``, ``chains`` (the chain, else the segment) and
     ``labels`` of their residues (``A:LEU12``); ``area_A2`` (F, N) float64, 0 where an atom was
     not in the representation that frame; each row sums to ``total_area_A2`` (F,), the
-    surface's area."""
+    surface's area (one cell's for a periodic surface shown as several images)."""
 
     rep: str
     frames: np.ndarray
@@ -59,7 +59,7 @@ class ResidueAreas:
     of the residues with atoms in the representation in any of the frames, with ``resids``,
     ``resnames``, ``chains`` (chain, else segment) and ``labels`` (``A:LEU12``); ``area_A2``
     (F, R) float64 (0 where the residue had no atom in it), each row summing to
-    ``total_area_A2`` (F,); ``exposure`` (F, R): area over the largest area a residue of the
+    ``total_area_A2`` (F,) (as for :class:`AtomAreas`); ``exposure`` (F, R): area over the largest area a residue of the
     same name has alone (NaN where unknown or absent)."""
 
     rep: str

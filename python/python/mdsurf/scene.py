@@ -204,6 +204,14 @@ class Scene:
         ``--fit``).
     smooth : int
         Average positions over ±``smooth`` frames (``--smooth``).
+    periodic : bool
+        Periodic surfaces in each frame's box (``--periodic``): Gaussians near a face reach
+        across it, the mesh is one cell's, and area, volume and every measurement are per cell
+        (a membrane patch or a liquid without walls at the faces; rectangular or triclinic
+        boxes).
+    replicate : tuple of 3 ints, optional
+        With ``periodic`` (implied): show A x B x C images of the cell (``--replicate``); the
+        area and volume are then those of all the images, the measurements still per cell.
     masses : array_like, optional
         Mass per atom in amu for ``center`` and ``fit`` (e.g. ``universe.atoms.masses``); by
         default mdsurf's element masses, as the command line uses for GRO and PDB files.
@@ -227,6 +235,8 @@ class Scene:
         center=None,
         fit=None,
         smooth=0,
+        periodic=False,
+        replicate=None,
         masses=None,
         _columns=None,
         _reader=None,
@@ -252,6 +262,13 @@ class Scene:
             columns = dict(columns, masses=[float(m) for m in np.asarray(masses).ravel()])
         if n_frames < 1:
             raise ValueError("the trajectory has no frames")
+        if replicate is not None:
+            replicate = [int(n) for n in replicate]
+            if len(replicate) != 3 or min(replicate) < 1:
+                raise ValueError(
+                    f"replicate {tuple(replicate)}: expected three whole numbers of at least 1, "
+                    "e.g. (2, 2, 1)"
+                )
         self._reader = reader
         self._n_frames = n_frames
         # Reading frame 0 (and its smoothing window) moves the universe's trajectory: it is put
@@ -260,15 +277,16 @@ class Scene:
         try:
             self._core = self._build(columns, n_frames, reader, file, select, state, spacing,
                                      radius_scale, isovalue, quality, vertices, whole, center,
-                                     fit, smooth, _surfaces)
+                                     fit, smooth, (bool(periodic), replicate), _surfaces)
         finally:
             if current is not None and universe.trajectory.ts.frame != current:
                 universe.trajectory[current]
 
     @staticmethod
     def _build(columns, n_frames, reader, file, select, state, spacing, radius_scale, isovalue,
-               quality, vertices, whole, center, fit, smooth, surfaces):
+               quality, vertices, whole, center, fit, smooth, periodic, surfaces):
         first, box, _ = reader(0)
+        periodic, replicate = periodic
         return _mdsurf.SceneCore(
             columns,
             _f32(first, "positions"),
@@ -286,6 +304,8 @@ class Scene:
             center=None if center is None else str(center),
             fit=None if fit is None else str(fit),
             smooth=int(smooth),
+            periodic=periodic,
+            replicate=replicate,
             file=file,
             surfaces=surfaces,
         )

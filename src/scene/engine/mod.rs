@@ -431,7 +431,7 @@ impl SceneEngine {
                     |out, map| {
                         let surface = ColouredSurface {
                             mesh: &out.mesh,
-                            area: out.area,
+                            area: out.measured_area(),
                             seams: out.periodic.as_deref(),
                             cell: PbcCell::of(frame),
                         };
