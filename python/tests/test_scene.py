@@ -249,6 +249,10 @@ def test_other_errors_are_value_errors(data, tmp_path):
         mdsurf.Scene(u, select="protein").frame(1)
     with pytest.raises(TypeError, match="select="):
         mdsurf.Scene(u.select_atoms("protein"))
+    # Errors name their source, as the command line's name the file.
+    positions = np.zeros((1, 2, 3), np.float32)
+    with pytest.raises(ValueError, match="^Scene.from_arrays: --periodic needs a periodic box"):
+        mdsurf.Scene.from_arrays(["C", "C"], positions, periodic=True)
 
 
 MIRROR_SELECTIONS = [

@@ -253,7 +253,8 @@ class Scene:
             columns = universe_columns(universe)
             reader = _UniverseReader(universe)
             n_frames = len(universe.trajectory)
-            file = str(getattr(universe.trajectory, "filename", "") or "")
+            # Errors name the file, as on the command line (an in-memory universe has none).
+            file = str(getattr(universe.trajectory, "filename", "") or "") or "the universe"
         elif _columns is not None:
             columns, reader, n_frames, file = _columns, _reader, _n_frames, _file
         else:
@@ -367,7 +368,8 @@ class Scene:
             columns["bonds"] = [(int(a), int(b)) for a, b in np.asarray(bonds).reshape(-1, 2)]
         reader = _ArrayReader(positions, boxes, times)
         return cls(
-            None, masses=masses, _columns=columns, _reader=reader, _n_frames=frames, **kwargs
+            None, masses=masses, _columns=columns, _reader=reader, _n_frames=frames,
+            _file="Scene.from_arrays", **kwargs
         )
 
     def __len__(self):
