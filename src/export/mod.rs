@@ -29,6 +29,25 @@ use std::path::{Path, PathBuf};
 use crate::surface::Mesh;
 
 pub use atomic::{AtomicFile, resolve_links, write_atomic};
+
+/// A number written with a fixed count of decimals for a CSV field: `Fixed(x, 4)` writes as
+/// `{:.4}` does, but a value that rounds to zero has no sign (`0.0000`, not the `-0.0000` of
+/// an empty sum, which is -0.0 in Rust, or of a rounding error below zero).
+#[derive(Debug, Clone, Copy)]
+pub struct Fixed(pub f64, pub usize);
+
+impl fmt::Display for Fixed {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Fixed(value, decimals) = *self;
+        let text = format!("{value:.decimals$}");
+        match text.strip_prefix('-') {
+            Some(unsigned) if unsigned.bytes().all(|b| b == b'0' || b == b'.') => {
+                f.write_str(unsigned)
+            }
+            _ => f.write_str(&text),
+        }
+    }
+}
 pub use stats::{STATS_COLUMNS, StatsRow, StatsWriter};
 
 /// Why an output file could not be written.
@@ -150,4 +169,28 @@ pub(crate) fn too_large(what: &str) -> io::Error {
         io::ErrorKind::InvalidInput,
         format!("the mesh is too large for {what}"),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Fixed;
+
+    #[test]
+    fn fixed_decimals_drop_the_sign_of_zero_only() {
+        let empty_sum: f64 = std::iter::empty::<f64>().sum();
+        assert_eq!(
+            format!("{empty_sum:.4}"),
+            "-0.0000",
+            "Rust's empty sum is -0.0"
+        );
+        assert_eq!(Fixed(empty_sum, 4).to_string(), "0.0000");
+        assert_eq!(Fixed(-2e-9, 3).to_string(), "0.000");
+        assert_eq!(Fixed(-0.0006, 3).to_string(), "-0.001");
+        assert_eq!(Fixed(-12.5, 1).to_string(), "-12.5");
+        assert_eq!(
+            Fixed(1234.56789, 4).to_string(),
+            format!("{:.4}", 1234.56789)
+        );
+        assert_eq!(Fixed(f64::NAN, 3).to_string(), "NaN");
+    }
 }

@@ -11,8 +11,8 @@ use super::{
     CavityEvent, ContactResidue, ExposureTable, InterfaceResult, MeasureError, ResidueArea, Side,
     TrackedCavity,
 };
-use crate::export::ExportError;
 use crate::export::atomic::write_atomic;
+use crate::export::{ExportError, Fixed};
 // `text` as one CSV field, quoted when it holds a comma, a quote or a line break.
 use crate::export::stats::csv_text as field;
 use crate::model::Topology;
@@ -78,14 +78,14 @@ impl ResidueCsv {
             let names = r.names(topology);
             let e = exposure
                 .and_then(|t| t.exposure(names.resname, r.area))
-                .map_or(String::new(), |e| format!("{e:.4}"));
+                .map_or(String::new(), |e| Fixed(e, 4).to_string());
             let _ = writeln!(
                 self.0.rows,
-                "{frame},{rep},{},{},{},{:.3},{e},{}",
+                "{frame},{rep},{},{},{},{},{e},{}",
                 field(names.chain_or_segment()),
                 names.resid,
                 field(names.resname.trim()),
-                r.area,
+                Fixed(r.area, 3),
                 r.residue
             );
         }
@@ -135,12 +135,13 @@ impl AtomCsv {
             let names = ResidueNames::of_atom(topology, i);
             let _ = writeln!(
                 self.0.rows,
-                "{frame},{rep},{},{},{},{},{},{area:.3},{}",
+                "{frame},{rep},{},{},{},{},{},{},{}",
                 names.serial,
                 field(names.atom_name.trim()),
                 field(names.chain_or_segment()),
                 names.resid,
                 field(names.resname.trim()),
+                Fixed(*area, 3),
                 topology.residue_index.get(i).copied().unwrap_or(0),
             );
         }
@@ -190,13 +191,13 @@ impl CavityCsv {
             let lining = lining_residues(topology, atom_indices, &c.lining_atoms)?;
             let _ = writeln!(
                 self.0.rows,
-                "{frame},{rep},{},{:.3},{:.3},{:.3},{:.3},{:.3},{}",
+                "{frame},{rep},{},{},{},{},{},{},{}",
                 t.id,
-                c.volume,
-                c.area,
-                c.centroid.x,
-                c.centroid.y,
-                c.centroid.z,
+                Fixed(c.volume, 3),
+                Fixed(c.area, 3),
+                Fixed(c.centroid.x, 3),
+                Fixed(c.centroid.y, 3),
+                Fixed(c.centroid.z, 3),
                 field(&lining.join(" "))
             );
         }
@@ -295,12 +296,12 @@ impl InterfaceCsv {
         };
         let _ = writeln!(
             self.0.rows,
-            "{frame},{},{:.4},{:.4},{:.4},{:.4},{},{}",
+            "{frame},{},{},{},{},{},{},{}",
             time_field(time_ps),
-            result.area_a,
-            result.area_b,
-            result.area_complex,
-            result.buried,
+            Fixed(result.area_a, 4),
+            Fixed(result.area_b, 4),
+            Fixed(result.area_complex, 4),
+            Fixed(result.buried, 4),
             labels(Side::A),
             labels(Side::B),
         );
@@ -362,13 +363,13 @@ impl ContactCsv {
             };
             let _ = writeln!(
                 self.0.rows,
-                "{frame},{time},{side},{},{},{},{:.3},{:.3},{:.3},{}",
+                "{frame},{time},{side},{},{},{},{},{},{},{}",
                 field(names.chain_or_segment()),
                 names.resid,
                 field(names.resname.trim()),
-                c.residue.area,
-                c.area_complex,
-                c.buried,
+                Fixed(c.residue.area, 3),
+                Fixed(c.area_complex, 3),
+                Fixed(c.buried, 3),
                 c.residue.residue
             );
         }
