@@ -11,6 +11,7 @@
 mod arrays;
 mod engines;
 mod measurements;
+mod periodic_frames;
 mod scene;
 mod topology;
 
@@ -25,6 +26,7 @@ use pyo3::prelude::*;
 
 use engines::parse_backend;
 use mdsurf::gpu::Backend;
+use periodic_frames::FrameSurfaces;
 
 /// The exception for an engine error: bad input is a `ValueError`, a grid that does not fit a
 /// `MemoryError`, anything else (the GPU) a `RuntimeError`.
@@ -201,7 +203,7 @@ type Measures<'py> = Bound<'py, PyArray1<f64>>;
 
 /// See `mdsurf.measure` (python/mdsurf/__init__.py) for the documentation.
 #[pyfunction]
-#[pyo3(signature = (trajectory, radii, spacing, radius_scale, isovalue, quality, backend, vertices))]
+#[pyo3(signature = (trajectory, radii, spacing, radius_scale, isovalue, quality, backend, vertices, boxes = None))]
 #[allow(clippy::too_many_arguments)]
 fn measure<'py>(
     py: Python<'py>,
@@ -213,11 +215,16 @@ fn measure<'py>(
     quality: &str,
     backend: &str,
     vertices: &str,
+    boxes: Option<PyReadonlyArrayDyn<'py, f32>>,
 ) -> PyResult<(Measures<'py>, Measures<'py>)> {
     let (params, backend, vertices) =
         settings(spacing, radius_scale, isovalue, quality, backend, vertices)?;
+    let backend = periodic_frames::backend_for(boxes.is_some(), backend, vertices)?;
     let (frames, atoms) = arrays::trajectory(&trajectory)?;
     let radii = arrays::radii(&radii, atoms)?;
+    let boxes = boxes
+        .map(|b| periodic_frames::boxes(&b, frames))
+        .transpose()?;
     if frames == 0 {
         // Nothing to compute: no engine is chosen, so no GPU is opened.
         return Ok((PyArray1::zeros(py, 0, false), PyArray1::zeros(py, 0, false)));
@@ -228,6 +235,7 @@ fn measure<'py>(
             let mut area = Vec::with_capacity(frames);
             let mut volume = Vec::with_capacity(frames);
             let mut positions = Vec::with_capacity(atoms);
+            let mut surfaces = FrameSurfaces::new(boxes.as_deref());
             for f in 0..frames {
                 arrays::frame_into(&view, f, &mut positions);
                 let atoms = AtomSet {
@@ -235,9 +243,7 @@ fn measure<'py>(
                     radii: &radii,
                     colours: None,
                 };
-                let out = engine
-                    .compute(&atoms, &params)
-                    .map_err(|e| surface_err(&format!("frame {f}: "), e))?;
+                let out = surfaces.compute(engine, f, &atoms, &params)?;
                 area.push(out.area);
                 volume.push(out.volume);
             }
@@ -257,7 +263,7 @@ type AtomMeasures<'py> = (Measures<'py>, Measures<'py>, Bound<'py, PyArray2<f64>
 /// share to the atoms by their Gaussians there, scaled to the surface's area); the frames of
 /// `mdsurf.analysis.GaussianSurface(per_residue=True)`.
 #[pyfunction]
-#[pyo3(signature = (trajectory, radii, spacing, radius_scale, isovalue, quality, backend, vertices))]
+#[pyo3(signature = (trajectory, radii, spacing, radius_scale, isovalue, quality, backend, vertices, boxes = None))]
 #[allow(clippy::too_many_arguments)]
 fn atom_areas<'py>(
     py: Python<'py>,
@@ -269,11 +275,16 @@ fn atom_areas<'py>(
     quality: &str,
     backend: &str,
     vertices: &str,
+    boxes: Option<PyReadonlyArrayDyn<'py, f32>>,
 ) -> PyResult<AtomMeasures<'py>> {
     let (params, backend, vertices) =
         settings(spacing, radius_scale, isovalue, quality, backend, vertices)?;
+    let backend = periodic_frames::backend_for(boxes.is_some(), backend, vertices)?;
     let (frames, atoms) = arrays::trajectory(&trajectory)?;
     let radii = arrays::radii(&radii, atoms)?;
+    let boxes = boxes
+        .map(|b| periodic_frames::boxes(&b, frames))
+        .transpose()?;
     let view = trajectory.as_array();
     let result = py.detach(|| {
         engines::with_engine(backend, vertices, |engine| {
@@ -283,6 +294,7 @@ fn atom_areas<'py>(
             // The parameters the engine computes with (refined vertices run at quality max).
             let effective = engine.vertices().effective(&params);
             engine.set_keep_mesh(true);
+            let mut surfaces = FrameSurfaces::new(boxes.as_deref());
             for f in 0..frames {
                 arrays::frame_into(&view, f, &mut positions);
                 let set = AtomSet {
@@ -290,9 +302,7 @@ fn atom_areas<'py>(
                     radii: &radii,
                     colours: None,
                 };
-                let out = engine
-                    .compute(&set, &params)
-                    .map_err(|e| surface_err(&format!("frame {f}: "), e))?;
+                let out = surfaces.compute(engine, f, &set, &params)?;
                 let per_atom = mdsurf::measure::atom_areas_of(&out, &set, &effective)
                     .map_err(|e| PyRuntimeError::new_err(format!("frame {f}: {e}")))?;
                 area.push(out.area);

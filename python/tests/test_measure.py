@@ -225,6 +225,32 @@ def test_periodic_keywords_equal_cli(cli, data, tmp_path):
             mdsurf.Scene(universe(gro), select=lipids, replicate=bad)
 
 
+def test_gaussian_surface_periodic_equals_the_scene(data, tmp_path):
+    """``GaussianSurface(periodic=True)`` computes the scene's periodic surfaces: the same
+    area, per-residue areas and exposure; a GPU asked for is refused in one line."""
+    from mdsurf.analysis import GaussianSurface
+
+    gro = tmp_path / "bilayer.gro"
+    shutil.copy(data / "martini_dppc_chol_bilayer.gro", gro)
+    u = universe(gro)
+    lipids = "resname DPPC CHOL"
+    run = GaussianSurface(u, select=lipids, periodic=True, per_residue=True).run()
+    scene = mdsurf.Scene(u, select=lipids, periodic=True)
+    assert run.results.area[0] == pytest.approx(scene.run().area["selection"][0], rel=1e-9)
+    res = scene.per_residue_areas()
+    np.testing.assert_allclose(run.results.residue_area[0][res.residues], res.area_A2[0],
+                               rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(run.results.exposure[0][res.residues], res.exposure[0],
+                               rtol=1e-6)
+    # Open surfaces have walls at the box's faces.
+    walls = GaussianSurface(u, select=lipids).run()
+    assert walls.results.area[0] > 1.3 * run.results.area[0]
+    with pytest.raises(ValueError, match="on the CPU"):
+        GaussianSurface(u, select=lipids, periodic=True, engine="gpu")
+    with pytest.raises(ValueError, match="boxes must be an array of shape"):
+        mdsurf.measure(np.zeros((2, 3, 3)), np.ones(3), boxes=np.zeros((1, 3, 3)))
+
+
 def test_probe_cavities_equal_cli(cli, adk, tmp_path):
     gro, xtc = adk
     run = run_cli(cli, tmp_path, gro, xtc, "--select", "protein", "--frames", "0:2",

@@ -117,6 +117,7 @@ def measure(
     quality="medium",
     backend="auto",
     vertices="interpolated",
+    boxes=None,
 ):
     """Surface area and enclosed volume of every frame, without building meshes in Python.
 
@@ -128,6 +129,10 @@ def measure(
         Atom radii in Å.
     spacing, radius_scale, isovalue, quality, backend, vertices
         As in :func:`surface`.
+    boxes : array_like, shape (F, 3, 3), optional
+        Each frame's periodic box (rows a, b, c in Å): the surfaces are then periodic in it,
+        as ``mdsurf surface --periodic`` computes them (area and volume per cell; CPU,
+        interpolated vertices).
 
     Returns
     -------
@@ -143,6 +148,7 @@ def measure(
         str(quality),
         str(backend),
         str(vertices),
+        boxes=None if boxes is None else _f32(boxes, "boxes"),
     )
 
 

@@ -99,6 +99,11 @@ class GaussianSurface(AnalysisBase):
         Selections (mdsurf's language) to centre in the box and to fit onto the first frame.
     smooth : int
         Average positions over ±``smooth`` frames.
+    periodic : bool
+        Periodic surfaces in each frame's box, as ``mdsurf surface --periodic``: Gaussians
+        near a face reach across it, so a membrane patch or a liquid has no walls at the faces;
+        area, volume and per-atom areas are per cell. Computed on the CPU (``engine`` "cpu" or
+        "auto", interpolated vertices); a frame without a box raises ``ValueError``.
     per_residue : bool
         Also share each frame's area among the atoms (the rule of ``mdsurf surface
         --per-atom``: a triangle's area goes a third to each vertex, a vertex's share to the
@@ -148,6 +153,7 @@ class GaussianSurface(AnalysisBase):
         center=None,
         fit=None,
         smooth=0,
+        periodic=False,
         per_residue=False,
         **kwargs,
     ):
@@ -156,6 +162,7 @@ class GaussianSurface(AnalysisBase):
         self._ag = atomgroup
         self._select = None if select is None else str(select)
         self._per_residue = bool(per_residue)
+        self._periodic = bool(periodic)
         # The atoms the per-atom columns stand for, and the residues of the per-residue ones.
         self._columns = atomgroup if self._select is None else atomgroup.universe.atoms
         self._transforms = dict(
@@ -195,6 +202,7 @@ class GaussianSurface(AnalysisBase):
             np.zeros((0, 1, 3), np.float32),
             np.ones(1, np.float32),
             *self._settings.values(),
+            boxes=np.zeros((0, 3, 3), np.float32) if self._periodic else None,
         )
         if self._per_residue:
             self._exposure_reference = self._isolated_areas(core)
@@ -252,7 +260,7 @@ class GaussianSurface(AnalysisBase):
         frame = self._ts.frame
         scene = self._scene()
         trajectory = self._ag.universe.trajectory
-        positions, picked, _ = scene._core.transformed(frame, scene._reader, self._select)
+        positions, picked, box = scene._core.transformed(frame, scene._reader, self._select)
         if trajectory.ts.frame != frame:
             trajectory[frame]  # smoothing read its neighbours: back to this frame
         if picked is None:
@@ -260,17 +268,23 @@ class GaussianSurface(AnalysisBase):
             radii = self._radii
         else:
             radii = self._radii[picked]
+        boxes = None
+        if self._periodic:
+            if box is None:
+                raise ValueError(f"frame {frame}: periodic=True needs a periodic box, and the "
+                                 "frame has none")
+            boxes = box[np.newaxis]
         shares = np.zeros(len(picked))
         if len(picked) == 0:
             area, volume = [0.0], [0.0]
         elif self._per_residue:
             area, volume, per_atom = _mdsurf.atom_areas(
-                positions[picked][np.newaxis], radii, *self._settings.values()
+                positions[picked][np.newaxis], radii, *self._settings.values(), boxes=boxes
             )
             shares = per_atom[0]
         else:
             area, volume = _mdsurf.measure(
-                positions[picked][np.newaxis], radii, *self._settings.values()
+                positions[picked][np.newaxis], radii, *self._settings.values(), boxes=boxes
             )
         self.results.area[self._frame_index] = area[0]
         self.results.volume[self._frame_index] = volume[0]
