@@ -11,8 +11,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::Vec3;
-use mdsurf::model::sizing::fit_untyped_radii;
-use mdsurf::model::{Frame, RadiusOverrides, Topology, elements};
+use mdsurf::model::{Frame, RadiusOverrides, Topology};
 use mdsurf::scene::defaults::default_representations;
 use mdsurf::scene::representation::{RepStyle, Representation};
 use mdsurf::scene::state_file::StateFile;
@@ -28,6 +27,7 @@ use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::arrays;
+use crate::topology::{Columns, build_topology};
 
 /// The Python exception for a scene error: a selection that does not bind, particles that do
 /// not fit the topology, or a surface input the engine refuses is a `ValueError`; a grid too
@@ -129,135 +129,6 @@ fn read_frame_with(reader: &Bound<'_, PyAny>, index: usize, atoms: usize) -> PyR
         positions,
         cell: cell_of(cell)?,
     })
-}
-
-/// Fails unless `list` (when given) has one entry per atom.
-fn per_atom<T>(list: Option<Vec<T>>, what: &str, atoms: usize) -> PyResult<Option<Vec<T>>> {
-    match list {
-        Some(l) if l.len() != atoms => Err(PyValueError::new_err(format!(
-            "{what} has {} entries for {atoms} atoms",
-            l.len()
-        ))),
-        other => Ok(other),
-    }
-}
-
-/// The per-atom columns a topology is built from (any but `names` may be missing).
-#[derive(FromPyObject, Default)]
-#[pyo3(from_item_all)]
-struct Columns {
-    names: Vec<String>,
-    #[pyo3(default)]
-    resnames: Option<Vec<String>>,
-    #[pyo3(default)]
-    resids: Option<Vec<i64>>,
-    /// Which residue each atom belongs to as the reader grouped them (MDAnalysis' resindex): a
-    /// new residue starts where it changes, as where number, name, chain or segment change.
-    #[pyo3(default)]
-    residues: Option<Vec<i64>>,
-    #[pyo3(default)]
-    chains: Option<Vec<String>>,
-    #[pyo3(default)]
-    segments: Option<Vec<String>>,
-    #[pyo3(default)]
-    elements: Option<Vec<String>>,
-    #[pyo3(default)]
-    types: Option<Vec<String>>,
-    #[pyo3(default)]
-    masses: Option<Vec<f32>>,
-    #[pyo3(default)]
-    charges: Option<Vec<f32>>,
-    #[pyo3(default)]
-    serials: Option<Vec<i64>>,
-    #[pyo3(default)]
-    b_factors: Option<Vec<f32>>,
-    #[pyo3(default)]
-    occupancies: Option<Vec<f32>>,
-    #[pyo3(default)]
-    bonds: Option<Vec<(i64, i64)>>,
-}
-
-/// The topology of `columns` as the crate's readers leave it: elements canonical (invalid ones
-/// guessed from atom and residue names), radii and missing masses from the element table,
-/// residues numbered as runs, untyped particles sized from `first` (positions of frame 0).
-fn build_topology(c: Columns, first: &[Vec3]) -> PyResult<Topology> {
-    let n = c.names.len();
-    if n == 0 {
-        return Err(PyValueError::new_err("the topology has no atoms"));
-    }
-    if first.len() != n {
-        return Err(PyValueError::new_err(format!(
-            "frame 0 has {} atoms but the topology has {n}",
-            first.len()
-        )));
-    }
-    let resnames = per_atom(c.resnames, "resnames", n)?;
-    let resids = per_atom(c.resids, "resids", n)?;
-    let residues = per_atom(c.residues, "residues", n)?;
-    let has_residues = resnames.is_some() || resids.is_some() || residues.is_some();
-    let labels = |v: Option<Vec<String>>| v.unwrap_or_else(|| vec![String::new(); n]);
-    let elements = per_atom(c.elements, "elements", n)?
-        .map(|v| {
-            v.iter()
-                .map(|e| elements::canonical_symbol(e).unwrap_or(""))
-                .collect::<Vec<_>>()
-        })
-        .unwrap_or_else(|| vec![""; n]);
-    let mut top = Topology {
-        names: c.names.into(),
-        elements: elements.into(),
-        residue_names: labels(resnames).into(),
-        residue_ids: resids.unwrap_or_else(|| vec![0; n]),
-        chains: labels(per_atom(c.chains, "chains", n)?).into(),
-        segments: labels(per_atom(c.segments, "segments", n)?).into(),
-        b_factors: per_atom(c.b_factors, "b_factors", n)?.unwrap_or_default(),
-        occupancies: per_atom(c.occupancies, "occupancies", n)?.unwrap_or_default(),
-        masses: per_atom(c.masses, "masses", n)?.unwrap_or_default(),
-        charges: per_atom(c.charges, "charges", n)?.unwrap_or_default(),
-        serials: per_atom(c.serials, "serials", n)?.unwrap_or_default(),
-        ..Topology::default()
-    };
-    if let Some(types) = per_atom(c.types, "types", n)? {
-        top.types = types.into();
-    }
-    if let Some(bonds) = c.bonds {
-        top.bonds = bonds
-            .into_iter()
-            .map(|(a, b)| {
-                let ok = |x: i64| (0..n as i64).contains(&x);
-                if ok(a) && ok(b) {
-                    Ok([a as u32, b as u32])
-                } else {
-                    Err(PyValueError::new_err(format!(
-                        "bond ({a}, {b}) names an atom outside 0..{n}"
-                    )))
-                }
-            })
-            .collect::<PyResult<_>>()?;
-    }
-    // Residues as runs of atoms with the same (number, name, chain, segment) and reader
-    // residue, numbered as the crate's readers number them; atoms of a file without residues
-    // are residues of their own.
-    let group = match (has_residues, residues) {
-        (false, _) => vec![u32::MAX; n],
-        (true, Some(residues)) => {
-            // Only whether an atom's residue equals the previous atom's counts: run numbers.
-            let mut run = 0u32;
-            (0..n)
-                .map(|i| {
-                    if i > 0 && residues[i] != residues[i - 1] {
-                        run = (run + 1) % u32::MAX;
-                    }
-                    run
-                })
-                .collect()
-        }
-        (true, None) => vec![0; n],
-    };
-    top.number_residue_runs(&group);
-    top.complete_elements_and_radii();
-    fit_untyped_radii(&mut top, first);
-    Ok(top)
 }
 
 /// The engine in `slot`, reached through `&mut` without locking (a panic while it was held

@@ -7,17 +7,19 @@
 //!
 //! The surface must exist before its exposure does, so a representation coloured this way is
 //! computed in two passes: the surface, then (these colours known) its colour pass again. On the
-//! GPU the second pass is a colour-only submit ([`crate::gpu::Work::Colour`]); host engines
-//! compute the surface again with the colours.
+//! GPU the second pass is a colour-only submit ([`crate::gpu::Work::Colour`], asked for by an
+//! [`ExposureRequest`]); host engines compute the surface again with the colours
+//! ([`host_surface`]).
 
 use std::collections::HashMap;
 
 use super::frame::SceneError;
+use super::representation::Representation;
 use crate::measure::{self, ExposureTable, MeasureError};
 use crate::model::pbc::PbcCell;
-use crate::model::{ColourMap, Topology};
+use crate::model::{ColorScheme, ColourMap, Topology};
 use crate::surface::periodic::PeriodicMesh;
-use crate::surface::{AtomSet, CpuEngine, Mesh, SurfaceParams};
+use crate::surface::{AtomSet, CpuEngine, Mesh, SurfaceOutput, SurfaceParams};
 
 /// The scene error of representation `rep`'s exposure colours failing in frame `frame`.
 pub(crate) fn exposure_failed(frame: usize, rep: &str) -> impl FnOnce(MeasureError) -> SceneError {
@@ -115,4 +117,54 @@ impl ExposureColouring {
             None => (0..atoms.len() as u32).map(colour_of).collect(),
         })
     }
+}
+
+/// A GPU surface's exposure colours, asked for when it is submitted.
+pub(crate) struct ExposureRequest {
+    /// The colour map.
+    pub map: ColourMap,
+    /// The topology atoms of the particles (`None`: all).
+    pub subset: Option<Vec<u32>>,
+    /// The frame's periodic cell, if any (see [`ColouredSurface::cell`]).
+    pub cell: Option<PbcCell>,
+}
+
+/// The colour map of `rep`'s exposure colours, when its surface takes them (atoms, not
+/// beads).
+pub(crate) fn exposure_map(rep: &Representation, beads: bool) -> Option<ColourMap> {
+    match rep.colour {
+        ColorScheme::Exposure(map) if rep.style.is_surface() && !beads => Some(map),
+        _ => None,
+    }
+}
+
+/// Linear RGB colour per atom (0 to 1).
+pub(crate) type AtomColours = Vec<[f32; 3]>;
+
+/// A host engine's surface of `atoms` (`compute`), coloured by exposure through `map` in a
+/// second pass: the first pass, uncoloured, gives the per-atom areas whose colours `colour`
+/// returns (when its mesh was kept), and the surface is computed again with them. Returns
+/// the surface and the colours of the second pass.
+pub(crate) fn host_surface(
+    atoms: AtomSet<'_>,
+    map: Option<ColourMap>,
+    mut compute: impl FnMut(&AtomSet<'_>) -> Result<SurfaceOutput, SceneError>,
+    colour: impl FnOnce(&SurfaceOutput, ColourMap) -> Result<AtomColours, SceneError>,
+) -> Result<(SurfaceOutput, Option<AtomColours>), SceneError> {
+    let first = AtomSet {
+        colours: atoms.colours.filter(|_| map.is_none()),
+        ..atoms
+    };
+    let output = compute(&first)?;
+    // Exposure colours need the mesh (kept unless only measured).
+    let Some(map) = map.filter(|_| output.counts_without_mesh.is_none()) else {
+        return Ok((output, None));
+    };
+    let colours = colour(&output, map)?;
+    let coloured = AtomSet {
+        colours: Some(&colours),
+        ..atoms
+    };
+    let output = compute(&coloured)?;
+    Ok((output, Some(colours)))
 }

@@ -4,10 +4,10 @@
 
 use std::sync::Arc;
 
-use super::{ExposureRequest, SceneBackend, SceneEngine};
+use super::{SceneBackend, SceneEngine};
 use crate::gpu::{Changes, FrameStats, GpuEngine, GpuSurface};
 use crate::model::Topology;
-use crate::scene::exposure::{ColouredSurface, exposure_failed};
+use crate::scene::exposure::{ColouredSurface, ExposureRequest, exposure_failed};
 use crate::scene::frame::{LayerResult, RepId, SceneError, SceneFrame};
 use crate::surface::{AtomSet, Mesh, SurfaceEngine, SurfaceError};
 

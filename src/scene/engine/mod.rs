@@ -36,16 +36,19 @@ mod gpu;
 use gpu::sibling_of;
 
 use super::cavity_layer::CavitySource;
-use super::exposure::{ColouredSurface, ExposureColouring, exposure_failed};
+use super::exposure::{
+    ColouredSurface, ExposureColouring, ExposureRequest, exposure_failed, exposure_map,
+    host_surface,
+};
 use super::frame::{LayerResult, ParticleData, RepId, RepRequest, SceneError, SceneFrame};
 use super::layer::{Layer, LayerFrame};
 use super::representation::Representation;
 use crate::gpu::exposure::runs_on_gpu;
 use crate::gpu::{Changes, GpuEngine, Work};
 use crate::model::pbc::PbcCell;
-use crate::model::{ColorScheme, ColourMap, Frame, RadiusOverrides, Topology};
+use crate::model::{Frame, RadiusOverrides, Topology};
 use crate::surface::periodic::PeriodicEngine;
-use crate::surface::{AtomSet, Mesh, MeshCounts, SurfaceEngine, SurfaceOutput};
+use crate::surface::{Mesh, MeshCounts, SurfaceEngine, SurfaceOutput};
 use crate::transform::Replicate;
 
 /// The engine a scene computes its surfaces with.
@@ -134,56 +137,6 @@ struct Submitted {
     work: Work,
     /// Exposure colours to give the surface once it is collected.
     exposure: Option<ExposureRequest>,
-}
-
-/// A GPU surface's exposure colours, asked for when it is submitted.
-pub(super) struct ExposureRequest {
-    /// The colour map.
-    map: ColourMap,
-    /// The topology atoms of the particles (`None`: all).
-    subset: Option<Vec<u32>>,
-    /// The frame's periodic cell, if any (see [`ColouredSurface::cell`]).
-    cell: Option<PbcCell>,
-}
-
-/// The colour map of `rep`'s exposure colours, when its surface takes them (atoms, not
-/// beads).
-fn exposure_map(rep: &Representation, beads: bool) -> Option<ColourMap> {
-    match rep.colour {
-        ColorScheme::Exposure(map) if rep.style.is_surface() && !beads => Some(map),
-        _ => None,
-    }
-}
-
-/// Linear RGB colour per atom (0 to 1).
-type AtomColours = Vec<[f32; 3]>;
-
-/// A host engine's surface of `atoms` (`compute`), coloured by exposure through `map` in a
-/// second pass: the first pass, uncoloured, gives the per-atom areas whose colours `colour`
-/// returns (when its mesh was kept), and the surface is computed again with them. Returns
-/// the surface and the colours of the second pass.
-fn host_surface(
-    atoms: AtomSet<'_>,
-    map: Option<ColourMap>,
-    mut compute: impl FnMut(&AtomSet<'_>) -> Result<SurfaceOutput, SceneError>,
-    colour: impl FnOnce(&SurfaceOutput, ColourMap) -> Result<AtomColours, SceneError>,
-) -> Result<(SurfaceOutput, Option<AtomColours>), SceneError> {
-    let first = AtomSet {
-        colours: atoms.colours.filter(|_| map.is_none()),
-        ..atoms
-    };
-    let output = compute(&first)?;
-    // Exposure colours need the mesh (kept unless only measured).
-    let Some(map) = map.filter(|_| output.counts_without_mesh.is_none()) else {
-        return Ok((output, None));
-    };
-    let colours = colour(&output, map)?;
-    let coloured = AtomSet {
-        colours: Some(&colours),
-        ..atoms
-    };
-    let output = compute(&coloured)?;
-    Ok((output, Some(colours)))
 }
 
 /// A representation's result while a frame is computed: reused as it was, or new (with a GPU
