@@ -39,6 +39,11 @@ pub struct Fixed(pub f64, pub usize);
 impl fmt::Display for Fixed {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let Fixed(value, decimals) = *self;
+        // Only a value in (-1, 0] can print as a signed zero; the rest is written directly
+        // (these fields fill per-atom tables, one per atom and frame).
+        if !(value > -1.0 && value <= 0.0) {
+            return write!(f, "{value:.decimals$}");
+        }
         let text = format!("{value:.decimals$}");
         match text.strip_prefix('-') {
             Some(unsigned) if unsigned.bytes().all(|b| b == b'0' || b == b'.') => {

@@ -8,6 +8,7 @@ use super::MeasureError;
 use super::cells::{Batch, CellGrid, CellList, nearest};
 use crate::model::cells::sort_by_cell;
 use crate::surface::analytic::exp_fast;
+use crate::surface::periodic::PeriodicMesh;
 use crate::surface::{AtomSet, Mesh, SurfaceOutput, SurfaceParams};
 
 /// Area in Å² of each triangle-vertex share: `vertex_areas[v]` is a third of the area of every
@@ -287,11 +288,11 @@ pub fn atom_areas(
     Ok(areas)
 }
 
-/// [`atom_areas`] of a computed surface, rescaled so that they sum to [`SurfaceOutput::area`]
-/// (the same, to rounding, with interpolated vertices; the curved area with refined ones).
-/// A periodic surface's are [`super::periodic_atom_areas`], per cell (summing to
-/// [`SurfaceOutput::measured_area`], one cell's). Fails as [`atom_areas`] does, or when the engine did not keep the
-/// mesh.
+/// [`atom_areas`] of a computed surface, rescaled so that they sum to
+/// [`SurfaceOutput::measured_area`]: its area (the same, to rounding, with interpolated
+/// vertices; the curved area with refined ones), one cell's for a periodic surface, whose
+/// areas are [`super::periodic_atom_areas`]. Fails as [`atom_areas`] does, or when the engine
+/// did not keep the mesh.
 pub fn atom_areas_of(
     output: &SurfaceOutput,
     atoms: &AtomSet<'_>,
@@ -300,11 +301,25 @@ pub fn atom_areas_of(
     if output.counts_without_mesh.is_some() {
         return Err(MeasureError::NoMesh);
     }
-    let mut areas = match &output.periodic {
-        Some(seams) => super::periodic_atom_areas(&output.mesh, seams, atoms, params)?,
-        None => atom_areas(&output.mesh, atoms, params)?,
+    let seams = output.periodic.as_deref();
+    scaled_atom_areas(&output.mesh, seams, output.measured_area(), atoms, params)
+}
+
+/// The per-atom areas of `mesh` (with a periodic surface's `seams`: per cell, over the atoms'
+/// images), scaled so that they sum to `area` (Å²), the area the engine measured: the rule of
+/// [`atom_areas_of`] for a mesh held apart from its `SurfaceOutput` (one read back from the
+/// GPU).
+pub fn scaled_atom_areas(
+    mesh: &Mesh,
+    seams: Option<&PeriodicMesh>,
+    area: f64,
+    atoms: &AtomSet<'_>,
+    params: &SurfaceParams,
+) -> Result<Vec<f64>, MeasureError> {
+    let mut areas = match seams {
+        Some(seams) => super::periodic_atom_areas(mesh, seams, atoms, params)?,
+        None => atom_areas(mesh, atoms, params)?,
     };
-    let area = output.measured_area();
     let sum: f64 = areas.iter().sum();
     if sum > 0.0 && area.is_finite() {
         let scale = area / sum;

@@ -59,7 +59,7 @@ pub(crate) mod probe_surface;
 pub(crate) mod residues;
 pub(crate) mod tracking;
 
-pub use areas::{atom_areas, atom_areas_of, vertex_areas};
+pub use areas::{atom_areas, atom_areas_of, scaled_atom_areas, vertex_areas};
 pub use cavities::{Cavity, CavityOptions, Component, cavities, cavities_of, components};
 pub use csv::{
     AtomCsv, CavityCsv, CavityEventCsv, ContactCsv, InterfaceCsv, ResidueCsv, lining_residues,

@@ -83,19 +83,9 @@ impl ExposureColouring {
                 params,
             )?),
         };
-        let ColouredSurface {
-            mesh, area, seams, ..
-        } = surface;
-        let mut areas = match seams {
-            Some(s) => measure::periodic_atom_areas(mesh, s, &plain, params)?,
-            None => measure::atom_areas(mesh, &plain, params)?,
-        };
-        // Shares of the triangle area, scaled to the surface's area (the same to rounding with
-        // interpolated vertices; the curved area with refined ones), as `--per-residue` does.
-        let sum: f64 = areas.iter().sum();
-        if sum > 0.0 && area.is_finite() {
-            areas.iter_mut().for_each(|a| *a *= area / sum);
-        }
+        // As `--per-residue` weighs them.
+        let (mesh, seams) = (surface.mesh, surface.seams);
+        let areas = measure::scaled_atom_areas(mesh, seams, surface.area, &plain, params)?;
         let residues = measure::residue_areas(topology, atom_indices, &areas)?;
         let exposure: HashMap<u32, f32> = residues
             .iter()

@@ -43,8 +43,9 @@ impl SceneEngine {
     }
 
     /// Gives the GPU surface of `result` (its counters `stats`) the exposure colours of
-    /// `request`: reads its mesh back, computes the colours of its atoms, stores them in `result`'s particles and submits the colour pass again. Returns
-    /// the engine's frame number to collect.
+    /// `request`: reads its mesh back, computes the colours of its atoms, stores them in
+    /// `result`'s particles and submits the colour pass again. Returns the engine's frame
+    /// number to collect.
     pub(super) fn colour_by_exposure(
         &mut self,
         topology: &Topology,
