@@ -17,7 +17,7 @@
 //!
 //! Rectangular boxes (edges along x, y, z) take the path above, unchanged. Triclinic and
 //! rotated cells ([`PeriodicCell::Triclinic`]) are sampled along their edge vectors and
-//! marched in index space ([`triclinic`]), with the same definitions: area of the Cartesian
+//! marched in index space ([`triclinic`], its density in [`triclinic_fill`]), with the same definitions: area of the Cartesian
 //! triangles, volume of the region `rho >= I` inside one cell.
 
 pub(crate) mod cell;
@@ -26,6 +26,7 @@ pub(crate) mod mc;
 pub mod measure;
 pub mod seams;
 pub(crate) mod triclinic;
+mod triclinic_fill;
 
 pub use cell::{PeriodicCell, TriclinicCell};
 pub use seams::{FaceTwin, PeriodicMesh};

@@ -3,7 +3,7 @@
 //!
 //! Data flow: [`AtomSet`] + [`TriclinicCell`] + [`SurfaceParams`] -> images of every atom
 //! whose cutoff sphere reaches the cell ([`images`]) -> density (and colour) at the samples
-//! `origin + i/N_a a + j/N_b b + k/N_c c` ([`fill`]) -> [`super::mc::extract`] on the index
+//! `origin + i/N_a a + j/N_b b + k/N_c c` ([`super::triclinic_fill::fill`]) -> [`super::mc::extract`] on the index
 //! grid (spacing 1 along each axis, so vertex positions are `(i + t, j, k)` and so on) ->
 //! per-cell volume in index space ([`super::measure::box_volume`]) times `|det J|` -> the mesh
 //! (replicated in index space, so copies meet exactly) mapped to Cartesian by
@@ -13,7 +13,8 @@
 //! Definitions (DESIGN section 2, every periodic image counted): `rho(x) = sum_i sum_n
 //! exp(-|x - p_i - n M|^2 / (2 alpha_i^2))` over the pairs with `|x - p_i - n M| < q alpha_i`,
 //! every image within the cutoff (not only the minimum image), the exponential of the full
-//! squared distance in Å². The affine map sends the piecewise-linear index-space surface onto
+//! squared distance in Å² (a polynomial within 1e-6 of it, [`super::triclinic_fill`]). The
+//! affine map sends the piecewise-linear index-space surface onto
 //! the Cartesian mesh, so the volume per cell is exactly the volume of the region `rho >= I`
 //! inside the cell bounded by that mesh and the cell faces, the same rule as the rectangular
 //! box's. Images are summed in a canonical order, so the atoms' order changes nothing.
@@ -26,6 +27,7 @@ use rayon::prelude::*;
 
 use super::cell::TriclinicCell;
 use super::density::PeriodicGrid;
+use super::triclinic_fill::fill;
 use super::{Replicate, mc, measure, replicate_mesh};
 use crate::surface::DensityVolume;
 use crate::surface::{
@@ -91,7 +93,12 @@ pub fn images(atoms: &AtomSet<'_>, params: &SurfaceParams, geo: &Geometry) -> Ve
     let inv = geo.cell.matrix().inverse();
     let dims = geo.dims.map(f64::from);
     let m = geo.cell.matrix();
-    let mut out: Vec<Image> = atoms
+    let [nx, ny, nz] = geo.dims;
+    let cell = |g: f32, n: u32| ((g.floor().max(0.0)) as u64).min(n as u64 - 1);
+    let key = |a: &Image| {
+        (cell(a.index[2], nz) * ny as u64 + cell(a.index[1], ny)) * nx as u64 + cell(a.index[0], nx)
+    };
+    let mut keyed: Vec<(u64, Image)> = atoms
         .positions
         .par_iter()
         .enumerate()
@@ -107,39 +114,31 @@ pub fn images(atoms: &AtomSet<'_>, params: &SurfaceParams, geo: &Geometry) -> Ve
             }
             // Reach in fractional units plus one sample of margin.
             let r = [0, 1, 2].map(|a| cut as f64 * geo.reach[a] / dims[a] + 1.0 / dims[a]);
-            let shifts = |a: usize| {
+            let shifts = move |a: usize| {
                 let m = r[a].ceil() as i64 + 1;
                 (-m..=m)
                     .map(|n| n as f64)
                     .filter(move |&n| s[a] + n + r[a] >= 0.0 && s[a] + n - r[a] < 1.0)
-                    .collect::<Vec<f64>>()
             };
-            let (xs, ys, zs) = (shifts(0), shifts(1), shifts(2));
             let k = 0.5 / (alpha * alpha);
             let colour = atoms.colour(i);
-            let mut v = Vec::with_capacity(xs.len() * ys.len() * zs.len());
-            for &nz in &zs {
-                for &ny in &ys {
-                    for &nx in &xs {
+            shifts(2).flat_map(move |nz| {
+                shifts(1).flat_map(move |ny| {
+                    shifts(0).map(move |nx| {
                         let f = s + glam::DVec3::new(nx, ny, nz);
-                        v.push(Image {
+                        let image = Image {
                             index: (f * glam::DVec3::from(dims)).as_vec3().to_array(),
                             pos: (m * f).as_vec3(),
                             k,
                             cut,
                             colour,
-                        });
-                    }
-                }
-            }
-            v
+                        };
+                        (key(&image), image)
+                    })
+                })
+            })
         })
         .collect();
-    let cell = |g: f32, n: u32| ((g.floor().max(0.0)) as u64).min(n as u64 - 1);
-    let [nx, ny, nz] = geo.dims;
-    let key = |a: &Image| {
-        (cell(a.index[2], nz) * ny as u64 + cell(a.index[1], ny)) * nx as u64 + cell(a.index[0], nx)
-    };
     let tie = |a: &Image, b: &Image| -> Ordering {
         (0..3)
             .map(|k| a.pos[k].total_cmp(&b.pos[k]))
@@ -149,143 +148,8 @@ pub fn images(atoms: &AtomSet<'_>, params: &SurfaceParams, geo: &Geometry) -> Ve
             .find(|o| o.is_ne())
             .unwrap_or(Ordering::Equal)
     };
-    out.par_sort_unstable_by(|a, b| key(a).cmp(&key(b)).then_with(|| tie(a, b)));
-    out
-}
-
-/// Inclusive index range `0..n` within `half` samples of `g`, `None` when empty.
-fn span(g: f32, half: f64, n: u32) -> Option<(u32, u32)> {
-    let lo = (g as f64 - half).floor() as i64;
-    let hi = (g as f64 + half).ceil() as i64;
-    let (lo, hi) = (lo.max(0), hi.min(n as i64 - 1));
-    (lo <= hi).then_some((lo as u32, hi as u32))
-}
-
-/// Fills `vol` with the density (and colour divided by `iso` when `with_colour`) of `images`
-/// at the samples of `geo`, reusing the buffers when the grid keeps its size.
-pub fn fill(
-    vol: &mut DensityVolume,
-    images: &[Image],
-    geo: &Geometry,
-    iso: f32,
-    with_colour: bool,
-) {
-    let [nx, ny, nz] = geo.dims;
-    let total = nx as usize * ny as usize * nz as usize;
-    let plane = nx as usize * ny as usize;
-    if vol.values.len() != total {
-        vol.values = vec![0.0; total];
-    }
-    if !with_colour {
-        vol.colours = None;
-    } else if vol.colours.as_ref().is_none_or(|c| c.len() != total) {
-        vol.colours = Some(vec![[0.0; 3]; total]);
-    }
-    // Slabs of planes along c, each with the images that reach it (ascending, so canonical).
-    let threads = rayon::current_num_threads().max(1) as u32;
-    let slab_planes = (nz / (8 * threads)).clamp(1, 64);
-    let slab_count = nz.div_ceil(slab_planes) as usize;
-    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); slab_count];
-    for (i, img) in images.iter().enumerate() {
-        let half = img.cut as f64 * geo.reach[2] + 1.0;
-        if let Some((k0, k1)) = span(img.index[2], half, nz) {
-            for s in k0 / slab_planes..=k1 / slab_planes {
-                lists[s as usize].push(i as u32);
-            }
-        }
-    }
-    let slab_len = plane * slab_planes as usize;
-    let inv_iso = 1.0 / iso;
-    let run = |s: usize, vals: &mut [f32], cols: Option<&mut [[f32; 3]]>| {
-        let z0 = s as u32 * slab_planes;
-        let z1 = (z0 + slab_planes).min(nz) - 1;
-        fill_slab(images, &lists[s], geo, (z0, z1), vals, cols);
-    };
-    match vol.colours.as_mut() {
-        None => vol
-            .values
-            .par_chunks_mut(slab_len)
-            .enumerate()
-            .for_each(|(s, vals)| {
-                vals.fill(0.0);
-                run(s, vals, None);
-            }),
-        Some(cols) => vol
-            .values
-            .par_chunks_mut(slab_len)
-            .zip(cols.par_chunks_mut(slab_len))
-            .enumerate()
-            .for_each(|(s, (vals, cols))| {
-                vals.fill(0.0);
-                cols.fill([0.0; 3]);
-                run(s, vals, Some(&mut *cols));
-                for c in cols.iter_mut() {
-                    *c = c.map(|v| v * inv_iso);
-                }
-            }),
-    }
-}
-
-/// Adds the images `list` to the planes `z0..=z1` (`vals`, `cols` hold those planes).
-fn fill_slab(
-    images: &[Image],
-    list: &[u32],
-    geo: &Geometry,
-    (z0, z1): (u32, u32),
-    vals: &mut [f32],
-    mut cols: Option<&mut [[f32; 3]]>,
-) {
-    let [nx, ny, _] = geo.dims;
-    let plane = nx as usize * ny as usize;
-    let [u, v, w] = [geo.jac.x_axis, geo.jac.y_axis, geo.jac.z_axis].map(|c| c.as_vec3());
-    let uu = u.dot(u);
-    for &a in list {
-        let img = &images[a as usize];
-        let cut2 = img.cut * img.cut;
-        let half = |axis: usize| img.cut as f64 * geo.reach[axis] + 1.0;
-        let Some((k0, k1)) = span(img.index[2], half(2), z1 + 1) else {
-            continue;
-        };
-        let Some((j0, j1)) = span(img.index[1], half(1), ny) else {
-            continue;
-        };
-        for k in k0.max(z0)..=k1 {
-            let zoff = (k - z0) as usize * plane;
-            let ek = k as f32 * w - img.pos;
-            for j in j0..=j1 {
-                // Samples of this row: |i u + e|^2 < cut^2, a quadratic in i.
-                let e = ek + j as f32 * v;
-                let ue = u.dot(e);
-                let disc = ue * ue - uu * (e.dot(e) - cut2);
-                if disc <= 0.0 {
-                    continue;
-                }
-                let root = disc.sqrt();
-                let lo = ((-ue - root) / uu).floor() as i64;
-                let hi = ((-ue + root) / uu).ceil() as i64;
-                let (lo, hi) = (lo.max(0) as usize, hi.min(nx as i64 - 1));
-                if hi < lo as i64 {
-                    continue;
-                }
-                let row = zoff + j as usize * nx as usize;
-                for i in lo..=hi as usize {
-                    let d = e + i as f32 * u;
-                    let d2 = d.dot(d);
-                    if d2 >= cut2 {
-                        continue;
-                    }
-                    let g = (-img.k * d2).exp();
-                    vals[row + i] += g;
-                    if let Some(cols) = cols.as_deref_mut() {
-                        let c = &mut cols[row + i];
-                        for (x, &y) in c.iter_mut().zip(&img.colour) {
-                            *x += g * y;
-                        }
-                    }
-                }
-            }
-        }
-    }
+    keyed.par_sort_unstable_by(|a, b| a.0.cmp(&b.0).then_with(|| tie(&a.1, &b.1)));
+    keyed.into_par_iter().map(|(_, image)| image).collect()
 }
 
 /// Maps an index-space mesh to Cartesian (Å) for `geo`, `replicate` copies of the cell
