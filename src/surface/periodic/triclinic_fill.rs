@@ -27,6 +27,10 @@ fn span(g: f32, half: f64, n: u32) -> Option<(u32, u32)> {
     (lo <= hi).then_some((lo as u32, hi as u32))
 }
 
+/// The most bytes of samples (density and colour) one slab of the fill holds, about a core's
+/// share of a second-level cache.
+const SLAB_BYTES: usize = 512 * 1024;
+
 /// Fills `vol` with the density (and colour divided by `iso` when `with_colour`) of `images`
 /// at the samples of `geo`, reusing the buffers when the grid keeps its size.
 pub fn fill(
@@ -47,9 +51,14 @@ pub fn fill(
     } else if vol.colours.as_ref().is_none_or(|c| c.len() != total) {
         vol.colours = Some(vec![[0.0; 3]; total]);
     }
-    // Slabs of planes along c, each with the images that reach it (ascending, so canonical).
+    // Slabs of planes along c, each with the images that reach it (ascending, so canonical):
+    // about eight per thread, and small enough that a slab's samples stay in a core's cache
+    // while its images visit them (at H = 0.5 Å on adk in water, one plane a slab instead of
+    // ten took the fill from about 630 to 430 ms).
     let threads = rayon::current_num_threads().max(1) as u32;
-    let slab_planes = (nz / (8 * threads)).clamp(1, 64);
+    let sample_bytes = if with_colour { 16 } else { 4 };
+    let cached_planes = (SLAB_BYTES / (plane * sample_bytes)).max(1) as u32;
+    let slab_planes = (nz / (8 * threads)).clamp(1, 64).min(cached_planes);
     let slab_count = nz.div_ceil(slab_planes) as usize;
     let mut lists: Vec<Vec<u32>> = vec![Vec::new(); slab_count];
     for (i, img) in images.iter().enumerate() {
