@@ -74,7 +74,13 @@ pub fn fill(
     let run = |s: usize, vals: &mut [f32], cols: Option<&mut [[f32; 3]]>| {
         let z0 = s as u32 * slab_planes;
         let z1 = (z0 + slab_planes).min(nz) - 1;
-        fill_slab(images, &lists[s], geo, (z0, z1), vals, cols);
+        let slab = Slab {
+            images,
+            list: &lists[s],
+            geo,
+            planes: (z0, z1),
+        };
+        fill_slab(&slab, vals, cols);
     };
     match vol.colours.as_mut() {
         None => vol
@@ -101,51 +107,45 @@ pub fn fill(
     }
 }
 
-/// Adds the images `list` to the planes `z0..=z1` (`vals`, `cols` hold those planes).
-fn fill_slab(
-    images: &[Image],
-    list: &[u32],
-    geo: &Geometry,
+/// One slab's work: the images `list` (indices into `images`) that reach its planes
+/// `planes.0..=planes.1` of the samples of `geo`.
+struct Slab<'a> {
+    images: &'a [Image],
+    list: &'a [u32],
+    geo: &'a Geometry,
     planes: (u32, u32),
-    vals: &mut [f32],
-    cols: Option<&mut [[f32; 3]]>,
-) {
+}
+
+/// Adds the slab's images to its planes (`vals`, `cols` hold those planes).
+fn fill_slab(slab: &Slab<'_>, vals: &mut [f32], cols: Option<&mut [[f32; 3]]>) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        unsafe { fill_slab_avx2(images, list, geo, planes, vals, cols) };
+        unsafe { fill_slab_avx2(slab, vals, cols) };
         return;
     }
-    fill_slab_body(images, list, geo, planes, vals, cols);
+    fill_slab_body(slab, vals, cols);
 }
 
 /// [`fill_slab`] compiled for AVX2 (8-wide rows); the same operations in the same order (Rust
 /// never fuses a multiply and an add), so the same bits as the portable build.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn fill_slab_avx2(
-    images: &[Image],
-    list: &[u32],
-    geo: &Geometry,
-    planes: (u32, u32),
-    vals: &mut [f32],
-    cols: Option<&mut [[f32; 3]]>,
-) {
-    fill_slab_body(images, list, geo, planes, vals, cols);
+fn fill_slab_avx2(slab: &Slab<'_>, vals: &mut [f32], cols: Option<&mut [[f32; 3]]>) {
+    fill_slab_body(slab, vals, cols);
 }
 
 /// The body of [`fill_slab`], inlined into each instruction-set variant: per image and row,
 /// the samples its cutoff sphere reaches (a quadratic in the row's index), their terms
 /// computed [`ROW_LANES`] at a time ([`add_run`]).
 #[inline(always)]
-fn fill_slab_body(
-    images: &[Image],
-    list: &[u32],
-    geo: &Geometry,
-    (z0, z1): (u32, u32),
-    vals: &mut [f32],
-    mut cols: Option<&mut [[f32; 3]]>,
-) {
+fn fill_slab_body(slab: &Slab<'_>, vals: &mut [f32], mut cols: Option<&mut [[f32; 3]]>) {
+    let Slab {
+        images,
+        list,
+        geo,
+        planes: (z0, z1),
+    } = *slab;
     let [nx, ny, _] = geo.dims;
     let plane = nx as usize * ny as usize;
     let [u, v, w] = [geo.jac.x_axis, geo.jac.y_axis, geo.jac.z_axis].map(|c| c.as_vec3());
