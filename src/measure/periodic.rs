@@ -26,6 +26,7 @@ use std::borrow::Cow;
 use std::collections::VecDeque;
 
 use glam::{DMat3, DVec3, IVec3, Vec3};
+use rayon::prelude::*;
 
 use super::cavities::{
     Cavity, CavityOptions, Component, bounding_radius, components, lining_atoms,
@@ -61,34 +62,38 @@ impl Images {
         let inv = m.inverse();
         let widths = cell.widths();
         let q = f64::from(params.cutoff()) * f64::from(params.radius_scale);
-        let mut out = Images {
-            positions: Vec::with_capacity(atoms.len()),
-            radii: Vec::with_capacity(atoms.len()),
-            atom: Vec::with_capacity(atoms.len()),
-        };
-        for (i, (&p, &r)) in atoms.positions.iter().zip(atoms.radii).enumerate() {
-            let mut s = inv * (p - cell.origin).as_dvec3();
-            s -= s.floor();
-            // Reach in fractions of the cell along each axis.
-            let reach = (q * f64::from(r) + margin) * DVec3::ONE / widths;
-            let shifts = |a: usize| {
-                let m = reach[a].ceil() as i64 + 1;
-                (-m..=m)
-                    .filter(move |&n| s[a] + n as f64 + reach[a] >= 0.0)
-                    .filter(move |&n| s[a] + n as f64 - reach[a] <= 1.0)
-            };
-            for nz in shifts(2) {
-                for ny in shifts(1) {
-                    for nx in shifts(0) {
-                        let f = s + DVec3::new(nx as f64, ny as f64, nz as f64);
-                        out.positions.push((m * f).as_vec3() + cell.origin);
-                        out.radii.push(r);
-                        out.atom.push(i as u32);
-                    }
-                }
-            }
+        // Each atom's images in parallel, kept in the atoms' order.
+        let images: Vec<(Vec3, f32, u32)> = atoms
+            .positions
+            .par_iter()
+            .zip(atoms.radii.par_iter())
+            .enumerate()
+            .flat_map_iter(|(i, (&p, &r))| {
+                let mut s = inv * (p - cell.origin).as_dvec3();
+                s -= s.floor();
+                // Reach in fractions of the cell along each axis.
+                let reach = (q * f64::from(r) + margin) * DVec3::ONE / widths;
+                let shifts = move |a: usize| {
+                    let m = reach[a].ceil() as i64 + 1;
+                    (-m..=m)
+                        .filter(move |&n| s[a] + n as f64 + reach[a] >= 0.0)
+                        .filter(move |&n| s[a] + n as f64 - reach[a] <= 1.0)
+                };
+                shifts(2).flat_map(move |nz| {
+                    shifts(1).flat_map(move |ny| {
+                        shifts(0).map(move |nx| {
+                            let f = s + DVec3::new(nx as f64, ny as f64, nz as f64);
+                            ((m * f).as_vec3() + cell.origin, r, i as u32)
+                        })
+                    })
+                })
+            })
+            .collect();
+        Images {
+            positions: images.iter().map(|x| x.0).collect(),
+            radii: images.iter().map(|x| x.1).collect(),
+            atom: images.iter().map(|x| x.2).collect(),
         }
-        out
     }
 
     fn set(&self) -> AtomSet<'_> {
