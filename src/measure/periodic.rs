@@ -33,6 +33,7 @@ use super::cavities::{
 };
 use super::cells::CellList;
 use super::{InterfaceResult, MeasureError, atom_areas};
+use crate::surface::periodic::cell::images_reaching_cell;
 use crate::surface::periodic::{
     PeriodicCell, PeriodicEngine, PeriodicMesh, Replicate, TriclinicCell,
 };
@@ -63,36 +64,23 @@ impl Images {
         let widths = cell.widths();
         let q = f64::from(params.cutoff()) * f64::from(params.radius_scale);
         // Each atom's images in parallel, kept in the atoms' order.
-        let images: Vec<(Vec3, f32, u32)> = atoms
+        let (positions, (radii, atom)) = atoms
             .positions
             .par_iter()
             .zip(atoms.radii.par_iter())
             .enumerate()
             .flat_map_iter(|(i, (&p, &r))| {
-                let mut s = inv * (p - cell.origin).as_dvec3();
-                s -= s.floor();
+                let s = inv * (p - cell.origin).as_dvec3();
                 // Reach in fractions of the cell along each axis.
-                let reach = (q * f64::from(r) + margin) * DVec3::ONE / widths;
-                let shifts = move |a: usize| {
-                    let m = reach[a].ceil() as i64 + 1;
-                    (-m..=m)
-                        .filter(move |&n| s[a] + n as f64 + reach[a] >= 0.0)
-                        .filter(move |&n| s[a] + n as f64 - reach[a] <= 1.0)
-                };
-                shifts(2).flat_map(move |nz| {
-                    shifts(1).flat_map(move |ny| {
-                        shifts(0).map(move |nx| {
-                            let f = s + DVec3::new(nx as f64, ny as f64, nz as f64);
-                            ((m * f).as_vec3() + cell.origin, r, i as u32)
-                        })
-                    })
-                })
+                let reach = ((q * f64::from(r) + margin) * DVec3::ONE / widths).to_array();
+                images_reaching_cell(s, reach)
+                    .map(move |f| ((m * f).as_vec3() + cell.origin, (r, i as u32)))
             })
-            .collect();
+            .unzip();
         Images {
-            positions: images.iter().map(|x| x.0).collect(),
-            radii: images.iter().map(|x| x.1).collect(),
-            atom: images.iter().map(|x| x.2).collect(),
+            positions,
+            radii,
+            atom,
         }
     }
 

@@ -102,6 +102,29 @@ impl TriclinicCell {
     }
 }
 
+/// The fractional positions (in cell vectors) of the images of a point whose fractional
+/// coordinates are `s` (any values; wrapped into [0, 1) first) that reach the cell when the
+/// point reaches `reach[a]` (fractions of the cell) along each axis: every lattice shift `n`
+/// with `s + n - reach <= 1` and `s + n + reach >= 0` per axis, z slowest, x fastest.
+pub fn images_reaching_cell(s: DVec3, reach: [f64; 3]) -> impl Iterator<Item = DVec3> {
+    let mut s = s - s.floor();
+    for a in 0..3 {
+        // `x - floor(x)` rounds up to 1 for tiny negative x.
+        if s[a] >= 1.0 {
+            s[a] = 0.0;
+        }
+    }
+    let shifts = move |a: usize| {
+        let m = reach[a].ceil() as i64 + 1;
+        (-m..=m)
+            .map(|n| n as f64)
+            .filter(move |&n| s[a] + n + reach[a] >= 0.0 && s[a] + n - reach[a] <= 1.0)
+    };
+    shifts(2).flat_map(move |nz| {
+        shifts(1).flat_map(move |ny| shifts(0).map(move |nx| s + DVec3::new(nx, ny, nz)))
+    })
+}
+
 /// The cell `--periodic` computes in: a rectangular box along x, y, z (the original engine,
 /// unchanged) or any other cell.
 #[derive(Debug, Clone, Copy, PartialEq)]

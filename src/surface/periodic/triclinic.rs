@@ -25,7 +25,7 @@ use std::time::Instant;
 use glam::{DMat3, Vec3};
 use rayon::prelude::*;
 
-use super::cell::TriclinicCell;
+use super::cell::{TriclinicCell, images_reaching_cell};
 use super::density::PeriodicGrid;
 use super::triclinic_fill::fill;
 use super::{Replicate, mc, measure, replicate_mesh};
@@ -105,37 +105,20 @@ pub fn images(atoms: &AtomSet<'_>, params: &SurfaceParams, geo: &Geometry) -> Ve
         .flat_map_iter(|(i, &p)| {
             let alpha = atoms.radii[i] * params.radius_scale;
             let cut = q * alpha;
-            let mut s = inv * (p - geo.cell.origin).as_dvec3();
-            for a in 0..3 {
-                s[a] -= s[a].floor();
-                if s[a] >= 1.0 {
-                    s[a] = 0.0;
-                }
-            }
+            let s = inv * (p - geo.cell.origin).as_dvec3();
             // Reach in fractional units plus one sample of margin.
             let r = [0, 1, 2].map(|a| cut as f64 * geo.reach[a] / dims[a] + 1.0 / dims[a]);
-            let shifts = move |a: usize| {
-                let m = r[a].ceil() as i64 + 1;
-                (-m..=m)
-                    .map(|n| n as f64)
-                    .filter(move |&n| s[a] + n + r[a] >= 0.0 && s[a] + n - r[a] < 1.0)
-            };
             let k = 0.5 / (alpha * alpha);
             let colour = atoms.colour(i);
-            shifts(2).flat_map(move |nz| {
-                shifts(1).flat_map(move |ny| {
-                    shifts(0).map(move |nx| {
-                        let f = s + glam::DVec3::new(nx, ny, nz);
-                        let image = Image {
-                            index: (f * glam::DVec3::from(dims)).as_vec3().to_array(),
-                            pos: (m * f).as_vec3(),
-                            k,
-                            cut,
-                            colour,
-                        };
-                        (key(&image), image)
-                    })
-                })
+            images_reaching_cell(s, r).map(move |f| {
+                let image = Image {
+                    index: (f * glam::DVec3::from(dims)).as_vec3().to_array(),
+                    pos: (m * f).as_vec3(),
+                    k,
+                    cut,
+                    colour,
+                };
+                (key(&image), image)
             })
         })
         .collect();
